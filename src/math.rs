@@ -1,0 +1,297 @@
+//! The float trait the equations are written against, and the math backend that supplies the
+//! transcendental kernels.
+//!
+//! Two traits, kept deliberately small:
+//! - [`Float`]: arithmetic, a few constants and the exact (non-transcendental) operations that
+//!   the Magic Formula needs (`abs`, `sign`, `min`/`max`, finiteness). Implemented for `f32`
+//!   (device) and `f64` (host).
+//! - [`Backend`]: the transcendental kernels the equations call (`sin cos tan atan acos exp ln
+//!   sqrt`), one line per function. The *type* chooses the backend: `Tyre<f32, Libm>`. Each
+//!   kernel is listed with the equations that need it.
+//!
+//! [`Libm`] is the reference backend (the `libm` crate: correctly rounded to within 1 ulp for
+//! most functions). Faster backends plug in through the same trait.
+
+use core::ops::{Add, AddAssign, Div, Mul, MulAssign, Neg, Sub, SubAssign};
+
+/// A real scalar: `f32` on the device, `f64` on the host.
+///
+/// Only what the equations use. Units are whatever the caller's quantity has.
+pub trait Float:
+    Copy
+    + PartialOrd
+    + PartialEq
+    + Add<Output = Self>
+    + Sub<Output = Self>
+    + Mul<Output = Self>
+    + Div<Output = Self>
+    + Neg<Output = Self>
+    + AddAssign
+    + SubAssign
+    + MulAssign
+    + core::fmt::Debug
+    + Default
+{
+    /// 0
+    const ZERO: Self;
+    /// 1
+    const ONE: Self;
+    /// 2
+    const TWO: Self;
+    /// 1/2
+    const HALF: Self;
+    /// π
+    const PI: Self;
+    /// π/2
+    const FRAC_PI_2: Self;
+    /// 2/π (the normalisation of `atan` in (4.E44))
+    const FRAC_2_PI: Self;
+
+    /// Converts from `f64` (rounding to nearest for `f32`). Used for parameters and constants.
+    fn from_f64(x: f64) -> Self;
+    /// Converts to `f64` (exact for both implementations).
+    fn to_f64(self) -> f64;
+    /// |x|
+    fn abs(self) -> Self;
+    /// `true` unless NaN or ±∞.
+    fn is_finite(self) -> bool;
+    /// The larger of two values; NaN-free inputs assumed (callers check finiteness first).
+    #[inline]
+    fn max(self, other: Self) -> Self {
+        if self > other {
+            self
+        } else {
+            other
+        }
+    }
+    /// The smaller of two values; NaN-free inputs assumed.
+    #[inline]
+    fn min(self, other: Self) -> Self {
+        if self < other {
+            self
+        } else {
+            other
+        }
+    }
+    /// Mathematical sign: −1, 0 or +1 (MATLAB's `sign`, as the MF references use it).
+    #[inline]
+    fn sign(self) -> Self {
+        if self > Self::ZERO {
+            Self::ONE
+        } else if self < Self::ZERO {
+            -Self::ONE
+        } else {
+            Self::ZERO
+        }
+    }
+    /// Sign that is +1 at zero: the "sign(x) with sign(0) = 1" used by the book's signed
+    /// ε-guards ((4.E6a), (4.E16), (4.E26), (4.E39): "explained on page 177").
+    #[inline]
+    fn sign_nz(self) -> Self {
+        if self < Self::ZERO {
+            -Self::ONE
+        } else {
+            Self::ONE
+        }
+    }
+    /// x²
+    #[inline]
+    fn sq(self) -> Self {
+        self * self
+    }
+    /// Clamps to `[lo, hi]`; returns the value and whether it was changed.
+    #[inline]
+    fn clamp_flag(self, lo: Self, hi: Self) -> (Self, bool) {
+        if self < lo {
+            (lo, true)
+        } else if self > hi {
+            (hi, true)
+        } else {
+            (self, false)
+        }
+    }
+}
+
+macro_rules! impl_float {
+    ($t:ty, $pi:expr, $pi2:expr, $f2pi:expr) => {
+        impl Float for $t {
+            const ZERO: Self = 0.0;
+            const ONE: Self = 1.0;
+            const TWO: Self = 2.0;
+            const HALF: Self = 0.5;
+            const PI: Self = $pi;
+            const FRAC_PI_2: Self = $pi2;
+            const FRAC_2_PI: Self = $f2pi;
+            #[inline]
+            fn from_f64(x: f64) -> Self {
+                x as $t
+            }
+            #[inline]
+            fn to_f64(self) -> f64 {
+                self as f64
+            }
+            #[inline]
+            fn abs(self) -> Self {
+                <$t>::from_bits(self.to_bits() & !(1 << (<$t>::BITS_MINUS_ONE)))
+            }
+            #[inline]
+            fn is_finite(self) -> bool {
+                <$t>::is_finite(self)
+            }
+        }
+    };
+}
+
+trait BitsMinusOne {
+    const BITS_MINUS_ONE: u32;
+}
+impl BitsMinusOne for f32 {
+    const BITS_MINUS_ONE: u32 = 31;
+}
+impl BitsMinusOne for f64 {
+    const BITS_MINUS_ONE: u32 = 63;
+}
+
+impl_float!(
+    f32,
+    core::f32::consts::PI,
+    core::f32::consts::FRAC_PI_2,
+    core::f32::consts::FRAC_2_PI
+);
+impl_float!(
+    f64,
+    core::f64::consts::PI,
+    core::f64::consts::FRAC_PI_2,
+    core::f64::consts::FRAC_2_PI
+);
+
+/// The transcendental kernels of the Magic Formula, chosen by type.
+///
+/// Every function takes and returns the same scalar type. Angles in radians.
+pub trait Backend<F: Float> {
+    /// sin x — the sine Magic Formula (4.E9), (4.E19); turn-slip shifts (4.80).
+    fn sin(x: F) -> F;
+    /// cos x — the cosine Magic Formula (4.E33), (4.E36), weighting functions (4.E51), (4.E59).
+    fn cos(x: F) -> F;
+    /// tan x — `alpha_star` (4.E3) and the equivalent slip angles (A54), (A55).
+    fn tan(x: F) -> F;
+    /// atan x, result in (−π/2, π/2) — every Magic Formula argument.
+    fn atan(x: F) -> F;
+    /// acos x for x in [−1, 1], result in [0, π] — `alpha_prime` (4.E6).
+    fn acos(x: F) -> F;
+    /// eˣ — longitudinal slip stiffness (4.E15).
+    fn exp(x: F) -> F;
+    /// ln x for x > 0 — the powers of rolling resistance (A48) as exp(q·ln x).
+    fn ln(x: F) -> F;
+    /// √x for x ≥ 0 — equivalent slip angles (A54), (A55), turn slip (4.77).
+    fn sqrt(x: F) -> F;
+}
+
+/// Reference backend: the `libm` crate (Rust port of musl's libm).
+///
+/// Accuracy: within 1 ulp for the functions used here (musl's documentation). On a Cortex-M4F,
+/// the single-precision trigonometric functions go through `f64` internally (soft float) and are
+/// slow; they are the accuracy reference, not the fast path.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Libm;
+
+impl Backend<f32> for Libm {
+    #[inline]
+    fn sin(x: f32) -> f32 {
+        libm::sinf(x)
+    }
+    #[inline]
+    fn cos(x: f32) -> f32 {
+        libm::cosf(x)
+    }
+    #[inline]
+    fn tan(x: f32) -> f32 {
+        libm::tanf(x)
+    }
+    #[inline]
+    fn atan(x: f32) -> f32 {
+        libm::atanf(x)
+    }
+    #[inline]
+    fn acos(x: f32) -> f32 {
+        libm::acosf(x)
+    }
+    #[inline]
+    fn exp(x: f32) -> f32 {
+        libm::expf(x)
+    }
+    #[inline]
+    fn ln(x: f32) -> f32 {
+        libm::logf(x)
+    }
+    #[inline]
+    fn sqrt(x: f32) -> f32 {
+        libm::sqrtf(x)
+    }
+}
+
+impl Backend<f64> for Libm {
+    #[inline]
+    fn sin(x: f64) -> f64 {
+        libm::sin(x)
+    }
+    #[inline]
+    fn cos(x: f64) -> f64 {
+        libm::cos(x)
+    }
+    #[inline]
+    fn tan(x: f64) -> f64 {
+        libm::tan(x)
+    }
+    #[inline]
+    fn atan(x: f64) -> f64 {
+        libm::atan(x)
+    }
+    #[inline]
+    fn acos(x: f64) -> f64 {
+        libm::acos(x)
+    }
+    #[inline]
+    fn exp(x: f64) -> f64 {
+        libm::exp(x)
+    }
+    #[inline]
+    fn ln(x: f64) -> f64 {
+        libm::log(x)
+    }
+    #[inline]
+    fn sqrt(x: f64) -> f64 {
+        libm::sqrt(x)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sign_conventions() {
+        assert_eq!(0.0f64.sign(), 0.0);
+        assert_eq!((-0.0f64).sign(), 0.0);
+        assert_eq!(0.0f64.sign_nz(), 1.0);
+        assert_eq!((-2.0f32).sign_nz(), -1.0);
+        assert_eq!((-2.5f32).abs(), 2.5);
+        assert_eq!((-0.0f64).abs().to_bits(), 0);
+    }
+
+    #[test]
+    fn clamp_reports() {
+        assert_eq!(3.0f64.clamp_flag(0.0, 1.0), (1.0, true));
+        assert_eq!(0.5f64.clamp_flag(0.0, 1.0), (0.5, false));
+        assert_eq!((-1.0f32).clamp_flag(0.0, 1.0), (0.0, true));
+    }
+
+    #[test]
+    fn libm_matches_std() {
+        for &x in &[-3.0f64, -0.5, 0.0, 0.25, 1.0, 7.0] {
+            assert!((<Libm as Backend<f64>>::atan(x) - x.atan()).abs() < 1e-15);
+            assert!((<Libm as Backend<f64>>::sin(x) - x.sin()).abs() < 1e-15);
+            assert!((<Libm as Backend<f32>>::cos(x as f32) - (x as f32).cos()).abs() < 1e-6);
+        }
+    }
+}
