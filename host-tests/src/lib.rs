@@ -1,1 +1,8 @@
-//! Host side of gough: wraps the core for the command-line tool and the tests.
+//! Host side of gough: wraps the core for the `gough` command-line tool and the tests.
+//!
+//! Nothing here re-implements a formula of the core: `mfrun` turns CSV rows into
+//! [`gough::mf::Input`] and calls [`gough::mf::eval`]; `tolerance` holds the accuracy budgets.
+pub mod csvio;
+pub mod mfrun;
+pub mod tolerance;
+pub mod tyre;

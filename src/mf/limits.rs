@@ -1,0 +1,226 @@
+//! Conditioning of the inputs: range limits, low-speed reductions, the basic quantities.
+//!
+//! Implements Pacejka (2006) (4.E1)–(4.E8) and the MF-Tyre limit checks as the MF 6.1 solvers
+//! (TNO MF-Tyre; MFeval `parseInputs`/`calculateBasic`) apply them:
+//! - κ, α, γ, p clipped to KPUMIN..KPUMAX, ALPMIN..ALPMAX, CAMMIN..CAMMAX, PRESMIN..PRESMAX;
+//!   Fz clipped to FZMAX (the forces), and FZMIN kept for the aligning-torque terms.
+//! - Below VXLOW: κ and φt scale linearly with |Vx|/VXLOW; α with (|Vx| + |Vsy|)/VXLOW; the
+//!   shifts and the trail/residual torque fade with the smooth factor 1 − ½(1 + cos(π·Vx/VXLOW)).
+//!
+//! Every clip sets its [`Flags`] bit; nothing is clipped silently.
+
+use super::{EvalError, Flags, Input, InputField, Options, Params, Version, EPS};
+use crate::math::{Backend, Float};
+
+/// Digressive friction factor Aμ of (4.E8): λμ' = Aμ·λμ*/(1 + (Aμ − 1)·λμ*). The book suggests
+/// 10. With λμ = 1 (every bundled file) λμ' = 1 whatever Aμ is.
+// DIFFERS FROM MFeval: MFeval 4.0 uses Aμ = 1 (λμ' = λμ). We follow the book's documented 10,
+// so that on a slippery road (λμ < 1) the vertical shifts SVx, SVy shrink less than the peak,
+// as (4.E8) intends. Test: `mf::tests::digressive_friction_factor`.
+pub const A_MU: f64 = 10.0;
+
+/// Post-processed inputs and the quantities every equation shares.
+#[derive(Debug, Clone, Copy)]
+pub struct Conditioned<F> {
+    /// Version of the parameter set.
+    pub version: Version,
+    /// Limits and low-speed handling on.
+    pub limits: bool,
+    /// α*, γ* definitions on.
+    pub use_alpha_star: bool,
+    /// Fz for the forces [N] (≥ 0, clipped at FZMAX).
+    pub fz: F,
+    /// Fz for the aligning-torque terms Dt, Dr [N]: Fz raised to FZMIN when limits are on.
+    pub fz_low: F,
+    /// Fz before any clip (negative → 0) [N]: rolling resistance and radius.
+    pub fz_u: F,
+    /// κ used by the equations (reduced at low speed, clipped).
+    pub kappa: F,
+    /// κ after the low-speed reduction, before clipping (reported).
+    pub kappa_out: F,
+    /// κ as given (rolling resistance, radius).
+    pub kappa_u: F,
+    /// α used by the equations [rad].
+    pub alpha: F,
+    /// γ used by the equations [rad].
+    pub gamma: F,
+    /// φt after conditioning [1/m].
+    pub phit: F,
+    /// Vx as given [m/s].
+    pub vx: F,
+    /// Inflation pressure after clipping [Pa].
+    pub p: F,
+    /// Fz0' = λFz0·Fz0 (4.E1) [N].
+    pub fz0_prime: F,
+    /// dfz = (Fz − Fz0')/Fz0' (4.E2a).
+    pub dfz: F,
+    /// dpi = (p − pi0)/pi0 (4.E2b).
+    pub dpi: F,
+    /// α* (4.E3): tan(α)·sign(Vx) with `alpha_star`, else α.
+    pub alpha_star: F,
+    /// γ* (4.E4): sin(γ) with `alpha_star`, else γ.
+    pub gamma_star: F,
+    /// cos α' = Vx/Vc' (4.E6), (4.E6a); cos(acos(x)) = x saves two calls.
+    pub cos_alpha_prime: F,
+    /// λμx* (4.E7); the slip-speed decay λμV is 0 (not a `.tir` key): λμx* = λμx.
+    pub lmux_star: F,
+    /// λμy* (4.E7).
+    pub lmuy_star: F,
+    /// λμx' (4.E8).
+    pub lmux_prime: F,
+    /// λμy' (4.E8).
+    pub lmuy_prime: F,
+    /// Low-speed smooth reduction factor (1 above VXLOW).
+    pub red_smooth: F,
+    /// |Vx| ≤ VXLOW with limits on.
+    pub low_speed: bool,
+    /// Turn-slip state, when turn slip is evaluated.
+    pub turn: Option<super::turnslip::Spin<F>>,
+    /// Flags raised so far.
+    pub flags: Flags,
+}
+
+fn check<F: Float>(x: F, field: InputField) -> Result<F, EvalError> {
+    if x.is_finite() {
+        Ok(x)
+    } else {
+        Err(EvalError::NonFinite(field))
+    }
+}
+
+/// Validates and conditions one input (see the module doc).
+pub fn condition<F: Float, M: Backend<F>>(
+    p: &Params<F>,
+    input: &Input<F>,
+    opts: &Options,
+) -> Result<Conditioned<F>, EvalError> {
+    let mut fz = check(input.fz, InputField::Fz)?;
+    let mut kappa = check(input.kappa, InputField::Kappa)?;
+    let mut alpha = check(input.alpha, InputField::Alpha)?;
+    let mut gamma = check(input.gamma, InputField::Gamma)?;
+    let mut phit = check(input.phit, InputField::Phit)?;
+    let vx = check(input.vx, InputField::Vx)?;
+    let mut pres = match input.p {
+        Some(x) => check(x, InputField::P)?,
+        None => p.inflpres,
+    };
+    let mf6 = p.version.is_mf6();
+    if mf6 && pres <= F::ZERO {
+        return Err(EvalError::NonPositivePressure);
+    }
+    let mut flags = Flags::default();
+    flags.set_if(Flags::REVERSE, vx < F::ZERO);
+    if fz <= F::ZERO {
+        flags.insert(Flags::NO_CONTACT);
+        fz = F::ZERO;
+    }
+    let fz_u = fz;
+    let kappa_u = kappa;
+    let mut kappa_out = kappa;
+    let mut fz_low = fz;
+    let mut red_smooth = F::ONE;
+    let mut low_speed = false;
+
+    if opts.limits {
+        // Turn slip seen by the contact patch shrinks with the slip angle (MFeval "empirically
+        // discovered"; TNO behaviour).
+        phit = phit * M::cos(alpha);
+        let vxlow = p.vxlow;
+        if vx.abs() <= vxlow && vxlow > F::ZERO {
+            low_speed = true;
+            flags.insert(Flags::LOW_SPEED);
+            // Smooth reduction 1 − ½(1 + cos(π·Vx/VXLOW)): 0 at standstill, 1 at VXLOW.
+            red_smooth = F::ONE - F::HALF * (F::ONE + M::cos(F::PI * (vx / vxlow)));
+            let red_linear = (vx / vxlow).abs();
+            kappa_out = kappa * red_linear;
+            kappa = kappa * red_linear;
+            phit = phit * red_linear;
+        }
+        if vx < F::ZERO {
+            phit = -phit;
+        }
+        // α fades when the total speed |Vx| + |Vsy| falls below VXLOW (Vsy = tan(α)·Vx).
+        let speed_sum = vx.abs() + (M::tan(alpha) * vx).abs();
+        if speed_sum < p.vxlow {
+            alpha = alpha * (speed_sum / p.vxlow);
+        }
+        let (a, fa) = alpha.clamp_flag(p.alpmin, p.alpmax);
+        alpha = a;
+        flags.set_if(Flags::ALPHA, fa);
+        let (g, fg) = gamma.clamp_flag(p.cammin, p.cammax);
+        gamma = g;
+        flags.set_if(Flags::GAMMA, fg);
+        if fz > p.fzmax {
+            fz = p.fzmax.max(F::ZERO);
+            flags.insert(Flags::FZ_HIGH);
+        }
+        fz_low = fz;
+        if fz_u > F::ZERO && fz < p.fzmin {
+            fz_low = p.fzmin;
+            flags.insert(Flags::FZ_LOW);
+        }
+        if mf6 {
+            let (q, fp) = pres.clamp_flag(p.presmin, p.presmax);
+            pres = q;
+            flags.set_if(Flags::PRESSURE, fp);
+        }
+        let (k, fk) = kappa.clamp_flag(p.kpumin, p.kpumax);
+        kappa = k;
+        flags.set_if(Flags::KAPPA, fk);
+    }
+
+    let fz0_prime = p.lfzo * p.fnomin; // (4.E1)
+    let dfz = (fz - fz0_prime) / fz0_prime; // (4.E2a)
+    let dpi = if mf6 {
+        (pres - p.nompres) / p.nompres // (4.E2b)
+    } else {
+        F::ZERO
+    };
+    let (alpha_star, gamma_star) = if opts.alpha_star {
+        (M::tan(alpha) * vx.sign(), M::sin(gamma)) // (4.E3), (4.E4)
+    } else {
+        (alpha, gamma)
+    };
+    // (4.E6), (4.E6a): Vc' = Vc + ε·sign(Vc), with Vsy = tan(α)·|Vx| and Vcy = Vsy.
+    let vsy = M::tan(alpha) * vx.abs();
+    let vc = M::sqrt(vx * vx + vsy * vsy);
+    let vc_prime = vc + F::from_f64(EPS) * vc.sign_nz();
+    let cos_alpha_prime = vx / vc_prime;
+    // (4.E7) with λμV = 0, (4.E8) with Aμ.
+    let a_mu = F::from_f64(A_MU);
+    let lmux_star = p.lmux;
+    let lmuy_star = p.lmuy;
+    let lmux_prime = a_mu * lmux_star / (F::ONE + (a_mu - F::ONE) * lmux_star);
+    let lmuy_prime = a_mu * lmuy_star / (F::ONE + (a_mu - F::ONE) * lmuy_star);
+
+    Ok(Conditioned {
+        version: p.version,
+        limits: opts.limits,
+        use_alpha_star: opts.alpha_star,
+        fz,
+        fz_low,
+        fz_u,
+        kappa,
+        kappa_out,
+        kappa_u,
+        alpha,
+        gamma,
+        phit,
+        vx,
+        p: pres,
+        fz0_prime,
+        dfz,
+        dpi,
+        alpha_star,
+        gamma_star,
+        cos_alpha_prime,
+        lmux_star,
+        lmuy_star,
+        lmux_prime,
+        lmuy_prime,
+        red_smooth,
+        low_speed,
+        turn: None,
+        flags,
+    })
+}
