@@ -226,8 +226,9 @@ pub fn parse(text: &str) -> Result<Tir, Error> {
     let sep = if text.contains('\n') { '\n' } else { '\r' };
     for (i, line) in text.split(sep).enumerate() {
         let n = u32::try_from(i.saturating_add(1)).unwrap_or(u32::MAX);
-        reader.line_no = n;
-        reader.line(line).map_err(|kind| Error { line: n, kind })?;
+        reader
+            .line(line, n)
+            .map_err(|kind| Error { line: n, kind })?;
     }
     reader.finish()
 }
@@ -323,8 +324,6 @@ struct Reader {
     section: Section,
     warnings: heapless::Vec<Warning, MAX_WARNINGS>,
     warnings_dropped: u16,
-    /// Number of the line being read, for warnings (set by the caller before each line).
-    line_no: u32,
 }
 
 impl Reader {
@@ -338,7 +337,6 @@ impl Reader {
             section: Section::Plain,
             warnings: heapless::Vec::new(),
             warnings_dropped: 0,
-            line_no: 1,
         }
     }
 
@@ -348,8 +346,8 @@ impl Reader {
         }
     }
 
-    /// Reads one line (without its terminator).
-    fn line(&mut self, raw: &str) -> Result<(), ErrorKind> {
+    /// Reads line number `n` (without its terminator).
+    fn line(&mut self, raw: &str, n: u32) -> Result<(), ErrorKind> {
         let line = strip_comment(raw).trim();
         if line.is_empty() {
             return Ok(());
@@ -375,25 +373,24 @@ impl Reader {
         let text = unquote(value).ok_or(ErrorKind::Syntax)?;
         match self.section {
             Section::Header => Ok(()),
-            Section::Units => self.unit(key, text),
-            Section::Plain | Section::Table => self.entry(key, value, text),
+            Section::Units => self.unit(key, text, n),
+            Section::Plain | Section::Table => self.entry(key, value, text, n),
         }
     }
 
-    fn unit(&mut self, key: &str, text: &str) -> Result<(), ErrorKind> {
+    fn unit(&mut self, key: &str, text: &str, line: u32) -> Result<(), ErrorKind> {
         match UNITS.iter().find(|(k, _)| k.eq_ignore_ascii_case(key)) {
             Some((_, accepted)) if accepted.iter().any(|u| u.eq_ignore_ascii_case(text)) => Ok(()),
             Some(_) => Err(ErrorKind::UnsupportedUnit),
             None => {
-                self.warn(self.line_no, WarningKind::UnknownKey);
+                self.warn(line, WarningKind::UnknownKey);
                 Ok(())
             }
         }
     }
 
     /// A `KEY = value` line outside `[UNITS]`/`[MDI_HEADER]`; `text` is `value` unquoted.
-    fn entry(&mut self, key: &str, value: &str, text: &str) -> Result<(), ErrorKind> {
-        let line = self.line_no;
+    fn entry(&mut self, key: &str, value: &str, text: &str, line: u32) -> Result<(), ErrorKind> {
         if let Some(k) = Key::from_name(key) {
             let v = parse_number(value).ok_or(ErrorKind::BadNumber(k))?;
             let slot = self.lines.get_mut(index(k)).ok_or(ErrorKind::Syntax)?;
@@ -456,8 +453,8 @@ impl Reader {
                 Version::Mf52
             }
         };
-        let mut params = Params::zeroed(version);
-        params.tyreside = self.tyreside.flatten();
+        self.params.version = version;
+        self.params.tyreside = self.tyreside.flatten();
         for (&(v, line), &(_, k)) in self.aliases.iter().zip(ALIASES) {
             if let Some(slot) = self.lines.get_mut(index(k)) {
                 if line != 0 && *slot == 0 {
@@ -469,20 +466,23 @@ impl Reader {
         let mut turn_slip_warned = false;
         for &k in Key::ALL {
             if !k.since().covers(version) {
-                continue; // stays at its `zeroed` value
-            }
-            let given = self.lines.get(index(k)).is_some_and(|&l| l != 0);
-            if given {
-                params.set(k, self.params.get(k));
+                // Not read by this version: back to the `Params::zeroed` value.
+                self.params
+                    .set(k, if k.need() == Need::Scale { 1.0 } else { 0.0 });
                 continue;
             }
+            if self.lines.get(index(k)).is_some_and(|&l| l != 0) {
+                continue;
+            }
+            // Absent: the value is still the one `Params::zeroed` gave (1 for λ, else 0).
             match k.need() {
                 Need::Required => return Err(whole(ErrorKind::MissingKey(k))),
                 Need::Scale => {}
                 Need::Extension => self.warn(0, WarningKind::AbsentAssumedZero(k)),
                 Need::Range => {
                     let is_min = k.name().ends_with("MIN");
-                    params.set(k, if is_min { -NO_LIMIT } else { NO_LIMIT });
+                    self.params
+                        .set(k, if is_min { -NO_LIMIT } else { NO_LIMIT });
                     self.warn(0, WarningKind::AbsentNoLimit(k));
                 }
                 Need::TurnSlip => {
@@ -493,19 +493,19 @@ impl Reader {
                 }
             }
         }
-        if let Err((k, why)) = validate(&params) {
+        if let Err((k, why)) = validate(&self.params) {
             let line = self.lines.get(index(k)).copied().unwrap_or(0);
             return Err(Error {
                 line,
                 kind: ErrorKind::Invalid(k, why),
             });
         }
-        if params.vxlow == 0.0 {
+        if self.params.vxlow == 0.0 {
             let line = self.lines.get(index(Key::VXLOW)).copied().unwrap_or(0);
             self.warn(line, WarningKind::ZeroVxlow);
         }
         Ok(Tir {
-            params,
+            params: self.params,
             warnings: self.warnings,
             warnings_dropped: self.warnings_dropped,
         })
@@ -621,6 +621,13 @@ impl fmt::Display for ErrorKind {
             ),
             ErrorKind::UnsupportedUnit => {
                 f.write_str("unsupported unit (only SI: meter, newton, radian, kg, second, pascal)")
+            }
+            ErrorKind::Invalid(k, Invalid::EmptyRange) => {
+                let max = RANGES
+                    .iter()
+                    .find(|r| r.0 == k)
+                    .map_or("its maximum", |r| r.1.name());
+                write!(f, "{}: greater than {max} (empty range)", k.name())
             }
             ErrorKind::Invalid(k, why) => write!(f, "{}: {why}{}", k.name(), reason(k)),
         }
@@ -1327,6 +1334,14 @@ mod tests {
         assert_eq!(e.to_string(), "PKY2: must not be 0 (divisor)");
         let e: &dyn core::error::Error = &e;
         assert!(e.source().is_none());
+        let e = Error {
+            line: 9,
+            kind: ErrorKind::Invalid(Key::FZMIN, Invalid::EmptyRange),
+        };
+        assert_eq!(
+            e.to_string(),
+            "line 9: FZMIN: greater than FZMAX (empty range)"
+        );
         let w = Warning {
             line: 0,
             kind: WarningKind::NoFittypAssumedPac2002,

@@ -74,7 +74,7 @@ pub fn fy<F: Float, M: Backend<F>>(
     let kappa_s = c.kappa + s_hyk; // (4.E61)
     let g_yk = weight::<F, M>(b_yk, c_yk, e_yk, s_hyk, kappa_s, &mut c.flags); // (14), (4.E59), (4.E60)
     if c.low_speed {
-        s_vyk = s_vyk * c.red_smooth;
+        s_vyk *= c.red_smooth;
     }
     Fy {
         fy: g_yk * fy0 + s_vyk, // (13), (4.E58)
@@ -136,8 +136,8 @@ pub fn mz<F: Float, M: Backend<F>>(
     let mut t =
         m.d_t * super::magic_cos::<F, M>(m.b_t, m.c_t, m.e_t, alpha_t_eq) * c.cos_alpha_prime; // (70), (4.E73)
     if c.low_speed {
-        t = t * c.red_smooth;
-        m_zr = m_zr * c.red_smooth;
+        t *= c.red_smooth;
+        m_zr *= c.red_smooth;
     }
     let mz = match p.version {
         // (69)–(71) and MF 5.2: Mz = −t·(Fy − SVyκ) + Mzr + s·Fx.

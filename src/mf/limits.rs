@@ -124,7 +124,7 @@ pub fn condition<F: Float, M: Backend<F>>(
     if opts.limits {
         // Turn slip seen by the contact patch shrinks with the slip angle (MFeval "empirically
         // discovered"; TNO behaviour).
-        phit = phit * M::cos(alpha);
+        phit *= M::cos(alpha);
         let vxlow = p.vxlow;
         if vx.abs() <= vxlow && vxlow > F::ZERO {
             low_speed = true;
@@ -133,8 +133,8 @@ pub fn condition<F: Float, M: Backend<F>>(
             red_smooth = F::ONE - F::HALF * (F::ONE + M::cos(F::PI * (vx / vxlow)));
             let red_linear = (vx / vxlow).abs();
             kappa_out = kappa * red_linear;
-            kappa = kappa * red_linear;
-            phit = phit * red_linear;
+            kappa *= red_linear;
+            phit *= red_linear;
         }
         if vx < F::ZERO {
             phit = -phit;
@@ -142,7 +142,7 @@ pub fn condition<F: Float, M: Backend<F>>(
         // α fades when the total speed |Vx| + |Vsy| falls below VXLOW (Vsy = tan(α)·Vx).
         let speed_sum = vx.abs() + (M::tan(alpha) * vx).abs();
         if speed_sum < p.vxlow {
-            alpha = alpha * (speed_sum / p.vxlow);
+            alpha *= speed_sum / p.vxlow;
         }
         let (a, fa) = alpha.clamp_flag(p.alpmin, p.alpmax);
         alpha = a;

@@ -425,3 +425,6 @@ pub(crate) fn clip_e<F: Float>(e: F, c: &mut limits::Conditioned<F>) -> F {
         e
     }
 }
+
+#[cfg(test)]
+mod tests;

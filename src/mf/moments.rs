@@ -86,7 +86,7 @@ pub fn my<F: Float, M: Backend<F>>(p: &Params<F>, c: &Conditioned<F>, fx: F) -> 
     let low = -F::ONE - p.vxlow - high;
     if kappa >= low && kappa <= high {
         let ramp = F::FRAC_PI_2 * (kappa + F::ONE) / (high + F::ONE);
-        my = my * M::sin(ramp);
+        my *= M::sin(ramp);
     }
     if kappa < low {
         my = -my;

@@ -60,8 +60,8 @@ pub fn fx0<F: Float, M: Backend<F>>(p: &Params<F>, c: &mut Conditioned<F>) -> Fx
     let mut s_hx = (p.phx1 + p.phx2 * dfz) * p.lhx; // (30), (4.E17)
     let mut s_vx = fz * (p.pvx1 + p.pvx2 * dfz) * p.lvx * c.lmux_prime * zeta1; // (31), (4.E18)
     if c.low_speed {
-        s_vx = s_vx * c.red_smooth;
-        s_hx = s_hx * c.red_smooth;
+        s_vx *= c.red_smooth;
+        s_hx *= c.red_smooth;
     }
     let kappa_x = c.kappa + s_hx; // (23), (4.E10)
     let e_x =
@@ -161,8 +161,8 @@ pub fn fy0<F: Float, M: Backend<F>>(
         }
     };
     if c.low_speed {
-        s_vy = s_vy * c.red_smooth;
-        s_hy = s_hy * c.red_smooth;
+        s_vy *= c.red_smooth;
+        s_hy *= c.red_smooth;
     }
     let alpha_y = c.alpha_star + s_hy; // (33), (4.E20)
     let c_y = p.pcy1 * p.lcy; // (35), (4.E21)

@@ -1,0 +1,561 @@
+//! Tests of what the paper states about the Magic Formula, on real and on synthetic tyres, in
+//! f32 and f64. Correctness against an independent implementation is in
+//! `host-tests/tests/oracle.rs`; these check identities and invariants.
+
+use super::limits::condition;
+use super::*;
+use crate::math::Libm;
+use proptest::prelude::*;
+use std::vec::Vec;
+
+macro_rules! tyre {
+    ($name:literal) => {
+        (
+            $name,
+            include_str!(concat!("../../host-tests/data/tyres/", $name, ".tir")),
+        )
+    };
+}
+
+/// Every bundled file that must load.
+const TYRES: &[(&str, &str)] = &[
+    tyre!("MagicFormula52_Parameters"),
+    tyre!("MagicFormula61_Parameters"),
+    tyre!("MagicFormula62_Parameters"),
+    tyre!("MagicFormula61_Parameters_mfeval43"),
+    tyre!("MagicFormula62_Parameters_mfeval43"),
+    tyre!("PacejkaBook_Defaults"),
+    tyre!("reference_tire_tvd3"),
+    tyre!("FSAE_Defaults"),
+    tyre!("335_65R22_5_G275MSA_40psi"),
+    tyre!("335_65R22_5_G275MSA_60psi"),
+    tyre!("Generic_Pac02Tire"),
+    tyre!("Sedan_Pac02Tire"),
+    tyre!("CityBus_Pac02Tire"),
+    tyre!("mf_185_80R14"),
+];
+
+fn load(text: &str) -> Params<f64> {
+    crate::tir::parse(text).map(|t| t.params).unwrap()
+}
+
+/// Parsed once per test binary (proptest calls this per case).
+fn all_tyres() -> &'static [Params<f64>] {
+    static TYRES_PARSED: std::sync::OnceLock<Vec<Params<f64>>> = std::sync::OnceLock::new();
+    TYRES_PARSED.get_or_init(|| TYRES.iter().map(|(_, t)| load(t)).collect())
+}
+
+fn no_limits() -> Options {
+    Options {
+        limits: false,
+        ..Options::default()
+    }
+}
+
+/// A symmetric synthetic tyre: every shift and asymmetry zero, so Fy(α) is odd.
+fn symmetric(version: Version) -> Params<f64> {
+    let mut p = Params::<f64>::zeroed(version);
+    p.fnomin = 4000.0;
+    p.unloaded_radius = 0.31;
+    p.longvl = 16.7;
+    p.vxlow = 1.0;
+    p.inflpres = 2.2e5;
+    p.nompres = 2.2e5;
+    p.pcx1 = 1.65;
+    p.pdx1 = 1.2;
+    p.pdx2 = -0.08;
+    p.pex1 = 0.2;
+    p.pkx1 = 22.0;
+    p.pkx3 = 0.1;
+    p.pcy1 = 1.35;
+    p.pdy1 = 1.1;
+    p.pdy2 = -0.1;
+    p.pey1 = -0.5;
+    p.pky1 = -18.0;
+    p.pky2 = 1.8;
+    p.pky4 = 2.0;
+    p.qbz1 = 10.0;
+    p.qcz1 = 1.2;
+    p.qdz1 = 0.09;
+    p.qez1 = -1.5;
+    p.qbz10 = 0.4;
+    p.rbx1 = 12.0;
+    p.rcx1 = 1.0;
+    p.rby1 = 10.0;
+    p.rcy1 = 1.0;
+    p
+}
+
+fn eval64(p: &Params<f64>, i: Input<f64>, o: &Options) -> Output<f64> {
+    eval::<f64, Libm>(p, &i, o).unwrap()
+}
+
+fn lat(fz: f64, alpha: f64) -> Input<f64> {
+    Input {
+        fz,
+        alpha,
+        vx: 20.0,
+        ..Input::default()
+    }
+}
+
+#[test]
+fn every_bundled_tyre_evaluates_with_iso_signs() {
+    for (name, text) in TYRES {
+        let p = load(text);
+        let fz = p.fnomin;
+        let o = eval64(&p, lat(fz, 0.05), &Options::default());
+        assert!(
+            o.fy < 0.0,
+            "{name}: alpha > 0 must give Fy < 0, got {}",
+            o.fy
+        );
+        assert!(
+            o.mz > 0.0,
+            "{name}: alpha > 0 must give Mz > 0 below the peak, got {}",
+            o.mz
+        );
+        let o = eval64(
+            &p,
+            Input {
+                fz,
+                kappa: -0.05, // braking: inside every file's KPUMIN..KPUMAX (the truck's is ..0)
+                vx: 20.0,
+                ..Input::default()
+            },
+            &Options::default(),
+        );
+        assert!(
+            o.fx < 0.0,
+            "{name}: kappa < 0 must give Fx < 0, got {}",
+            o.fx
+        );
+        assert!(o.mu_y > 0.3 && o.mu_y < 4.0, "{name}: mu_y {}", o.mu_y);
+    }
+}
+
+#[test]
+fn no_contact_gives_zero() {
+    for p in all_tyres().iter().cloned() {
+        for fz in [0.0, -100.0] {
+            let o = eval64(
+                &p,
+                Input {
+                    fz,
+                    kappa: 0.1,
+                    alpha: 0.1,
+                    gamma: 0.02,
+                    vx: 20.0,
+                    ..Input::default()
+                },
+                &Options::default(),
+            );
+            assert!(o.flags.contains(Flags::NO_CONTACT));
+            for v in [o.fx, o.fy, o.mx, o.my, o.mz, o.mu_x, o.mu_y, o.k_ya, o.t] {
+                assert_eq!(v, 0.0);
+            }
+        }
+    }
+}
+
+#[test]
+fn non_finite_input_is_an_error() {
+    let p = load(TYRES[1].1);
+    let base = lat(4000.0, 0.05);
+    let cases = [
+        (
+            Input {
+                fz: f64::NAN,
+                ..base
+            },
+            InputField::Fz,
+        ),
+        (
+            Input {
+                kappa: f64::INFINITY,
+                ..base
+            },
+            InputField::Kappa,
+        ),
+        (
+            Input {
+                alpha: f64::NAN,
+                ..base
+            },
+            InputField::Alpha,
+        ),
+        (
+            Input {
+                gamma: f64::NEG_INFINITY,
+                ..base
+            },
+            InputField::Gamma,
+        ),
+        (
+            Input {
+                phit: f64::NAN,
+                ..base
+            },
+            InputField::Phit,
+        ),
+        (
+            Input {
+                vx: f64::NAN,
+                ..base
+            },
+            InputField::Vx,
+        ),
+        (
+            Input {
+                p: Some(f64::NAN),
+                ..base
+            },
+            InputField::P,
+        ),
+    ];
+    for (i, field) in cases {
+        assert_eq!(
+            eval::<f64, Libm>(&p, &i, &Options::default()),
+            Err(EvalError::NonFinite(field))
+        );
+    }
+    assert_eq!(
+        eval::<f64, Libm>(
+            &p,
+            &Input {
+                p: Some(-1.0),
+                ..base
+            },
+            &Options::default()
+        ),
+        Err(EvalError::NonPositivePressure)
+    );
+    let p52 = load(TYRES[0].1);
+    let ts = Options {
+        turn_slip: true,
+        ..Options::default()
+    };
+    assert_eq!(
+        eval::<f64, Libm>(&p52, &base, &ts),
+        Err(EvalError::TurnSlipUnavailable)
+    );
+}
+
+#[test]
+fn limits_are_flagged() {
+    let p = load(TYRES[1].1);
+    let o = eval64(
+        &p,
+        Input {
+            fz: p.fzmax * 2.0,
+            kappa: 5.0,
+            alpha: 2.0,
+            gamma: 1.0,
+            vx: 0.5,
+            p: Some(p.presmax * 2.0),
+            ..Input::default()
+        },
+        &Options::default(),
+    );
+    for f in [
+        Flags::FZ_HIGH,
+        Flags::KAPPA,
+        Flags::ALPHA,
+        Flags::GAMMA,
+        Flags::PRESSURE,
+        Flags::LOW_SPEED,
+    ] {
+        assert!(o.flags.contains(f), "missing flag {f:?} in {:?}", o.flags);
+    }
+    assert_eq!(o.fz, p.fzmax);
+    let o = eval64(&p, lat(p.fnomin, 0.05), &Options::default());
+    assert!(o.flags.is_empty(), "{:?}", o.flags);
+}
+
+#[test]
+fn use_mode_digits() {
+    assert_eq!(Options::from_use_mode(111), Some(Options::default()));
+    let o = Options::from_use_mode(221).unwrap();
+    assert!(!o.limits && o.alpha_star && !o.turn_slip);
+    assert!(Options::from_use_mode(112).unwrap().turn_slip);
+    for bad in [0, 11, 311, 131, 113, 1111] {
+        assert_eq!(Options::from_use_mode(bad), None, "{bad}");
+    }
+}
+
+/// (4.E8) with Aμ = 10, where MFeval uses Aμ = 1: on a road with λμ = 0.5 the vertical shift
+/// SVy scales with λμ' = 10·0.5/(1 + 9·0.5) = 0.909, not 0.5. DIFFERS FROM MFeval (README).
+#[test]
+fn digressive_friction_factor() {
+    let mut p = load(TYRES[1].1);
+    p.lmuy = 0.5;
+    p.lmux = 0.5;
+    let c = condition::<f64, Libm>(&p, &lat(p.fnomin, 0.0), &no_limits()).unwrap();
+    assert!((c.lmuy_prime - 10.0 * 0.5 / (1.0 + 9.0 * 0.5)).abs() < 1e-15);
+    assert!((c.lmux_prime - 0.909_090_909_09).abs() < 1e-9);
+    assert_eq!(c.lmuy_star, 0.5);
+}
+
+/// The paper, eq. (3): D is the peak value. With no shifts and E ≤ 1, C > 1, max |Fy0| = Dy.
+#[test]
+fn d_is_the_peak() {
+    for v in [Version::Delft96, Version::Mf52, Version::Mf61] {
+        let p = symmetric(v);
+        let fz = 5000.0;
+        let peak = (0..=4000)
+            .map(|i| {
+                eval64(&p, lat(fz, i as f64 * 0.4 / 4000.0), &no_limits())
+                    .fy
+                    .abs()
+            })
+            .fold(0.0, f64::max);
+        let o = eval64(&p, lat(fz, 0.01), &no_limits());
+        let d = o.mu_y * fz;
+        assert!((peak - d).abs() < 1e-4 * d, "{v:?}: peak {peak} vs D {d}");
+    }
+}
+
+/// The paper: "the product BCD corresponds to the slope at the origin" — ∂Fy0/∂α at αy = 0 is
+/// Kyα (39), and ∂Fx0/∂κ at κx = 0 is Kxκ (28), for every bundled tyre.
+#[test]
+fn bcd_is_the_slope_at_the_origin() {
+    for p in all_tyres().iter().cloned() {
+        let fz = p.fnomin;
+        let mut c = condition::<f64, Libm>(&p, &lat(fz, 0.0), &no_limits()).unwrap();
+        let f = pure::fy0::<f64, Libm>(&p, &mut c, 0.0, false);
+        let h = 1e-6;
+        let at = |a: f64| {
+            let mut c = condition::<f64, Libm>(&p, &lat(fz, a), &no_limits()).unwrap();
+            pure::fy0::<f64, Libm>(&p, &mut c, 0.0, false).fy0
+        };
+        let a0 = -f.s_hy;
+        let slope = (at(a0 + h) - at(a0 - h)) / (2.0 * h);
+        assert!(
+            (slope - f.k_ya).abs() < 1e-5 * f.k_ya.abs(),
+            "{:?}: {slope} vs {}",
+            p.version,
+            f.k_ya
+        );
+
+        let lon = |k: f64| {
+            let i = Input {
+                fz,
+                kappa: k,
+                vx: 20.0,
+                ..Input::default()
+            };
+            let mut c = condition::<f64, Libm>(&p, &i, &no_limits()).unwrap();
+            pure::fx0::<f64, Libm>(&p, &mut c)
+        };
+        let f0 = lon(0.0);
+        let k0 = -(p.phx1 + p.phx2 * c.dfz) * p.lhx;
+        let slope = (lon(k0 + h).fx0 - lon(k0 - h).fx0) / (2.0 * h);
+        assert!(
+            (slope - f0.k_xk).abs() < 1e-5 * f0.k_xk.abs(),
+            "{:?}: {slope} vs {}",
+            p.version,
+            f0.k_xk
+        );
+    }
+}
+
+/// Eq. (6): for zero camber the cornering stiffness attains its maximum p1 at Fz = p2 (with
+/// p2 as the load PKY2·Fz0' in the appendix's normalisation) — versions with the constant 2.
+#[test]
+fn cornering_stiffness_peaks_at_p2() {
+    for p in all_tyres().iter().cloned().filter(|p| !p.version.is_mf6()) {
+        let fz_peak = p.pky2 * p.lfzo * p.fnomin;
+        let k = |fz: f64| eval64(&p, lat(fz, 0.0), &no_limits()).k_ya.abs();
+        let kmax = k(fz_peak);
+        assert!((kmax - (p.pky1 * p.fnomin * p.lfzo * p.lky).abs()).abs() < 1e-9 * kmax);
+        for f in [0.8, 0.95, 0.99, 1.01, 1.05, 1.3] {
+            assert!(k(fz_peak * f) < kmax, "{:?}", p.version);
+        }
+    }
+}
+
+/// Eq. (12): the weighting functions are 1 at pure slip, so Fx = Fx0 at α = 0 and Fy = Fy0 at
+/// κ = 0.
+#[test]
+fn weights_are_one_at_pure_slip() {
+    for p in all_tyres().iter().cloned() {
+        for k in [-0.4, -0.1, 0.0, 0.05, 0.3] {
+            let i = Input {
+                fz: p.fnomin,
+                kappa: k,
+                vx: 20.0,
+                ..Input::default()
+            };
+            let mut c = condition::<f64, Libm>(&p, &i, &no_limits()).unwrap();
+            let fx0 = pure::fx0::<f64, Libm>(&p, &mut c).fx0;
+            assert_eq!(
+                eval64(&p, i, &no_limits()).fx,
+                combined::fx::<f64, Libm>(&p, &mut c, fx0)
+            );
+            assert!((eval64(&p, i, &no_limits()).fx - fx0).abs() <= 1e-12 * fx0.abs().max(1.0));
+        }
+        for a in [-0.3, -0.02, 0.0, 0.1] {
+            let i = lat(p.fnomin, a);
+            let mut c = condition::<f64, Libm>(&p, &i, &no_limits()).unwrap();
+            let fy0 = pure::fy0::<f64, Libm>(&p, &mut c, 0.0, false).fy0;
+            assert!((eval64(&p, i, &no_limits()).fy - fy0).abs() <= 1e-12 * fy0.abs().max(1.0));
+        }
+    }
+}
+
+/// TYRESIDE: a right tyre mounted on the left is its mirror image: Fy, Mx, Mz change sign with
+/// α, γ, φt; Fx, My do not.
+#[test]
+fn mirroring_is_a_reflection() {
+    let p = load(TYRES[1].1); // TYRESIDE = 'RIGHT'
+    assert_eq!(p.tyreside, Some(Side::Right));
+    let right = Options {
+        mounted: Some(Side::Right),
+        ..Options::default()
+    };
+    let left = Options {
+        mounted: Some(Side::Left),
+        ..Options::default()
+    };
+    for (k, a, g) in [(0.0, 0.05, 0.02), (-0.1, -0.1, -0.03), (0.05, 0.2, 0.0)] {
+        let i = Input {
+            fz: 5000.0,
+            kappa: k,
+            alpha: a,
+            gamma: g,
+            vx: 20.0,
+            ..Input::default()
+        };
+        let mi = Input {
+            alpha: -a,
+            gamma: -g,
+            ..i
+        };
+        let l = eval64(&p, i, &left);
+        let r = eval64(&p, mi, &right);
+        assert!(l.flags.contains(Flags::MIRRORED) && !r.flags.contains(Flags::MIRRORED));
+        assert_eq!(l.fx, r.fx);
+        assert_eq!(l.my, r.my);
+        assert_eq!(l.fy, -r.fy);
+        assert_eq!(l.mz, -r.mz);
+        assert_eq!(l.mx, -r.mx);
+        // Not mirrored when mounted on its own side: identical to no mounting given.
+        assert_eq!(eval64(&p, i, &right), eval64(&p, i, &Options::default()));
+    }
+}
+
+/// Delft 96 eq. (28): Kx = Fz(pKx1 + pKx2·dfz)·exp(−pKx3·dfz); MF 5.2 has exp(+PKX3·dfz).
+#[test]
+fn delft96_slip_stiffness_exponent_sign() {
+    let p96 = symmetric(Version::Delft96);
+    let p52 = symmetric(Version::Mf52);
+    let fz = 6000.0;
+    let dfz = (fz - 4000.0) / 4000.0;
+    let k96 = eval64(&p96, lat(fz, 0.0), &no_limits()).k_xk;
+    let k52 = eval64(&p52, lat(fz, 0.0), &no_limits()).k_xk;
+    assert!((k96 - fz * 22.0 * (-0.1 * dfz).exp()).abs() < 1e-9 * k96);
+    assert!((k52 - fz * 22.0 * (0.1 * dfz).exp()).abs() < 1e-9 * k52);
+}
+
+macro_rules! float_props {
+    ($modname:ident, $t:ty, $tol:expr) => {
+        mod $modname {
+            use super::*;
+
+            fn tyres() -> Vec<Params<$t>> {
+                all_tyres().iter().map(|p| p.cast::<$t>()).collect()
+            }
+
+            proptest! {
+                #![proptest_config(ProptestConfig::with_cases(256))]
+
+                /// Any finite input: Ok with finite numbers, or a clear error; never a panic.
+                #[test]
+                fn finite_in_finite_out(
+                    idx in 0usize..14, fz in -1e5f64..1e6, kappa in -20.0f64..20.0,
+                    alpha in -1.6f64..1.6, gamma in -1.0f64..1.0, phit in -1.0f64..1.0,
+                    vx in -80.0f64..80.0, limits in any::<bool>(), star in any::<bool>(),
+                    turn in any::<bool>(), big in any::<bool>(),
+                ) {
+                    let ps = tyres();
+                    let p = &ps[idx];
+                    let s: f64 = if big { 1e25 } else { 1.0 };
+                    let i = Input { fz: (fz * s) as $t, kappa: kappa as $t, alpha: alpha as $t,
+                        gamma: gamma as $t, phit: phit as $t, vx: (vx * s) as $t, p: None };
+                    let o = Options { limits, alpha_star: star, turn_slip: turn, mounted: None };
+                    match eval::<$t, Libm>(p, &i, &o) {
+                        Ok(out) => {
+                            for v in [out.fx, out.fy, out.mz, out.mx, out.my, out.t, out.m_zr,
+                                      out.mu_x, out.mu_y, out.k_xk, out.k_ya, out.sigma_x, out.sigma_y] {
+                                prop_assert!(v.is_finite());
+                            }
+                        }
+                        Err(EvalError::TurnSlipUnavailable) => prop_assert!(turn),
+                        Err(EvalError::Overflow) => prop_assert!(!limits || big),
+                        Err(e) => prop_assert!(false, "unexpected {e:?}"),
+                    }
+                }
+
+                /// In the operating range, with limits on, evaluation always succeeds and
+                /// |Fy − SVy-free part| stays within the friction ellipse's lateral bound μy·Fz
+                /// (plus the vertical shifts, bounded by 10 % of Fz here).
+                #[test]
+                fn friction_bound(
+                    idx in 0usize..14, load in 0.05f64..2.0, kappa in -1.0f64..1.0,
+                    alpha in -0.5f64..0.5, gamma in -0.1f64..0.1, vx in 1.0f64..60.0,
+                ) {
+                    let ps = tyres();
+                    let p = &ps[idx];
+                    let fz = (load * p.fnomin.to_f64()) as $t;
+                    let i = Input { fz, kappa: kappa as $t, alpha: alpha as $t, gamma: gamma as $t,
+                        vx: vx as $t, ..Input::default() };
+                    let o = eval::<$t, Libm>(p, &i, &Options::default()).unwrap();
+                    let bound = (o.mu_y * o.fz).to_f64() * 1.001 + 0.1 * o.fz.to_f64();
+                    prop_assert!(o.fy.to_f64().abs() <= bound, "Fy {:?} bound {}", o.fy, bound);
+                    let bound = (o.mu_x * o.fz).to_f64() * 1.001 + 0.1 * o.fz.to_f64();
+                    prop_assert!(o.fx.to_f64().abs() <= bound, "Fx {:?} bound {}", o.fx, bound);
+                }
+
+                /// With every shift and asymmetry zero, Fy and Mz are odd in α, Fx odd in κ.
+                #[test]
+                fn odd_symmetry(v in 0usize..3, load in 0.2f64..2.0, a in 0.0f64..0.6, k in 0.0f64..0.8) {
+                    let version = [Version::Delft96, Version::Mf52, Version::Mf61][v];
+                    let p = symmetric(version).cast::<$t>();
+                    let fz = (load * 4000.0) as $t;
+                    let ev = |alpha: f64, kappa: f64| eval::<$t, Libm>(&p, &Input { fz,
+                        alpha: alpha as $t, kappa: kappa as $t, vx: 20.0, ..Input::default() },
+                        &no_limits()).unwrap();
+                    let (pos, neg) = (ev(a, 0.0), ev(-a, 0.0));
+                    let tol = $tol * 4000.0;
+                    prop_assert!((pos.fy + neg.fy).to_f64().abs() <= tol);
+                    prop_assert!((pos.mz + neg.mz).to_f64().abs() <= tol * 0.31);
+                    let (pos, neg) = (ev(0.0, k), ev(0.0, -k));
+                    prop_assert!((pos.fx + neg.fx).to_f64().abs() <= tol);
+                }
+
+                /// The device path agrees with the host path (f32 rounding only).
+                #[test]
+                fn agrees_with_f64(
+                    idx in 0usize..14, load in 0.1f64..2.0, kappa in -0.5f64..0.5,
+                    alpha in -0.3f64..0.3, gamma in -0.05f64..0.05, vx in 2.0f64..40.0,
+                ) {
+                    let p64 = &all_tyres()[idx];
+                    let p = p64.cast::<$t>();
+                    let fz = load * p64.fnomin;
+                    let i = Input { fz, kappa, alpha, gamma, vx, ..Input::default() };
+                    let a = eval::<f64, Libm>(p64, &i, &Options::default()).unwrap();
+                    let it = Input { fz: fz as $t, kappa: kappa as $t, alpha: alpha as $t,
+                        gamma: gamma as $t, vx: vx as $t, ..Input::default() };
+                    let b = eval::<$t, Libm>(&p, &it, &Options::default()).unwrap();
+                    let tol = 1e-4 * p64.fnomin;
+                    prop_assert!((a.fx - b.fx.to_f64()).abs() <= tol);
+                    prop_assert!((a.fy - b.fy.to_f64()).abs() <= tol);
+                    prop_assert!((a.mz - b.mz.to_f64()).abs() <= tol * p64.unloaded_radius);
+                }
+            }
+        }
+    };
+}
+
+float_props!(props_f64, f64, 1e-9);
+float_props!(props_f32, f32, 1e-4);
