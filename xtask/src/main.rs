@@ -1,1 +1,175 @@
-fn main() {}
+//! `cargo xtask <task>`: the project's task runner (the README's test command is
+//! `cargo xtask test-all`, and `.ci/run` calls exactly that).
+//!
+//! Tasks:
+//! - `test-all`: installs the embedded targets, builds the core for thumbv7em-none-eabihf and
+//!   thumbv6m-none-eabi, checks formatting and lints, runs every host test (core unit and
+//!   property tests, doc tests, the MFeval oracle, the CLI), builds the firmware and runs it
+//!   under QEMU (installing `qemu-system-arm` with apt-get when it is missing and we may).
+//! - `qemu-check`: only ensures QEMU is present.
+use std::io::{BufRead, BufReader};
+use std::process::{Command, ExitCode, Stdio};
+
+const TARGETS: [&str; 2] = ["thumbv7em-none-eabihf", "thumbv6m-none-eabi"];
+
+fn main() -> ExitCode {
+    let task = std::env::args().nth(1).unwrap_or_default();
+    let result = match task.as_str() {
+        "test-all" => test_all(),
+        "qemu-check" => ensure_qemu(),
+        _ => Err(format!(
+            "unknown task '{task}'; tasks: test-all, qemu-check"
+        )),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("xtask: FAILED: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn root() -> std::path::PathBuf {
+    std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+fn step(name: &str) {
+    eprintln!("\n==> {name}");
+}
+
+fn run(cmd: &mut Command) -> Result<(), String> {
+    let shown = format!("{cmd:?}");
+    let status = cmd.status().map_err(|e| format!("{shown}: {e}"))?;
+    if status.success() {
+        Ok(())
+    } else {
+        Err(format!("{shown} exited with {status}"))
+    }
+}
+
+fn cargo() -> Command {
+    let mut c = Command::new(std::env::var("CARGO").unwrap_or_else(|_| "cargo".into()));
+    c.current_dir(root());
+    c
+}
+
+/// Runs `cargo test ...`, echoing its output, and adds up the "test result" lines.
+fn cargo_test(args: &[&str], passed: &mut u64, failed: &mut u64) -> Result<(), String> {
+    let mut c = cargo();
+    c.arg("test").args(args).stdout(Stdio::piped());
+    let shown = format!("{c:?}");
+    let mut child = c.spawn().map_err(|e| format!("{shown}: {e}"))?;
+    if let Some(out) = child.stdout.take() {
+        for line in BufReader::new(out).lines().map_while(Result::ok) {
+            println!("{line}");
+            if let Some(rest) = line.strip_prefix("test result: ") {
+                for part in rest.split(';') {
+                    let part = part
+                        .trim()
+                        .trim_start_matches("ok. ")
+                        .trim_start_matches("FAILED. ");
+                    let mut it = part.split_whitespace();
+                    if let (Some(n), Some(what)) = (it.next(), it.next()) {
+                        let n: u64 = n.parse().unwrap_or(0);
+                        match what {
+                            "passed" => *passed += n,
+                            "failed" => *failed += n,
+                            _ => {}
+                        }
+                    }
+                }
+            }
+        }
+    }
+    let status = child.wait().map_err(|e| format!("{shown}: {e}"))?;
+    if status.success() {
+        Ok(())
+    } else {
+        Err(format!("{shown} exited with {status}"))
+    }
+}
+
+fn have(cmd: &str) -> bool {
+    Command::new(cmd)
+        .arg("--version")
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .status()
+        .map(|s| s.success())
+        .unwrap_or(false)
+}
+
+fn ensure_targets() -> Result<(), String> {
+    step("rustup target add (idempotent; rust-toolchain.toml's `targets` does not add them to an installed toolchain)");
+    if have("rustup") {
+        let mut c = Command::new("rustup");
+        c.current_dir(root()).args(["target", "add"]).args(TARGETS);
+        run(&mut c)
+    } else {
+        eprintln!("rustup not found: assuming the targets {TARGETS:?} are installed");
+        Ok(())
+    }
+}
+
+fn ensure_qemu() -> Result<(), String> {
+    step("qemu-system-arm");
+    if have("qemu-system-arm") {
+        return Ok(());
+    }
+    let is_root = Command::new("id")
+        .arg("-u")
+        .output()
+        .map(|o| o.stdout.starts_with(b"0"))
+        .unwrap_or(false);
+    if is_root && have("apt-get") {
+        eprintln!("qemu-system-arm is missing: installing it with apt-get");
+        let _ = run(Command::new("apt-get").arg("update").stdout(Stdio::null()));
+        run(Command::new("apt-get").args([
+            "install",
+            "-y",
+            "--no-install-recommends",
+            "qemu-system-arm",
+        ]))?;
+    }
+    if have("qemu-system-arm") {
+        Ok(())
+    } else {
+        Err(
+            "qemu-system-arm is required to run the firmware tests; install it (Debian/Ubuntu: \
+             `sudo apt-get install qemu-system-arm`) and run again"
+                .into(),
+        )
+    }
+}
+
+fn test_all() -> Result<(), String> {
+    let (mut passed, mut failed) = (0u64, 0u64);
+    ensure_targets()?;
+    for t in TARGETS {
+        step(&format!("core builds for {t} (no_std, no alloc)"));
+        run(cargo().args(["build", "-p", "gough", "--release", "--target", t]))?;
+    }
+    step("formatting");
+    run(cargo().args(["fmt", "--all", "--check"]))?;
+    step("lints (the core denies unwrap/expect/panic/indexing outside tests)");
+    run(cargo().args([
+        "clippy",
+        "--workspace",
+        "--all-targets",
+        "--",
+        "-D",
+        "warnings",
+    ]))?;
+    step("host tests: core unit + property + doc tests, MFeval oracle, CLI");
+    cargo_test(&["--workspace"], &mut passed, &mut failed)?;
+    ensure_qemu()?;
+    step("firmware: build for thumbv7em-none-eabihf and run under QEMU mps2-an386");
+    let mut c = cargo();
+    c.current_dir(root().join("firmware"))
+        .args(["run", "--release"]);
+    run(&mut c)?;
+    passed += 1;
+    println!("\ntest-all: {passed} passed, {failed} failed");
+    Ok(())
+}
