@@ -5,7 +5,7 @@
 //! FITTYP          = 61            $Magic Formula version number
 //! TYRESIDE        = 'LEFT'
 //! [VERTICAL]
-//! FNOMIN          = 4000          $Nominal wheel load [N]
+//! FNOMIN          = 4000          $Nominal wheel load \[N\]
 //! ```
 //!
 //! [`parse`] reads the whole text once, line by line, into a [`Params<f64>`] (cast it with

@@ -126,7 +126,7 @@ fn check_file(path: &Path, prec: Precision, report: &mut Vec<String>) -> Vec<Fai
                 Unit::Length => tolerance::moment(fnomin, r0, prec) / fnomin,
             };
             let err = (got - want).abs();
-            if !(err <= tol) {
+            if err.is_nan() || err > tol {
                 failures.push(Failure(format!(
                     "{fname} {prec:?} line {line} {col}: ours {got:.9e} oracle {want:.9e} |err| {err:.3e} > {tol:.3e}  (in: {:?})",
                     &row[..7]

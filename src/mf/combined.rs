@@ -40,11 +40,11 @@ pub fn fx<F: Float, M: Backend<F>>(p: &Params<F>, c: &mut Conditioned<F>, fx0: F
 /// Results of [`fy`].
 #[derive(Debug, Clone, Copy)]
 pub struct Fy<F> {
-    /// Combined-slip lateral force Fy [N] (13), (4.E58).
+    /// Combined-slip lateral force Fy \[N\] (13), (4.E58).
     pub fy: F,
     /// Gyκ (14), (4.E59).
     pub g_yk: F,
-    /// κ-induced side force SVyκ [N] (16), (4.E66).
+    /// κ-induced side force SVyκ \[N\] (16), (4.E66).
     pub s_vyk: F,
 }
 
@@ -86,11 +86,11 @@ pub fn fy<F: Float, M: Backend<F>>(
 /// Results of [`mz`].
 #[derive(Debug, Clone, Copy)]
 pub struct Mz<F> {
-    /// Aligning torque Mz [N·m] (17), (69), (4.E71).
+    /// Aligning torque Mz \[N·m\] (17), (69), (4.E71).
     pub mz: F,
-    /// Pneumatic trail t [m] (70), (4.E73).
+    /// Pneumatic trail t \[m\] (70), (4.E73).
     pub t: F,
-    /// Residual torque Mzr [N·m] (72), (4.E75).
+    /// Residual torque Mzr \[N·m\] (72), (4.E75).
     pub m_zr: F,
 }
 

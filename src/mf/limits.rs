@@ -28,11 +28,11 @@ pub struct Conditioned<F> {
     pub limits: bool,
     /// α*, γ* definitions on.
     pub use_alpha_star: bool,
-    /// Fz for the forces [N] (≥ 0, clipped at FZMAX).
+    /// Fz for the forces \[N\] (≥ 0, clipped at FZMAX).
     pub fz: F,
-    /// Fz for the aligning-torque terms Dt, Dr [N]: Fz raised to FZMIN when limits are on.
+    /// Fz for the aligning-torque terms Dt, Dr \[N\]: Fz raised to FZMIN when limits are on.
     pub fz_low: F,
-    /// Fz before any clip (negative → 0) [N]: rolling resistance and radius.
+    /// Fz before any clip (negative → 0) \[N\]: rolling resistance and radius.
     pub fz_u: F,
     /// κ used by the equations (reduced at low speed, clipped).
     pub kappa: F,
@@ -40,17 +40,17 @@ pub struct Conditioned<F> {
     pub kappa_out: F,
     /// κ as given (rolling resistance, radius).
     pub kappa_u: F,
-    /// α used by the equations [rad].
+    /// α used by the equations \[rad\].
     pub alpha: F,
-    /// γ used by the equations [rad].
+    /// γ used by the equations \[rad\].
     pub gamma: F,
-    /// φt after conditioning [1/m].
+    /// φt after conditioning \[1/m\].
     pub phit: F,
-    /// Vx as given [m/s].
+    /// Vx as given \[m/s\].
     pub vx: F,
-    /// Inflation pressure after clipping [Pa].
+    /// Inflation pressure after clipping \[Pa\].
     pub p: F,
-    /// Fz0' = λFz0·Fz0 (4.E1) [N].
+    /// Fz0' = λFz0·Fz0 (4.E1) \[N\].
     pub fz0_prime: F,
     /// dfz = (Fz − Fz0')/Fz0' (4.E2a).
     pub dfz: F,

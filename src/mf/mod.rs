@@ -51,19 +51,19 @@ pub const EPS: f64 = 1e-6;
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Input<F> {
-    /// Vertical load Fz [N], ≥ 0 in contact; Fz ≤ 0 means no contact (all outputs zero).
+    /// Vertical load Fz \[N\], ≥ 0 in contact; Fz ≤ 0 means no contact (all outputs zero).
     pub fz: F,
-    /// Longitudinal slip κ [-]: −1 locked wheel, 0 free rolling, > 0 driving.
+    /// Longitudinal slip κ \[-\]: −1 locked wheel, 0 free rolling, > 0 driving.
     pub kappa: F,
-    /// Slip angle α [rad], ISO-W: α > 0 gives Fy < 0.
+    /// Slip angle α \[rad\], ISO-W: α > 0 gives Fy < 0.
     pub alpha: F,
-    /// Inclination (camber) angle γ [rad].
+    /// Inclination (camber) angle γ \[rad\].
     pub gamma: F,
-    /// Turn slip φt [1/m] (path curvature at zero slip angle); used only with turn slip on.
+    /// Turn slip φt \[1/m\] (path curvature at zero slip angle); used only with turn slip on.
     pub phit: F,
-    /// Longitudinal speed of the wheel centre Vx [m/s]; < 0 runs backwards.
+    /// Longitudinal speed of the wheel centre Vx \[m/s\]; < 0 runs backwards.
     pub vx: F,
-    /// Inflation pressure p [Pa]; `None` takes `INFLPRES` from the parameter set. Used by MF 6.x.
+    /// Inflation pressure p \[Pa\]; `None` takes `INFLPRES` from the parameter set. Used by MF 6.x.
     pub p: Option<F>,
 }
 
@@ -183,36 +183,36 @@ impl Flags {
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Output<F> {
-    /// Longitudinal force Fx [N]; κ > 0 gives Fx > 0.
+    /// Longitudinal force Fx \[N\]; κ > 0 gives Fx > 0.
     pub fx: F,
-    /// Lateral force Fy [N]; α > 0 gives Fy < 0.
+    /// Lateral force Fy \[N\]; α > 0 gives Fy < 0.
     pub fy: F,
-    /// Vertical load used [N] (after clipping to FZMAX when limits are on).
+    /// Vertical load used \[N\] (after clipping to FZMAX when limits are on).
     pub fz: F,
-    /// Overturning moment Mx [N·m].
+    /// Overturning moment Mx \[N·m\].
     pub mx: F,
-    /// Rolling resistance moment My [N·m] (negative when rolling forwards).
+    /// Rolling resistance moment My \[N·m\] (negative when rolling forwards).
     pub my: F,
-    /// Aligning moment Mz [N·m]; α > 0 gives Mz > 0 below the peak.
+    /// Aligning moment Mz \[N·m\]; α > 0 gives Mz > 0 below the peak.
     pub mz: F,
-    /// Longitudinal peak friction coefficient μx [-] (4.E13), at the actual load/pressure/camber.
+    /// Longitudinal peak friction coefficient μx \[-\] (4.E13), at the actual load/pressure/camber.
     pub mu_x: F,
-    /// Lateral peak friction coefficient μy [-] (4.E23), as a magnitude (files that fit with
+    /// Lateral peak friction coefficient μy \[-\] (4.E23), as a magnitude (files that fit with
     /// negative PDY1 carry the sign in Dy instead).
     pub mu_y: F,
-    /// Longitudinal slip stiffness Kxκ [N] (4.E15), ∂Fx0/∂κ at κx = 0.
+    /// Longitudinal slip stiffness Kxκ \[N\] (4.E15), ∂Fx0/∂κ at κx = 0.
     pub k_xk: F,
-    /// Cornering stiffness Kyα [N/rad] (4.E25), ∂Fy0/∂α at αy = 0 (negative in ISO-W files).
+    /// Cornering stiffness Kyα \[N/rad\] (4.E25), ∂Fy0/∂α at αy = 0 (negative in ISO-W files).
     pub k_ya: F,
-    /// Pneumatic trail t [m] (4.E73), at the combined-slip equivalent angle.
+    /// Pneumatic trail t \[m\] (4.E73), at the combined-slip equivalent angle.
     pub t: F,
-    /// Residual aligning torque Mzr [N·m] (4.E75).
+    /// Residual aligning torque Mzr \[N·m\] (4.E75).
     pub m_zr: F,
-    /// Longitudinal relaxation length σx [m] (0 when the file gives no carcass stiffness).
+    /// Longitudinal relaxation length σx \[m\] (0 when the file gives no carcass stiffness).
     pub sigma_x: F,
-    /// Lateral relaxation length σy [m] (0 when the file gives no carcass stiffness).
+    /// Lateral relaxation length σy \[m\] (0 when the file gives no carcass stiffness).
     pub sigma_y: F,
-    /// κ after the low-speed reduction (as MFeval's `out_kappa`) [-].
+    /// κ after the low-speed reduction (as MFeval's `out_kappa`) \[-\].
     pub kappa: F,
     /// What was clipped or regularised.
     pub flags: Flags,

@@ -26,7 +26,7 @@ fn low_load<F: Float>(fz: F, fzmin: F, power2: bool) -> F {
     }
 }
 
-/// Overturning moment Mx [N·m], (A47) + MF 6.1.2 terms.
+/// Overturning moment Mx \[N·m\], (A47) + MF 6.1.2 terms.
 pub fn mx<F: Float, M: Backend<F>>(p: &Params<F>, c: &Conditioned<F>, fy: F) -> F {
     let fz = low_load(c.fz, p.fzmin, true);
     let (g, fz0, r0) = (c.gamma, p.fnomin, p.unloaded_radius);
@@ -55,7 +55,7 @@ fn pow<F: Float, M: Backend<F>>(x: F, y: F) -> F {
     }
 }
 
-/// Rolling resistance moment My [N·m], (A48) for MF 6.x, MF 5.2 form otherwise.
+/// Rolling resistance moment My \[N·m\], (A48) for MF 6.x, MF 5.2 form otherwise.
 pub fn my<F: Float, M: Backend<F>>(p: &Params<F>, c: &Conditioned<F>, fx: F) -> F {
     let fz = low_load(c.fz_u, p.fzmin, false);
     let (fz0, r0, v0) = (p.fnomin, p.unloaded_radius, p.longvl);

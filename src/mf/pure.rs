@@ -15,11 +15,11 @@ use crate::math::{Backend, Float};
 /// Results of [`fx0`].
 #[derive(Debug, Clone, Copy)]
 pub struct Fx0<F> {
-    /// Pure longitudinal force Fx0 [N] (22), (4.E9).
+    /// Pure longitudinal force Fx0 \[N\] (22), (4.E9).
     pub fx0: F,
-    /// μx [-] (26), (4.E13).
+    /// μx \[-\] (26), (4.E13).
     pub mu_x: F,
-    /// Kxκ [N] (28), (4.E15).
+    /// Kxκ \[N\] (28), (4.E15).
     pub k_xk: F,
 }
 
@@ -78,19 +78,19 @@ pub fn fx0<F: Float, M: Backend<F>>(p: &Params<F>, c: &mut Conditioned<F>) -> Fx
 /// Results of [`fy0`].
 #[derive(Debug, Clone, Copy)]
 pub struct Fy0<F> {
-    /// Pure lateral force Fy0 [N] (32), (4.E19).
+    /// Pure lateral force Fy0 \[N\] (32), (4.E19).
     pub fy0: F,
-    /// μy [-] (37), (4.E23), signed as the file fits it.
+    /// μy \[-\] (37), (4.E23), signed as the file fits it.
     pub mu_y: F,
-    /// Kyα [N/rad] (39), (4.E25).
+    /// Kyα \[N/rad\] (39), (4.E25).
     pub k_ya: F,
-    /// SHy [rad] (41), (4.E27).
+    /// SHy \[rad\] (41), (4.E27).
     pub s_hy: F,
-    /// SVy [N] (42), (4.E29).
+    /// SVy \[N\] (42), (4.E29).
     pub s_vy: F,
-    /// By [1/rad] (40), (4.E26).
+    /// By \[1/rad\] (40), (4.E26).
     pub b_y: F,
-    /// Cy [-] (35), (4.E21).
+    /// Cy \[-\] (35), (4.E21).
     pub c_y: F,
     /// ζ2 (turn slip, 1 without).
     pub zeta2: F,
@@ -200,17 +200,17 @@ pub fn fy0<F: Float, M: Backend<F>>(
 /// combined-slip aligning torque is built.
 #[derive(Debug, Clone, Copy)]
 pub struct Mz0<F> {
-    /// αr = α* + SHf (47), (4.E37) [rad].
+    /// αr = α* + SHf (47), (4.E37) \[rad\].
     pub alpha_r: F,
-    /// αt = α* + SHt (45), (4.E34) [rad].
+    /// αt = α* + SHt (45), (4.E34) \[rad\].
     pub alpha_t: F,
-    /// Kyα' = Kyα + ε·sign(Kyα) (4.E39) [N/rad].
+    /// Kyα' = Kyα + ε·sign(Kyα) (4.E39) \[N/rad\].
     pub k_ya_prime: F,
     /// Bt (50), (A58).
     pub b_t: F,
     /// Ct (51), (4.E41).
     pub c_t: F,
-    /// Dt [m] (52), (A60).
+    /// Dt \[m\] (52), (A60).
     pub d_t: F,
     /// Et (53), (4.E44).
     pub e_t: F,
@@ -218,7 +218,7 @@ pub struct Mz0<F> {
     pub b_r: F,
     /// Cr (4.E46): 1 without turn slip.
     pub c_r: F,
-    /// Dr [N·m] (56), (4.E47).
+    /// Dr \[N·m\] (56), (4.E47).
     pub d_r: F,
 }
 

@@ -8,7 +8,7 @@ use super::limits::Conditioned;
 use super::Params;
 use crate::math::{Backend, Float};
 
-/// (σx, σy) [m].
+/// (σx, σy) \[m\].
 pub fn sigma<F: Float, M: Backend<F>>(
     p: &Params<F>,
     c: &Conditioned<F>,

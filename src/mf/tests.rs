@@ -136,10 +136,10 @@ fn every_bundled_tyre_evaluates_with_iso_signs() {
 
 #[test]
 fn no_contact_gives_zero() {
-    for p in all_tyres().iter().cloned() {
+    for p in all_tyres().iter() {
         for fz in [0.0, -100.0] {
             let o = eval64(
-                &p,
+                p,
                 Input {
                     fz,
                     kappa: 0.1,
@@ -319,14 +319,14 @@ fn d_is_the_peak() {
 /// Kyα (39), and ∂Fx0/∂κ at κx = 0 is Kxκ (28), for every bundled tyre.
 #[test]
 fn bcd_is_the_slope_at_the_origin() {
-    for p in all_tyres().iter().cloned() {
+    for p in all_tyres().iter() {
         let fz = p.fnomin;
-        let mut c = condition::<f64, Libm>(&p, &lat(fz, 0.0), &no_limits()).unwrap();
-        let f = pure::fy0::<f64, Libm>(&p, &mut c, 0.0, false);
+        let mut c = condition::<f64, Libm>(p, &lat(fz, 0.0), &no_limits()).unwrap();
+        let f = pure::fy0::<f64, Libm>(p, &mut c, 0.0, false);
         let h = 1e-6;
         let at = |a: f64| {
-            let mut c = condition::<f64, Libm>(&p, &lat(fz, a), &no_limits()).unwrap();
-            pure::fy0::<f64, Libm>(&p, &mut c, 0.0, false).fy0
+            let mut c = condition::<f64, Libm>(p, &lat(fz, a), &no_limits()).unwrap();
+            pure::fy0::<f64, Libm>(p, &mut c, 0.0, false).fy0
         };
         let a0 = -f.s_hy;
         let slope = (at(a0 + h) - at(a0 - h)) / (2.0 * h);
@@ -344,8 +344,8 @@ fn bcd_is_the_slope_at_the_origin() {
                 vx: 20.0,
                 ..Input::default()
             };
-            let mut c = condition::<f64, Libm>(&p, &i, &no_limits()).unwrap();
-            pure::fx0::<f64, Libm>(&p, &mut c)
+            let mut c = condition::<f64, Libm>(p, &i, &no_limits()).unwrap();
+            pure::fx0::<f64, Libm>(p, &mut c)
         };
         let f0 = lon(0.0);
         let k0 = -(p.phx1 + p.phx2 * c.dfz) * p.lhx;
@@ -363,9 +363,9 @@ fn bcd_is_the_slope_at_the_origin() {
 /// p2 as the load PKY2·Fz0' in the appendix's normalisation) — versions with the constant 2.
 #[test]
 fn cornering_stiffness_peaks_at_p2() {
-    for p in all_tyres().iter().cloned().filter(|p| !p.version.is_mf6()) {
+    for p in all_tyres().iter().filter(|p| !p.version.is_mf6()) {
         let fz_peak = p.pky2 * p.lfzo * p.fnomin;
-        let k = |fz: f64| eval64(&p, lat(fz, 0.0), &no_limits()).k_ya.abs();
+        let k = |fz: f64| eval64(p, lat(fz, 0.0), &no_limits()).k_ya.abs();
         let kmax = k(fz_peak);
         assert!((kmax - (p.pky1 * p.fnomin * p.lfzo * p.lky).abs()).abs() < 1e-9 * kmax);
         for f in [0.8, 0.95, 0.99, 1.01, 1.05, 1.3] {
@@ -378,7 +378,7 @@ fn cornering_stiffness_peaks_at_p2() {
 /// κ = 0.
 #[test]
 fn weights_are_one_at_pure_slip() {
-    for p in all_tyres().iter().cloned() {
+    for p in all_tyres().iter() {
         for k in [-0.4, -0.1, 0.0, 0.05, 0.3] {
             let i = Input {
                 fz: p.fnomin,
@@ -386,19 +386,19 @@ fn weights_are_one_at_pure_slip() {
                 vx: 20.0,
                 ..Input::default()
             };
-            let mut c = condition::<f64, Libm>(&p, &i, &no_limits()).unwrap();
-            let fx0 = pure::fx0::<f64, Libm>(&p, &mut c).fx0;
+            let mut c = condition::<f64, Libm>(p, &i, &no_limits()).unwrap();
+            let fx0 = pure::fx0::<f64, Libm>(p, &mut c).fx0;
             assert_eq!(
-                eval64(&p, i, &no_limits()).fx,
-                combined::fx::<f64, Libm>(&p, &mut c, fx0)
+                eval64(p, i, &no_limits()).fx,
+                combined::fx::<f64, Libm>(p, &mut c, fx0)
             );
-            assert!((eval64(&p, i, &no_limits()).fx - fx0).abs() <= 1e-12 * fx0.abs().max(1.0));
+            assert!((eval64(p, i, &no_limits()).fx - fx0).abs() <= 1e-12 * fx0.abs().max(1.0));
         }
         for a in [-0.3, -0.02, 0.0, 0.1] {
             let i = lat(p.fnomin, a);
-            let mut c = condition::<f64, Libm>(&p, &i, &no_limits()).unwrap();
-            let fy0 = pure::fy0::<f64, Libm>(&p, &mut c, 0.0, false).fy0;
-            assert!((eval64(&p, i, &no_limits()).fy - fy0).abs() <= 1e-12 * fy0.abs().max(1.0));
+            let mut c = condition::<f64, Libm>(p, &i, &no_limits()).unwrap();
+            let fy0 = pure::fy0::<f64, Libm>(p, &mut c, 0.0, false).fy0;
+            assert!((eval64(p, i, &no_limits()).fy - fy0).abs() <= 1e-12 * fy0.abs().max(1.0));
         }
     }
 }

@@ -16,7 +16,7 @@ pub const RE_MAX_ITER: u32 = 30;
 /// Spin state shared by the force and moment equations.
 #[derive(Debug, Clone, Copy)]
 pub struct Spin<F> {
-    /// Spin φ [1/m] (4.76).
+    /// Spin φ \[1/m\] (4.76).
     pub phi: F,
     /// Camber reduction factor εγ (4.90).
     pub eps_gamma: F,
@@ -40,7 +40,7 @@ pub fn available<F: Float>(p: &Params<F>) -> bool {
         .any(|&x| x != F::ZERO)
 }
 
-/// Wheel angular speed Ω [rad/s] from Vx and κ through the effective rolling radius Re.
+/// Wheel angular speed Ω \[rad/s\] from Vx and κ through the effective rolling radius Re.
 fn omega<F: Float, M: Backend<F>>(p: &Params<F>, c: &mut Conditioned<F>) -> F {
     let (r0, fz0, v0) = (p.unloaded_radius, p.fnomin, p.longvl);
     let c_z = p.vertical_stiffness * (F::ONE + p.pfz1 * c.dpi);
