@@ -176,6 +176,9 @@ pub fn parse_with(
 /// Writes a CSV atomically: to `path.tmp`, then renamed to `path`.
 pub fn write(path: &Path, header: &[&str], rows: &[Vec<f64>]) -> std::io::Result<()> {
     use std::io::Write;
+    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir)?;
+    }
     let tmp = path.with_extension("csv.tmp");
     {
         let f = std::fs::File::create(&tmp)?;
