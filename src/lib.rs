@@ -15,6 +15,7 @@
 //! - [`math`] — the float trait and the math backend ([`math::Libm`] by default).
 //! - [`mf`] — the Magic Formula: Delft Tyre 96, MF 5.2, MF 6.1/6.2; pure and combined slip.
 //! - [`tir`] — `.tir` text → [`mf::Params`], without allocation.
+//! - [`relax`] — transient slip through relaxation lengths, paper eqs. (19)–(21).
 //!
 //! ## Guarantees
 //! The core never panics (no `unwrap`, no unchecked indexing; see the crate-level lints) and
@@ -37,4 +38,5 @@ extern crate std;
 
 pub mod math;
 pub mod mf;
+pub mod relax;
 pub mod tir;

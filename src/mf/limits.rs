@@ -133,7 +133,9 @@ pub fn condition<F: Float, M: Backend<F>>(
             red_smooth = F::ONE - F::HALF * (F::ONE + M::cos(F::PI * (vx / vxlow)));
             let red_linear = (vx / vxlow).abs();
             kappa_out = kappa * red_linear;
-            kappa *= red_linear;
+            if !opts.transient {
+                kappa *= red_linear;
+            }
             phit *= red_linear;
         }
         if vx < F::ZERO {
@@ -141,7 +143,7 @@ pub fn condition<F: Float, M: Backend<F>>(
         }
         // α fades when the total speed |Vx| + |Vsy| falls below VXLOW (Vsy = tan(α)·Vx).
         let speed_sum = vx.abs() + (M::tan(alpha) * vx).abs();
-        if speed_sum < p.vxlow {
+        if speed_sum < p.vxlow && !opts.transient {
             alpha *= speed_sum / p.vxlow;
         }
         let (a, fa) = alpha.clamp_flag(p.alpmin, p.alpmax);

@@ -84,6 +84,10 @@ pub struct Options {
     /// the tyre is mirrored: α, γ, φt change sign on the way in, Fy, Mx, Mz, Mzr on the way out.
     /// `None`: never mirror.
     pub mounted: Option<Side>,
+    /// The slips come from a transient model ([`crate::relax`]): skip the steady-state
+    /// low-speed reductions of κ and α (the transient model's own damping handles standstill),
+    /// as TNO's and MFeval's dynamic modes do.
+    pub transient: bool,
 }
 
 impl Default for Options {
@@ -93,6 +97,7 @@ impl Default for Options {
             alpha_star: false,
             turn_slip: false,
             mounted: None,
+            transient: false,
         }
     }
 }
@@ -121,6 +126,7 @@ impl Options {
             alpha_star,
             turn_slip,
             mounted: None,
+            transient: false,
         })
     }
 }

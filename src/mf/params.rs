@@ -211,6 +211,7 @@ tir_params! {
     PCFY1 pcfy1 Extension Mf6 "Cy: load dependency, linear \\[-\\].";
     PCFY2 pcfy2 Extension Mf6 "Cy: load dependency, quadratic \\[-\\].";
     PCFY3 pcfy3 Extension Mf6 "Cy: pressure dependency \\[-\\].";
+    DAMP_VLOW damp_vlow Extension Mf6 "Additional low-speed damping, proportional to stiffness \\[s\\] (used by `relax`).";
     // ranges
     PRESMIN presmin Range Mf6 "Minimum valid inflation pressure \\[Pa\\].";
     PRESMAX presmax Range Mf6 "Maximum valid inflation pressure \\[Pa\\].";
@@ -478,7 +479,6 @@ pub const IGNORED_KEYS: &[&str] = &[
     "DAMP_YAW",
     "DAMP_WINDUP",
     "DAMP_RESIDUAL",
-    "DAMP_VLOW",
     "Q_BVX",
     "Q_BVT",
     "PCMZ1",

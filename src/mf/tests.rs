@@ -482,7 +482,7 @@ macro_rules! float_props {
                     let s: f64 = if big { 1e25 } else { 1.0 };
                     let i = Input { fz: (fz * s) as $t, kappa: kappa as $t, alpha: alpha as $t,
                         gamma: gamma as $t, phit: phit as $t, vx: (vx * s) as $t, p: None };
-                    let o = Options { limits, alpha_star: star, turn_slip: turn, mounted: None };
+                    let o = Options { limits, alpha_star: star, turn_slip: turn, mounted: None, transient: false };
                     match eval::<$t, Libm>(p, &i, &o) {
                         Ok(out) => {
                             for v in [out.fx, out.fy, out.mz, out.mx, out.my, out.t, out.m_zr,

@@ -1,0 +1,406 @@
+//! Transient slip through relaxation lengths: paper eqs. (19)–(21), safe through standstill.
+//!
+//! The tyre's contact patch must deflect before it can carry a force, so the force follows the
+//! wheel slip with a lag over a travelled distance σ, the relaxation length. The paper's eq. (19)
+//! for the deflection v of the string's leading edge,
+//! `(1/Vx)·dv/dt + v/σ = tan α − a·φ`, multiplied through by σ·Vx and with the rolling speed Vr
+//! in place of Vx (longitudinal slip present, turn slip neglected), becomes eq. (20):
+//!
+//! ```text
+//! σα·dv/dt + Vr·v = σα·Vsy        (lateral; ISO-W: tan α = Vsy/|Vx|, the paper's −Vsy in SAE)
+//! σκ·du/dt + Vr·u = −σκ·Vsx       (longitudinal twin; κ = −Vsx/|Vx|)
+//! tan α' = v/σα  (21),    κ' = u/σκ
+//! ```
+//!
+//! No division by a speed appears, so the states start and stop from standstill (Vr = Vx = 0).
+//! α' and κ' feed the combined-slip Magic Formula ([`crate::mf::eval`]).
+//!
+//! ## Discretisation
+//! Over a step h the inputs (Vr, Vsx, Vsy, σ) are held (or taken at the step's midpoint by the
+//! caller); the linear first-order equation dv/dt = −a·v + b with a = |Vr|/σ ≥ 0 is then solved
+//! exactly: `v(t+h) = v·e^(−a·h) + b·h·φ1(a·h)` with φ1(x) = (1 − e^(−x))/x (a series for small x),
+//! so the update is exact for constant inputs, unconditionally stable (e^(−a·h) ∈ (0, 1]) for any
+//! Vr ≥ 0 and any step, and never divides by zero.
+//!
+//! ## Low speed and standstill
+//! - Damping speed: [`DampingSpeed::Rolling`] (the paper: Vr = Ω·Re = Vx − Vsx) or
+//!   [`DampingSpeed::Forward`] (|Vx|, TNO MF-Tyre; then α' → α exactly in steady state also under
+//!   braking). The paper's form is the default.
+//! - Pacejka's low-speed damping: below VXLOW an artificial damping proportional to the carcass
+//!   stiffness, `k = DAMP_VLOW·C·½(1 + cos(π·|Vx|/VXLOW))`, is added; as C = |K|/σ, its slip
+//!   equivalent is `Δα' = DAMP_VLOW·w·Vsy/σα` and `Δκ' = −DAMP_VLOW·w·Vsx/σκ` (w the cosine fade).
+//! - Clamps: |tan α'| ≤ [`Config::max_tan_alpha`] and |κ'| ≤ [`Config::max_kappa`], applied to the
+//!   states themselves, so a wheel sliding at standstill (Vr = 0, Vsy ≠ 0) cannot wind the
+//!   deflection up without bound; every clamp is flagged.
+//! - σ has a floor [`Config::sigma_min`] (σ → 0 as Fz → 0 would make the lag vanish and the
+//!   deflection meaningless).
+//!
+//! ## What it leaves out
+//! Turn slip's contribution (the −a·φ term), the contact-patch mass of MF-Swift, and the
+//! slip-dependent relaxation length inside the step (offered between steps by
+//! [`decayed_sigma`], paper ref. [8]).
+
+use crate::math::{Backend, Float};
+use crate::mf::{self, EvalError, Input, Options, Output, Params};
+
+/// Which speed damps the deflection in eq. (20).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum DampingSpeed {
+    /// Speed of rolling Vr = Vx − Vsx (the paper, eq. 20).
+    Rolling,
+    /// |Vx| (TNO MF-Tyre linear transient): steady state gives α' = α, κ' = κ exactly.
+    Forward,
+}
+
+/// Configuration of the transient model. Units SI.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Config<F> {
+    /// Speed in the damping term of eq. (20).
+    pub damping: DampingSpeed,
+    /// Floor on σα and σκ \[m\]: the relaxation length never falls below it at low load.
+    pub sigma_min: F,
+    /// Low-speed damping time constant DAMP_VLOW \[s\] (0: none).
+    pub damp_vlow: F,
+    /// Speed below which the low-speed damping fades in, VXLOW \[m/s\].
+    pub vxlow: F,
+    /// Bound on |tan α'| (default 1.0, α' = 45°: far beyond any force peak).
+    pub max_tan_alpha: F,
+    /// Bound on |κ'| (default 1.0: a locked wheel).
+    pub max_kappa: F,
+}
+
+impl<F: Float> Config<F> {
+    /// Defaults from a parameter set: the paper's damping speed, DAMP_VLOW and VXLOW from the
+    /// file, σ floor 1 % of R0.
+    pub fn from_params(p: &Params<F>) -> Self {
+        Config {
+            damping: DampingSpeed::Rolling,
+            sigma_min: p.unloaded_radius * F::from_f64(0.01),
+            damp_vlow: p.damp_vlow,
+            vxlow: p.vxlow,
+            max_tan_alpha: F::ONE,
+            max_kappa: F::ONE,
+        }
+    }
+}
+
+/// Kinematics of one wheel at the contact point over a step. ISO-W, SI.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Kinematics<F> {
+    /// Forward speed of the wheel centre Vx \[m/s\] (< 0 backwards).
+    pub vx: F,
+    /// Longitudinal slip speed Vsx = Vx − Ω·Re \[m/s\] (> 0 braking).
+    pub vsx: F,
+    /// Lateral slip speed Vsy \[m/s\] (ISO-W: tan α = Vsy/|Vx|).
+    pub vsy: F,
+}
+
+/// Relaxation lengths used for a step \[m\].
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Sigma<F> {
+    /// Longitudinal σκ \[m\].
+    pub sigma_kappa: F,
+    /// Lateral σα \[m\].
+    pub sigma_alpha: F,
+}
+
+/// What happened during a step (a bit set).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct StepFlags(pub u8);
+
+impl StepFlags {
+    /// σ was raised to `sigma_min`.
+    pub const SIGMA_FLOOR: StepFlags = StepFlags(1);
+    /// The lateral state was clamped to `max_tan_alpha`.
+    pub const ALPHA_CLAMPED: StepFlags = StepFlags(2);
+    /// The longitudinal state was clamped to `max_kappa`.
+    pub const KAPPA_CLAMPED: StepFlags = StepFlags(4);
+    /// Low-speed damping was active.
+    pub const LOW_SPEED: StepFlags = StepFlags(8);
+    /// Are all bits of `o` set?
+    pub const fn contains(self, o: StepFlags) -> bool {
+        self.0 & o.0 == o.0
+    }
+}
+
+/// Transient slips after a step.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Slips<F> {
+    /// κ' \[-\]: longitudinal deflection gradient, the κ input of the Magic Formula.
+    pub kappa: F,
+    /// α' \[rad\]: lateral deflection angle (21), the α input of the Magic Formula.
+    pub alpha: F,
+    /// What was clamped or damped.
+    pub flags: StepFlags,
+}
+
+/// Why a step was refused (the state is left unchanged).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum StepError {
+    /// An input was NaN or infinite.
+    NonFinite,
+    /// The step was ≤ 0 or longer than [`MAX_DT`].
+    BadStep,
+}
+
+impl core::fmt::Display for StepError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            StepError::NonFinite => f.write_str("non-finite input to the transient step"),
+            StepError::BadStep => f.write_str("time step must be in (0, 1] s"),
+        }
+    }
+}
+
+impl core::error::Error for StepError {}
+
+/// Longest step accepted \[s\].
+pub const MAX_DT: f64 = 1.0;
+
+/// The deflection states of one tyre: lateral v and longitudinal u \[m\].
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Transient<F> {
+    /// Lateral deflection of the contact patch's leading edge v \[m\], eq. (20).
+    pub v: F,
+    /// Longitudinal deflection u \[m\].
+    pub u: F,
+}
+
+/// φ1(x) = (1 − e^(−x))/x for x ≥ 0, with φ1(0) = 1; a 4-term series below 1e-3 where the
+/// closed form loses digits.
+fn phi1<F: Float, M: Backend<F>>(x: F) -> F {
+    if x < F::from_f64(1e-3) {
+        // 1 − x/2 + x²/6 − x³/24
+        F::ONE - x * (F::HALF - x * (F::from_f64(1.0 / 6.0) - x * F::from_f64(1.0 / 24.0)))
+    } else {
+        (F::ONE - M::exp(-x)) / x
+    }
+}
+
+/// One exact step of dy/dt = −a·y + b over h (a ≥ 0).
+fn exact_step<F: Float, M: Backend<F>>(y: F, a: F, b: F, h: F) -> F {
+    let x = a * h;
+    y * M::exp(-x) + b * h * phi1::<F, M>(x)
+}
+
+impl<F: Float> Transient<F> {
+    /// At rest, undeflected.
+    pub const fn new(zero: F) -> Self {
+        Transient { v: zero, u: zero }
+    }
+
+    /// Advances the states by `dt` \[s\] with the kinematics and relaxation lengths held over the
+    /// step (eq. 20, exact), and returns α', κ' (eq. 21) with the low-speed damping added.
+    pub fn step<M: Backend<F>>(
+        &mut self,
+        cfg: &Config<F>,
+        dt: F,
+        k: &Kinematics<F>,
+        sigma: &Sigma<F>,
+    ) -> Result<Slips<F>, StepError> {
+        if !(dt.is_finite() && k.vx.is_finite() && k.vsx.is_finite() && k.vsy.is_finite())
+            || !(sigma.sigma_alpha.is_finite() && sigma.sigma_kappa.is_finite())
+        {
+            return Err(StepError::NonFinite);
+        }
+        if dt <= F::ZERO || dt > F::from_f64(MAX_DT) {
+            return Err(StepError::BadStep);
+        }
+        let mut flags = StepFlags::default();
+        let mut floor = |s: F| {
+            if s < cfg.sigma_min {
+                flags.0 |= StepFlags::SIGMA_FLOOR.0;
+                cfg.sigma_min.max(F::from_f64(1e-6))
+            } else {
+                s
+            }
+        };
+        let s_a = floor(sigma.sigma_alpha.abs());
+        let s_k = floor(sigma.sigma_kappa.abs());
+        let speed = match cfg.damping {
+            DampingSpeed::Rolling => (k.vx - k.vsx).abs(),
+            DampingSpeed::Forward => k.vx.abs(),
+        };
+        // (20): dv/dt = −(Vr/σα)·v + Vsy;  du/dt = −(Vr/σκ)·u − Vsx.
+        let mut v = exact_step::<F, M>(self.v, speed / s_a, k.vsy, dt);
+        let mut u = exact_step::<F, M>(self.u, speed / s_k, -k.vsx, dt);
+        let v_max = cfg.max_tan_alpha * s_a;
+        let u_max = cfg.max_kappa * s_k;
+        let (cv, fv) = v.clamp_flag(-v_max, v_max);
+        let (cu, fu) = u.clamp_flag(-u_max, u_max);
+        v = cv;
+        u = cu;
+        if fv {
+            flags.0 |= StepFlags::ALPHA_CLAMPED.0;
+        }
+        if fu {
+            flags.0 |= StepFlags::KAPPA_CLAMPED.0;
+        }
+        self.v = v;
+        self.u = u;
+        let mut tan_a = v / s_a; // (21)
+        let mut kappa = u / s_k;
+        // Low-speed damping (Pacejka's kVlow), faded in below VXLOW.
+        if cfg.damp_vlow > F::ZERO && cfg.vxlow > F::ZERO && k.vx.abs() < cfg.vxlow {
+            let w = F::HALF * (F::ONE + M::cos(F::PI * k.vx.abs() / cfg.vxlow));
+            tan_a += cfg.damp_vlow * w * k.vsy / s_a;
+            kappa -= cfg.damp_vlow * w * k.vsx / s_k;
+            flags.0 |= StepFlags::LOW_SPEED.0;
+        }
+        Ok(Slips {
+            kappa,
+            alpha: M::atan(tan_a),
+            flags,
+        })
+    }
+}
+
+/// Slip-dependent decay of a relaxation length (paper, ref. [8]): σ is adapted so that the
+/// deflection stays equal to the force over the carcass stiffness, i.e. σ = σ0·|F|/|K·s| where s
+/// is the transient slip (tan α' or κ') and F the force it produced, K the slip stiffness at zero
+/// slip. Equals σ0 at small slip and decays as the force saturates; never above σ0, never
+/// negative. Apply between steps with the previous step's force.
+pub fn decayed_sigma<F: Float>(sigma0: F, force: F, stiffness: F, slip: F) -> F {
+    let lin = (stiffness * slip).abs();
+    if lin <= force.abs() || lin == F::ZERO {
+        sigma0
+    } else {
+        sigma0 * force.abs() / lin
+    }
+}
+
+/// A tyre with transient slip: the states of eq. (20) plus the Magic Formula at (α', κ').
+///
+/// One Magic Formula evaluation per step; the relaxation lengths of a step are those the
+/// previous step's evaluation returned (σ varies with Fz, which changes little over one step).
+#[derive(Debug, Clone)]
+pub struct TransientTyre<F> {
+    /// Deflection states.
+    pub state: Transient<F>,
+    /// Configuration.
+    pub config: Config<F>,
+    /// Apply [`decayed_sigma`] (paper ref. [8]) between steps.
+    pub slip_decay: bool,
+    last: Option<Output<F>>,
+    last_slips: Slips<F>,
+}
+
+/// Operating point of a transient step: the kinematics plus the load and camber.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Operating<F> {
+    /// Wheel kinematics.
+    pub kin: Kinematics<F>,
+    /// Vertical load Fz \[N\].
+    pub fz: F,
+    /// Inclination γ \[rad\].
+    pub gamma: F,
+    /// Inflation pressure \[Pa\] (`None`: INFLPRES).
+    pub p: Option<F>,
+}
+
+/// Why a transient-tyre step failed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum TyreError {
+    /// The transient step refused its input.
+    Step(StepError),
+    /// The Magic Formula refused its input.
+    Eval(EvalError),
+}
+
+impl<F: Float> TransientTyre<F> {
+    /// Undeflected tyre with the parameter set's defaults.
+    pub fn new(p: &Params<F>) -> Self {
+        TransientTyre {
+            state: Transient::new(F::ZERO),
+            config: Config::from_params(p),
+            slip_decay: false,
+            last: None,
+            last_slips: Slips::default(),
+        }
+    }
+
+    /// The last output, if any step has run.
+    pub fn last(&self) -> Option<&Output<F>> {
+        self.last.as_ref()
+    }
+
+    /// The last transient slips.
+    pub fn slips(&self) -> Slips<F> {
+        self.last_slips
+    }
+
+    /// Advances by `dt` and evaluates the Magic Formula at the transient slips.
+    pub fn step<M: Backend<F>>(
+        &mut self,
+        p: &Params<F>,
+        opts: &Options,
+        dt: F,
+        op: &Operating<F>,
+    ) -> Result<Output<F>, TyreError> {
+        let sigma = match self.last {
+            Some(o) => {
+                let (mut sk, mut sa) = (o.sigma_x, o.sigma_y);
+                if self.slip_decay {
+                    sk = decayed_sigma(sk, o.fx, o.k_xk, self.last_slips.kappa);
+                    sa = decayed_sigma(sa, o.fy, o.k_ya, M::tan(self.last_slips.alpha));
+                }
+                Sigma {
+                    sigma_kappa: sk,
+                    sigma_alpha: sa,
+                }
+            }
+            None => {
+                // First step: σ at this load, zero slip.
+                let o = mf::eval::<F, M>(
+                    p,
+                    &Input {
+                        fz: op.fz,
+                        gamma: op.gamma,
+                        vx: op.kin.vx,
+                        p: op.p,
+                        ..Input::default()
+                    },
+                    opts,
+                )
+                .map_err(TyreError::Eval)?;
+                Sigma {
+                    sigma_kappa: o.sigma_x,
+                    sigma_alpha: o.sigma_y,
+                }
+            }
+        };
+        let mut state = self.state;
+        let s = state
+            .step::<M>(&self.config, dt, &op.kin, &sigma)
+            .map_err(TyreError::Step)?;
+        let out = mf::eval::<F, M>(
+            p,
+            &Input {
+                fz: op.fz,
+                kappa: s.kappa,
+                alpha: s.alpha,
+                gamma: op.gamma,
+                phit: F::ZERO,
+                vx: op.kin.vx,
+                p: op.p,
+            },
+            opts,
+        )
+        .map_err(TyreError::Eval)?;
+        self.state = state;
+        self.last = Some(out);
+        self.last_slips = s;
+        Ok(out)
+    }
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,404 @@
+//! The transient model against its analytic solutions, through standstill, and the paper's
+//! dynamic side-force loss under load fluctuation (Figs. 13–14).
+use super::*;
+use crate::math::Libm;
+use proptest::prelude::*;
+use std::vec::Vec;
+
+fn cfg(damping: DampingSpeed) -> Config<f64> {
+    Config {
+        damping,
+        sigma_min: 0.01,
+        damp_vlow: 0.0,
+        vxlow: 1.0,
+        max_tan_alpha: 1.0,
+        max_kappa: 1.0,
+    }
+}
+
+const SIGMA: Sigma<f64> = Sigma {
+    sigma_kappa: 0.15,
+    sigma_alpha: 0.45,
+};
+
+/// Step in slip angle: tan α'(s) = tan α0·(1 − e^(−s/σα)) over travelled distance s, exactly,
+/// for steps from 10 µs to 10 ms; and the longitudinal twin.
+#[test]
+fn step_response_is_the_analytic_first_order_response() {
+    let vx = 20.0;
+    let (tan_a0, kappa0) = (0.05f64, -0.08f64);
+    for dt in [1e-5, 1e-4, 1e-3, 1e-2] {
+        for damping in [DampingSpeed::Forward, DampingSpeed::Rolling] {
+            let mut tr = Transient::new(0.0);
+            let k = Kinematics {
+                vx,
+                vsx: -kappa0 * vx,
+                vsy: tan_a0 * vx,
+            };
+            let n = (0.1 / dt) as usize;
+            for i in 1..=n {
+                let s = tr.step::<Libm>(&cfg(damping), dt, &k, &SIGMA).unwrap();
+                let dist = vx * dt * i as f64;
+                // Rolling: Vr = Vx − Vsx = Vx·(1 + κ0).
+                let speed = match damping {
+                    DampingSpeed::Forward => vx,
+                    DampingSpeed::Rolling => vx * (1.0 + kappa0),
+                };
+                let t = dt * i as f64;
+                let want_a = tan_a0 * vx / speed * (1.0 - (-speed * t / SIGMA.sigma_alpha).exp());
+                let want_k = kappa0 * vx / speed * (1.0 - (-speed * t / SIGMA.sigma_kappa).exp());
+                assert!((s.alpha.tan() - want_a).abs() < 1e-12, "dt {dt} s {dist}");
+                assert!((s.kappa - want_k).abs() < 1e-12, "dt {dt} s {dist}");
+            }
+        }
+    }
+}
+
+/// Sinusoidal slip angle: gain 1/√(1 + (ωp·σ)²) and phase −atan(ωp·σ) over path frequency ωp.
+#[test]
+fn frequency_response_matches_the_analytic_one() {
+    let vx = 15.0;
+    let dt = 1e-4;
+    for &wp in &[0.5, 2.0, 5.0] {
+        // ωp [rad/m] → ω = ωp·V [rad/s]
+        let w = wp * vx;
+        let mut tr = Transient::new(0.0);
+        let cycles = 6.0;
+        let t_end = cycles * 2.0 * core::f64::consts::PI / w;
+        let n = (t_end / dt) as usize;
+        let (mut sc, mut cc, mut norm) = (0.0, 0.0, 0.0);
+        for i in 0..n {
+            let tm = (i as f64 + 0.5) * dt; // midpoint of the step
+            let x = 0.01 * (w * tm).sin();
+            let k = Kinematics {
+                vx,
+                vsx: 0.0,
+                vsy: x * vx,
+            };
+            let y = tr
+                .step::<Libm>(&cfg(DampingSpeed::Forward), dt, &k, &SIGMA)
+                .unwrap()
+                .alpha
+                .tan();
+            let te = (i + 1) as f64 * dt;
+            if te > t_end / 2.0 {
+                sc += y * (w * te).sin();
+                cc += y * (w * te).cos();
+                norm += (w * te).sin().powi(2);
+            }
+        }
+        let gain = (sc * sc + cc * cc).sqrt() / norm / 0.01;
+        let phase = cc.atan2(sc);
+        let ws = wp * SIGMA.sigma_alpha;
+        let (g_want, p_want) = (1.0 / (1.0 + ws * ws).sqrt(), -ws.atan());
+        assert!(
+            (gain - g_want).abs() < 2e-3,
+            "wp {wp}: gain {gain} vs {g_want}"
+        );
+        assert!(
+            (phase - p_want).abs() < 2e-3,
+            "wp {wp}: phase {phase} vs {p_want}"
+        );
+    }
+}
+
+/// Stop, slide at standstill, start again: the states stay bounded and finite, the low-speed
+/// damping acts, and after the restart the slips settle to the steady values.
+#[test]
+fn standstill_stop_start_stays_bounded() {
+    let mut c = cfg(DampingSpeed::Rolling);
+    c.damp_vlow = 0.001;
+    let mut tr = Transient::new(0.0);
+    let dt = 1e-3;
+    let mut t = 0.0;
+    let mut max_tan = 0.0f64;
+    while t < 6.0 {
+        // 20 m/s → 0 in 2 s, 2 s at rest with the wheel pushed sideways, 0 → 10 m/s.
+        let vx = if t < 2.0 {
+            20.0 * (1.0 - t / 2.0)
+        } else if t < 4.0 {
+            0.0
+        } else {
+            5.0 * (t - 4.0)
+        };
+        let vsy = if (2.0..4.0).contains(&t) {
+            0.5
+        } else {
+            0.03 * vx
+        };
+        let vsx = if (2.0..4.0).contains(&t) { -0.1 } else { 0.0 }; // pushed at rest
+        let s = tr
+            .step::<Libm>(&c, dt, &Kinematics { vx, vsx, vsy }, &SIGMA)
+            .unwrap();
+        assert!(s.alpha.is_finite() && s.kappa.is_finite());
+        assert!(tr.v.abs() <= c.max_tan_alpha * SIGMA.sigma_alpha + 1e-12);
+        assert!(tr.u.abs() <= c.max_kappa * SIGMA.sigma_kappa + 1e-12);
+        if (3.2..4.0).contains(&t) {
+            assert!(
+                s.flags.contains(StepFlags::ALPHA_CLAMPED),
+                "sliding at rest must hit the clamp"
+            );
+            assert!(s.flags.contains(StepFlags::LOW_SPEED));
+        }
+        max_tan = max_tan.max(s.alpha.tan().abs());
+        t += dt;
+    }
+    let s = tr
+        .step::<Libm>(
+            &c,
+            dt,
+            &Kinematics {
+                vx: 10.0,
+                vsx: 0.0,
+                vsy: 0.3,
+            },
+            &SIGMA,
+        )
+        .unwrap();
+    assert!(
+        (s.alpha.tan() - 0.03).abs() < 1e-3,
+        "settled to tan α = 0.03, got {}",
+        s.alpha.tan()
+    );
+    // At rest with no slip the states do not drift.
+    let before = tr;
+    for _ in 0..1000 {
+        tr.step::<Libm>(
+            &cfg(DampingSpeed::Rolling),
+            dt,
+            &Kinematics::default(),
+            &SIGMA,
+        )
+        .unwrap();
+    }
+    assert_eq!(tr, before);
+}
+
+#[test]
+fn bad_steps_are_refused_and_leave_the_state() {
+    let mut tr = Transient { v: 0.01, u: -0.02 };
+    let k = Kinematics {
+        vx: 10.0,
+        vsx: 0.0,
+        vsy: 1.0,
+    };
+    let c = cfg(DampingSpeed::Rolling);
+    assert_eq!(
+        tr.step::<Libm>(&c, 0.0, &k, &SIGMA),
+        Err(StepError::BadStep)
+    );
+    assert_eq!(
+        tr.step::<Libm>(&c, 2.0, &k, &SIGMA),
+        Err(StepError::BadStep)
+    );
+    assert_eq!(
+        tr.step::<Libm>(&c, f64::NAN, &k, &SIGMA),
+        Err(StepError::NonFinite)
+    );
+    let kn = Kinematics {
+        vsy: f64::INFINITY,
+        ..k
+    };
+    assert_eq!(
+        tr.step::<Libm>(&c, 1e-3, &kn, &SIGMA),
+        Err(StepError::NonFinite)
+    );
+    assert_eq!(tr, Transient { v: 0.01, u: -0.02 });
+    // σ = 0 (no load) is floored, not divided by.
+    let s = tr.step::<Libm>(&c, 1e-3, &k, &Sigma::default()).unwrap();
+    assert!(s.flags.contains(StepFlags::SIGMA_FLOOR) && s.alpha.is_finite());
+}
+
+#[test]
+fn decayed_sigma_bounds() {
+    assert_eq!(decayed_sigma(0.4, 1000.0, -50000.0, 0.01), 0.4); // linear range
+    let s = decayed_sigma(0.4, 4000.0, -50000.0, 0.2); // saturated: 4000 of 10000
+    assert!((s - 0.16).abs() < 1e-12);
+    assert_eq!(decayed_sigma(0.4, 0.0, 0.0, 0.0), 0.4);
+}
+
+fn tyre61() -> Params<f64> {
+    crate::tir::parse(include_str!(
+        "../../host-tests/data/tyres/MagicFormula61_Parameters.tir"
+    ))
+    .unwrap()
+    .params
+}
+
+/// Average |Fy| at α = 6° under Fz = Fz0·(1 + A·sin 2πft), dynamic (transient) and the average
+/// of the steady-state curve over the same load cycle (the quasi-static reference).
+fn fy_averages(p: &Params<f64>, f: f64, amp: f64, vx: f64) -> (f64, f64) {
+    let opts = Options {
+        transient: true,
+        ..Options::default()
+    };
+    let mut tyre = TransientTyre::new(p);
+    let dt = 2e-4;
+    let tan_a = (6.0f64).to_radians().tan();
+    let period = 1.0 / f;
+    let settle = 3.0 * period + 1.0; // ≥ 1 s of travel for the lag to settle
+    let cycles = 4.0;
+    let (mut dynamic, mut quasi, mut n) = (0.0, 0.0, 0.0);
+    let mut t = 0.0;
+    while t < settle + cycles * period {
+        let tm = t + dt / 2.0;
+        let fz = p.fnomin * (1.0 + amp * (2.0 * core::f64::consts::PI * f * tm).sin());
+        let op = Operating {
+            kin: Kinematics {
+                vx,
+                vsx: 0.0,
+                vsy: tan_a * vx,
+            },
+            fz,
+            gamma: 0.0,
+            p: None,
+        };
+        let out = tyre.step::<Libm>(p, &opts, dt, &op).unwrap();
+        if t >= settle {
+            let ss = mf::eval::<f64, Libm>(
+                p,
+                &Input {
+                    fz,
+                    alpha: tan_a.atan(),
+                    vx,
+                    ..Input::default()
+                },
+                &opts,
+            )
+            .unwrap();
+            dynamic += out.fy.abs();
+            quasi += ss.fy.abs();
+            n += 1.0;
+        }
+        t += dt;
+    }
+    (dynamic / n, quasi / n)
+}
+
+/// Paper Figs. 13–14: a side-slipping wheel rolling with a sinusoidal load loses average side
+/// force; the loss grows with frequency and amplitude and at lower speed (shorter wavelength);
+/// its quasi-static part equals the steady-state curve averaged over the load cycle.
+#[test]
+fn dynamic_side_force_loss_under_load_fluctuation() {
+    let p = tyre61();
+    let fy0 = mf::eval::<f64, Libm>(
+        &p,
+        &Input {
+            fz: p.fnomin,
+            alpha: 6f64.to_radians(),
+            vx: 20.0,
+            ..Input::default()
+        },
+        &Options::default(),
+    )
+    .unwrap()
+    .fy
+    .abs();
+    let loss = |f: f64, a: f64, v: f64| {
+        let (d, q) = fy_averages(&p, f, a, v);
+        (q - d) / fy0
+    };
+    // Quasi-static: at 0.2 Hz the dynamic average equals the averaged steady-state curve.
+    let (d, q) = fy_averages(&p, 0.2, 0.5, 20.0);
+    assert!((d - q).abs() < 2e-3 * fy0, "quasi-static {d} vs {q}");
+    // and that average is below Fy at the mean load (the static loss of Fig. 14 at 0 Hz).
+    assert!(q < fy0);
+    let (l2, l8, l16) = (
+        loss(2.0, 0.5, 20.0),
+        loss(8.0, 0.5, 20.0),
+        loss(16.0, 0.5, 20.0),
+    );
+    assert!(
+        0.0 < l2 && l2 < l8 && l8 < l16,
+        "loss grows with frequency: {l2} {l8} {l16}"
+    );
+    let (a_small, a_big) = (loss(8.0, 0.25, 20.0), loss(8.0, 0.75, 20.0));
+    assert!(
+        a_small < l8 && l8 < a_big,
+        "loss grows with amplitude: {a_small} {l8} {a_big}"
+    );
+    let slow = loss(8.0, 0.5, 10.0);
+    assert!(slow > l8, "loss grows at lower speed: {slow} vs {l8}");
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(200))]
+    /// Any finite kinematics, any step in [10 µs, 10 ms], any σ ≥ 0: finite and bounded states.
+    #[test]
+    fn bounded_for_any_finite_input(
+        steps in proptest::collection::vec(
+            (-60.0f64..60.0, -60.0f64..60.0, -60.0f64..60.0, 1e-5f64..1e-2, 0.0f64..2.0, 0.0f64..2.0), 1..200),
+        rolling in any::<bool>(),
+    ) {
+        let c = cfg(if rolling { DampingSpeed::Rolling } else { DampingSpeed::Forward });
+        let mut tr = Transient::new(0.0);
+        for (vx, vsx, vsy, dt, sa, sk) in steps {
+            let sig = Sigma { sigma_alpha: sa, sigma_kappa: sk };
+            let s = tr.step::<Libm>(&c, dt, &Kinematics { vx, vsx, vsy }, &sig).unwrap();
+            prop_assert!(s.alpha.is_finite() && s.kappa.is_finite());
+            prop_assert!(s.alpha.abs() <= core::f64::consts::FRAC_PI_4 + 1e-12);
+            prop_assert!(s.kappa.abs() <= 1.0 + 1e-12);
+        }
+    }
+
+    /// The f32 device path stays finite and bounded too, and tracks f64.
+    #[test]
+    fn f32_tracks_f64(vx in 0.0f64..50.0, tan_a in -0.2f64..0.2, n in 1usize..500) {
+        let c64 = cfg(DampingSpeed::Rolling);
+        let c32 = Config { damping: DampingSpeed::Rolling, sigma_min: 0.01f32, damp_vlow: 0.0, vxlow: 1.0, max_tan_alpha: 1.0, max_kappa: 1.0 };
+        let (mut a, mut b) = (Transient::new(0.0f64), Transient::new(0.0f32));
+        let s32 = Sigma { sigma_alpha: 0.45f32, sigma_kappa: 0.15f32 };
+        let mut last = (0.0, 0.0f32);
+        for _ in 0..n {
+            let x = a.step::<Libm>(&c64, 1e-3, &Kinematics { vx, vsx: 0.0, vsy: tan_a * vx }, &SIGMA).unwrap();
+            let y = b.step::<Libm>(&c32, 1e-3, &Kinematics { vx: vx as f32, vsx: 0.0, vsy: (tan_a * vx) as f32 }, &s32).unwrap();
+            last = (x.alpha, y.alpha);
+        }
+        prop_assert!((last.0 - last.1 as f64).abs() < 1e-5);
+    }
+}
+
+#[test]
+fn transient_tyre_converges_to_the_steady_state() {
+    let p = tyre61();
+    let opts = Options {
+        transient: true,
+        ..Options::default()
+    };
+    let mut tyre = TransientTyre::new(&p);
+    tyre.config.damping = DampingSpeed::Forward;
+    let (vx, a, k) = (20.0, 0.04f64, -0.05f64);
+    let op = Operating {
+        kin: Kinematics {
+            vx,
+            vsx: -k * vx,
+            vsy: a.tan() * vx,
+        },
+        fz: 5000.0,
+        gamma: 0.01,
+        p: None,
+    };
+    let mut outs = Vec::new();
+    for _ in 0..2000 {
+        outs.push(tyre.step::<Libm>(&p, &opts, 1e-3, &op).unwrap());
+    }
+    let ss = mf::eval::<f64, Libm>(
+        &p,
+        &Input {
+            fz: 5000.0,
+            kappa: k,
+            alpha: a,
+            gamma: 0.01,
+            vx,
+            ..Input::default()
+        },
+        &opts,
+    )
+    .unwrap();
+    let last = outs.last().unwrap();
+    assert!((last.fy - ss.fy).abs() < 1e-6 * p.fnomin && (last.fx - ss.fx).abs() < 1e-6 * p.fnomin);
+    // The force builds up: after 0.5·σ of travel it is well below the steady value.
+    let sigma = ss.sigma_y;
+    let i = ((0.5 * sigma / vx) / 1e-3) as usize;
+    assert!(outs[i].fy.abs() < 0.6 * ss.fy.abs());
+}
