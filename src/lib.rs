@@ -15,7 +15,10 @@
 //! - [`math`] — the float trait and the math backend ([`math::Libm`] by default).
 //! - [`mf`] — the Magic Formula: Delft Tyre 96, MF 5.2, MF 6.1/6.2; pure and combined slip.
 //! - [`tir`] — `.tir` text → [`mf::Params`], without allocation.
+//! - [`proto`] — the CAN protocol: messages (postcard), segmentation, CRC, SLCAN, DBC.
 //! - [`relax`] — transient slip through relaxation lengths, paper eqs. (19)–(21).
+//! - [`brush`] — the paper's brush model: physical Gough curves without a `.tir` file.
+//! - [`mu`] — the Gough-plot road-friction estimator (μ from Fy, Mz, Fz without α).
 //!
 //! ## Guarantees
 //! The core never panics (no `unwrap`, no unchecked indexing; see the crate-level lints) and
@@ -36,7 +39,9 @@
 #[cfg(any(test, feature = "std"))]
 extern crate std;
 
+pub mod brush;
 pub mod math;
 pub mod mf;
+pub mod mu;
 pub mod relax;
 pub mod tir;

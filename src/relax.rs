@@ -206,9 +206,10 @@ impl<F: Float> Transient<F> {
         k: &Kinematics<F>,
         sigma: &Sigma<F>,
     ) -> Result<Slips<F>, StepError> {
-        if !(dt.is_finite() && k.vx.is_finite() && k.vsx.is_finite() && k.vsy.is_finite())
-            || !(sigma.sigma_alpha.is_finite() && sigma.sigma_kappa.is_finite())
-        {
+        let finite = [dt, k.vx, k.vsx, k.vsy, sigma.sigma_alpha, sigma.sigma_kappa]
+            .iter()
+            .all(|x| x.is_finite());
+        if !finite {
             return Err(StepError::NonFinite);
         }
         if dt <= F::ZERO || dt > F::from_f64(MAX_DT) {

@@ -83,6 +83,41 @@ pub fn fy<F: Float, M: Backend<F>>(
     }
 }
 
+/// The moment arm s of Fx in the aligning torque, eq. (73) / (A56): its coefficients, copied
+/// out of a parameter set so that an estimator can carry them without the whole set.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Arm<F> {
+    /// R0 \[m\].
+    pub r0: F,
+    /// Fz0 \[N\].
+    pub fz0: F,
+    /// SSZ1..SSZ4 \[-\].
+    pub ssz: [F; 4],
+    /// λs \[-\].
+    pub ls: F,
+}
+
+impl<F: Float> Arm<F> {
+    /// The coefficients of `p`.
+    pub fn from_params(p: &Params<F>) -> Self {
+        Arm {
+            r0: p.unloaded_radius,
+            fz0: p.fnomin,
+            ssz: [p.ssz1, p.ssz2, p.ssz3, p.ssz4],
+            ls: p.ls,
+        }
+    }
+
+    /// s \[m\] at lateral force `fy` \[N\], normalised load increment `dfz` and camber `gamma`
+    /// \[rad\]: s = R0·(ssz1 + ssz2·Fy/Fz0 + (ssz3 + ssz4·dfz)·γ)·λs (73), (A56) — Fy/Fz0 and γ,
+    /// not Fz0' and γ*, as the paper and TNO.
+    pub fn s(&self, fy: F, dfz: F, gamma: F) -> F {
+        let [s1, s2, s3, s4] = self.ssz;
+        self.r0 * (s1 + s2 * (fy / self.fz0) + (s3 + s4 * dfz) * gamma) * self.ls
+    }
+}
+
 /// Results of [`mz`].
 #[derive(Debug, Clone, Copy)]
 pub struct Mz<F> {
@@ -115,9 +150,7 @@ pub fn mz<F: Float, M: Backend<F>>(
     let alpha_r_eq = M::atan(M::sqrt(tan_r * tan_r + kk2)) * m.alpha_r.sign(); // (75), (A54)
     let alpha_t_eq = M::atan(M::sqrt(tan_t * tan_t + kk2)) * m.alpha_t.sign(); // (74), (A55)
                                                                                // (73), (A56): s with Fy/Fz0 and γ (not Fz0', γ*), as the paper and TNO.
-    let s = p.unloaded_radius
-        * (p.ssz1 + p.ssz2 * (fy_c / p.fnomin) + (p.ssz3 + p.ssz4 * c.dfz) * c.gamma)
-        * p.ls;
+    let s = Arm::from_params(p).s(fy_c, c.dfz, c.gamma);
     let mut m_zr = m.d_r * M::cos(m.c_r * M::atan(m.b_r * alpha_r_eq)); // (72), (4.E75)
 
     // F'y (4.E74): Fy at γ = 0 (MF 6.x); the weighting Gyκ keeps the actual γ* (TNO, MFeval).

@@ -496,13 +496,14 @@ macro_rules! float_props {
                     }
                 }
 
-                /// In the operating range, with limits on, evaluation always succeeds and
-                /// |Fy − SVy-free part| stays within the friction ellipse's lateral bound μy·Fz
-                /// (plus the vertical shifts, bounded by 10 % of Fz here).
+                /// In the operating range, with limits on, evaluation always succeeds and |Fy|
+                /// stays within the lateral bound μy·Fz (plus the vertical shifts, bounded by
+                /// 10 % of Fz here; camber thrust is kept small, since with large γ the camber
+                /// shift SVyγ legitimately exceeds that).
                 #[test]
                 fn friction_bound(
                     idx in 0usize..14, load in 0.05f64..2.0, kappa in -1.0f64..1.0,
-                    alpha in -0.5f64..0.5, gamma in -0.1f64..0.1, vx in 1.0f64..60.0,
+                    alpha in -0.5f64..0.5, gamma in -0.02f64..0.02, vx in 1.0f64..60.0,
                 ) {
                     let ps = tyres();
                     let p = &ps[idx];

@@ -1,0 +1,614 @@
+//! The Gough-plot road-friction estimator: μ from measured Fy, Mz and Fz, without the slip angle.
+//!
+//! The paper: "When such a collection of curves [the Gough plot: Fy against Mz, which spread in
+//! radial direction with the friction coefficient] is available ..., the friction coefficient may
+//! be estimated when on the road the side force and the aligning torque are measured and the
+//! value of the vertical load is available as well" (ref. [2], Pasterkamp & Pacejka 1994). The
+//! pneumatic trail collapses long before the side force saturates, so the point's place on its
+//! curve — and with it μ — is known early, at moderate utilisation.
+//!
+//! ## Per sample (bounded cost, no allocation, no loop without a constant bound)
+//! 1. Gates: finite input, |Vx| ≥ `vx_min`, Fz ≥ `fz_min_rel`·Fz0, |Fy| ≥ `fy_min_rel`·Fz,
+//!    |Fy| ≥ `fy_share_min`·|F| (lateral excitation must dominate).
+//!    Inputs are low-pass filtered (time constant `lowpass_tau`) against sensor noise.
+//! 2. Combined slip: the moment of Fx about the contact centre, s·Fx with the arm s of eq. (17)
+//!    / (73) (`mf::combined::Arm`, the core's own formula), is removed from Mz; the force used
+//!    for μ is the horizontal resultant on the friction ellipse, √((Fx·μy0/μx0)² + Fy²).
+//! 3. The effective trail τ = −Mz/Fy is inverted through the model's tabulated Gough curve
+//!    ([`table::GoughTable`], λμ = 1, at the wheel's static camber) at the two bracketing load
+//!    nodes, giving f = |Fy|/Fz at λμ = 1 on the same point of the curve; λμ = |F|/(Fz·f),
+//!    interpolated linearly in Fz. μ = λμ·μy0 (architecture: μ on the file's surface scale).
+//! 4. Its variance from the measurement noise (σMz, σFy) through the local slopes of the table.
+//!    The sample is *identifiable* when the trail has dropped by ≥ `trail_drop_min` and the
+//!    model-induced σ of μ is ≤ `sigma_max` (measurement noise is left to the filter); otherwise the estimator says so instead of
+//!    guessing ([`State::NotIdentifiable`]) and holds its last estimate with a growing σ.
+//! 5. A scalar Kalman filter (random walk, intensity `q`) fuses identifiable samples; innovations
+//!    beyond `gate` σ are outliers and rejected, and `change_count` consecutive outliers of one
+//!    sign declare a change of surface (dry → ice): the filter restarts from the new evidence.
+//!    Isolated outliers (noise) never move the estimate.
+//!
+//! ## Leaves out
+//! Pure longitudinal excitation (straight braking, no Fy): the trail carries no information
+//! then; that is the slip-slope method's domain (a host peer in `gough-host`). Turn slip.
+
+pub mod table;
+
+use crate::brush::Brush;
+use crate::math::{Backend, Float};
+use crate::mf::{combined::Arm, Params};
+pub use table::{GoughTable, Model, LAMBDA_NODES, LOAD_NODES};
+
+/// Estimator settings. SI units.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Config<F> {
+    /// Static camber of the wheel \[rad\] (the table is built at it).
+    pub gamma: F,
+    /// Aligning-torque sensor noise, rms \[N·m\].
+    pub sigma_mz: F,
+    /// Lateral-force sensor noise, rms, as a fraction of Fz \[-\].
+    pub sigma_fy_rel: F,
+    /// Below this |Vx| \[m/s\] no sample is used.
+    pub vx_min: F,
+    /// Below this Fz/Fz0 no sample is used.
+    pub fz_min_rel: F,
+    /// Below this |Fy|/Fz no sample is used (τ = −Mz/Fy undefined).
+    pub fy_min_rel: F,
+    /// Below this share |Fy|/|F| of the horizontal force no sample is used: when Fx dominates
+    /// (straight braking) the trail says little and the combined-slip approximation is poor.
+    pub fy_share_min: F,
+    /// Minimum trail drop 1 − τ/τ0 for a sample to count as identifiable.
+    pub trail_drop_min: F,
+    /// Maximum model-induced σ of one sample's μ \[-\] for it to count as identifiable (the
+    /// measurement noise is averaged by the filter; the model's error is not).
+    pub sigma_max: F,
+    /// Model uncertainty of the trail, as a fraction of τ0 (table interpolation between loads,
+    /// the shifts that make λμ-scaling not exactly radial): added to the measurement variance,
+    /// so that where the inversion is ill-conditioned the sample is not identifiable.
+    pub trail_model_rel: F,
+    /// Random-walk intensity of λμ \[1/s\] (variance growth per second).
+    pub q: F,
+    /// Outlier gate in standard deviations of the innovation.
+    pub gate: F,
+    /// Consecutive one-sided outliers that declare a change of surface.
+    pub change_count: u16,
+    /// Prior μ reported before any identifiable sample, and when the estimate has aged out.
+    pub mu_prior: F,
+    /// σ of the prior; an estimate whose σ grows beyond it falls back to the prior.
+    pub sigma_prior: F,
+    /// Low-pass time constant of the inputs \[s\] (0: none).
+    pub lowpass_tau: F,
+}
+
+impl<F: Float> Default for Config<F> {
+    fn default() -> Self {
+        let c = F::from_f64;
+        Config {
+            gamma: F::ZERO,
+            sigma_mz: c(2.0),
+            sigma_fy_rel: c(0.01),
+            vx_min: c(3.0),
+            fz_min_rel: c(0.15),
+            fy_min_rel: c(0.05),
+            fy_share_min: c(0.5),
+            trail_drop_min: c(0.2),
+            sigma_max: c(0.08),
+            trail_model_rel: c(0.02),
+            q: c(0.02),
+            gate: c(4.0),
+            change_count: 15,
+            mu_prior: c(0.8),
+            sigma_prior: c(0.4),
+            lowpass_tau: c(0.01),
+        }
+    }
+}
+
+/// One measurement of one wheel. ISO-W, SI.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Sample<F> {
+    /// Time \[s\] (monotonic).
+    pub t: F,
+    /// Vertical load Fz \[N\].
+    pub fz: F,
+    /// Lateral force Fy \[N\].
+    pub fy: F,
+    /// Aligning torque Mz \[N·m\].
+    pub mz: F,
+    /// Longitudinal force Fx \[N\], when measured.
+    pub fx: Option<F>,
+    /// Forward speed Vx \[m/s\], when measured (the speed gate is skipped without it).
+    pub vx: Option<F>,
+}
+
+/// What an estimate rests on.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum State {
+    /// This sample was informative and updated the estimate.
+    Identifiable,
+    /// This sample carried no usable information (the trail has not dropped, or a gate
+    /// failed); the last estimate is held with a growing σ.
+    NotIdentifiable,
+    /// No usable estimate (none yet, or it aged out): the prior is reported.
+    Fallback,
+}
+
+impl State {
+    /// Name as in logs: `identifiable`, `not_identifiable`, `fallback`.
+    pub const fn name(self) -> &'static str {
+        match self {
+            State::Identifiable => "identifiable",
+            State::NotIdentifiable => "not_identifiable",
+            State::Fallback => "fallback",
+        }
+    }
+}
+
+/// An estimate of the road friction.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Estimate<F> {
+    /// μ \[-\] on the tyre file's test-surface scale (architecture.md).
+    pub mu: F,
+    /// Standard deviation of μ \[-\].
+    pub sigma: F,
+    /// What it rests on.
+    pub state: State,
+    /// A change of surface was declared at this sample.
+    pub change: bool,
+}
+
+/// Why an estimator could not be built.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum BuildError {
+    /// The model gives no usable Gough curve (zero stiffness, nonsense parameters).
+    NoGoughCurve,
+}
+
+impl core::fmt::Display for BuildError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str("the tyre model gives no usable Gough curve")
+    }
+}
+
+impl core::error::Error for BuildError {}
+
+/// One wheel's estimator: a few words of state and a reference to the tyre's shared
+/// [`GoughTable`] (about 9 KB in f32, built once per tyre). No allocation.
+///
+/// ```
+/// use gough::{math::Libm, mu::{Config, GoughTable, MuEstimator, Sample, State}};
+/// let text = include_str!("../../host-tests/data/tyres/MagicFormula61_Parameters.tir");
+/// let tyre = gough::tir::parse(text).unwrap().params.cast::<f32>();
+/// let table = GoughTable::for_tyre::<Libm>(&tyre, 0.0).unwrap();
+/// let mut est = MuEstimator::for_tyre(&table, &tyre, Config::default());
+/// // Straight running tells nothing about friction: the prior is reported, and said so.
+/// let e = est.update::<Libm>(&Sample { t: 0.0, fz: 6000.0, fy: 0.0, mz: 0.0, fx: None, vx: Some(20.0) });
+/// assert_eq!(e.state, State::Fallback);
+/// ```
+#[derive(Debug, Clone)]
+pub struct MuEstimator<'t, F> {
+    table: &'t GoughTable<F>,
+    arm: Arm<F>,
+    fz0: F,
+    cfg: Config<F>,
+    // filter
+    lambda: F,
+    p: F,
+    have: bool,
+    run: i32,
+    // low-pass state
+    lp: Option<Sample<F>>,
+    last_t: Option<F>,
+}
+
+/// A per-sample λμ with its variance (before filtering).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Raw<F> {
+    /// λμ \[-\].
+    pub lambda: F,
+    /// Its variance.
+    pub var: F,
+    /// Trail drop 1 − τ/τ0.
+    pub drop: F,
+}
+
+impl<F: Float> GoughTable<F> {
+    /// The table of a Magic Formula tyre at static camber `gamma` \[rad\].
+    pub fn for_tyre<M: Backend<F>>(tyre: &Params<F>, gamma: F) -> Result<Self, BuildError> {
+        GoughTable::build::<M>(Model::Mf(tyre), gamma).ok_or(BuildError::NoGoughCurve)
+    }
+
+    /// The table of the paper's brush model (no `.tir` at hand).
+    pub fn for_brush<M: Backend<F>>(brush: Brush<F>) -> Result<Self, BuildError> {
+        GoughTable::build::<M>(Model::Brush(brush), F::ZERO).ok_or(BuildError::NoGoughCurve)
+    }
+}
+
+/// A sample reduced to what the table needs: load bracket (node `j`, weight `w`), side, trail,
+/// force, load.
+#[derive(Clone, Copy)]
+struct Reading<F> {
+    j: usize,
+    w: F,
+    side: usize,
+    tau: F,
+    force: F,
+    fz: F,
+}
+
+/// One surface's radial estimate.
+#[derive(Clone, Copy)]
+struct NodeEst<F> {
+    lambda: F,
+    dl_dtau: F,
+    tau0: F,
+    drop: F,
+}
+
+impl<'t, F: Float> MuEstimator<'t, F> {
+    /// An estimator for one wheel of a Magic Formula tyre (its table built by
+    /// [`GoughTable::for_tyre`] at the wheel's static camber `config.gamma`).
+    pub fn for_tyre(table: &'t GoughTable<F>, tyre: &Params<F>, config: Config<F>) -> Self {
+        Self::with_table(table, Arm::from_params(tyre), tyre.fnomin, config)
+    }
+
+    /// An estimator on the brush model's table (no Fx moment arm).
+    pub fn for_brush(table: &'t GoughTable<F>, brush: &Brush<F>, config: Config<F>) -> Self {
+        let arm = Arm {
+            r0: F::ZERO,
+            fz0: brush.fz0,
+            ssz: [F::ZERO; 4],
+            ls: F::ZERO,
+        };
+        Self::with_table(table, arm, brush.fz0, config)
+    }
+
+    fn with_table(table: &'t GoughTable<F>, arm: Arm<F>, fz0: F, cfg: Config<F>) -> Self {
+        MuEstimator {
+            table,
+            arm,
+            fz0,
+            cfg,
+            lambda: F::ZERO,
+            p: F::ZERO,
+            have: false,
+            run: 0,
+            lp: None,
+            last_t: None,
+        }
+    }
+
+    /// μy0 of the model: μ of its test surface (λμ = 1).
+    pub fn mu0(&self) -> F {
+        self.table.mu0
+    }
+
+    /// The settings.
+    pub fn config(&self) -> &Config<F> {
+        &self.cfg
+    }
+
+    /// Forgets everything learnt (e.g. after a reset command).
+    pub fn reset(&mut self) {
+        self.have = false;
+        self.run = 0;
+        self.lp = None;
+        self.last_t = None;
+    }
+
+    /// The radial estimate on surface node `si` for the reading `q`.
+    fn node(&self, si: usize, q: &Reading<F>) -> Option<NodeEst<F>> {
+        let Reading {
+            j,
+            w,
+            side,
+            tau,
+            force,
+            fz,
+        } = *q;
+        let t = self.table;
+        let (t0a, t0b) = (t.tau0(si, j, side)?, t.tau0(si, j + 1, side)?);
+        // The trail's length scales with load (Dt ∝ Fz·(qDz1 + qDz2·dfz)): compare curves at
+        // the same fraction of their own small-slip trail τ0, not at the same τ.
+        let tau0 = t0a + w * (t0b - t0a);
+        if tau0 <= F::ZERO {
+            return None;
+        }
+        let rho = tau / tau0;
+        let ia = t.invert(si, j, side, rho * t0a)?;
+        let ib = t.invert(si, j + 1, side, rho * t0b)?;
+        let f = ia.f + w * (ib.f - ia.f);
+        if f <= F::ZERO {
+            return None;
+        }
+        // ∂f/∂τ through ρ: ∂f_j/∂τ = f_j'·τ0_j/τ0.
+        let dfdtau = (ia.df_dtau * t0a + w * (ib.df_dtau * t0b - ia.df_dtau * t0a)) / tau0;
+        let lam_node = F::from_f64(*table::LAMBDA_NODES.get(si)?);
+        let lambda = lam_node * force / (fz * f); // radial scaling about the node
+        Some(NodeEst {
+            lambda,
+            dl_dtau: -lambda * dfdtau / f,
+            tau0,
+            drop: F::ONE - rho,
+        })
+    }
+
+    /// λμ and its variance from one (filtered) sample, or `None` when the sample is not
+    /// identifiable. Pure function of the sample; exposed for tests and diagnosis.
+    pub fn raw<M: Backend<F>>(&self, s: &Sample<F>) -> Option<Raw<F>> {
+        let cfg = &self.cfg;
+        if s.fz < cfg.fz_min_rel * self.fz0 {
+            return None;
+        }
+        if let Some(vx) = s.vx {
+            if vx.abs() < cfg.vx_min {
+                return None;
+            }
+        }
+        let fy = s.fy;
+        if fy.abs() < cfg.fy_min_rel * s.fz {
+            return None;
+        }
+        let fx = s.fx.unwrap_or(F::ZERO);
+        let dfz = (s.fz - self.fz0) / self.fz0;
+        let mz = s.mz - self.arm.s(fy, dfz, cfg.gamma) * fx; // (17): remove s·Fx
+        let tau = -mz / fy;
+        // Side: Fy along the model's α > 0 direction → side 0.
+        let side = if fy * self.table.fy_sign > F::ZERO {
+            0
+        } else {
+            1
+        };
+        // Friction ellipse: Fx counts at the lateral scale μy0/μx0 of the model.
+        let fxe = fx * self.table.mu_ratio;
+        let force = M::sqrt(fxe * fxe + fy * fy);
+        if fy.abs() < cfg.fy_share_min * force {
+            return None;
+        }
+        // Load nodes bracketing Fz (clamped at the ends).
+        let nodes = &self.table.fz;
+        let n = nodes.len();
+        let mut j = 0;
+        while j + 2 < n && nodes.get(j + 1).is_some_and(|&x| s.fz > x) {
+            j += 1;
+        }
+        let (za, zb) = (*nodes.get(j)?, *nodes.get(j + 1)?);
+        let w = ((s.fz - za) / (zb - za)).max(F::ZERO).min(F::ONE);
+        let reading = Reading {
+            j,
+            w,
+            side,
+            tau,
+            force,
+            fz: s.fz,
+        };
+        // Radial estimates about each surface node; the consistent one is where the estimate
+        // crosses its own node (d = λ̂ − λnode changes sign), interpolated between the two.
+        let mut ests: [Option<NodeEst<F>>; table::LAMBDA_NODES.len()] =
+            [None; table::LAMBDA_NODES.len()];
+        for (si, slot) in ests.iter_mut().enumerate() {
+            *slot = self.node(si, &reading);
+        }
+        let mut prev: Option<(F, NodeEst<F>)> = None;
+        let mut pick: Option<NodeEst<F>> = None;
+        for (si, e) in ests.iter().enumerate() {
+            let Some(e) = *e else { continue };
+            let d = e.lambda - F::from_f64(*table::LAMBDA_NODES.get(si)?);
+            match prev {
+                Some((dp, ep)) if dp >= F::ZERO && d < F::ZERO => {
+                    let u = dp / (dp - d);
+                    let mix = |a: F, b: F| a + u * (b - a);
+                    pick = Some(NodeEst {
+                        lambda: mix(ep.lambda, e.lambda),
+                        dl_dtau: mix(ep.dl_dtau, e.dl_dtau),
+                        tau0: mix(ep.tau0, e.tau0),
+                        drop: mix(ep.drop, e.drop),
+                    });
+                    break;
+                }
+                None if d < F::ZERO => {
+                    pick = Some(e); // below the lowest usable node
+                    break;
+                }
+                _ => {}
+            }
+            prev = Some((d, e));
+            pick = Some(e); // above every node so far: the highest one
+        }
+        // Ambiguity guard: the same (τ, |F|) can be a slippery surface at moderate slip or a
+        // grippy one at small slip, where the trail has not dropped. An estimate is believed
+        // only if every grippier surface node could read the point too.
+        if let Some(e) = pick {
+            for (si, est) in ests.iter().enumerate() {
+                if F::from_f64(*table::LAMBDA_NODES.get(si)?) > e.lambda && est.is_none() {
+                    return None;
+                }
+            }
+        }
+        let e = pick?;
+        let lambda = e.lambda;
+        // Error propagation: λ = |F|/(Fz·f(τ)), τ = −M/Fy.
+        //   ∂λ/∂τ = −λ·f'/f;  ∂τ/∂M = −1/Fy;  ∂τ/∂Fy = −τ/Fy;  ∂λ/∂|F| = λ/|F|.
+        let s_m = cfg.sigma_mz;
+        let s_f = cfg.sigma_fy_rel * s.fz;
+        let var_meas = e.dl_dtau.sq() * ((s_m / fy).sq() + (tau * s_f / fy).sq())
+            + (lambda * s_f / force).sq();
+        // The model's own uncertainty does not average out over samples: it alone decides
+        // whether the inversion is well-conditioned enough to be believed at all.
+        let var_model = (e.dl_dtau * cfg.trail_model_rel * e.tau0).sq();
+        let mu0 = self.table.mu0;
+        if e.drop < cfg.trail_drop_min
+            || var_model * mu0.sq() > cfg.sigma_max.sq()
+            || lambda <= F::ZERO
+            || !lambda.is_finite()
+        {
+            return None;
+        }
+        Some(Raw {
+            lambda,
+            var: var_meas + var_model,
+            drop: e.drop,
+        })
+    }
+
+    /// Processes one sample and returns the current estimate. Non-finite or out-of-order samples
+    /// are not identifiable (the estimate is held); nothing earlier is lost.
+    pub fn update<M: Backend<F>>(&mut self, s: &Sample<F>) -> Estimate<F> {
+        let finite = s.t.is_finite()
+            && s.fz.is_finite()
+            && s.fy.is_finite()
+            && s.mz.is_finite()
+            && s.fx.is_none_or(|x| x.is_finite())
+            && s.vx.is_none_or(|x| x.is_finite());
+        let dt = match (self.last_t, finite) {
+            (_, false) => None,
+            (None, true) => Some(F::ZERO),
+            (Some(t0), true) => {
+                let d = s.t - t0;
+                if d < F::ZERO {
+                    None
+                } else {
+                    Some(d.min(F::ONE))
+                }
+            }
+        };
+        let Some(dt) = dt else {
+            return self.hold::<M>();
+        };
+        self.last_t = Some(s.t);
+        // Low-pass the inputs (first order, α = dt/(τ + dt)).
+        let filt = match self.lp {
+            None => *s,
+            Some(prev) => {
+                let a = if self.cfg.lowpass_tau > F::ZERO {
+                    dt / (self.cfg.lowpass_tau + dt)
+                } else {
+                    F::ONE
+                };
+                let mix = |p: F, x: F| p + a * (x - p);
+                Sample {
+                    t: s.t,
+                    fz: mix(prev.fz, s.fz),
+                    fy: mix(prev.fy, s.fy),
+                    mz: mix(prev.mz, s.mz),
+                    fx: match (prev.fx, s.fx) {
+                        (Some(p), Some(x)) => Some(mix(p, x)),
+                        (_, x) => x,
+                    },
+                    vx: s.vx,
+                }
+            }
+        };
+        self.lp = Some(filt);
+        if self.have {
+            self.p += self.cfg.q * dt;
+        }
+        match self.raw::<M>(&filt) {
+            None => self.hold::<M>(),
+            Some(r) => self.fuse::<M>(r),
+        }
+    }
+
+    fn hold<M: Backend<F>>(&self) -> Estimate<F> {
+        let mu0 = self.table.mu0;
+        if self.have {
+            let sigma = M::sqrt(self.p) * mu0;
+            if sigma <= self.cfg.sigma_prior {
+                return Estimate {
+                    mu: self.lambda * mu0,
+                    sigma,
+                    state: State::NotIdentifiable,
+                    change: false,
+                };
+            }
+        }
+        Estimate {
+            mu: self.cfg.mu_prior,
+            sigma: self.cfg.sigma_prior,
+            state: State::Fallback,
+            change: false,
+        }
+    }
+
+    fn fuse<M: Backend<F>>(&mut self, r: Raw<F>) -> Estimate<F> {
+        let mu0 = self.table.mu0;
+        let mut change = false;
+        if !self.have {
+            self.lambda = r.lambda;
+            self.p = r.var;
+            self.have = true;
+            self.run = 0;
+        } else {
+            let e = r.lambda - self.lambda;
+            let s = self.p + r.var;
+            if e * e > self.cfg.gate.sq() * s {
+                // Outlier: counted, not used, unless it persists on one side (a new surface).
+                let dir = if e > F::ZERO { 1 } else { -1 };
+                self.run = if self.run.signum() == dir {
+                    self.run + dir
+                } else {
+                    dir
+                };
+                if self.run.unsigned_abs() >= u32::from(self.cfg.change_count) {
+                    self.lambda = r.lambda;
+                    self.p = r.var;
+                    self.run = 0;
+                    change = true;
+                } else {
+                    return Estimate {
+                        mu: self.lambda * mu0,
+                        sigma: M::sqrt(self.p) * mu0,
+                        state: State::Identifiable,
+                        change: false,
+                    };
+                }
+            } else {
+                let k = self.p / s;
+                self.lambda += k * e;
+                self.p = (F::ONE - k) * self.p;
+                self.run = 0;
+            }
+        }
+        Estimate {
+            mu: self.lambda * mu0,
+            sigma: M::sqrt(self.p) * mu0,
+            state: State::Identifiable,
+            change,
+        }
+    }
+}
+
+/// Fuses two wheels' estimates (an axle) by inverse variance when they agree within 3σ; `None`
+/// when either has no estimate of its own or they disagree (μ-split: keep them apart).
+pub fn fuse<F: Float, M: Backend<F>>(a: &Estimate<F>, b: &Estimate<F>) -> Option<Estimate<F>> {
+    if a.state == State::Fallback || b.state == State::Fallback {
+        return None;
+    }
+    let (va, vb) = (a.sigma.sq(), b.sigma.sq());
+    if va <= F::ZERO || vb <= F::ZERO {
+        return None;
+    }
+    let d = a.mu - b.mu;
+    if d * d > F::from_f64(9.0) * (va + vb) {
+        return None;
+    }
+    let w = vb / (va + vb);
+    let state = if a.state == State::Identifiable || b.state == State::Identifiable {
+        State::Identifiable
+    } else {
+        State::NotIdentifiable
+    };
+    Some(Estimate {
+        mu: w * a.mu + (F::ONE - w) * b.mu,
+        sigma: M::sqrt(va * vb / (va + vb)),
+        state,
+        change: a.change || b.change,
+    })
+}
+
+#[cfg(test)]
+mod tests;
