@@ -40,8 +40,11 @@
 extern crate std;
 
 pub mod brush;
+#[cfg(feature = "fixed")]
+pub mod fixed;
 pub mod math;
 pub mod mf;
 pub mod mu;
+pub mod proto;
 pub mod relax;
 pub mod tir;

@@ -35,14 +35,14 @@ pub mod table;
 
 use crate::brush::Brush;
 use crate::math::{Backend, Float};
-use crate::mf::{combined::Arm, Params};
-pub use table::{GoughTable, Model, LAMBDA_NODES, LOAD_NODES};
+use crate::mf::{combined::Arm, Params, Side};
+pub use table::{GoughTable, Model, CAMBER_NODES, LAMBDA_NODES, LOAD_NODES};
 
 /// Estimator settings. SI units.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Config<F> {
-    /// Static camber of the wheel \[rad\] (the table is built at it).
+    /// Camber of the wheel \[rad\] used when a sample carries none (its static camber).
     pub gamma: F,
     /// Aligning-torque sensor noise, rms \[N·m\].
     pub sigma_mz: F,
@@ -59,6 +59,9 @@ pub struct Config<F> {
     pub fy_share_min: F,
     /// Minimum trail drop 1 − τ/τ0 for a sample to count as identifiable.
     pub trail_drop_min: F,
+    /// Minimum absolute trail drop τ0 − τ \[m\]: where the small-slip trail itself is short
+    /// (low load, strong camber), a relative drop is within the table's interpolation error.
+    pub trail_drop_abs_min: F,
     /// Maximum model-induced σ of one sample's μ \[-\] for it to count as identifiable (the
     /// measurement noise is averaged by the filter; the model's error is not).
     pub sigma_max: F,
@@ -89,14 +92,15 @@ impl<F: Float> Default for Config<F> {
             sigma_fy_rel: c(0.01),
             vx_min: c(3.0),
             fz_min_rel: c(0.15),
-            fy_min_rel: c(0.05),
+            fy_min_rel: c(0.04),
             fy_share_min: c(0.5),
             trail_drop_min: c(0.2),
+            trail_drop_abs_min: c(0.004),
             sigma_max: c(0.08),
             trail_model_rel: c(0.02),
             q: c(0.02),
             gate: c(4.0),
-            change_count: 15,
+            change_count: 40,
             mu_prior: c(0.8),
             sigma_prior: c(0.4),
             lowpass_tau: c(0.01),
@@ -120,6 +124,9 @@ pub struct Sample<F> {
     pub fx: Option<F>,
     /// Forward speed Vx \[m/s\], when measured (the speed gate is skipped without it).
     pub vx: Option<F>,
+    /// Inclination γ \[rad\] (static camber plus roll camber from the suspension kinematics),
+    /// when known; `Config::gamma` otherwise.
+    pub gamma: Option<F>,
 }
 
 /// What an estimate rests on.
@@ -177,16 +184,16 @@ impl core::fmt::Display for BuildError {
 impl core::error::Error for BuildError {}
 
 /// One wheel's estimator: a few words of state and a reference to the tyre's shared
-/// [`GoughTable`] (about 9 KB in f32, built once per tyre). No allocation.
+/// [`GoughTable`] (about 27 KB in f32, built once per tyre and side). No allocation.
 ///
 /// ```
 /// use gough::{math::Libm, mu::{Config, GoughTable, MuEstimator, Sample, State}};
 /// let text = include_str!("../../host-tests/data/tyres/MagicFormula61_Parameters.tir");
 /// let tyre = gough::tir::parse(text).unwrap().params.cast::<f32>();
-/// let table = GoughTable::for_tyre::<Libm>(&tyre, 0.0).unwrap();
+/// let table = GoughTable::for_tyre::<Libm>(&tyre).unwrap();
 /// let mut est = MuEstimator::for_tyre(&table, &tyre, Config::default());
 /// // Straight running tells nothing about friction: the prior is reported, and said so.
-/// let e = est.update::<Libm>(&Sample { t: 0.0, fz: 6000.0, fy: 0.0, mz: 0.0, fx: None, vx: Some(20.0) });
+/// let e = est.update::<Libm>(&Sample { t: 0.0, fz: 6000.0, fy: 0.0, mz: 0.0, fx: None, vx: Some(20.0), gamma: None });
 /// assert_eq!(e.state, State::Fallback);
 /// ```
 #[derive(Debug, Clone)]
@@ -217,14 +224,23 @@ pub struct Raw<F> {
 }
 
 impl<F: Float> GoughTable<F> {
-    /// The table of a Magic Formula tyre at static camber `gamma` \[rad\].
-    pub fn for_tyre<M: Backend<F>>(tyre: &Params<F>, gamma: F) -> Result<Self, BuildError> {
-        GoughTable::build::<M>(Model::Mf(tyre), gamma).ok_or(BuildError::NoGoughCurve)
+    /// The table of a Magic Formula tyre, as the file describes it (no mirroring).
+    pub fn for_tyre<M: Backend<F>>(tyre: &Params<F>) -> Result<Self, BuildError> {
+        Self::for_wheel::<M>(tyre, None)
+    }
+
+    /// The table of a Magic Formula tyre mounted on side `mounted` (mirrored when that differs
+    /// from the file's TYRESIDE, exactly as `mf::eval` does with `Options::mounted`).
+    pub fn for_wheel<M: Backend<F>>(
+        tyre: &Params<F>,
+        mounted: Option<Side>,
+    ) -> Result<Self, BuildError> {
+        GoughTable::build::<M>(Model::Mf(tyre), mounted).ok_or(BuildError::NoGoughCurve)
     }
 
     /// The table of the paper's brush model (no `.tir` at hand).
     pub fn for_brush<M: Backend<F>>(brush: Brush<F>) -> Result<Self, BuildError> {
-        GoughTable::build::<M>(Model::Brush(brush), F::ZERO).ok_or(BuildError::NoGoughCurve)
+        GoughTable::build::<M>(Model::Brush(brush), None).ok_or(BuildError::NoGoughCurve)
     }
 }
 
@@ -234,6 +250,8 @@ impl<F: Float> GoughTable<F> {
 struct Reading<F> {
     j: usize,
     w: F,
+    g: usize,
+    u: F,
     side: usize,
     tau: F,
     force: F,
@@ -247,11 +265,13 @@ struct NodeEst<F> {
     dl_dtau: F,
     tau0: F,
     drop: F,
+    /// Relative spread of λ from a saturated reading (deep sliding), 0 otherwise.
+    spread: F,
 }
 
 impl<'t, F: Float> MuEstimator<'t, F> {
     /// An estimator for one wheel of a Magic Formula tyre (its table built by
-    /// [`GoughTable::for_tyre`] at the wheel's static camber `config.gamma`).
+    /// [`GoughTable::for_tyre`] or [`GoughTable::for_wheel`]).
     pub fn for_tyre(table: &'t GoughTable<F>, tyre: &Params<F>, config: Config<F>) -> Self {
         Self::with_table(table, Arm::from_params(tyre), tyre.fnomin, config)
     }
@@ -305,28 +325,46 @@ impl<'t, F: Float> MuEstimator<'t, F> {
         let Reading {
             j,
             w,
+            g,
+            u,
             side,
             tau,
             force,
             fz,
         } = *q;
         let t = self.table;
-        let (t0a, t0b) = (t.tau0(si, j, side)?, t.tau0(si, j + 1, side)?);
+        // Bilinear in (load, camber) over the four bracketing curves.
+        let corners = [
+            (g, j, (F::ONE - u) * (F::ONE - w)),
+            (g, j + 1, (F::ONE - u) * w),
+            (g + 1, j, u * (F::ONE - w)),
+            (g + 1, j + 1, u * w),
+        ];
+        let mut tau0 = F::ZERO;
+        for &(gi, ji, wt) in &corners {
+            tau0 += wt * t.tau0(gi, si, ji, side)?;
+        }
         // The trail's length scales with load (Dt ∝ Fz·(qDz1 + qDz2·dfz)): compare curves at
         // the same fraction of their own small-slip trail τ0, not at the same τ.
-        let tau0 = t0a + w * (t0b - t0a);
         if tau0 <= F::ZERO {
             return None;
         }
         let rho = tau / tau0;
-        let ia = t.invert(si, j, side, rho * t0a)?;
-        let ib = t.invert(si, j + 1, side, rho * t0b)?;
-        let f = ia.f + w * (ib.f - ia.f);
+        let (mut f, mut f_spread, mut dfdtau) = (F::ZERO, F::ZERO, F::ZERO);
+        for &(gi, ji, wt) in &corners {
+            let t0 = t.tau0(gi, si, ji, side)?;
+            if wt == F::ZERO {
+                continue;
+            }
+            let inv = t.invert(gi, si, ji, side, rho * t0)?;
+            f += wt * inv.f;
+            f_spread += wt * inv.f_spread;
+            // ∂f/∂τ through ρ: ∂f_k/∂τ = f_k'·τ0_k/τ0.
+            dfdtau += wt * inv.df_dtau * t0 / tau0;
+        }
         if f <= F::ZERO {
             return None;
         }
-        // ∂f/∂τ through ρ: ∂f_j/∂τ = f_j'·τ0_j/τ0.
-        let dfdtau = (ia.df_dtau * t0a + w * (ib.df_dtau * t0b - ia.df_dtau * t0a)) / tau0;
         let lam_node = F::from_f64(*table::LAMBDA_NODES.get(si)?);
         let lambda = lam_node * force / (fz * f); // radial scaling about the node
         Some(NodeEst {
@@ -334,6 +372,7 @@ impl<'t, F: Float> MuEstimator<'t, F> {
             dl_dtau: -lambda * dfdtau / f,
             tau0,
             drop: F::ONE - rho,
+            spread: f_spread / f,
         })
     }
 
@@ -355,7 +394,14 @@ impl<'t, F: Float> MuEstimator<'t, F> {
         }
         let fx = s.fx.unwrap_or(F::ZERO);
         let dfz = (s.fz - self.fz0) / self.fz0;
-        let mz = s.mz - self.arm.s(fy, dfz, cfg.gamma) * fx; // (17): remove s·Fx
+        let gamma = s.gamma.filter(|g| g.is_finite()).unwrap_or(cfg.gamma);
+        // (17): remove s·Fx. A mirrored tyre's arm is the mirror of the file's: −s(−Fy, −γ).
+        let arm = if self.table.mirrored {
+            -self.arm.s(-fy, dfz, -gamma)
+        } else {
+            self.arm.s(fy, dfz, gamma)
+        };
+        let mz = s.mz - arm * fx;
         let tau = -mz / fy;
         // Side: Fy along the model's α > 0 direction → side 0.
         let side = if fy * self.table.fy_sign > F::ZERO {
@@ -378,9 +424,19 @@ impl<'t, F: Float> MuEstimator<'t, F> {
         }
         let (za, zb) = (*nodes.get(j)?, *nodes.get(j + 1)?);
         let w = ((s.fz - za) / (zb - za)).max(F::ZERO).min(F::ONE);
+        // Camber nodes bracketing γ (clamped at the ends).
+        let cn = &table::CAMBER_NODES;
+        let mut g = 0;
+        while g + 2 < cn.len() && cn.get(g + 1).is_some_and(|&x| gamma.to_f64() > x) {
+            g += 1;
+        }
+        let (ga, gb) = (F::from_f64(*cn.get(g)?), F::from_f64(*cn.get(g + 1)?));
+        let u = ((gamma - ga) / (gb - ga)).max(F::ZERO).min(F::ONE);
         let reading = Reading {
             j,
             w,
+            g,
+            u,
             side,
             tau,
             force,
@@ -407,6 +463,7 @@ impl<'t, F: Float> MuEstimator<'t, F> {
                         dl_dtau: mix(ep.dl_dtau, e.dl_dtau),
                         tau0: mix(ep.tau0, e.tau0),
                         drop: mix(ep.drop, e.drop),
+                        spread: mix(ep.spread, e.spread),
                     });
                     break;
                 }
@@ -420,11 +477,39 @@ impl<'t, F: Float> MuEstimator<'t, F> {
             pick = Some(e); // above every node so far: the highest one
         }
         // Ambiguity guard: the same (τ, |F|) can be a slippery surface at moderate slip or a
-        // grippy one at small slip, where the trail has not dropped. An estimate is believed
-        // only if every grippier surface node could read the point too.
+        // grippy one at small slip, where the trail has not dropped (or is still rising, with
+        // the residual torque). An estimate is believed only if every grippier surface node
+        // could read the point too, reads it as less grippy than itself (no second crossing),
+        // and the point lies on none of their rising branches.
         if let Some(e) = pick {
+            let (gn, jn) = (g + usize::from(u > F::HALF), j + usize::from(w > F::HALF));
+            let f_m = force / s.fz;
             for (si, est) in ests.iter().enumerate() {
-                if F::from_f64(*table::LAMBDA_NODES.get(si)?) > e.lambda && est.is_none() {
+                let lam_k = F::from_f64(*table::LAMBDA_NODES.get(si)?);
+                if lam_k <= e.lambda {
+                    continue;
+                }
+                if est.is_none() {
+                    return None;
+                }
+                // A second crossing further up: the point reads as a grippier surface too.
+                if let Some(k) = est {
+                    if k.lambda >= lam_k {
+                        return None;
+                    }
+                }
+                let tol = F::from_f64(0.3) * self.table.tau0(gn, si, jn, side)?.abs();
+                if self.table.on_rise(
+                    table::CurveIdx {
+                        g: gn,
+                        si,
+                        j: jn,
+                        side,
+                    },
+                    f_m,
+                    tau,
+                    tol,
+                ) {
                     return None;
                 }
             }
@@ -439,9 +524,10 @@ impl<'t, F: Float> MuEstimator<'t, F> {
             + (lambda * s_f / force).sq();
         // The model's own uncertainty does not average out over samples: it alone decides
         // whether the inversion is well-conditioned enough to be believed at all.
-        let var_model = (e.dl_dtau * cfg.trail_model_rel * e.tau0).sq();
+        let var_model = (e.dl_dtau * cfg.trail_model_rel * e.tau0).sq() + (lambda * e.spread).sq();
         let mu0 = self.table.mu0;
         if e.drop < cfg.trail_drop_min
+            || e.drop * e.tau0 < cfg.trail_drop_abs_min
             || var_model * mu0.sq() > cfg.sigma_max.sq()
             || lambda <= F::ZERO
             || !lambda.is_finite()
@@ -463,7 +549,8 @@ impl<'t, F: Float> MuEstimator<'t, F> {
             && s.fy.is_finite()
             && s.mz.is_finite()
             && s.fx.is_none_or(|x| x.is_finite())
-            && s.vx.is_none_or(|x| x.is_finite());
+            && s.vx.is_none_or(|x| x.is_finite())
+            && s.gamma.is_none_or(|x| x.is_finite());
         let dt = match (self.last_t, finite) {
             (_, false) => None,
             (None, true) => Some(F::ZERO),
@@ -500,6 +587,7 @@ impl<'t, F: Float> MuEstimator<'t, F> {
                         (_, x) => x,
                     },
                     vx: s.vx,
+                    gamma: s.gamma,
                 }
             }
         };

@@ -11,7 +11,7 @@
 
 use crate::brush::Brush;
 use crate::math::{Backend, Float};
-use crate::mf::{self, Input, Options, Params};
+use crate::mf::{self, Input, Options, Params, Side};
 
 /// Loads the table holds, as multiples of the reference load.
 pub const LOAD_NODES: [f64; 7] = [0.2, 0.4, 0.6, 0.8, 1.0, 1.35, 1.8];
@@ -21,8 +21,41 @@ pub const LOAD_NODES: [f64; 7] = [0.2, 0.4, 0.6, 0.8, 1.0, 1.35, 1.8];
 pub const LAMBDA_NODES: [f64; 4] = [0.15, 0.35, 0.65, 1.0];
 /// Slip-angle nodes per load, side and surface.
 pub const POINTS: usize = 20;
+/// Inclination angles the table holds \[rad\] (±2°): camber moves the Gough curve (camber
+/// thrust, the camber terms of the trail and residual torque), and a wheel's camber changes
+/// with roll; the estimate interpolates between the bracketing nodes.
+pub const CAMBER_NODES: [f64; 7] = [-0.045, -0.03, -0.015, 0.0, 0.015, 0.03, 0.045];
 const NL: usize = LOAD_NODES.len();
 const NS: usize = LAMBDA_NODES.len();
+const NG: usize = CAMBER_NODES.len();
+/// Points kept of the rising branch (small slip, before the trail peaks).
+pub const RISE: usize = POINTS / 2;
+
+/// One value per curve: camber × surface × load × side.
+pub type PerCurve<T> = [[[[T; 2]; NL]; NS]; NG];
+
+/// Index of one tabulated curve.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct CurveIdx {
+    /// Camber node.
+    pub g: usize,
+    /// Surface (λμ) node.
+    pub si: usize,
+    /// Load node.
+    pub j: usize,
+    /// Side: 0 for α > 0, 1 for α < 0.
+    pub side: usize,
+}
+
+/// A curve as [`curve`] samples it.
+struct Curve<F> {
+    tau: [F; POINTS],
+    f: [F; POINTS],
+    len: u8,
+    neg: [F; 2],
+    rise: [(F, F); RISE],
+    rise_len: u8,
+}
 /// Largest tabulated slip angle at λμ = 1 \[rad\]: well past full sliding of any car tyre.
 pub const ALPHA_MAX: f64 = 0.6;
 
@@ -35,25 +68,41 @@ pub enum Model<'a, F> {
     Brush(Brush<F>),
 }
 
-/// The tabulated Gough curves: 4 surfaces × 7 loads × 2 sides × 20 points × (τ, f), about
-/// 9 KB in f32. Built once per tyre and shared by the estimators of all wheels.
+/// The tabulated Gough curves: 3 cambers × 4 surfaces × 7 loads × 2 sides × 20 points × (τ, f),
+/// about 27 KB in f32. Built once per tyre (and mounting side) and shared by the estimators of
+/// the wheels on that side.
 #[derive(Debug, Clone)]
 pub struct GoughTable<F> {
     /// Loads of the nodes \[N\].
     pub fz: [F; NL],
     /// τ \[m\] per surface, load, side (0: α > 0, 1: α < 0), node; strictly decreasing over
     /// `len`.
-    pub tau: [[[[F; POINTS]; 2]; NL]; NS],
+    pub tau: PerCurve<[F; POINTS]>,
     /// f = |Fy|/Fz \[-\] (absolute, on that surface) per surface, load, side, node.
-    pub f: [[[[F; POINTS]; 2]; NL]; NS],
+    pub f: PerCurve<[F; POINTS]>,
     /// Number of usable (monotone) nodes per surface, load and side.
-    pub len: [[[u8; 2]; NL]; NS],
+    pub len: PerCurve<u8>,
+    /// Range (lo, hi) of f once the trail has turned negative (past the aligning torque's sign
+    /// change, near and beyond the force peak, out into deep sliding where τ rises again and no
+    /// longer tells the slip): what a reading with τ < 0 can mean. (0, 0) when the curve has no
+    /// negative trail.
+    pub f_neg: PerCurve<[F; 2]>,
+    /// The rising branch (f, τ) before the trail's peak, per camber, surface, load, side: at
+    /// small slip the residual torque and the shifts make the trail grow first, so a reading
+    /// there can look like a slippery surface at large slip. Kept to recognise that ambiguity.
+    pub rise: PerCurve<[(F, F); RISE]>,
+    /// Number of rising-branch points.
+    pub rise_len: PerCurve<u8>,
     /// Sign of Fy for α > 0 in this model (−1 for ISO-W files).
     pub fy_sign: F,
     /// μ of the table's surface: μy0 (Magic Formula: μy at Fz0, γ = 0, nominal pressure).
     pub mu0: F,
     /// μy0/μx0: the friction ellipse's aspect (1 for the isotropic brush model).
     pub mu_ratio: F,
+    /// The tyre is mirrored (mounted on the side opposite its TYRESIDE): quantities computed
+    /// from the file's coefficients outside the table (the Fx moment arm s) must be mirrored
+    /// too.
+    pub mirrored: bool,
 }
 
 /// One point inverted from the table.
@@ -67,25 +116,34 @@ pub struct Inversion<F> {
     pub drop: F,
     /// The point was beyond the table's end (full sliding).
     pub saturated: bool,
+    /// Half-width of the f range a saturated point can mean (0 when not saturated).
+    pub f_spread: F,
 }
 
 fn alpha_node(k: usize) -> f64 {
     let x = (k + 1) as f64 / POINTS as f64;
-    ALPHA_MAX * x * x // dense near zero, where the trail changes least
+    // Cubic spacing: dense near zero, where the residual torque and the shifts bend the trail
+    // (the rising branch must be resolved to recognise readings there), coarse in deep sliding.
+    ALPHA_MAX * x * x * x
 }
 
 impl<F: Float> GoughTable<F> {
-    /// Tabulates `model` at camber `gamma` \[rad\]. `None` if the model gives no usable curve
-    /// (e.g. zero cornering stiffness) at some load.
-    pub fn build<M: Backend<F>>(model: Model<'_, F>, gamma: F) -> Option<Self> {
+    /// Tabulates `model` for a wheel mounted on `mounted` (the Magic Formula mirrors the tyre
+    /// when that differs from the file's TYRESIDE; `None`: as the file is). `None` if the model
+    /// gives no usable curve at the nominal load.
+    pub fn build<M: Backend<F>>(model: Model<'_, F>, mounted: Option<Side>) -> Option<Self> {
+        let mirrored = match (model, mounted) {
+            (Model::Mf(p), Some(m)) => p.tyreside.is_some_and(|s| s != m),
+            _ => false,
+        };
         let mut src = match model {
-            Model::Mf(p) => Src::Mf(p.clone()),
+            Model::Mf(p) => Src::Mf(p.clone(), mounted),
             Model::Brush(b) => Src::Brush(b),
         };
         src.set_lambda(F::ONE);
         let (fz_ref, mu0, mu_ratio) = match &src {
-            Src::Mf(q) => {
-                let (_, _, mu0, mux0) = mf_fy_mz::<F, M>(q, F::ZERO, q.fnomin, F::ZERO)?;
+            Src::Mf(q, m) => {
+                let (_, _, mu0, mux0) = mf_fy_mz::<F, M>(q, *m, F::ZERO, q.fnomin, F::ZERO)?;
                 if mux0 <= F::ZERO || mu0 <= F::ZERO {
                     return None;
                 }
@@ -95,53 +153,127 @@ impl<F: Float> GoughTable<F> {
         };
         let mut t = GoughTable {
             fz: [F::ZERO; NL],
-            tau: [[[[F::ZERO; POINTS]; 2]; NL]; NS],
-            f: [[[[F::ZERO; POINTS]; 2]; NL]; NS],
-            len: [[[0; 2]; NL]; NS],
+            tau: [[[[[F::ZERO; POINTS]; 2]; NL]; NS]; NG],
+            f: [[[[[F::ZERO; POINTS]; 2]; NL]; NS]; NG],
+            len: [[[[0; 2]; NL]; NS]; NG],
+            f_neg: [[[[[F::ZERO; 2]; 2]; NL]; NS]; NG],
+            rise: [[[[[(F::ZERO, F::ZERO); RISE]; 2]; NL]; NS]; NG],
+            rise_len: [[[[0; 2]; NL]; NS]; NG],
             fy_sign: F::ZERO,
             mu0,
             mu_ratio,
+            mirrored,
         };
-        let (fy_probe, _) = src.eval::<M>(F::from_f64(0.05), fz_ref, gamma)?;
+        let (fy_probe, _) = src.eval::<M>(F::from_f64(0.05), fz_ref, F::ZERO)?;
         t.fy_sign = fy_probe.sign_nz();
         for (j, &ln) in LOAD_NODES.iter().enumerate() {
             *t.fz.get_mut(j)? = fz_ref * F::from_f64(ln);
         }
-        for (si, &lam) in LAMBDA_NODES.iter().enumerate() {
-            src.set_lambda(F::from_f64(lam));
-            for j in 0..NL {
-                let fz = *t.fz.get(j)?;
-                for side in 0..2 {
-                    // A curve with no usable monotone part (an asymmetric tyre's ply-steer side
-                    // at low friction) stays empty: its points are simply not identifiable.
-                    let (taus, fs, n) = curve::<F, M>(&src, fz, gamma, side, t.fy_sign, lam, mu0)
-                        .unwrap_or(([F::ZERO; POINTS], [F::ZERO; POINTS], 0));
-                    *t.tau.get_mut(si)?.get_mut(j)?.get_mut(side)? = taus;
-                    *t.f.get_mut(si)?.get_mut(j)?.get_mut(side)? = fs;
-                    *t.len.get_mut(si)?.get_mut(j)?.get_mut(side)? = n;
+        for (gi, &g) in CAMBER_NODES.iter().enumerate() {
+            let gamma = F::from_f64(g);
+            for (si, &lam) in LAMBDA_NODES.iter().enumerate() {
+                src.set_lambda(F::from_f64(lam));
+                for j in 0..NL {
+                    let fz = *t.fz.get(j)?;
+                    for side in 0..2 {
+                        // A curve with no usable monotone part (an asymmetric tyre's ply-steer side
+                        // at low friction) stays empty: its points are simply not identifiable.
+                        let c = curve::<F, M>(&src, fz, gamma, side, t.fy_sign, lam, mu0)
+                            .unwrap_or(Curve {
+                                tau: [F::ZERO; POINTS],
+                                f: [F::ZERO; POINTS],
+                                len: 0,
+                                neg: [F::ZERO; 2],
+                                rise: [(F::ZERO, F::ZERO); RISE],
+                                rise_len: 0,
+                            });
+                        let (taus, fs, n, neg, rise, nr) =
+                            (c.tau, c.f, c.len, c.neg, c.rise, c.rise_len);
+                        *t.rise.get_mut(gi)?.get_mut(si)?.get_mut(j)?.get_mut(side)? = rise;
+                        *t.rise_len
+                            .get_mut(gi)?
+                            .get_mut(si)?
+                            .get_mut(j)?
+                            .get_mut(side)? = nr;
+                        *t.f_neg
+                            .get_mut(gi)?
+                            .get_mut(si)?
+                            .get_mut(j)?
+                            .get_mut(side)? = neg;
+                        *t.tau.get_mut(gi)?.get_mut(si)?.get_mut(j)?.get_mut(side)? = taus;
+                        *t.f.get_mut(gi)?.get_mut(si)?.get_mut(j)?.get_mut(side)? = fs;
+                        *t.len.get_mut(gi)?.get_mut(si)?.get_mut(j)?.get_mut(side)? = n;
+                    }
                 }
             }
         }
         // The tyre's own surface at the nominal load must be usable on both sides.
         let nominal = LOAD_NODES.iter().position(|&x| x == 1.0)?;
-        let own = t.len.get(NS - 1)?.get(nominal)?;
+        let flat = CAMBER_NODES.iter().position(|&x| x == 0.0)?;
+        let own = t.len.get(flat)?.get(NS - 1)?.get(nominal)?;
         if own.iter().any(|&n| n < 4) {
             return None;
         }
         Some(t)
     }
 
-    /// τ0: the trail at the smallest usable slip of surface `si`, load `j`, side `side` \[m\].
-    pub fn tau0(&self, si: usize, j: usize, side: usize) -> Option<F> {
-        self.tau.get(si)?.get(j)?.get(side)?.first().copied()
+    /// Is (f, τ) on the rising branch of curve (g, si, j, side), within `tol` of its trail?
+    /// f is interpolated along the branch (it grows with slip there).
+    pub fn on_rise(&self, c: CurveIdx, f: F, tau: F, tol: F) -> bool {
+        let CurveIdx { g, si, j, side } = c;
+        let (Some(pts), Some(&n)) = (
+            self.rise
+                .get(g)
+                .and_then(|x| x.get(si))
+                .and_then(|x| x.get(j))
+                .and_then(|x| x.get(side)),
+            self.rise_len
+                .get(g)
+                .and_then(|x| x.get(si))
+                .and_then(|x| x.get(j))
+                .and_then(|x| x.get(side)),
+        ) else {
+            return false;
+        };
+        let pts = pts.get(..n as usize).unwrap_or(&[]);
+        for w in pts.windows(2) {
+            if let [(f0, t0), (f1, t1)] = *w {
+                if f >= f0 && f <= f1 && f1 > f0 {
+                    let tr = t0 + (f - f0) / (f1 - f0) * (t1 - t0);
+                    return (tau - tr).abs() <= tol;
+                }
+            }
+        }
+        // Below the first point: the branch's start (residual torque dominates) — treat any
+        // reading with a force that small as on it.
+        pts.first().is_some_and(|&(f0, _)| f < f0)
+    }
+
+    /// τ0: the trail at the smallest usable slip of camber `g`, surface `si`, load `j`, side
+    /// `side` \[m\].
+    pub fn tau0(&self, g: usize, si: usize, j: usize, side: usize) -> Option<F> {
+        self.tau
+            .get(g)?
+            .get(si)?
+            .get(j)?
+            .get(side)?
+            .first()
+            .copied()
     }
 
     /// Inverts τ → f on surface `si`, load `j`, side `side`. `None` when τ is above the usable
     /// range (the trail has not dropped: the point is not identifiable).
-    pub fn invert(&self, si: usize, j: usize, side: usize, tau: F) -> Option<Inversion<F>> {
-        let taus = self.tau.get(si)?.get(j)?.get(side)?;
-        let fs = self.f.get(si)?.get(j)?.get(side)?;
-        let len = *self.len.get(si)?.get(j)?.get(side)? as usize;
+    pub fn invert(
+        &self,
+        g: usize,
+        si: usize,
+        j: usize,
+        side: usize,
+        tau: F,
+    ) -> Option<Inversion<F>> {
+        let taus = self.tau.get(g)?.get(si)?.get(j)?.get(side)?;
+        let fs = self.f.get(g)?.get(si)?.get(j)?.get(side)?;
+        let len = *self.len.get(g)?.get(si)?.get(j)?.get(side)? as usize;
         let start = 0;
         let tau0 = *taus.get(start)?;
         if tau >= tau0 || !tau.is_finite() {
@@ -149,17 +281,27 @@ impl<F: Float> GoughTable<F> {
         }
         let last = len.checked_sub(1)?;
         let (tau_end, f_end) = (*taus.get(last)?, *fs.get(last)?);
-        if tau <= tau_end {
+        let [neg_lo, neg_hi] = *self.f_neg.get(g)?.get(si)?.get(j)?.get(side)?;
+        if tau <= tau_end || (tau <= F::ZERO && neg_hi > F::ZERO) {
+            // Past the aligning torque's sign change: near the force peak or in deep sliding,
+            // where the trail no longer tells where on the (falling) force curve the tyre is.
+            // Take the middle of the f range seen there and say how wide it is.
             let drop = if tau0 > F::ZERO {
-                F::ONE - tau_end / tau0
+                F::ONE - tau.max(tau_end) / tau0
             } else {
                 F::ONE
             };
+            let (lo, hi) = if neg_hi > F::ZERO {
+                (neg_lo.min(f_end), neg_hi.max(f_end))
+            } else {
+                (f_end, f_end)
+            };
             return Some(Inversion {
-                f: f_end,
+                f: F::HALF * (hi + lo),
                 df_dtau: F::ZERO,
                 drop,
                 saturated: true,
+                f_spread: F::HALF * (hi - lo),
             });
         }
         // Binary search for k with taus[k] > tau >= taus[k+1] on [start, last].
@@ -185,6 +327,7 @@ impl<F: Float> GoughTable<F> {
             df_dtau: slope,
             drop,
             saturated: false,
+            f_spread: F::ZERO,
         })
     }
 }
@@ -192,12 +335,14 @@ impl<F: Float> GoughTable<F> {
 /// (Fy, Mz, μy, μx) of the Magic Formula at pure side slip, limits off, nominal pressure.
 fn mf_fy_mz<F: Float, M: Backend<F>>(
     q: &Params<F>,
+    mounted: Option<Side>,
     alpha: F,
     fz: F,
     gamma: F,
 ) -> Option<(F, F, F, F)> {
     let opts = Options {
         limits: false,
+        mounted,
         ..Options::default()
     };
     let inp = Input {
@@ -213,14 +358,14 @@ fn mf_fy_mz<F: Float, M: Backend<F>>(
 
 /// The model behind the table, on a settable surface λμ.
 enum Src<F> {
-    Mf(Params<F>),
+    Mf(Params<F>, Option<Side>),
     Brush(Brush<F>),
 }
 
 impl<F: Float> Src<F> {
     fn set_lambda(&mut self, lambda: F) {
         match self {
-            Src::Mf(q) => {
+            Src::Mf(q, _) => {
                 q.lmux = lambda;
                 q.lmuy = lambda;
             }
@@ -232,7 +377,9 @@ impl<F: Float> Src<F> {
     /// are exactly radial).
     fn eval<M: Backend<F>>(&self, alpha: F, fz: F, gamma: F) -> Option<(F, F)> {
         match self {
-            Src::Mf(q) => mf_fy_mz::<F, M>(q, alpha, fz, gamma).map(|(fy, mz, _, _)| (fy, mz)),
+            Src::Mf(q, m) => {
+                mf_fy_mz::<F, M>(q, *m, alpha, fz, gamma).map(|(fy, mz, _, _)| (fy, mz))
+            }
             Src::Brush(b) => Some(b.fy_mz::<M>(alpha, fz)),
         }
     }
@@ -248,11 +395,11 @@ fn curve<F: Float, M: Backend<F>>(
     fy_sign: F,
     lambda: f64,
     mu0: F,
-) -> Option<([F; POINTS], [F; POINTS], u8)> {
+) -> Option<Curve<F>> {
     let sgn = if side == 0 { F::ONE } else { -F::ONE };
     let (scale, lam_f) = match src {
         Src::Brush(_) => (F::from_f64(lambda), F::from_f64(lambda)),
-        Src::Mf(_) => (F::from_f64(lambda), F::ONE),
+        Src::Mf(..) => (F::from_f64(lambda), F::ONE),
     };
     let mut taus = [F::ZERO; POINTS];
     let mut fs = [F::ZERO; POINTS];
@@ -261,7 +408,7 @@ fn curve<F: Float, M: Backend<F>>(
         // Brush: evaluate at λ = 1 on the stretched axis and scale radially (exact).
         let alpha_eval = match src {
             Src::Brush(_) => M::atan(M::tan(alpha) / scale),
-            Src::Mf(_) => alpha,
+            Src::Mf(..) => alpha,
         };
         let (fy, mz) = src.eval::<M>(alpha_eval, fz, gamma)?;
         let (fy, mz) = (fy * lam_f, mz * lam_f);
@@ -306,5 +453,50 @@ fn curve<F: Float, M: Backend<F>>(
     if n < 4 {
         return None;
     }
-    Some((kept_t, kept_f, n as u8))
+    // f once τ ≤ 0: from the last positive-trail point on, through the sampled tail.
+    let mut neg = [F::ZERO; 2];
+    if let Some(k0) = (first..POINTS).find(|&k| taus.get(k).is_some_and(|&x| x <= F::ZERO)) {
+        let from = k0.saturating_sub(1).max(first);
+        let (mut lo, mut hi) = (F::from_f64(1e9), F::ZERO);
+        for k in from..POINTS {
+            let fk = *fs.get(k)?;
+            lo = lo.min(fk);
+            hi = hi.max(fk);
+        }
+        // Out to a spinning wheel (α = 0.8 rad), beyond the stretched axis: the deepest
+        // sliding a reading with τ < 0 can come from.
+        for &a in &[0.3, 0.45, 0.6, 0.8] {
+            if a > lambda * ALPHA_MAX {
+                let alpha = sgn * F::from_f64(a);
+                let alpha_eval = match src {
+                    Src::Brush(_) => M::atan(M::tan(alpha) / scale),
+                    Src::Mf(..) => alpha,
+                };
+                let (fy, _) = src.eval::<M>(alpha_eval, fz, gamma)?;
+                let fk = fy * lam_f * fy_sign * sgn / fz;
+                if fk > F::ZERO {
+                    lo = lo.min(fk);
+                }
+            }
+        }
+        neg = [lo, hi];
+    }
+    // The rising branch: points before `first` with a positive force on this side.
+    let mut rise = [(F::ZERO, F::ZERO); RISE];
+    let mut nr = 0;
+    for k in 0..first.min(RISE) {
+        let (tk, fk) = (*taus.get(k)?, *fs.get(k)?);
+        if fk > F::ZERO && tk < F::from_f64(1e8) {
+            *rise.get_mut(nr)? = (fk, tk);
+            nr += 1;
+        }
+    }
+    Some(Curve {
+        tau: kept_t,
+        f: kept_f,
+        len: n as u8,
+        neg,
+        rise,
+        rise_len: nr as u8,
+    })
 }

@@ -7,6 +7,10 @@
 //!   property tests, doc tests, the MFeval oracle, the CLI), builds the firmware and runs it
 //!   under QEMU (installing `qemu-system-arm` with apt-get when it is missing and we may).
 //! - `qemu-check`: only ensures QEMU is present.
+//! - `snapshot [--overwrite]`: runs the firmware selftest under QEMU and compares its output with
+//!   `firmware/golden/selftest.out` (or rewrites it).
+mod firmware;
+
 use std::io::{BufRead, BufReader};
 use std::process::{Command, ExitCode, Stdio};
 
@@ -17,8 +21,10 @@ fn main() -> ExitCode {
     let result = match task.as_str() {
         "test-all" => test_all(),
         "qemu-check" => ensure_qemu(),
+        "snapshot" => ensure_qemu()
+            .and_then(|()| firmware::snapshot(std::env::args().any(|a| a == "--overwrite"))),
         _ => Err(format!(
-            "unknown task '{task}'; tasks: test-all, qemu-check"
+            "unknown task '{task}'; tasks: test-all, qemu-check, snapshot [--overwrite]"
         )),
     };
     match result {
@@ -164,12 +170,7 @@ fn test_all() -> Result<(), String> {
     step("host tests: core unit + property + doc tests, MFeval oracle, CLI");
     cargo_test(&["--workspace"], &mut passed, &mut failed)?;
     ensure_qemu()?;
-    step("firmware: build for thumbv7em-none-eabihf and run under QEMU mps2-an386");
-    let mut c = cargo();
-    c.current_dir(root().join("firmware"))
-        .args(["run", "--release"]);
-    run(&mut c)?;
-    passed += 1;
+    firmware::test_all(&mut passed)?;
     println!("\ntest-all: {passed} passed, {failed} failed");
     Ok(())
 }

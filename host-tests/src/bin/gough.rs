@@ -33,6 +33,30 @@ enum Cmd {
         #[command(subcommand)]
         cmd: TirCmd,
     },
+    /// CAN protocol (the DBC description of the bus).
+    Proto {
+        #[command(subcommand)]
+        cmd: gough_host::fwcli::ProtoCmd,
+    },
+    /// The firmware under QEMU (mps2-an386), its UART bridged to TCP.
+    Firmware {
+        #[command(subcommand)]
+        cmd: gough_host::fwcli::FirmwareCmd,
+    },
+    /// Upload a tyre, stream a measurement log to the firmware as CAN frames, record its answers.
+    Replay(gough_host::fwcli::ReplayArgs),
+    /// Vehicle simulation: run a manoeuvre, write DIR/log.csv and PNG plots.
+    Sim(gough_host::sim::cli::SimArgs),
+    /// Road-friction estimation: on a log, or benchmarked on simulated manoeuvres.
+    Mu {
+        #[command(subcommand)]
+        cmd: gough_host::mu::cli::MuCmd,
+    },
+    /// Sim-to-real gap diagnosis: where the sim misses a log, which effect causes it.
+    Gap {
+        #[command(subcommand)]
+        cmd: gough_host::gap::cli::GapCmd,
+    },
 }
 
 #[derive(Subcommand)]
@@ -90,6 +114,12 @@ fn main() -> ExitCode {
 
 fn run(cli: Cli) -> Result<(), String> {
     match cli.cmd {
+        Cmd::Proto { cmd } => gough_host::fwcli::proto(cmd),
+        Cmd::Firmware { cmd } => gough_host::fwcli::firmware(cmd),
+        Cmd::Replay(args) => gough_host::fwcli::replay(args),
+        Cmd::Sim(args) => gough_host::sim::cli::run(args),
+        Cmd::Mu { cmd } => gough_host::mu::cli::run(cmd),
+        Cmd::Gap { cmd } => gough_host::gap::cli::run(cmd),
         Cmd::Tir {
             cmd: TirCmd::Check { file },
         } => {

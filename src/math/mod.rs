@@ -1,4 +1,4 @@
-//! The float trait the equations are written against, and the math backend that supplies the
+//! The float trait the equations are written against, and the math backends that supply the
 //! transcendental kernels.
 //!
 //! Two traits, kept deliberately small:
@@ -6,15 +6,48 @@
 //!   the Magic Formula needs (`abs`, `sign`, `min`/`max`, finiteness). Implemented for `f32`
 //!   (device) and `f64` (host).
 //! - [`Backend`]: the transcendental kernels the equations call (`sin cos tan atan acos exp ln
-//!   sqrt`), one line per function. The *type* chooses the backend: `Tyre<f32, Libm>`. Each
-//!   kernel is listed with the equations that need it.
+//!   sqrt`), one line per function. The *type* chooses the backend:
+//!   `mf::eval::<f32, math::Fast>`. Each kernel is listed with the equations that need it.
+//!
+//! ## Backends
+//! Features make a backend available; the type chooses which one runs, so one binary can run
+//! them side by side (`host-tests/tests/backends.rs` does, against f64).
+//!
+//! | backend | feature | f32 kernels | max error (measured; each kernel's doc) |
+//! |---|---|---|---|
+//! | [`Libm`] | always | the `libm` crate (musl port) | ≤ 1 ulp; the reference |
+//! | `Fast` | `fast` | minimax polynomials, pure f32 (`math::fast`) | ≤ 4e-7 relative (issue 7 asks 2e-6) |
+//! | `Micromath` | `micromath` | the `micromath` crate, wrapped (`math::micro`) | 1e-3 to 3e-2 absolute, ln 0.12, √ 6 % |
+//!
+//! Through the whole Magic Formula (`host-tests/tests/backends.rs`, all oracle sweeps): f32 with
+//! `Fast` is as close to f64 as f32 with `Libm` (2e-6·FNOMIN); `Micromath` is 4e-2·FNOMIN off.
+//!
+//! The fixed-point path (feature `fixed`) implements [`Float`] and [`Backend`] for a fixed-point
+//! type in `crate::fixed`.
 //!
 //! [`Libm`] is the reference backend (the `libm` crate: correctly rounded to within 1 ulp for
-//! most functions). Faster backends plug in through the same trait.
+//! most functions).
 
 use core::ops::{Add, AddAssign, Div, Mul, MulAssign, Neg, Sub, SubAssign};
 
-/// A real scalar: `f32` on the device, `f64` on the host.
+#[cfg(any(feature = "fast", feature = "fixed"))]
+pub(crate) mod minimax;
+
+#[cfg(feature = "fast")]
+pub mod fast;
+#[cfg(feature = "fast")]
+pub use fast::Fast;
+
+#[cfg(feature = "micromath")]
+pub mod micro;
+#[cfg(feature = "micromath")]
+pub use micro::Micromath;
+
+#[cfg(all(test, any(feature = "fast", feature = "micromath")))]
+pub(crate) mod testutil;
+
+/// A real scalar: `f32` on the device, `f64` on the host (and `fixed::Fix`, Q31.32, with the
+/// `fixed` feature).
 ///
 /// Only what the equations use. Units are whatever the caller's quantity has.
 pub trait Float:
@@ -49,11 +82,11 @@ pub trait Float:
 
     /// Converts from `f64` (rounding to nearest for `f32`). Used for parameters and constants.
     fn from_f64(x: f64) -> Self;
-    /// Converts to `f64` (exact for both implementations).
+    /// Converts to `f64` (exact for `f32` and `f64`; `fixed::Fix` rounds beyond 2²¹).
     fn to_f64(self) -> f64;
     /// |x|
     fn abs(self) -> Self;
-    /// `true` unless NaN or ±∞.
+    /// `true` unless NaN or ±∞ (for `fixed::Fix`: unless saturated).
     fn is_finite(self) -> bool;
     /// The larger of two values; NaN-free inputs assumed (callers check finiteness first).
     #[inline]

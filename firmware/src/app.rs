@@ -1,0 +1,336 @@
+//! The application: protocol state, parameter upload, the per-tick Magic Formula evaluations.
+//! Board independent: a board hands in its CAN driver (any `embedded_can::nb::Can`) and a
+//! millisecond clock.
+
+use gough::math::Libm;
+use gough::mf::{self, Options, Params};
+use gough::proto::{
+    self, crc32, id, link, Ack, AckCode, Command, Feed, Forces, Measurement, Msg, MsgType,
+    ParamSource, Reassembler, Settings, Status, MAX_TIR_LEN, MSG_BUF,
+};
+
+/// Attempts per frame while the driver's transmit queue is full.
+const TX_ATTEMPTS: u32 = 100_000;
+/// Frames handled per [`App::poll`] call, so one call stays short.
+const RX_BUDGET: usize = 64;
+/// Measurements waiting for the next tick.
+pub const QUEUE: usize = 16;
+
+/// What the board must do after [`App::poll`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, defmt::Format)]
+pub enum Event {
+    /// `Command::Reset` was received (and acknowledged): reset the MCU.
+    Reset,
+    /// `Command::Stop` was received (QEMU board): the final `Status` is sent; exit.
+    Stop,
+}
+
+#[derive(Debug, Clone, Copy)]
+struct Upload {
+    len: usize,
+    got: usize,
+    hash: u32,
+}
+
+/// The whole device state. ~35 KiB (the upload buffer is 32 KiB): keep it in a `static`.
+pub struct App {
+    params: Option<Params<f32>>,
+    source: ParamSource,
+    hash: u32,
+    upload: Option<Upload>,
+    text: [u8; MAX_TIR_LEN],
+    rx_meas: Reassembler<MSG_BUF>,
+    rx_cfg: Reassembler<MSG_BUF>,
+    queue: heapless::Deque<(Measurement, u8), QUEUE>,
+    settings: Settings,
+    eval_errors: u32,
+    tx_messages: u32,
+    tx_errors: u32,
+    tx_seq: [u8; 2],
+    /// Transport errors the board counted (SLCAN lines, overruns); reported in `Status`.
+    pub link_errors: u32,
+    /// Whether `Command::Stop` is honoured (QEMU) or answered `NotSupported`.
+    pub can_stop: bool,
+    /// Measures the deepest stack use \[bytes\] when a `Status` is built (the board's
+    /// stack painting); `None`: reported as 0.
+    pub stack_probe: Option<fn() -> u32>,
+    now_ms: u32,
+}
+
+impl Default for App {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl App {
+    /// Empty state: no parameters, default settings.
+    pub const fn new() -> Self {
+        App {
+            params: None,
+            source: ParamSource::None,
+            hash: 0,
+            upload: None,
+            text: [0; MAX_TIR_LEN],
+            rx_meas: Reassembler::new(),
+            rx_cfg: Reassembler::new(),
+            queue: heapless::Deque::new(),
+            settings: Settings {
+                limits: true,
+                fallback_mu: 0.3,
+                window: 64,
+                min_utilisation: 0.3,
+            },
+            eval_errors: 0,
+            tx_messages: 0,
+            tx_errors: 0,
+            tx_seq: [0; 2],
+            link_errors: 0,
+            can_stop: false,
+            stack_probe: None,
+            now_ms: 0,
+        }
+    }
+
+    /// Loads a `.tir` text as the parameter set; on success the previous one is replaced.
+    /// Returns the 1-based line of the first error otherwise.
+    pub fn load_tir(&mut self, text: &str, source: ParamSource) -> Result<(), u32> {
+        let t = gough::tir::parse(text).map_err(|e| e.line)?;
+        self.params = Some(t.params.cast::<f32>());
+        self.hash = crc32(text.as_bytes());
+        self.source = source;
+        defmt::info!(
+            "parameters loaded: {=u32:x} ({} bytes, {} warnings)",
+            self.hash,
+            text.len(),
+            t.warnings.len()
+        );
+        Ok(())
+    }
+
+    /// The parameter set in use.
+    pub fn params(&self) -> Option<&Params<f32>> {
+        self.params.as_ref()
+    }
+
+    /// The status report.
+    pub fn status(&self) -> Status {
+        let mut rx = *self.rx_meas.counters();
+        rx.add(self.rx_cfg.counters());
+        Status {
+            firmware: crate::VERSION,
+            proto: proto::PROTO_VERSION,
+            source: self.source,
+            param_hash: self.hash,
+            uptime_ms: self.now_ms,
+            rx,
+            link_errors: self.link_errors,
+            eval_errors: self.eval_errors,
+            tx_messages: self.tx_messages,
+            stack_peak: self.stack_probe.map_or(0, |f| f()),
+        }
+    }
+
+    fn send<C: embedded_can::nb::Can>(&mut self, can: &mut C, msg: &Msg) {
+        let cid = id::of(msg.msg_type());
+        let k = usize::from(cid == id::STATUS);
+        let seq = self.tx_seq.get(k).copied().unwrap_or(0);
+        if let Some(s) = self.tx_seq.get_mut(k) {
+            *s = seq.wrapping_add(1);
+        }
+        match link::send_nb(can, cid, seq, msg, TX_ATTEMPTS) {
+            Ok(()) => self.tx_messages = self.tx_messages.wrapping_add(1),
+            Err(_) => self.tx_errors = self.tx_errors.wrapping_add(1),
+        }
+    }
+
+    fn ack<C: embedded_can::nb::Can>(&mut self, can: &mut C, of: MsgType, seq: u8, code: AckCode) {
+        self.send(
+            can,
+            &Msg::Ack(Ack {
+                of: of as u8,
+                seq,
+                code,
+            }),
+        );
+    }
+
+    /// Receives what the driver has (at most a budget of frames), handles configuration and
+    /// commands at once and queues measurements for [`App::tick`].
+    pub fn poll<C: embedded_can::nb::Can>(&mut self, can: &mut C, now_ms: u32) -> Option<Event> {
+        self.now_ms = now_ms;
+        let _ = self.rx_meas.poll(now_ms);
+        let _ = self.rx_cfg.poll(now_ms);
+        for _ in 0..RX_BUDGET {
+            let frame = match can.receive() {
+                Ok(f) => f,
+                Err(nb::Error::WouldBlock) => return None,
+                Err(nb::Error::Other(_)) => {
+                    self.link_errors = self.link_errors.wrapping_add(1);
+                    continue;
+                }
+            };
+            use embedded_can::Frame as _;
+            let data = frame.data();
+            let seq = data.get(1).copied().unwrap_or(0);
+            let fed = match link::standard_id(&frame) {
+                Some(id::MEASUREMENT) => self.rx_meas.feed(data, now_ms),
+                Some(id::CONFIG) => self.rx_cfg.feed(data, now_ms),
+                _ => continue, // other traffic on the bus
+            };
+            match fed {
+                Feed::Pending => {}
+                Feed::Dropped(e) => defmt::debug!("dropped: {}", e),
+                Feed::Done(msg) => {
+                    if let Some(ev) = self.handle(can, msg, seq) {
+                        return Some(ev);
+                    }
+                }
+            }
+        }
+        None
+    }
+
+    fn handle<C: embedded_can::nb::Can>(
+        &mut self,
+        can: &mut C,
+        msg: Msg,
+        seq: u8,
+    ) -> Option<Event> {
+        match msg {
+            Msg::Measurement(m) => {
+                if self.queue.push_back((m, seq)).is_err() {
+                    self.eval_errors = self.eval_errors.wrapping_add(1);
+                    defmt::warn!("measurement queue full");
+                }
+            }
+            Msg::ParamBegin(b) => {
+                let len = usize::try_from(b.len).unwrap_or(usize::MAX);
+                let code = if len == 0 || len > MAX_TIR_LEN {
+                    self.upload = None;
+                    AckCode::BadLength
+                } else {
+                    self.upload = Some(Upload {
+                        len,
+                        got: 0,
+                        hash: b.hash,
+                    });
+                    AckCode::Ok
+                };
+                self.ack(can, MsgType::ParamBegin, seq, code);
+            }
+            Msg::ParamChunk(c) => {
+                let code = match self.upload.as_mut() {
+                    None => Some(AckCode::NotInUpload),
+                    Some(u) if usize::try_from(c.offset).ok() != Some(u.got) => {
+                        Some(AckCode::BadOffset)
+                    }
+                    Some(u) => {
+                        let d = c.data.as_slice();
+                        let end = u.got.saturating_add(d.len());
+                        match self.text.get_mut(u.got..end).filter(|_| end <= u.len) {
+                            Some(dst) => {
+                                dst.copy_from_slice(d);
+                                u.got = end;
+                                None
+                            }
+                            None => Some(AckCode::BadLength),
+                        }
+                    }
+                };
+                if let Some(code) = code {
+                    self.upload = None;
+                    self.ack(can, MsgType::ParamChunk, seq, code);
+                }
+            }
+            Msg::ParamCommit(c) => {
+                let code = match self.upload.take() {
+                    None => AckCode::NotInUpload,
+                    Some(u) if u.got != u.len => AckCode::BadLength,
+                    Some(u) => {
+                        let text = self.text.get(..u.len).unwrap_or(&[]);
+                        if crc32(text) != u.hash || c.hash != u.hash {
+                            AckCode::BadHash
+                        } else {
+                            match core::str::from_utf8(text) {
+                                Err(_) => AckCode::TirError { line: 0 },
+                                Ok(s) => {
+                                    // Copy out of `self.text` borrow: parse needs &mut self after.
+                                    match gough::tir::parse(s) {
+                                        Ok(t) => {
+                                            self.params = Some(t.params.cast::<f32>());
+                                            self.hash = u.hash;
+                                            self.source = ParamSource::Uploaded;
+                                            defmt::info!("uploaded parameters {=u32:x}", u.hash);
+                                            AckCode::Ok
+                                        }
+                                        Err(e) => AckCode::TirError { line: e.line },
+                                    }
+                                }
+                            }
+                        }
+                    }
+                };
+                self.ack(can, MsgType::ParamCommit, seq, code);
+            }
+            Msg::Settings(s) => {
+                self.settings = s;
+                self.ack(can, MsgType::Settings, seq, AckCode::Ok);
+            }
+            Msg::Command(Command::StatusRequest) => {
+                let s = self.status();
+                self.send(can, &Msg::Status(s));
+            }
+            Msg::Command(Command::Reset) => {
+                self.ack(can, MsgType::Command, seq, AckCode::Ok);
+                return Some(Event::Reset);
+            }
+            Msg::Command(Command::Stop) => {
+                if self.can_stop {
+                    let s = self.status();
+                    self.send(can, &Msg::Status(s));
+                    return Some(Event::Stop);
+                }
+                self.ack(can, MsgType::Command, seq, AckCode::NotSupported);
+            }
+            // Device → host messages on our receive identifiers: not for us.
+            Msg::Forces(_) | Msg::Estimate(_) | Msg::Status(_) | Msg::Ack(_) => {}
+        }
+        None
+    }
+
+    /// One fixed-rate step: every queued measurement → `mf::eval` → `Forces` (or an `Ack`
+    /// saying why not). The estimator hooks in here.
+    pub fn tick<C: embedded_can::nb::Can>(&mut self, can: &mut C, now_ms: u32) {
+        self.now_ms = now_ms;
+        while let Some((m, seq)) = self.queue.pop_front() {
+            let reply = self.evaluate(&m);
+            match reply {
+                Ok(f) => self.send(can, &Msg::Forces(f)),
+                Err(code) => {
+                    self.eval_errors = self.eval_errors.wrapping_add(1);
+                    self.ack(can, MsgType::Measurement, seq, code);
+                }
+            }
+        }
+    }
+
+    /// The predicted forces of one sample (the same call the host's replay check makes).
+    pub fn evaluate(&self, m: &Measurement) -> Result<Forces, AckCode> {
+        let p = self.params.as_ref().ok_or(AckCode::NoParams)?;
+        let input = m.mf_input(p).ok_or(AckCode::NoSlip)?;
+        let opts = Options {
+            limits: self.settings.limits,
+            ..Options::default()
+        };
+        let o = mf::eval::<f32, Libm>(p, &input, &opts).map_err(|_| AckCode::EvalError)?;
+        Ok(Forces {
+            wheel: m.wheel,
+            t_us: m.t_us,
+            fx: o.fx,
+            fy: o.fy,
+            mz: o.mz,
+            flags: o.flags.0,
+        })
+    }
+}

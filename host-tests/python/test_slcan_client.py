@@ -1,0 +1,216 @@
+#!/usr/bin/env python3
+"""An independent client of the gough CAN protocol, on python-can's `slcan` interface.
+
+This is the project's second implementation of the protocol, written from the README's
+description (not from the Rust code): framing, CRC-32, postcard bodies. It tests ours.
+
+Run by `cargo xtask test-all` against the firmware under QEMU:
+    gough firmware run --no-build --port PORT &
+    python test_slcan_client.py --port PORT --gough path/to/gough
+
+It sends measurements, decodes the predicted forces and checks them bit for bit against
+`gough mf eval --precision f32` (the host's f32 run of the same core); sends a message with a
+broken CRC and checks the device counted it; then stops the firmware. Exit code 0 = pass.
+"""
+import argparse
+import csv
+import os
+import struct
+import subprocess
+import sys
+import tempfile
+import time
+import zlib
+
+import can
+
+PROTO_VERSION = 1
+ID_MEASUREMENT, ID_CONFIG, ID_RESULT, ID_STATUS = 0x300, 0x301, 0x310, 0x311
+T_MEASUREMENT, T_COMMAND, T_FORCES, T_STATUS, T_ACK = 0x01, 0x06, 0x81, 0x83, 0x84
+CMD_STATUS_REQUEST, CMD_STOP = 1, 2
+
+
+def varint(b, i):
+    """postcard varint (LEB128, unsigned) at b[i:] -> (value, next index)."""
+    v, shift = 0, 0
+    while True:
+        x = b[i]
+        i += 1
+        v |= (x & 0x7F) << shift
+        if x < 0x80:
+            return v, i
+        shift += 7
+
+
+def message(mtype, body):
+    data = bytes([PROTO_VERSION, mtype]) + body
+    return data + struct.pack("<I", zlib.crc32(data))
+
+
+def frames(msg, seq):
+    """Segment: first frame [0x80|last, seq, len] + 5 bytes; then [last|index, seq] + 6 bytes."""
+    out = [msg[:5]]
+    rest = msg[5:]
+    while rest:
+        out.append(rest[:6])
+        rest = rest[6:]
+    res = []
+    for k, chunk in enumerate(out):
+        last = 0x40 if k == len(out) - 1 else 0
+        if k == 0:
+            res.append(bytes([0x80 | last, seq, len(msg)]) + chunk)
+        else:
+            res.append(bytes([last | k, seq]) + chunk)
+    return res
+
+
+def measurement(wheel, t_us, fz, fy, mz, vx, alpha, kappa):
+    opt = lambda x: b"\x00" if x is None else b"\x01" + struct.pack("<f", x)
+    body = bytes([wheel]) + struct.pack("<Ifff", t_us, fz, fy, mz)
+    for x in (None, vx, None, None, alpha, kappa, None):  # fx vx omega delta alpha kappa gamma
+        body += opt(x)
+    return message(T_MEASUREMENT, body)
+
+
+class Receiver:
+    def __init__(self, bus):
+        self.bus = bus
+        self.partial = {}
+
+    def recv(self, timeout=10.0):
+        end = time.time() + timeout
+        while time.time() < end:
+            f = self.bus.recv(timeout=max(0.01, end - time.time()))
+            if f is None or f.arbitration_id not in (ID_RESULT, ID_STATUS):
+                continue
+            d = bytes(f.data)
+            first, last, seq = d[0] & 0x80, d[0] & 0x40, d[1]
+            if first:
+                self.partial[f.arbitration_id] = [d[2], seq, bytearray(d[3:])]
+            else:
+                p = self.partial.get(f.arbitration_id)
+                if p is None or p[1] != seq:
+                    raise AssertionError("frame out of order")
+                p[2] += d[2:]
+            if last:
+                total, _, buf = self.partial.pop(f.arbitration_id)
+                buf = bytes(buf[:total])
+                data, crc = buf[:-4], struct.unpack("<I", buf[-4:])[0]
+                assert zlib.crc32(data) == crc, "bad CRC from the device"
+                assert data[0] == PROTO_VERSION
+                return data[1], data[2:]
+        raise AssertionError("timed out waiting for the device")
+
+
+def decode_forces(b):
+    wheel = b[0]
+    t_us, fx, fy, mz, flags = struct.unpack("<IfffH", b[1:19])
+    assert len(b) == 19
+    return wheel, t_us, fx, fy, mz, flags
+
+
+def decode_status(b):
+    fw = tuple(b[0:3])
+    proto = b[3]
+    source, i = varint(b, 4)
+    (param_hash,) = struct.unpack("<I", b[i:i + 4])
+    i += 4
+    vals = []
+    for _ in range(1 + 10 + 4):  # uptime, 10 counters, link, eval, tx, stack
+        v, i = varint(b, i)
+        vals.append(v)
+    assert i == len(b), "status body length"
+    names = ["uptime_ms", "frames", "messages", "duplicates", "truncated", "bad_header",
+             "bad_crc", "out_of_order", "overflow", "timeout", "decode",
+             "link_errors", "eval_errors", "tx_messages", "stack_peak"]
+    s = dict(zip(names, vals))
+    s.update(firmware=fw, proto=proto, source=source, param_hash=param_hash)
+    return s
+
+
+def f32(x):
+    return struct.unpack("<f", struct.pack("<f", x))[0]
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--port", type=int, required=True)
+    ap.add_argument("--gough", required=True, help="path of the gough binary (expected values)")
+    ap.add_argument("--tir", required=True)
+    a = ap.parse_args()
+
+    cases = [  # wheel, fz, alpha, kappa, vx
+        (0, 6752.0, 0.04, 0.05, 16.6),
+        (1, 4000.0, -0.1, 0.0, 20.0),
+        (2, 9000.0, 0.02, -0.15, 10.0),
+        (3, 3000.0, 0.2, 0.1, 30.0),
+    ]
+    with tempfile.TemporaryDirectory() as d:
+        inp, out = os.path.join(d, "in.csv"), os.path.join(d, "out.csv")
+        with open(inp, "w") as f:
+            f.write("in_Fz,in_kappa,in_alpha,in_gamma,in_phit,in_Vx,in_P\n")
+            for _, fz, al, ka, vx in cases:
+                f.write(f"{f32(fz)!r},{f32(ka)!r},{f32(al)!r},0,0,{f32(vx)!r},0\n")
+        subprocess.run([a.gough, "mf", "eval", "--tir", a.tir, "--input", inp, "--output", out,
+                        "--precision", "f32"], check=True, capture_output=True)
+        with open(out) as f:
+            expected = [(f32(float(r["Fx"])), f32(float(r["Fy"])), f32(float(r["Mz"])))
+                        for r in csv.DictReader(f)]
+
+    bus = None
+    for _ in range(100):
+        try:
+            bus = can.Bus(interface="slcan", channel=f"socket://127.0.0.1:{a.port}", sleep_after_open=0)
+            break
+        except Exception:
+            time.sleep(0.1)
+    assert bus is not None, "cannot connect to the firmware"
+    rx = Receiver(bus)
+    fails = 0
+    try:
+        for k, (w, fz, al, ka, vx) in enumerate(cases):
+            m = measurement(w, 1000 * (k + 1), fz, -1000.0, 10.0, vx, al, ka)
+            for fr in frames(m, k):
+                bus.send(can.Message(arbitration_id=ID_MEASUREMENT, data=fr, is_extended_id=False))
+            while True:
+                t, body = rx.recv()
+                if t == T_FORCES:
+                    break
+            wheel, t_us, fx, fy, mz, flags = decode_forces(body)
+            ok = (wheel, t_us) == (w, 1000 * (k + 1)) and (fx, fy, mz) == expected[k]
+            print(f"{'ok  ' if ok else 'FAIL'} wheel {wheel} Fz {fz}: Fx {fx:.6g} Fy {fy:.6g} Mz {mz:.6g} "
+                  f"(gough mf eval f32: {expected[k][0]:.6g} {expected[k][1]:.6g} {expected[k][2]:.6g})")
+            fails += not ok
+
+        # A damaged message: the device must drop it and count it.
+        bad = bytearray(measurement(0, 99, 1.0, 1.0, 1.0, 1.0, 0.0, 0.0))
+        bad[-1] ^= 0xFF
+        for fr in frames(bytes(bad), 200):
+            bus.send(can.Message(arbitration_id=ID_MEASUREMENT, data=fr, is_extended_id=False))
+        cmd = message(T_COMMAND, bytes([CMD_STATUS_REQUEST]))
+        for fr in frames(cmd, 0):
+            bus.send(can.Message(arbitration_id=ID_CONFIG, data=fr, is_extended_id=False))
+        while True:
+            t, body = rx.recv()
+            if t == T_STATUS:
+                break
+        s = decode_status(body)
+        ok = s["bad_crc"] == 1 and s["messages"] == len(cases) + 1 and s["proto"] == PROTO_VERSION
+        print(f"{'ok  ' if ok else 'FAIL'} status: {s}")
+        fails += not ok
+
+        stop = message(T_COMMAND, bytes([CMD_STOP]))
+        for fr in frames(stop, 1):
+            bus.send(can.Message(arbitration_id=ID_CONFIG, data=fr, is_extended_id=False))
+        while True:
+            t, body = rx.recv()
+            if t == T_STATUS:
+                break
+    finally:
+        bus.shutdown()
+    print(f"python-can client: {fails} failed")
+    return 1 if fails else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

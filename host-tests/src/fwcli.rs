@@ -1,0 +1,198 @@
+//! The `gough proto`, `gough firmware` and `gough replay` subcommands.
+use crate::device::{self, Device, Qemu, SlcanTcp};
+use crate::replay::{self, Answer};
+use crate::tyre;
+use clap::{Args, Subcommand};
+use std::path::PathBuf;
+use std::time::{Duration, Instant};
+
+/// `gough proto ...`
+#[derive(Subcommand)]
+pub enum ProtoCmd {
+    /// Print the DBC description of the bus (identifiers, frame header, message types).
+    Dbc {
+        /// Write to this file instead of stdout.
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
+}
+
+/// `gough firmware ...`
+#[derive(Subcommand)]
+pub enum FirmwareCmd {
+    /// Build the firmware, start it in QEMU (mps2-an386) and bridge its UART0 (SLCAN) to TCP.
+    ///
+    /// Waits until QEMU exits (the firmware exits on `Command::Stop`) and returns its code.
+    /// Clients: `gough replay --port PORT`, or python-can with
+    /// `can.Bus(interface="slcan", channel="socket://127.0.0.1:PORT")`.
+    Run(RunArgs),
+}
+
+/// Where the firmware comes from and how it is reached.
+#[derive(Args, Clone)]
+pub struct RunArgs {
+    /// Firmware ELF to run (default: the release build of firmware/, built first).
+    #[arg(long)]
+    pub elf: Option<PathBuf>,
+    /// Do not build the firmware first.
+    #[arg(long)]
+    pub no_build: bool,
+    /// TCP port for UART0 (default: a free one, printed).
+    #[arg(long)]
+    pub port: Option<u16>,
+    /// Working directory of QEMU (the defmt log `firmware.defmt` lands there).
+    #[arg(long, default_value = "target/qemu")]
+    pub workdir: PathBuf,
+}
+
+/// `gough replay`
+#[derive(Args)]
+pub struct ReplayArgs {
+    /// Tyre property file uploaded to the device (the device parses and checks it).
+    #[arg(long)]
+    pub tir: PathBuf,
+    /// Measurement log: t,fz,fy,mz required; fx,vx,alpha,kappa,gamma,wheel optional (SI, rad, ISO-W).
+    #[arg(long)]
+    pub log: PathBuf,
+    /// Results: t,wheel,fx,fy,mz,flags,ack,mu,sigma,state.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Talk to a firmware already listening on this TCP port instead of starting one.
+    #[arg(long)]
+    pub connect: Option<u16>,
+    /// Measurements in flight at once.
+    #[arg(long, default_value_t = 8)]
+    pub window: usize,
+    /// Compare every answer with the host's f32 run of the same core; fail on any difference
+    /// beyond `--max-ulps`.
+    #[arg(long)]
+    pub check: bool,
+    /// Allowed difference for `--check`, in units in the last place of f32.
+    #[arg(long, default_value_t = 0)]
+    pub max_ulps: u64,
+    #[command(flatten)]
+    #[allow(missing_docs)]
+    pub run: RunArgs,
+}
+
+/// `gough proto dbc`
+pub fn proto(cmd: ProtoCmd) -> Result<(), String> {
+    let ProtoCmd::Dbc { out } = cmd;
+    let mut s = String::new();
+    gough::proto::dbc::write(&mut s).map_err(|e| e.to_string())?;
+    match out {
+        Some(p) => std::fs::write(&p, s).map_err(|e| format!("{}: {e}", p.display())),
+        None => {
+            print!("{s}");
+            Ok(())
+        }
+    }
+}
+
+fn start(args: &RunArgs) -> Result<Qemu, String> {
+    let elf = match &args.elf {
+        Some(e) => e.clone(),
+        None => {
+            if !args.no_build {
+                device::build_firmware()?;
+            }
+            device::firmware_elf("gough-firmware")
+        }
+    };
+    Qemu::start(&elf, &args.workdir, false, args.port)
+}
+
+/// `gough firmware run`
+pub fn firmware(cmd: FirmwareCmd) -> Result<(), String> {
+    let FirmwareCmd::Run(args) = cmd;
+    let mut q = start(&args)?;
+    eprintln!(
+        "firmware UART0 (SLCAN) on tcp 127.0.0.1:{p}; python-can: can.Bus(interface=\"slcan\", channel=\"socket://127.0.0.1:{p}\")",
+        p = q.port
+    );
+    match q.wait(Duration::from_secs(u64::MAX / 4)) {
+        Some(0) => Ok(()),
+        Some(c) => Err(format!("firmware exited with code {c}")),
+        None => Err("QEMU did not exit".into()),
+    }
+}
+
+/// `gough replay`
+pub fn replay(a: ReplayArgs) -> Result<(), String> {
+    let t = tyre::load(&a.tir)?;
+    let text = std::fs::read(&a.tir).map_err(|e| format!("{}: {e}", a.tir.display()))?;
+    let log = replay::read_log(&a.log).map_err(|e| e.to_string())?;
+    let mut qemu = None;
+    let port = match a.connect {
+        Some(p) => p,
+        None => {
+            let q = start(&a.run)?;
+            let p = q.port;
+            qemu = Some(q);
+            p
+        }
+    };
+    let t0 = Instant::now();
+    let mut dev = Device::new(SlcanTcp::connect(port, Duration::from_secs(20))?);
+    let s = dev.status(Duration::from_secs(20))?;
+    eprintln!(
+        "device: firmware {}.{}.{}, protocol v{}, parameters {:?} {:08x}",
+        s.firmware[0], s.firmware[1], s.firmware[2], s.proto, s.source, s.param_hash
+    );
+    let hash = dev.upload_tir(&text)?;
+    eprintln!(
+        "uploaded {} ({} bytes, crc32 {hash:08x}) in {:.2} s",
+        a.tir.display(),
+        text.len(),
+        t0.elapsed().as_secs_f64()
+    );
+    let t1 = Instant::now();
+    let got = replay::stream(&mut dev, &log, a.window)?;
+    let n_forces = got
+        .iter()
+        .filter(|g| matches!(g, Answer::Forces(_)))
+        .count();
+    eprintln!(
+        "{} rows -> {} forces, {} without ({:.2} s)",
+        log.len(),
+        n_forces,
+        log.len() - n_forces,
+        t1.elapsed().as_secs_f64()
+    );
+    replay::write_results(&a.out, &log, &got)
+        .map_err(|e| format!("{}: cannot write: {e}", a.out.display()))?;
+    let status = if qemu.is_some() {
+        dev.stop(Duration::from_secs(20))?
+    } else {
+        dev.status(Duration::from_secs(20))?
+    };
+    eprintln!(
+        "device counters: rx frames {} messages {} dropped {} duplicates {}; link errors {}; eval errors {}; tx {}; stack peak {} bytes",
+        status.rx.frames,
+        status.rx.messages,
+        status.rx.dropped(),
+        status.rx.duplicates,
+        status.link_errors,
+        status.eval_errors,
+        status.tx_messages,
+        status.stack_peak
+    );
+    if let Some(mut q) = qemu {
+        match q.wait(Duration::from_secs(20)) {
+            Some(0) => {}
+            c => return Err(format!("firmware exit code {c:?}, expected 0")),
+        }
+    }
+    if a.check {
+        let p32 = t.params.cast::<f32>();
+        let worst = replay::compare(&p32, &log, &got)?;
+        eprintln!("check: device answers = host f32 run, worst {worst} ulp");
+        if worst > a.max_ulps {
+            return Err(format!(
+                "device and host f32 differ by {worst} ulp (allowed {})",
+                a.max_ulps
+            ));
+        }
+    }
+    Ok(())
+}

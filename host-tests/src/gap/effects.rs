@@ -1,0 +1,704 @@
+//! The candidate effects: each a parametric extension of the sim with a physical form.
+//!
+//! An effect's parameters start at the values that reproduce the sim exactly (SIM.tir's own
+//! coefficients, unit factors, zero lag, zero bias), so "no change" is always inside its model.
+//!
+//! | effect | form | parameters |
+//! |---|---|---|
+//! | `camber` | the file's camber terms re-fitted: MF 6.x Fy camber stiffness Kyγ (4.E30) and camber vertical shift Svyγ (4.E28), Mzr camber (4.E47); MF 5.x/Delft 96 the camber shift Shy (PHY3) instead of Kyγ | `pky6 pvy3 qdz8` (6.x), `phy3 pvy3 qdz8` |
+//! | `inflation_pressure` | MF 6.x: the pressure terms of Kxκ, μx, Kyα, μy and the trail re-fitted (4.E17, 4.E13, 4.E25, 4.E23, 4.E40); MF 5.x (no pressure model): λKx, λKy, λμx, λμy each times (1 + a·dpi), dpi = (p − p̃)/p̃ about the log's median p̃ | `ppx1 ppx3 ppy1 ppy3 ppz1` / `a_kx a_ky a_mux a_muy` |
+//! | `turn_slip` | MF 6.x with turn-slip coefficients: the reductions of Kyα, μy, trail and the spin moment re-fitted (4.79, 4.77, 4.91, 4.102); otherwise a linear spin force and moment ΔFy = c_fy·Fz·R0·φt, ΔMz = c_mz·Fz·R0²·φt | `pkyp1 pdyp1 qdtp1 qdrp1` / `c_fy c_mz` |
+//! | `combined_slip` | the weighting-function slopes Bxα (4.E54), Byκ (4.E62) and the Fx moment arm s (4.E76) re-fitted | `rbx1 rby1 ssz1` |
+//! | `relaxation_length` | σκ, σα times s·(1 + c·dfz) (a σ(Fz) relaxation); without filters in SIM.tir, σα = s_alpha·R0·Fz/Fz0, σκ = s_kappa·R0·Fz/(2·Fz0) | `s_kappa s_alpha c_fz` |
+//! | `speed_dependent_friction` | λμx = λμy = (1 + b·(|Vx| − V0)/V0)/(1 + a·Vs/V0), Vs the slip speed (TNO's λμV form plus a forward-speed trend), V0 = LONGVL | `a_vs b_vx` |
+//! | `thermal` | a first-order tread temperature T, τ·dT/dt + T = Ps/(Fz0·V0), driven by the slip power Ps = |Fx·Vsx| + |Fy·Vsy| of the *measured* forces, from T = 0 at the log's start; λμx = λμy = exp(−k·T) | `k tau` |
+//! | `sensor_lag` | a first-order lag per channel (exact for a first-order hold) | `tau_fx tau_fy tau_mz` \[s\] |
+//! | `sensor_bias` | a constant offset per channel | `b_fx b_fy b_mz` \[N, N, N·m\] |
+//! | `conicity_plysteer` | the zero-slip offsets re-fitted: Fy horizontal and vertical shifts (4.E27, 4.E29), the trail's shift (4.E35) | `phy1 pvy1 qhz1` |
+//!
+//! Each extension can be evaluated two ways: exactly (a full run of the sim with the extension,
+//! used for scoring) and on a subset of rows (for fitting), where the slips fed to the Magic
+//! Formula are those of the baseline run (for effects that change σ only through the cornering
+//! and slip stiffness, that is a second-order approximation inside the fit; the scores are
+//! always exact).
+
+use super::fit::Bounds;
+use super::log::Log;
+use super::sim::{lag, lowpass_from, Lambda, Mods, Out, RowError, Run, SigmaMode, Sim};
+use gough::mf::{Key, Params};
+
+/// A candidate effect.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum Effect {
+    /// Camber terms.
+    Camber,
+    /// Inflation-pressure terms.
+    InflationPressure,
+    /// Turn slip.
+    TurnSlip,
+    /// Combined-slip weighting.
+    CombinedSlip,
+    /// Relaxation lengths.
+    RelaxationLength,
+    /// Friction falling with slip speed.
+    SpeedDependentFriction,
+    /// Tread temperature from slip power.
+    Thermal,
+    /// Sensor lag per channel.
+    SensorLag,
+    /// Sensor bias per channel.
+    SensorBias,
+    /// Conicity / ply-steer offsets.
+    ConicityPlysteer,
+}
+
+/// Every candidate, in report order before sorting.
+pub const ALL: [Effect; 10] = [
+    Effect::Camber,
+    Effect::InflationPressure,
+    Effect::TurnSlip,
+    Effect::CombinedSlip,
+    Effect::RelaxationLength,
+    Effect::SpeedDependentFriction,
+    Effect::Thermal,
+    Effect::SensorLag,
+    Effect::SensorBias,
+    Effect::ConicityPlysteer,
+];
+
+impl Effect {
+    /// Name as in the report.
+    pub const fn name(self) -> &'static str {
+        match self {
+            Effect::Camber => "camber",
+            Effect::InflationPressure => "inflation_pressure",
+            Effect::TurnSlip => "turn_slip",
+            Effect::CombinedSlip => "combined_slip",
+            Effect::RelaxationLength => "relaxation_length",
+            Effect::SpeedDependentFriction => "speed_dependent_friction",
+            Effect::Thermal => "thermal",
+            Effect::SensorLag => "sensor_lag",
+            Effect::SensorBias => "sensor_bias",
+            Effect::ConicityPlysteer => "conicity_plysteer",
+        }
+    }
+
+    /// Looks an effect up by its report name.
+    pub fn from_name(s: &str) -> Option<Effect> {
+        ALL.iter().copied().find(|e| e.name() == s)
+    }
+
+    /// The physical form, one line (for the report).
+    pub const fn form(self) -> &'static str {
+        match self {
+            Effect::Camber => "camber terms re-fitted (Kyγ or Shyγ, Svyγ, Mzr camber)",
+            Effect::InflationPressure => {
+                "pressure terms re-fitted (MF 6.x), or λK, λμ linear in dpi (MF 5.x)"
+            }
+            Effect::TurnSlip => {
+                "turn-slip reductions re-fitted (MF 6.x), or a linear spin force and moment"
+            }
+            Effect::CombinedSlip => "combined-slip slopes rbx1, rby1 and the Fx arm ssz1",
+            Effect::RelaxationLength => "σ times s·(1 + c·dfz)",
+            Effect::SpeedDependentFriction => "λμ = (1 + b·(|Vx|−V0)/V0)/(1 + a·Vs/V0)",
+            Effect::Thermal => "λμ = exp(−k·T), τ·dT/dt + T = slip power/(Fz0·V0)",
+            Effect::SensorLag => "first-order lag per channel",
+            Effect::SensorBias => "constant offset per channel",
+            Effect::ConicityPlysteer => "zero-slip offsets phy1, pvy1, qhz1 re-fitted",
+        }
+    }
+
+    /// Cheap to evaluate on every row (no Magic Formula evaluation per call): fitted on all
+    /// training rows rather than a subsample.
+    pub const fn cheap(self) -> bool {
+        matches!(self, Effect::SensorLag | Effect::SensorBias)
+    }
+}
+
+/// What the effects share: the log, the sim, its baseline run and per-row quantities.
+#[derive(Debug, Clone)]
+pub struct Ctx<'a> {
+    /// The log.
+    pub log: &'a Log,
+    /// The sim.
+    pub sim: &'a Sim,
+    /// The baseline run (SIM.tir as it is).
+    pub base: Run,
+    /// Noise floor per channel (`stats::noise_floor` of the baseline residual), floored.
+    pub noise: [f64; 3],
+    /// Slip speed |Vs| per row \[m/s\] (log kinematics).
+    pub vs: Vec<f64>,
+    /// Slip power of the measured forces over Fz0·V0 per row \[-\].
+    pub power: Vec<f64>,
+    /// dfz = (Fz − Fz0)/Fz0 per row.
+    pub dfz: Vec<f64>,
+    /// Reference pressure of the MF 5.x pressure extension: the log's median p \[Pa\].
+    pub p_ref: f64,
+}
+
+impl<'a> Ctx<'a> {
+    /// Runs the baseline and prepares the per-row quantities.
+    pub fn new(log: &'a Log, sim: &'a Sim) -> Result<Ctx<'a>, RowError> {
+        let base = sim.run(log, &sim.params, &Mods::default())?;
+        let mut noise = [0.0; 3];
+        for (c, nz) in noise.iter_mut().enumerate() {
+            let r: Vec<f64> = (0..log.len())
+                .map(|i| log.meas[i][c] - base.out[i][c])
+                .collect();
+            let scale = super::stats::rms(log.meas.iter().map(|m| m[c]));
+            // Floor: a clean (noise-free) log still needs a finite normalisation.
+            *nz = super::stats::noise_floor(&r).max(1e-6 * scale.max(1.0));
+        }
+        let p = &sim.params;
+        let (fz0, v0) = (p.fnomin, p.longvl.abs().max(1.0));
+        let n = log.len();
+        let mut vs = Vec::with_capacity(n);
+        let mut power = Vec::with_capacity(n);
+        for i in 0..n {
+            let (vsx, vsy) = log.slip_velocity(i);
+            vs.push(vsx.hypot(vsy));
+            power.push((log.meas[i][0] * vsx).abs() + (log.meas[i][1] * vsy).abs());
+        }
+        for w in power.iter_mut() {
+            *w /= fz0 * v0;
+        }
+        let dfz = log.fz.iter().map(|&f| (f - fz0) / fz0).collect();
+        let p_ref = log
+            .p
+            .as_ref()
+            .map(|p| super::stats::median(p))
+            .unwrap_or(0.0);
+        Ok(Ctx {
+            log,
+            sim,
+            base,
+            noise,
+            vs,
+            power,
+            dfz,
+            p_ref,
+        })
+    }
+
+    /// Residual of the baseline, row by row.
+    pub fn base_resid(&self) -> Vec<Out> {
+        resid(self.log, &self.base.out)
+    }
+}
+
+/// measured − predicted per row.
+pub fn resid(log: &Log, pred: &[Out]) -> Vec<Out> {
+    log.meas
+        .iter()
+        .zip(pred)
+        .map(|(m, p)| [m[0] - p[0], m[1] - p[1], m[2] - p[2]])
+        .collect()
+}
+
+#[derive(Debug, Clone, PartialEq)]
+enum Variant {
+    Keys(Vec<Key>),
+    PressureLambda,
+    TurnSlipAdd,
+    Relaxation,
+    SpeedFriction,
+    Thermal,
+    Lag,
+    Bias,
+}
+
+/// An effect's parameters for a given log and sim.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Spec {
+    /// The effect.
+    pub effect: Effect,
+    /// Parameter names as in the report (`.tir` keys in lower case where they are keys).
+    pub names: Vec<String>,
+    /// Starting points (the first reproduces the sim; more for multi-start fits).
+    pub starts: Vec<Vec<f64>>,
+    /// Bounds and scales.
+    pub bounds: Bounds,
+    variant: Variant,
+}
+
+/// (key, floor of its scale, lower bound if the sign is physical).
+const KEY_SCALES: &[(&str, f64, Option<f64>)] = &[
+    ("PKY6", 0.5, None),
+    ("PHY3", 0.01, None),
+    ("PVY3", 0.1, None),
+    ("QDZ8", 0.1, None),
+    ("PPX1", 0.3, None),
+    ("PPX3", 0.1, None),
+    ("PPY1", 0.3, None),
+    ("PPY3", 0.1, None),
+    ("PPZ1", 0.3, None),
+    ("PKYP1", 0.5, Some(0.0)),
+    ("PDYP1", 0.2, Some(0.0)),
+    ("QDTP1", 5.0, Some(0.0)),
+    ("QDRP1", 0.5, Some(0.0)),
+    ("RBX1", 5.0, Some(0.5)),
+    ("RBY1", 5.0, Some(0.5)),
+    ("SSZ1", 0.02, None),
+    ("PHY1", 0.003, None),
+    ("PVY1", 0.01, None),
+    ("QHZ1", 0.003, None),
+];
+
+fn keys_spec(effect: Effect, p: &Params<f64>, names: &[&str]) -> Spec {
+    let mut keys = Vec::new();
+    let (mut start, mut lo, mut hi, mut scale) = (vec![], vec![], vec![], vec![]);
+    for &n in names {
+        let Some(k) = Key::from_name(n) else { continue };
+        let (floor, lower) = KEY_SCALES
+            .iter()
+            .find(|e| e.0 == n)
+            .map(|e| (e.1, e.2))
+            .unwrap_or((0.1, None));
+        let v = p.get(k);
+        let s = v.abs().max(floor);
+        keys.push(k);
+        start.push(v);
+        scale.push(s);
+        let l = v - 5.0 * s;
+        lo.push(match lower {
+            Some(b) => l.max(b.min(v)),
+            None => l,
+        });
+        hi.push(v + 5.0 * s);
+    }
+    Spec {
+        effect,
+        names: keys.iter().map(|k| k.name().to_ascii_lowercase()).collect(),
+        starts: vec![start],
+        bounds: Bounds { lo, hi, scale },
+        variant: Variant::Keys(keys),
+    }
+}
+
+fn simple(
+    effect: Effect,
+    names: &[&str],
+    starts: Vec<Vec<f64>>,
+    b: [&[f64]; 3],
+    v: Variant,
+) -> Spec {
+    Spec {
+        effect,
+        names: names.iter().map(|s| s.to_string()).collect(),
+        starts,
+        bounds: Bounds {
+            lo: b[0].to_vec(),
+            hi: b[1].to_vec(),
+            scale: b[2].to_vec(),
+        },
+        variant: v,
+    }
+}
+
+/// The parameters of `effect` for this log and sim, or why it does not apply.
+pub fn spec(effect: Effect, ctx: &Ctx) -> Result<Spec, String> {
+    let (log, sim) = (ctx.log, ctx.sim);
+    let p = &sim.params;
+    let n = log.len();
+    match effect {
+        Effect::Camber => {
+            let gmax = log.gamma.iter().fold(0.0f64, |a, g| a.max(g.abs()));
+            if gmax < 1e-5 {
+                return Err("γ = 0 throughout the log: the camber terms do nothing".into());
+            }
+            let names: &[&str] = if p.version.is_mf6() {
+                &["PKY6", "PVY3", "QDZ8"]
+            } else {
+                &["PHY3", "PVY3", "QDZ8"]
+            };
+            Ok(keys_spec(effect, p, names))
+        }
+        Effect::InflationPressure => {
+            let Some(pr) = &log.p else {
+                return Err("no p column: the pressure is INFLPRES throughout".into());
+            };
+            if p.version.is_mf6() {
+                let p0 = p.nompres;
+                if pr.iter().all(|&x| (x - p0).abs() <= 1e-6 * p0) {
+                    return Err("p = NOMPRES throughout: the pressure terms do nothing".into());
+                }
+                Ok(keys_spec(
+                    effect,
+                    p,
+                    &["PPX1", "PPX3", "PPY1", "PPY3", "PPZ1"],
+                ))
+            } else {
+                let (lo, hi) = pr
+                    .iter()
+                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
+                        (a.min(x), b.max(x))
+                    });
+                if hi - lo <= 1e-6 * ctx.p_ref {
+                    return Err(
+                        "p is constant and MF 5.x has no pressure terms: nothing to fit".into(),
+                    );
+                }
+                Ok(simple(
+                    effect,
+                    &["a_kx", "a_ky", "a_mux", "a_muy"],
+                    vec![vec![0.0; 4]],
+                    [&[-5.0; 4], &[5.0; 4], &[0.5; 4]],
+                    Variant::PressureLambda,
+                ))
+            }
+        }
+        Effect::TurnSlip => {
+            let any = log
+                .phit
+                .as_ref()
+                .is_some_and(|ph| ph.iter().any(|&x| x != 0.0));
+            if !any {
+                return Err("no turn slip in the log (no phit column, or φt = 0)".into());
+            }
+            if sim.turn_slip {
+                Ok(keys_spec(effect, p, &["PKYP1", "PDYP1", "QDTP1", "QDRP1"]))
+            } else {
+                Ok(simple(
+                    effect,
+                    &["c_fy", "c_mz"],
+                    vec![vec![0.0; 2]],
+                    [&[-50.0, -50.0], &[50.0, 50.0], &[1.0, 1.0]],
+                    Variant::TurnSlipAdd,
+                ))
+            }
+        }
+        Effect::CombinedSlip => {
+            let both = (0..n)
+                .filter(|&i| log.kappa[i].abs() > 0.005 && log.alpha[i].abs() > 0.005)
+                .count();
+            if both < 20 {
+                return Err("fewer than 20 rows with both |κ| and |α| > 0.005".into());
+            }
+            Ok(keys_spec(effect, p, &["RBX1", "RBY1", "SSZ1"]))
+        }
+        Effect::RelaxationLength => {
+            let starts = if sim.filters {
+                vec![vec![1.0, 1.0, 0.0]]
+            } else {
+                vec![vec![0.3, 0.3, 0.0], vec![1.0, 1.0, 0.0]]
+            };
+            Ok(simple(
+                effect,
+                &["s_kappa", "s_alpha", "c_fz"],
+                starts,
+                [&[0.0, 0.0, -0.95], &[5.0, 5.0, 3.0], &[0.2, 0.2, 0.2]],
+                Variant::Relaxation,
+            ))
+        }
+        Effect::SpeedDependentFriction => Ok(simple(
+            effect,
+            &["a_vs", "b_vx"],
+            vec![vec![0.0, 0.0]],
+            [&[-0.9, -0.9], &[20.0, 2.0], &[0.5, 0.2]],
+            Variant::SpeedFriction,
+        )),
+        Effect::Thermal => {
+            let m = super::stats::mean(&ctx.power);
+            if m <= 0.0 {
+                return Err("no slip power in the log".into());
+            }
+            let ks = 0.1 / m;
+            Ok(simple(
+                effect,
+                &["k", "tau"],
+                [1.0f64, 5.0, 25.0]
+                    .iter()
+                    .map(|&tau| vec![0.0, tau.ln()])
+                    .collect(),
+                [
+                    &[-10.0 * ks, 0.3f64.ln()],
+                    &[10.0 * ks, 200f64.ln()],
+                    &[ks, 0.5],
+                ],
+                Variant::Thermal,
+            ))
+        }
+        Effect::SensorLag => Ok(simple(
+            effect,
+            &["tau_fx", "tau_fy", "tau_mz"],
+            vec![vec![0.0; 3]],
+            [&[0.0; 3], &[0.5; 3], &[0.01; 3]],
+            Variant::Lag,
+        )),
+        Effect::SensorBias => {
+            let big: Vec<f64> = (0..3)
+                .map(|c| 10.0 * super::stats::rms(log.meas.iter().map(|m| m[c])) + 1.0)
+                .collect();
+            Ok(simple(
+                effect,
+                &["b_fx", "b_fy", "b_mz"],
+                vec![vec![0.0; 3]],
+                [
+                    &[-big[0], -big[1], -big[2]],
+                    &big,
+                    &[
+                        ctx.noise[0].max(1e-3 * big[0]),
+                        ctx.noise[1].max(1e-3 * big[1]),
+                        ctx.noise[2].max(1e-3 * big[2]),
+                    ],
+                ],
+                Variant::Bias,
+            ))
+        }
+        Effect::ConicityPlysteer => Ok(keys_spec(effect, p, &["PHY1", "PVY1", "QHZ1"])),
+    }
+}
+
+impl Spec {
+    /// The reported value of parameter `j` (τ of `thermal` in seconds, not its logarithm).
+    pub fn reported(&self, theta: &[f64]) -> Vec<(String, f64)> {
+        self.names
+            .iter()
+            .zip(theta)
+            .map(|(n, &v)| {
+                if self.variant == Variant::Thermal && n == "tau" {
+                    (n.clone(), v.exp())
+                } else {
+                    (n.clone(), v)
+                }
+            })
+            .collect()
+    }
+
+    /// The parameter set with this effect's `.tir` keys at `theta` (SIM.tir's otherwise).
+    pub fn params(&self, base: &Params<f64>, theta: &[f64]) -> Params<f64> {
+        let mut q = base.clone();
+        if let Variant::Keys(keys) = &self.variant {
+            for (k, &v) in keys.iter().zip(theta) {
+                q.set(*k, v);
+            }
+        }
+        q
+    }
+
+    /// The per-row λ multipliers of the friction and pressure extensions (`None` for others).
+    pub fn lambdas(&self, ctx: &Ctx, theta: &[f64]) -> Option<Vec<Lambda>> {
+        let log = ctx.log;
+        let n = log.len();
+        match self.variant {
+            Variant::PressureLambda => {
+                let pr = log.p.as_ref()?;
+                let f = |a: f64, d: f64| (1.0 + a * d).max(0.05);
+                Some(
+                    pr.iter()
+                        .map(|&x| {
+                            let d = (x - ctx.p_ref) / ctx.p_ref;
+                            Lambda {
+                                kx: f(theta[0], d),
+                                ky: f(theta[1], d),
+                                mux: f(theta[2], d),
+                                muy: f(theta[3], d),
+                            }
+                        })
+                        .collect(),
+                )
+            }
+            Variant::SpeedFriction => {
+                let v0 = ctx.sim.params.longvl.abs().max(1.0);
+                Some(
+                    (0..n)
+                        .map(|i| {
+                            let num = 1.0 + theta[1] * (log.vx[i].abs() - v0) / v0;
+                            let den = 1.0 + theta[0] * ctx.vs[i] / v0;
+                            Lambda::mu((num / den.max(0.05)).clamp(0.05, 5.0))
+                        })
+                        .collect(),
+                )
+            }
+            Variant::Thermal => {
+                let temp = lowpass_from(&ctx.power, &log.t, theta[1].exp(), 0.0);
+                Some(
+                    temp.iter()
+                        .map(|&tk| Lambda::mu((-theta[0] * tk).exp().clamp(0.05, 5.0)))
+                        .collect(),
+                )
+            }
+            _ => None,
+        }
+    }
+
+    /// Relaxation lengths per row for the relaxation extension.
+    fn sigmas(&self, ctx: &Ctx, theta: &[f64]) -> Vec<[f64; 2]> {
+        let p = &ctx.sim.params;
+        (0..ctx.log.len())
+            .map(|i| {
+                let g = (1.0 + theta[2] * ctx.dfz[i]).max(0.0);
+                let base = if ctx.sim.filters {
+                    ctx.base.sigma[i]
+                } else {
+                    let fzn = (ctx.log.fz[i] / p.fnomin).max(0.0);
+                    [0.5 * p.unloaded_radius * fzn, p.unloaded_radius * fzn]
+                };
+                [base[0] * theta[0] * g, base[1] * theta[1] * g]
+            })
+            .collect()
+    }
+
+    /// Predictions of the sim with this effect at `theta`: on `rows` (the fast path of a fit), or
+    /// on every row, exactly (`rows = None`). `None` when the model fails at this `theta`.
+    pub fn predict(&self, ctx: &Ctx, theta: &[f64], rows: Option<&[usize]>) -> Option<Vec<Out>> {
+        self.predict_with(ctx, theta, rows, &ctx.base.slips)
+    }
+
+    /// [`Spec::predict`], the fast path taking its slips from `slips` (a run's).
+    fn predict_with(
+        &self,
+        ctx: &Ctx,
+        theta: &[f64],
+        rows: Option<&[usize]>,
+        slips: &[[f64; 2]],
+    ) -> Option<Vec<Out>> {
+        let (log, sim) = (ctx.log, ctx.sim);
+        let all: Vec<usize>;
+        let sel = match rows {
+            Some(r) => r,
+            None => {
+                all = (0..log.len()).collect();
+                &all
+            }
+        };
+        let pick = |full: &[Out]| -> Vec<Out> { sel.iter().map(|&i| full[i]).collect() };
+        match &self.variant {
+            Variant::Keys(_) => {
+                let q = self.params(&sim.params, theta);
+                match rows {
+                    Some(r) => sim.eval_rows(log, &q, slips, r, &Mods::default()).ok(),
+                    None => sim.run(log, &q, &Mods::default()).ok().map(|r| r.out),
+                }
+            }
+            Variant::PressureLambda | Variant::SpeedFriction | Variant::Thermal => {
+                let l = self.lambdas(ctx, theta)?;
+                let mods = Mods {
+                    lambda: Some(&l),
+                    ..Mods::default()
+                };
+                match rows {
+                    Some(r) => sim.eval_rows(log, &sim.params, slips, r, &mods).ok(),
+                    None => sim.run(log, &sim.params, &mods).ok().map(|r| r.out),
+                }
+            }
+            Variant::Relaxation => {
+                let sg = self.sigmas(ctx, theta);
+                let slips = sim.slips(log, &sg).ok()?;
+                let mods = if sim.filters {
+                    Mods::default()
+                } else {
+                    Mods {
+                        sigma: SigmaMode::Given(&sg),
+                        ..Mods::default()
+                    }
+                };
+                sim.eval_rows(log, &sim.params, &slips, sel, &mods).ok()
+            }
+            Variant::TurnSlipAdd => {
+                let r0 = sim.params.unloaded_radius;
+                Some(
+                    sel.iter()
+                        .map(|&i| {
+                            let k = log.fz[i].max(0.0) * r0 * log.phit_at(i);
+                            let b = ctx.base.out[i];
+                            [b[0], b[1] + theta[0] * k, b[2] + theta[1] * k * r0]
+                        })
+                        .collect(),
+                )
+            }
+            Variant::Lag => {
+                let mut full = ctx.base.out.clone();
+                for c in 0..3 {
+                    let u: Vec<f64> = ctx.base.out.iter().map(|o| o[c]).collect();
+                    for (f, y) in full.iter_mut().zip(lag(&u, &log.t, theta[c])) {
+                        f[c] = y;
+                    }
+                }
+                Some(pick(&full))
+            }
+            Variant::Bias => Some(
+                sel.iter()
+                    .map(|&i| {
+                        let b = ctx.base.out[i];
+                        [b[0] + theta[0], b[1] + theta[1], b[2] + theta[2]]
+                    })
+                    .collect(),
+            ),
+        }
+    }
+
+    /// Does the effect change the relaxation lengths through the slip stiffnesses (σ = |K|/C)?
+    fn moves_sigma(&self, ctx: &Ctx) -> bool {
+        ctx.sim.filters && matches!(self.variant, Variant::Keys(_) | Variant::PressureLambda)
+    }
+
+    /// Fits the effect on `rows` (normalised least squares over the three channels, each
+    /// divided by its noise floor), from each starting point; the best fit's parameters.
+    ///
+    /// The fast path evaluates the Magic Formula on `rows` only, at the slips of a full run.
+    /// Where the effect changes σ (a re-fitted stiffness), those slips are refreshed: after a
+    /// fit, one exact run at the fitted parameters gives new slips and the fit is repeated from
+    /// there, up to [`SLIP_REFRESH`] times (a fixed point: at the truth the frozen and the
+    /// exact predictions agree, so clean data give the truth back).
+    pub fn fit(&self, ctx: &Ctx, rows: &[usize]) -> Option<super::fit::Fit> {
+        let log = ctx.log;
+        let noise = ctx.noise;
+        let mut slips = ctx.base.slips.clone();
+        let mut starts = self.starts.clone();
+        let mut best: Option<super::fit::Fit> = None;
+        let refresh = if self.moves_sigma(ctx) {
+            SLIP_REFRESH
+        } else {
+            0
+        };
+        for round in 0..=refresh {
+            let resid = |th: &[f64]| -> Option<Vec<f64>> {
+                let pred = self.predict_with(ctx, th, Some(rows), &slips)?;
+                let mut r = Vec::with_capacity(3 * rows.len());
+                for (k, &i) in rows.iter().enumerate() {
+                    for c in 0..3 {
+                        r.push((log.meas[i][c] - pred[k][c]) / noise[c]);
+                    }
+                }
+                r.iter().all(|v| v.is_finite()).then_some(r)
+            };
+            best = None;
+            for s in &starts {
+                if let Some(f) = super::fit::levenberg_marquardt(&resid, s, &self.bounds, 12) {
+                    if best.as_ref().is_none_or(|b| f.cost < b.cost) {
+                        best = Some(f);
+                    }
+                }
+            }
+            let Some(b) = &best else { break };
+            if round == refresh {
+                break;
+            }
+            let q = self.params(&ctx.sim.params, &b.theta);
+            let l = self.lambdas(ctx, &b.theta);
+            let mods = Mods {
+                lambda: l.as_deref(),
+                ..Mods::default()
+            };
+            let Ok(run) = ctx.sim.run(log, &q, &mods) else {
+                break;
+            };
+            let moved = run
+                .slips
+                .iter()
+                .zip(&slips)
+                .map(|(a, b)| (a[0] - b[0]).abs().max((a[1] - b[1]).abs()))
+                .fold(0.0, f64::max);
+            slips = run.slips;
+            starts = vec![b.theta.clone()];
+            if moved < 1e-9 {
+                break;
+            }
+        }
+        best
+    }
+}
+
+/// Times the slips of a fit are refreshed by an exact run (see [`Spec::fit`]).
+pub const SLIP_REFRESH: usize = 2;

@@ -1,0 +1,333 @@
+//! The diagnosis of the friction estimator's output, when the log has a reference `mu` column.
+//!
+//! The estimator ([`gough::mu::MuEstimator`], default settings, its Gough table built from
+//! SIM.tir at the log's median camber) runs on the log's measured Fx, Fy, Mz, Fz, Vx. Its error
+//! against the reference μ is taken on the rows where it has an estimate (state not
+//! `fallback`). Then:
+//! - `where`: the operating regions holding the squared μ error, binned as the force gap is
+//!   ([`super::regions`]), a region reported when it holds ≥ 20 % of the error and ≥ 1.25× its
+//!   share of the rows;
+//! - `effects`: does the effect explain the error? The estimator's model is SIM.tir in steady
+//!   state at the log's median camber, at INFLPRES, without turn slip, on clean sensors. For
+//!   each candidate, with the parameters it was fitted to on the *forces* (never on μ), its
+//!   contribution to the channels is Δ = (sim with the effect) − (sim without it), where
+//!   "without" is the estimator's assumption for that aspect: γ at the median (`camber`),
+//!   p = INFLPRES (`inflation_pressure`), φt = 0 (`turn_slip`), steady state
+//!   (`relaxation_length`), and SIM.tir as it is for the others (bias, lag, friction changes,
+//!   re-fitted terms). The estimator is run again on measured − Δ; the effect explains the error
+//!   as far as that shrinks it.
+//! - `verdict`: the effect with the largest μ shrink 1 − rmse_after/rmse_before when that is at
+//!   least [`MU_MIN_SHRINK`] and the estimator's error is at least [`MU_MIN_RMSE`]; else `none`.
+
+use super::cv::Score;
+use super::effects::{Ctx, Effect};
+use super::log::Log;
+use super::effects::Spec;
+use super::sim::{Mods, Out, Sim};
+use super::stats;
+use gough::math::Libm;
+use gough::mf::Params;
+use gough::mu::{Config, GoughTable, MuEstimator, Sample, State};
+use serde::Serialize;
+
+/// The μ verdict needs a shrink of at least this.
+pub const MU_MIN_SHRINK: f64 = 0.2;
+/// ... of an error of at least this RMS (μ units): below it the estimator is right.
+pub const MU_MIN_RMSE: f64 = 0.02;
+
+/// The μ part of the report.
+#[derive(Debug, Clone, Serialize)]
+pub struct MuReport {
+    /// Share of rows with an estimate (state not `fallback`).
+    pub coverage: f64,
+    /// RMS error of the estimate against the reference on those rows.
+    pub rmse: f64,
+    /// Mean error (estimate − reference).
+    pub bias: f64,
+    /// Regions holding the error, largest share first.
+    #[serde(rename = "where")]
+    pub where_: Vec<MuRegion>,
+    /// Every effect applied to the estimator, largest shrink first.
+    pub effects: Vec<MuEffect>,
+    /// Which effect explains the error.
+    pub verdict: MuVerdict,
+}
+
+/// A region of the μ error.
+#[derive(Debug, Clone, Serialize)]
+pub struct MuRegion {
+    /// Operating variable.
+    pub variable: String,
+    /// Lower end.
+    pub lo: f64,
+    /// Upper end.
+    pub hi: f64,
+    /// Share of the squared μ error here.
+    pub share_of_error: f64,
+    /// Share of the estimated rows here.
+    pub share_of_rows: f64,
+    /// RMS μ error here.
+    pub rmse: f64,
+    /// Mean μ error here.
+    pub bias: f64,
+}
+
+/// One effect applied to the estimator.
+#[derive(Debug, Clone, Serialize)]
+pub struct MuEffect {
+    /// Name.
+    pub effect: String,
+    /// 1 − rmse_after/rmse_before of the μ error (rows estimated both times).
+    pub shrink: f64,
+    /// RMS μ error with the effect applied.
+    pub rmse_after: f64,
+    /// How it was applied, or why it could not be.
+    pub note: String,
+}
+
+/// The μ verdict.
+#[derive(Debug, Clone, Serialize)]
+pub struct MuVerdict {
+    /// Effect or `none`.
+    pub effect: String,
+    /// Its μ shrink.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub shrink: Option<f64>,
+    /// Is it the force diagnosis's verdict too?
+    pub agrees_with_forces: bool,
+}
+
+/// Runs the estimator over the log; `meas` replaces the measured channels, `scale` divides each
+/// estimate. Returns (μ, has an estimate) per row.
+pub fn run_estimator(
+    params: &Params<f64>,
+    log: &Log,
+    meas: &[Out],
+    scale: Option<&[f64]>,
+) -> Result<Vec<(f64, bool)>, String> {
+    let gamma = stats::median(&log.gamma);
+    let table =
+        GoughTable::for_tyre::<Libm>(params).map_err(|e| format!("friction estimator: {e}"))?;
+    let cfg = Config {
+        gamma,
+        ..Config::default()
+    };
+    let mut est = MuEstimator::for_tyre(&table, params, cfg);
+    Ok((0..log.len())
+        .map(|i| {
+            let e = est.update::<Libm>(&Sample {
+                t: log.t[i],
+                fz: log.fz[i],
+                fy: meas[i][1],
+                mz: meas[i][2],
+                fx: Some(meas[i][0]),
+                vx: Some(log.vx[i]),
+                gamma: Some(log.gamma[i]),
+            });
+            let s = scale.and_then(|s| s.get(i)).copied().unwrap_or(1.0);
+            (e.mu / s, e.state != State::Fallback)
+        })
+        .collect())
+}
+
+fn error_stats(mu: &[(f64, bool)], reference: &[f64], mask: &[bool]) -> (f64, f64) {
+    let e: Vec<f64> = (0..mu.len())
+        .filter(|&i| mask[i])
+        .map(|i| mu[i].0 - reference[i])
+        .collect();
+    (stats::rms(e.iter().copied()), stats::mean(&e))
+}
+
+/// The μ diagnosis (module doc). `scores`: the force diagnosis's effects with their fits.
+pub fn diagnose(
+    ctx: &Ctx,
+    scores: &[Score],
+    force_verdict: Option<Effect>,
+) -> Result<MuReport, String> {
+    let log = ctx.log;
+    let Some(reference) = &log.mu else {
+        return Err("no mu column".into());
+    };
+    let p = &ctx.sim.params;
+    let base = run_estimator(p, log, &log.meas, None)?;
+    let mask: Vec<bool> = base.iter().map(|b| b.1).collect();
+    let n_est = mask.iter().filter(|&&m| m).count();
+    let (rmse, bias) = error_stats(&base, reference, &mask);
+    let err: Vec<f64> = (0..log.len()).map(|i| base[i].0 - reference[i]).collect();
+    let where_ = mu_regions(log, &err, &mask);
+
+    let mut effects = Vec::new();
+    for s in scores {
+        let name = s.effect.name().to_string();
+        let (Some(sp), None) = (&s.spec, &s.not_applicable) else {
+            effects.push(MuEffect {
+                effect: name,
+                shrink: 0.0,
+                rmse_after: rmse,
+                note: format!(
+                    "not applicable: {}",
+                    s.not_applicable.clone().unwrap_or_default()
+                ),
+            });
+            continue;
+        };
+        let applied = contribution(ctx, s.effect, sp, &s.theta).and_then(|(delta, note)| {
+            let m: Vec<Out> = log
+                .meas
+                .iter()
+                .zip(&delta)
+                .map(|(x, d)| [x[0] - d[0], x[1] - d[1], x[2] - d[2]])
+                .collect();
+            run_estimator(p, log, &m, None).map(|r| (r, note))
+        });
+        match applied {
+            Ok((r, note)) => {
+                let both: Vec<bool> = (0..log.len()).map(|i| mask[i] && r[i].1).collect();
+                let (b, _) = error_stats(&base, reference, &both);
+                let (a, _) = error_stats(&r, reference, &both);
+                effects.push(MuEffect {
+                    effect: name,
+                    shrink: if b > 0.0 { 1.0 - a / b } else { 0.0 },
+                    rmse_after: a,
+                    note,
+                });
+            }
+            Err(why) => effects.push(MuEffect {
+                effect: name,
+                shrink: 0.0,
+                rmse_after: rmse,
+                note: why,
+            }),
+        }
+    }
+    effects.sort_by(|a, b| b.shrink.total_cmp(&a.shrink));
+    let verdict = match effects.first() {
+        Some(e) if rmse >= MU_MIN_RMSE && e.shrink >= MU_MIN_SHRINK => MuVerdict {
+            effect: e.effect.clone(),
+            shrink: Some(e.shrink),
+            agrees_with_forces: force_verdict.map(|f| f.name()) == Some(e.effect.as_str()),
+        },
+        _ => MuVerdict {
+            effect: "none".into(),
+            shrink: None,
+            agrees_with_forces: force_verdict.is_none(),
+        },
+    };
+    Ok(MuReport {
+        coverage: n_est as f64 / log.len().max(1) as f64,
+        rmse,
+        bias,
+        where_,
+        effects,
+        verdict,
+    })
+}
+
+/// The effect's contribution to the channels, Δ = with − without (module doc), and a note.
+fn contribution(
+    ctx: &Ctx,
+    effect: Effect,
+    sp: &Spec,
+    theta: &[f64],
+) -> Result<(Vec<Out>, String), String> {
+    let log = ctx.log;
+    let sim = ctx.sim;
+    let with = sp
+        .predict(ctx, theta, None)
+        .ok_or("the sim with the effect failed on this log")?;
+    let fail = |(i, e): (usize, String)| format!("sim without the effect, row {i}: {e}");
+    let (without, note) = match effect {
+        Effect::Camber => {
+            let mut l = log.clone();
+            let g = stats::median(&log.gamma);
+            l.gamma.iter_mut().for_each(|x| *x = g);
+            let s2 = Sim::new(sim.params.clone(), &l);
+            let w = s2.run(&l, &sim.params, &Mods::default()).map_err(fail)?;
+            (w.out, "camber contribution (varying γ, re-fitted terms) removed")
+        }
+        Effect::InflationPressure => {
+            let mut l = log.clone();
+            l.p = None;
+            let w = sim.run(&l, &sim.params, &Mods::default()).map_err(fail)?;
+            (w.out, "pressure contribution (p ≠ INFLPRES, re-fitted terms) removed")
+        }
+        Effect::TurnSlip => {
+            let mut l = log.clone();
+            l.phit = None;
+            let s2 = Sim::new(sim.params.clone(), &l);
+            let w = s2.run(&l, &sim.params, &Mods::default()).map_err(fail)?;
+            (w.out, "turn-slip contribution removed (the estimator's table has none)")
+        }
+        Effect::RelaxationLength => {
+            let mut s2 = sim.clone();
+            s2.filters = false;
+            s2.opts.transient = false;
+            let w = s2.run(log, &sim.params, &Mods::default()).map_err(fail)?;
+            (w.out, "transient (relaxation) contribution removed")
+        }
+        _ => (ctx.base.out.clone(), "the effect's contribution removed"),
+    };
+    let delta = with
+        .iter()
+        .zip(&without)
+        .map(|(a, b)| [a[0] - b[0], a[1] - b[1], a[2] - b[2]])
+        .collect();
+    Ok((delta, note.to_string()))
+}
+
+fn mu_regions(log: &Log, err: &[f64], mask: &[bool]) -> Vec<MuRegion> {
+    let rows: Vec<usize> = (0..log.len()).filter(|&i| mask[i]).collect();
+    let total: f64 = rows.iter().map(|&i| err[i] * err[i]).sum();
+    if rows.is_empty() || total <= 0.0 {
+        return vec![];
+    }
+    let mut out = Vec::new();
+    for (name, x) in super::regions::variables(log) {
+        let xs: Vec<f64> = rows.iter().map(|&i| x[i]).collect();
+        let (lo, hi) = xs
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+                (a.min(v), b.max(v))
+            });
+        if !(hi > lo) {
+            continue;
+        }
+        let nb = super::regions::BINS;
+        let mut ed: Vec<f64> = (0..=nb)
+            .map(|k| stats::quantile(&xs, k as f64 / nb as f64))
+            .collect();
+        ed.dedup_by(|a, b| (*a - *b).abs() <= 1e-12 * (hi - lo));
+        if ed.len() < 3 {
+            continue;
+        }
+        for b in 0..ed.len() - 1 {
+            let last = b + 2 == ed.len();
+            let sel: Vec<usize> = rows
+                .iter()
+                .copied()
+                .filter(|&i| x[i] >= ed[b] && (x[i] < ed[b + 1] || last))
+                .collect();
+            if sel.is_empty() {
+                continue;
+            }
+            let e: Vec<f64> = sel.iter().map(|&i| err[i]).collect();
+            let share = e.iter().map(|v| v * v).sum::<f64>() / total;
+            let rs = sel.len() as f64 / rows.len() as f64;
+            if share < super::regions::MIN_SHARE || share < super::regions::MIN_CONCENTRATION * rs {
+                continue;
+            }
+            out.push(MuRegion {
+                variable: name.into(),
+                lo: ed[b],
+                hi: ed[b + 1],
+                share_of_error: share,
+                share_of_rows: rs,
+                rmse: stats::rms(e.iter().copied()),
+                bias: stats::mean(&e),
+            });
+        }
+    }
+    out.sort_by(|a, b| b.share_of_error.total_cmp(&a.share_of_error));
+    out.truncate(super::regions::MAX_REGIONS);
+    out
+}

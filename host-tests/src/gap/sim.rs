@@ -1,0 +1,354 @@
+//! The sim of the diagnosis: our tyre model from SIM.tir driven by the log's inputs.
+//!
+//! - Steady state: [`gough::mf::eval`] of the file's version at each row's (Fz, κ, α, γ, φt,
+//!   Vx, p), limits on (the file's ranges; each clip is the model's, as in `gough mf eval`).
+//! - Relaxation: when the file gives what the filters need (MF 6.x `LATERAL_STIFFNESS` and
+//!   `LONGITUDINAL_STIFFNESS`; MF 5.2 / Delft 96 `PTX1` and `PTY1`), the slips pass through
+//!   [`gough::relax::Transient`] (eq. 20, exact discretisation) before the Magic Formula, which
+//!   then runs with `Options::transient` (no steady-state low-speed reductions).
+//! - Turn slip is on when the log has a `phit` column and the file carries turn-slip
+//!   coefficients (MF 6.x); otherwise φt is not used.
+//!
+//! ## First-order hold
+//! A log samples continuous signals, so between two rows the inputs are taken as linear in
+//! time. The core's step holds its kinematics over a step; we feed it the kinematics at the
+//! step's **midpoint** of the linear interpolation (Vx, κ, α at the mean of the two rows). For
+//! the linear equation of eq. (20) with an input that is linear over the step, the midpoint value
+//! makes the exact step's forcing term exact to second order in h (the error is the ramp's
+//! weighting, a·h³/12 relative to b·h), where holding the left sample would add half a sample of
+//! lag. The relaxation length of a step is the one evaluated at the step's start, as in
+//! `TransientTyre` (σ changes with Fz, little over one step). Steps longer than
+//! [`gough::relax::MAX_DT`]/2 are split into sub-steps along the same linear interpolation.
+//!
+//! The damping speed is |Vx| ([`DampingSpeed::Forward`], TNO's linear transient model): a
+//! `.tir` file is fitted on steady-state data, and with this choice the transient sim reproduces
+//! that fit exactly in steady state (α' → α, κ' → κ), also under braking.
+//!
+//! The first row starts in steady state (deflections equal to σ·tan α and σ·κ), so a log that
+//! begins mid-manoeuvre does not show a start-up transient that the tyre never had.
+//!
+//! Nothing of the tyre is re-implemented here. The one formula typed here is the sensor model of
+//! [`lag`] (a first-order low-pass, exact for a first-order hold), which is not the tyre's.
+
+use super::log::Log;
+use gough::math::Libm;
+use gough::mf::{self, Input, Options, Params};
+use gough::relax::{Config, DampingSpeed, Kinematics, Sigma, Transient};
+
+/// Fx, Fy \[N\], Mz \[N·m\] of one row.
+pub type Out = [f64; 3];
+
+/// Per-row multipliers on the Magic Formula's scaling factors λ (1 = unchanged).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Lambda {
+    /// On λμx (LMUX).
+    pub mux: f64,
+    /// On λμy (LMUY).
+    pub muy: f64,
+    /// On λKx (LKX).
+    pub kx: f64,
+    /// On λKy (LKY).
+    pub ky: f64,
+}
+
+impl Lambda {
+    /// No change.
+    pub const ONE: Lambda = Lambda {
+        mux: 1.0,
+        muy: 1.0,
+        kx: 1.0,
+        ky: 1.0,
+    };
+    /// Both friction factors times `m`.
+    pub fn mu(m: f64) -> Lambda {
+        Lambda {
+            mux: m,
+            muy: m,
+            ..Lambda::ONE
+        }
+    }
+}
+
+/// Where the relaxation lengths of a run come from; `[σκ, σα]` \[m\] per row.
+#[derive(Debug, Clone, Copy, Default)]
+pub enum SigmaMode<'a> {
+    /// The model's (σx, σy of [`gough::mf::Output`]).
+    #[default]
+    Model,
+    /// The model's, times a per-row multiplier.
+    Scaled(&'a [[f64; 2]]),
+    /// Given per row (filters run even when the file has none).
+    Given(&'a [[f64; 2]]),
+}
+
+/// Per-row modifications of the sim (what an effect changes).
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Mods<'a> {
+    /// λ multipliers per row.
+    pub lambda: Option<&'a [Lambda]>,
+    /// Added to the outputs per row.
+    pub add: Option<&'a [Out]>,
+    /// Relaxation lengths.
+    pub sigma: SigmaMode<'a>,
+}
+
+/// The sim: a parameter set, the evaluation options and whether the filters run.
+#[derive(Debug, Clone)]
+pub struct Sim {
+    /// SIM.tir's parameters.
+    pub params: Params<f64>,
+    /// Evaluation options (limits on; `transient` when the filters run; turn slip if used).
+    pub opts: Options,
+    /// The relaxation-length filters run.
+    pub filters: bool,
+    /// Turn slip is evaluated (log has `phit`, file has turn-slip coefficients).
+    pub turn_slip: bool,
+    /// Transient-model settings (|Vx| damping, the file's DAMP_VLOW/VXLOW, σ floor 1 % R0).
+    pub cfg: Config<f64>,
+}
+
+/// The result of a full run.
+#[derive(Debug, Clone, Default)]
+pub struct Run {
+    /// Outputs per row.
+    pub out: Vec<Out>,
+    /// Relaxation lengths `[σκ, σα]` used from each row on \[m\] (0 without filters).
+    pub sigma: Vec<[f64; 2]>,
+    /// Slips fed to the Magic Formula `[κ', α']` per row.
+    pub slips: Vec<[f64; 2]>,
+}
+
+/// Does the file give what the relaxation filters need?
+pub fn has_filters(p: &Params<f64>) -> bool {
+    if p.version.is_mf6() {
+        p.lateral_stiffness > 0.0 && p.longitudinal_stiffness > 0.0
+    } else {
+        p.pty1 != 0.0 && p.ptx1 != 0.0
+    }
+}
+
+/// An error at a row: (row index, message).
+pub type RowError = (usize, String);
+
+impl Sim {
+    /// The sim of `params` for `log`.
+    pub fn new(params: Params<f64>, log: &Log) -> Sim {
+        let filters = has_filters(&params);
+        let turn_slip = log.phit.is_some() && mf::turnslip::available(&params);
+        let opts = Options {
+            transient: filters,
+            turn_slip,
+            ..Options::default()
+        };
+        let mut cfg = Config::from_params(&params);
+        cfg.damping = DampingSpeed::Forward;
+        Sim {
+            params,
+            opts,
+            filters,
+            turn_slip,
+            cfg,
+        }
+    }
+
+    fn input(&self, log: &Log, i: usize, kappa: f64, alpha: f64) -> Input<f64> {
+        Input {
+            fz: log.fz[i],
+            kappa,
+            alpha,
+            gamma: log.gamma[i],
+            phit: if self.turn_slip { log.phit_at(i) } else { 0.0 },
+            vx: log.vx[i],
+            p: log.p_at(i),
+        }
+    }
+
+    /// Advances the deflection states from row `i − 1` to row `i` (first-order hold: the
+    /// kinematics at the midpoint of each (sub-)step) with relaxation lengths `sigma`.
+    fn advance(
+        &self,
+        st: &mut Transient<f64>,
+        log: &Log,
+        i: usize,
+        sigma: [f64; 2],
+    ) -> Result<[f64; 2], RowError> {
+        let h = log.t[i] - log.t[i - 1];
+        let n_sub = (h / (0.5 * gough::relax::MAX_DT)).ceil().max(1.0) as usize;
+        let hs = h / n_sub as f64;
+        let sg = Sigma {
+            sigma_kappa: sigma[0],
+            sigma_alpha: sigma[1],
+        };
+        let mut slips = [0.0; 2];
+        for k in 0..n_sub {
+            let w = (k as f64 + 0.5) / n_sub as f64; // midpoint of the sub-step
+            let lin = |a: &[f64]| a[i - 1] + w * (a[i] - a[i - 1]);
+            let (vx, kappa, alpha) = (lin(&log.vx), lin(&log.kappa), lin(&log.alpha));
+            let kin = Kinematics {
+                vx,
+                vsx: -kappa * vx.abs(),
+                vsy: alpha.tan() * vx.abs(),
+            };
+            let s = st
+                .step::<Libm>(&self.cfg, hs, &kin, &sg)
+                .map_err(|e| (i, format!("relaxation step: {e}")))?;
+            slips = [s.kappa, s.alpha];
+        }
+        Ok(slips)
+    }
+
+    /// Steady-state deflections at row 0 for relaxation lengths `sigma`.
+    fn init(log: &Log, sigma: [f64; 2]) -> Transient<f64> {
+        Transient {
+            v: sigma[1] * log.alpha[0].tan(),
+            u: sigma[0] * log.kappa[0],
+        }
+    }
+
+    /// Runs the whole log with `params` (SIM.tir's or an effect's) and `mods`.
+    pub fn run(&self, log: &Log, params: &Params<f64>, mods: &Mods) -> Result<Run, RowError> {
+        let n = log.len();
+        let filters = self.filters || matches!(mods.sigma, SigmaMode::Given(_));
+        let mut q = params.clone();
+        let base = [q.lmux, q.lmuy, q.lkx, q.lky];
+        let mut run = Run {
+            out: Vec::with_capacity(n),
+            sigma: Vec::with_capacity(n),
+            slips: Vec::with_capacity(n),
+        };
+        let mut st = Transient::new(0.0);
+        let mut prev = [0.0; 2];
+        for i in 0..n {
+            let slips = if !filters || i == 0 {
+                [log.kappa[i], log.alpha[i]]
+            } else {
+                self.advance(&mut st, log, i, prev)?
+            };
+            set_lambda(&mut q, &base, mods, i);
+            let inp = self.input(log, i, slips[0], slips[1]);
+            let o = mf::eval::<f64, Libm>(&q, &inp, &self.opts)
+                .map_err(|e| (i, format!("Magic Formula: {e}")))?;
+            let sigma = if filters {
+                match mods.sigma {
+                    SigmaMode::Model => [o.sigma_x, o.sigma_y],
+                    SigmaMode::Scaled(m) => {
+                        let m = m.get(i).copied().unwrap_or([1.0, 1.0]);
+                        [o.sigma_x * m[0], o.sigma_y * m[1]]
+                    }
+                    SigmaMode::Given(g) => g.get(i).copied().unwrap_or([0.0, 0.0]),
+                }
+            } else {
+                [0.0, 0.0]
+            };
+            if filters && i == 0 {
+                st = Sim::init(log, sigma);
+            }
+            prev = sigma;
+            let mut out = [o.fx, o.fy, o.mz];
+            add(&mut out, mods, i);
+            run.out.push(out);
+            run.sigma.push(sigma);
+            run.slips.push(slips);
+        }
+        Ok(run)
+    }
+
+    /// The filters alone with given relaxation lengths per row (`sigma[i]` is used for the step
+    /// from row i to i + 1, as in [`Sim::run`]): the slips `[κ', α']` per row. Without filters
+    /// (`sigma` all zero and the file has none) the log's slips.
+    pub fn slips(&self, log: &Log, sigma: &[[f64; 2]]) -> Result<Vec<[f64; 2]>, RowError> {
+        let n = log.len();
+        let mut out = Vec::with_capacity(n);
+        out.push([log.kappa[0], log.alpha[0]]);
+        let s0 = sigma.first().copied().unwrap_or([0.0; 2]);
+        let mut st = Sim::init(log, s0);
+        for i in 1..n {
+            let s = sigma.get(i - 1).copied().unwrap_or(s0);
+            out.push(self.advance(&mut st, log, i, s)?);
+        }
+        Ok(out)
+    }
+
+    /// Evaluates the Magic Formula at the given slips on the selected rows only (the fast path
+    /// of a fit: the slips are those of a run, or of [`Sim::slips`]).
+    pub fn eval_rows(
+        &self,
+        log: &Log,
+        params: &Params<f64>,
+        slips: &[[f64; 2]],
+        rows: &[usize],
+        mods: &Mods,
+    ) -> Result<Vec<Out>, RowError> {
+        let mut q = params.clone();
+        let base = [q.lmux, q.lmuy, q.lkx, q.lky];
+        let mut res = Vec::with_capacity(rows.len());
+        for &i in rows {
+            set_lambda(&mut q, &base, mods, i);
+            let s = slips
+                .get(i)
+                .copied()
+                .unwrap_or([log.kappa[i], log.alpha[i]]);
+            let inp = self.input(log, i, s[0], s[1]);
+            let o = mf::eval::<f64, Libm>(&q, &inp, &self.opts)
+                .map_err(|e| (i, format!("Magic Formula: {e}")))?;
+            let mut out = [o.fx, o.fy, o.mz];
+            add(&mut out, mods, i);
+            res.push(out);
+        }
+        Ok(res)
+    }
+}
+
+fn set_lambda(q: &mut Params<f64>, base: &[f64; 4], mods: &Mods, i: usize) {
+    if let Some(l) = mods.lambda.and_then(|l| l.get(i)) {
+        q.lmux = base[0] * l.mux;
+        q.lmuy = base[1] * l.muy;
+        q.lkx = base[2] * l.kx;
+        q.lky = base[3] * l.ky;
+    }
+}
+
+fn add(out: &mut Out, mods: &Mods, i: usize) {
+    if let Some(a) = mods.add.and_then(|a| a.get(i)) {
+        for c in 0..3 {
+            out[c] += a[c];
+        }
+    }
+}
+
+/// φ1(x) = (1 − e^(−x))/x, with a series below 1e-3.
+fn phi1(x: f64) -> f64 {
+    if x < 1e-3 {
+        1.0 - x * (0.5 - x * (1.0 / 6.0 - x / 24.0))
+    } else {
+        (1.0 - (-x).exp()) / x
+    }
+}
+
+/// A first-order sensor lag τ·dy/dt + y = u over the log's time base, exact for an input that
+/// is linear between samples (first-order hold): over a step h with x = h/τ,
+/// `y1 = y0·e^(−x) + u0·(1 − e^(−x)) + (u1 − u0)·(1 − φ1(x))`, the ramp response. Starts in
+/// steady state (y0 = u0). τ ≤ 0 returns the input.
+pub fn lag(u: &[f64], t: &[f64], tau: f64) -> Vec<f64> {
+    match u.first() {
+        Some(&u0) if tau > 0.0 => lowpass_from(u, t, tau, u0),
+        _ => u.to_vec(),
+    }
+}
+
+/// The first-order low-pass of a signal, as [`lag`], but starting from `y0`.
+pub fn lowpass_from(u: &[f64], t: &[f64], tau: f64, y0: f64) -> Vec<f64> {
+    if u.is_empty() {
+        return Vec::new();
+    }
+    let mut y = Vec::with_capacity(u.len());
+    let mut yi = y0;
+    y.push(yi);
+    for i in 1..u.len().min(t.len()) {
+        let x = (t[i] - t[i - 1]) / tau.max(1e-9);
+        let e = (-x).exp();
+        yi = yi * e + u[i - 1] * (1.0 - e) + (u[i] - u[i - 1]) * (1.0 - phi1(x));
+        y.push(yi);
+    }
+    y
+}

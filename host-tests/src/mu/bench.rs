@@ -1,0 +1,749 @@
+//! `gough mu bench` and `gough mu demo`: the estimators against simulated truth.
+//!
+//! The plant is the host vehicle simulation (`crate::sim`) on the bundled tyre; its per-wheel
+//! Fy, Mz, Fz, Fx pass through a sensor model — additive Gaussian noise (Mz 2 N·m rms, Fy, Fx and
+//! Fz 1 % of Fz rms, seeded) and a 10 ms pure delay — before any estimator sees them. The
+//! peers additionally get the (delayed, exact) slip angle and slip ratio, which the Gough method
+//! never reads.
+//!
+//! Metrics per estimator and case, over the four wheels:
+//! - μ error |μ̂ − μ| (mean and 95th percentile) over the samples the estimator calls
+//!   identifiable;
+//! - the utilisation |F|/(μ·Fz) (architecture.md) reached when the reported estimate first stays
+//!   within ±0.1 of the truth until the end of its surface (median over wheels);
+//! - latency: time from the utilisation first reaching 0.5 on a surface to the estimate staying
+//!   within ±0.1 (median over wheels);
+//! - for surfaces that change: the time from the wheel entering the new surface to the estimate
+//!   staying within ±0.1 of it;
+//! - false change alarms on constant surfaces (the Gough estimator's `change` flag).
+
+use super::peers::{HsuGerdes, Row, SlipSlope};
+use crate::sim::{self, Log, Manoeuvre, Overrides, SimConfig};
+use clap::Args;
+use gough::math::Libm;
+use gough::mf::Params;
+use gough::mu::{Config, Estimate, GoughTable, MuEstimator, Sample, State};
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+/// Arguments of `gough mu bench`.
+#[derive(Args)]
+pub struct BenchArgs {
+    /// Tyre property file (.tir).
+    #[arg(
+        long,
+        default_value = "host-tests/data/tyres/MagicFormula61_Parameters.tir"
+    )]
+    pub tir: PathBuf,
+    /// Output directory for the table (table.md, table.csv) and the plots.
+    #[arg(long, default_value = "out/mu_bench")]
+    pub out: PathBuf,
+    /// Noise seed.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Only the first N cases (for a quick look).
+    #[arg(long)]
+    pub cases: Option<usize>,
+}
+
+/// Arguments of `gough mu demo`.
+#[derive(Args)]
+pub struct DemoArgs {
+    /// Tyre property file (.tir).
+    #[arg(
+        long,
+        default_value = "host-tests/data/tyres/MagicFormula61_Parameters.tir"
+    )]
+    pub tir: PathBuf,
+    /// Manoeuvre (one of the simulation's).
+    #[arg(long, default_value = "sine-dwell")]
+    pub manoeuvre: String,
+    /// Road (the simulation's spec grammar).
+    #[arg(long, default_value = "mu=1.0+patch=0.4@45..300")]
+    pub road: String,
+    /// Output directory (estimates.csv, mu.png, gough.png).
+    #[arg(long, default_value = "out/demo")]
+    pub out: PathBuf,
+    /// Noise seed.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+}
+
+/// Sensor model of the benchmark.
+#[derive(Debug, Clone, Copy)]
+pub struct Sensors {
+    /// Mz noise rms \[N·m\].
+    pub sigma_mz: f64,
+    /// Fy, Fx, Fz noise rms as a fraction of Fz.
+    pub sigma_rel: f64,
+    /// Pure delay \[s\].
+    pub delay: f64,
+}
+
+impl Default for Sensors {
+    fn default() -> Self {
+        Sensors {
+            sigma_mz: 2.0,
+            sigma_rel: 0.01,
+            delay: 0.010,
+        }
+    }
+}
+
+/// Seeded Gaussian noise (xorshift64 + Box–Muller); deterministic across platforms.
+struct Noise(u64);
+
+impl Noise {
+    fn uniform(&mut self) -> f64 {
+        self.0 ^= self.0 << 13;
+        self.0 ^= self.0 >> 7;
+        self.0 ^= self.0 << 17;
+        ((self.0 >> 11) as f64 + 0.5) / (1u64 << 53) as f64
+    }
+    fn gauss(&mut self) -> f64 {
+        let (u, v) = (self.uniform(), self.uniform());
+        (-2.0 * u.ln()).sqrt() * (2.0 * std::f64::consts::PI * v).cos()
+    }
+}
+
+/// One wheel's measured rows (noisy, delayed) and its truth, per logged step.
+pub struct WheelTrace {
+    /// What the estimators see.
+    pub rows: Vec<Row>,
+    /// True μ under the wheel at the (undelayed) time of each row.
+    pub mu_true: Vec<f64>,
+    /// True utilisation |F|/(μ·Fz) at each row.
+    pub util: Vec<f64>,
+    /// Camber γ \[rad\] (delayed): static plus roll camber, known to an ECU from the suspension
+    /// kinematics and the roll estimate.
+    pub gamma: Vec<f64>,
+}
+
+/// Applies the sensor model to wheel `w` of a log.
+pub fn measure(log: &Log, w: usize, s: &Sensors, seed: u64) -> WheelTrace {
+    let mut n = Noise(
+        seed.wrapping_mul(0x9E37_79B9_7F4A_7C15)
+            .wrapping_add(w as u64 + 1)
+            | 1,
+    );
+    let lag = (s.delay / log.dt).round() as usize;
+    let recs = &log.records;
+    let mut tr = WheelTrace {
+        rows: Vec::with_capacity(recs.len()),
+        mu_true: Vec::with_capacity(recs.len()),
+        util: Vec::with_capacity(recs.len()),
+        gamma: Vec::with_capacity(recs.len()),
+    };
+    for (i, r) in recs.iter().enumerate() {
+        let src = &recs[i.saturating_sub(lag)].wheels[w];
+        let fz = src.fz.max(0.0);
+        let sr = s.sigma_rel * fz;
+        tr.rows.push(Row {
+            t: r.t,
+            fz: fz + sr * n.gauss(),
+            fy: src.fy + sr * n.gauss(),
+            mz: src.mz + s.sigma_mz * n.gauss(),
+            fx: src.fx + sr * n.gauss(),
+            vx: src.vx,
+            alpha: src.alpha,
+            kappa: src.kappa,
+        });
+        tr.gamma.push(src.gamma);
+        let now = &r.wheels[w];
+        tr.mu_true.push(now.mu_true);
+        tr.util.push(if now.fz > 0.0 && now.mu_true > 0.0 {
+            now.fx.hypot(now.fy) / (now.mu_true * now.fz)
+        } else {
+            0.0
+        });
+    }
+    tr
+}
+
+/// The estimators compared.
+pub const METHODS: [&str; 3] = ["gough", "hsu-gerdes", "slip-slope"];
+
+/// The Gough tables of the left and right wheels: the simulation mounts the tyre on both sides
+/// (mirrored where the side differs from the file's TYRESIDE), so does the estimator.
+pub struct Tables {
+    left: GoughTable<f64>,
+    right: GoughTable<f64>,
+}
+
+impl Tables {
+    /// For both sides of the vehicle.
+    pub fn new(p: &Params<f64>) -> Result<Tables, String> {
+        use gough::mf::Side;
+        Ok(Tables {
+            left: GoughTable::for_wheel::<Libm>(p, Some(Side::Left)).map_err(|e| e.to_string())?,
+            right: GoughTable::for_wheel::<Libm>(p, Some(Side::Right))
+                .map_err(|e| e.to_string())?,
+        })
+    }
+    /// Table of wheel `w` (fl, fr, rl, rr).
+    pub fn wheel(&self, w: usize) -> &GoughTable<f64> {
+        if w.is_multiple_of(2) {
+            &self.left
+        } else {
+            &self.right
+        }
+    }
+}
+
+/// Runs estimator `m` (index into [`METHODS`]) over wheel `w`'s trace.
+pub fn run_method(
+    m: usize,
+    p: &Params<f64>,
+    tables: &Tables,
+    w: usize,
+    tr: &WheelTrace,
+) -> Vec<Estimate<f64>> {
+    match m {
+        0 => {
+            let mut e = MuEstimator::for_tyre(tables.wheel(w), p, Config::default());
+            tr.rows
+                .iter()
+                .zip(&tr.gamma)
+                .map(|(r, &g)| {
+                    e.update::<Libm>(&Sample {
+                        t: r.t,
+                        fz: r.fz,
+                        fy: r.fy,
+                        mz: r.mz,
+                        fx: Some(r.fx),
+                        vx: Some(r.vx),
+                        gamma: Some(g),
+                    })
+                })
+                .collect()
+        }
+        1 => match HsuGerdes::new(p) {
+            Some(mut e) => tr.rows.iter().map(|r| e.update(r)).collect(),
+            None => Vec::new(),
+        },
+        _ => match SlipSlope::new(p) {
+            Some(mut e) => tr.rows.iter().map(|r| e.update(r)).collect(),
+            None => Vec::new(),
+        },
+    }
+}
+
+/// Metrics of one estimator on one case (all wheels).
+#[derive(Debug, Clone, Default)]
+pub struct Metrics {
+    /// Samples called identifiable.
+    pub n_identifiable: usize,
+    /// Mean |error| while identifiable.
+    pub err_mean: Option<f64>,
+    /// 95th percentile |error| while identifiable.
+    pub err_p95: Option<f64>,
+    /// Median utilisation at which the estimate first stays within ±0.1.
+    pub util_within: Option<f64>,
+    /// Median latency from utilisation 0.5 to staying within ±0.1 \[s\].
+    pub latency: Option<f64>,
+    /// Median time from a change of surface to staying within ±0.1 of the new μ \[s\].
+    pub detect: Option<f64>,
+    /// Change alarms on constant surfaces.
+    pub false_alarms: usize,
+}
+
+fn median(mut v: Vec<f64>) -> Option<f64> {
+    if v.is_empty() {
+        return None;
+    }
+    v.sort_by(f64::total_cmp);
+    Some(v[v.len() / 2])
+}
+
+/// Segments of constant true μ: (start, end) index ranges.
+fn segments(mu: &[f64]) -> Vec<(usize, usize)> {
+    let mut out = Vec::new();
+    let mut s = 0;
+    for i in 1..=mu.len() {
+        if i == mu.len() || (mu[i] - mu[s]).abs() > 1e-9 {
+            out.push((s, i));
+            s = i;
+        }
+    }
+    out
+}
+
+/// Metrics of estimates `est` against the trace(s).
+pub fn metrics(traces: &[WheelTrace], ests: &[Vec<Estimate<f64>>]) -> Metrics {
+    let mut errs = Vec::new();
+    let (mut utils, mut lats, mut dets) = (Vec::new(), Vec::new(), Vec::new());
+    let mut false_alarms = 0;
+    for (tr, est) in traces.iter().zip(ests) {
+        if est.len() != tr.rows.len() {
+            continue;
+        }
+        for (i, e) in est.iter().enumerate() {
+            if e.state == State::Identifiable {
+                errs.push((e.mu - tr.mu_true[i]).abs());
+            }
+        }
+        let segs = segments(&tr.mu_true);
+        for (k, &(a, b)) in segs.iter().enumerate() {
+            // false alarms: change flags more than 0.3 s into a segment whose μ does not change
+            let settle = tr.rows[a].t + 0.3;
+            false_alarms += (a..b)
+                .filter(|&i| est[i].change && tr.rows[i].t > settle)
+                .count();
+            // first index from which the reported estimate stays within ±0.1 to the segment end
+            let mut first_ok = None;
+            for i in (a..b).rev() {
+                let e = &est[i];
+                if e.state == State::Fallback || (e.mu - tr.mu_true[i]).abs() > 0.1 {
+                    break;
+                }
+                first_ok = Some(i);
+            }
+            let Some(ok) = first_ok else { continue };
+            if b - ok < 50 {
+                continue; // held for under 50 samples: not "stays"
+            }
+            let umax = tr.util[a..=ok].iter().copied().fold(0.0, f64::max);
+            utils.push(umax);
+            if let Some(i5) = (a..b).find(|&i| tr.util[i] >= 0.5) {
+                lats.push((tr.rows[ok].t - tr.rows[i5].t).max(0.0));
+            }
+            if k > 0 {
+                dets.push(tr.rows[ok].t - tr.rows[a].t);
+            }
+        }
+    }
+    let n = errs.len();
+    let err_mean = (n > 0).then(|| errs.iter().sum::<f64>() / n as f64);
+    let err_p95 = (n > 0).then(|| {
+        errs.sort_by(f64::total_cmp);
+        errs[((n as f64 * 0.95) as usize).min(n - 1)]
+    });
+    Metrics {
+        n_identifiable: n,
+        err_mean,
+        err_p95,
+        util_within: median(utils),
+        latency: median(lats),
+        detect: median(dets),
+        false_alarms,
+    }
+}
+
+/// A benchmark case: a manoeuvre on a road.
+#[derive(Debug, Clone)]
+pub struct Case {
+    /// Manoeuvre name.
+    pub manoeuvre: &'static str,
+    /// Road spec.
+    pub road: String,
+}
+
+/// The suite: every manoeuvre on μ = 1.0, 0.7, 0.5, 0.3, 0.1, plus surface changes.
+pub fn suite() -> Vec<Case> {
+    let mut v = Vec::new();
+    for m in [
+        "step-steer",
+        "sine-dwell",
+        "brake-in-turn",
+        "constant-radius",
+        "slalom",
+    ] {
+        for mu in ["1.0", "0.7", "0.5", "0.3", "0.1"] {
+            v.push(Case {
+                manoeuvre: m,
+                road: format!("mu={mu}"),
+            });
+        }
+    }
+    v.push(Case {
+        manoeuvre: "abs-split",
+        road: "split=0.9/0.2".into(),
+    });
+    v.push(Case {
+        manoeuvre: "sine-dwell",
+        road: "mu=1.0+patch=0.4@45..300".into(),
+    });
+    v.push(Case {
+        manoeuvre: "slalom",
+        road: "step=1.0@0,0.3@90".into(),
+    });
+    v.push(Case {
+        manoeuvre: "constant-radius",
+        road: "mu=0.9+patch=0.3@-5..5".into(),
+    });
+    v
+}
+
+fn fmt(x: Option<f64>, digits: usize) -> String {
+    x.map_or("–".into(), |v| format!("{v:.digits$}"))
+}
+
+/// Simulates a case.
+pub fn simulate_case(p: &Params<f64>, c: &Case) -> Result<Log, String> {
+    let m = Manoeuvre::by_name(c.manoeuvre, &Overrides::default())?;
+    let mut cfg = SimConfig::new(m);
+    cfg.road = sim::Road::parse(&c.road)?;
+    sim::simulate(&cfg, p, false)
+}
+
+/// Runs the benchmark.
+pub fn run(a: BenchArgs) -> Result<(), String> {
+    let t = crate::tyre::load(&a.tir)?;
+    let p = t.params;
+    let tables = Tables::new(&p)?;
+    let sensors = Sensors::default();
+    let mut cases = suite();
+    if let Some(n) = a.cases {
+        cases.truncate(n);
+    }
+    std::fs::create_dir_all(&a.out).map_err(|e| format!("{}: {e}", a.out.display()))?;
+    let mut md = String::new();
+    let _ = writeln!(md, "| manoeuvre | road | estimator | identifiable samples | mean err | p95 err | util when within ±0.1 | latency from util 0.5 [s] | detect change [s] | false alarms |");
+    let _ = writeln!(md, "|---|---|---|---|---|---|---|---|---|---|");
+    let mut csv = String::from("manoeuvre,road,estimator,n_identifiable,err_mean,err_p95,util_within,latency_s,detect_s,false_alarms\n");
+    let bar = indicatif::ProgressBar::new(cases.len() as u64);
+    let mut gough_wins = 0;
+    let mut comparable = 0;
+    for c in &cases {
+        bar.set_message(format!("{} on {}", c.manoeuvre, c.road));
+        let log = simulate_case(&p, c)?;
+        let traces: Vec<WheelTrace> = (0..4).map(|w| measure(&log, w, &sensors, a.seed)).collect();
+        let mut ms = Vec::new();
+        for (m, method) in METHODS.iter().enumerate() {
+            let ests: Vec<Vec<Estimate<f64>>> = traces
+                .iter()
+                .enumerate()
+                .map(|(w, tr)| run_method(m, &p, &tables, w, tr))
+                .collect();
+            let mt = metrics(&traces, &ests);
+            let _ = writeln!(
+                md,
+                "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
+                c.manoeuvre,
+                c.road,
+                method,
+                mt.n_identifiable,
+                fmt(mt.err_mean, 3),
+                fmt(mt.err_p95, 3),
+                fmt(mt.util_within, 2),
+                fmt(mt.latency, 3),
+                fmt(mt.detect, 3),
+                if m == 0 {
+                    mt.false_alarms.to_string()
+                } else {
+                    "n/a".into()
+                }
+            );
+            let _ = writeln!(
+                csv,
+                "{},{},{},{},{},{},{},{},{},{}",
+                c.manoeuvre,
+                c.road,
+                method,
+                mt.n_identifiable,
+                fmt(mt.err_mean, 4),
+                fmt(mt.err_p95, 4),
+                fmt(mt.util_within, 3),
+                fmt(mt.latency, 4),
+                fmt(mt.detect, 4),
+                mt.false_alarms
+            );
+            ms.push(mt);
+        }
+        // "Better than both peers where they produce an estimate": compare p95 error.
+        for peer in &ms[1..] {
+            if let (Some(g), Some(q)) = (ms[0].err_p95, peer.err_p95) {
+                comparable += 1;
+                if g <= q {
+                    gough_wins += 1;
+                }
+            }
+        }
+        if c.road.contains("patch") || c.road.contains("step") {
+            let name = format!(
+                "{}_{}",
+                c.manoeuvre,
+                c.road.replace(['=', '+', '@', '.', ',', '/'], "_")
+            );
+            let ests: Vec<Estimate<f64>> = run_method(0, &p, &tables, 0, &traces[0]);
+            plot_mu(
+                &traces[0],
+                &[("gough", &ests)],
+                &a.out.join(format!("mu_{name}.png")),
+                &format!("{} on {} (front left)", c.manoeuvre, c.road),
+            )?;
+        }
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    let summary = format!("\nGough estimator at or below both peers' p95 error in {gough_wins} of {comparable} comparisons where a peer produced an estimate.\n");
+    md.push_str(&summary);
+    std::fs::write(a.out.join("table.md"), &md).map_err(|e| e.to_string())?;
+    std::fs::write(a.out.join("table.csv"), &csv).map_err(|e| e.to_string())?;
+    print!("{md}");
+    eprintln!("-> {}/table.md, table.csv, mu_*.png", a.out.display());
+    Ok(())
+}
+
+/// The product's main job on one command: a manoeuvre on a road whose friction changes, the
+/// estimator at every wheel, a short table, plots.
+pub fn demo(a: DemoArgs) -> Result<(), String> {
+    let t = crate::tyre::load(&a.tir)?;
+    let p = t.params;
+    let tables = Tables::new(&p)?;
+    let case = Case {
+        manoeuvre: sim::MANOEUVRES
+            .iter()
+            .copied()
+            .find(|m| *m == a.manoeuvre)
+            .ok_or_else(|| {
+                format!(
+                    "unknown manoeuvre '{}' (one of {})",
+                    a.manoeuvre,
+                    sim::MANOEUVRES.join(", ")
+                )
+            })?,
+        road: a.road.clone(),
+    };
+    let log = simulate_case(&p, &case)?;
+    let sensors = Sensors::default();
+    std::fs::create_dir_all(&a.out).map_err(|e| format!("{}: {e}", a.out.display()))?;
+    let names = ["fl", "fr", "rl", "rr"];
+    let mut csv = String::from("t,wheel,mu_true,mu,sigma,state,util\n");
+    println!(
+        "{} on '{}' ({}), estimator at every wheel (noise: Mz 2 N·m, F 1 % Fz, 10 ms lag):",
+        case.manoeuvre,
+        case.road,
+        p.version.name()
+    );
+    println!("wheel | true μ (start → end) | estimate at end | state | max utilisation | within ±0.1 from util");
+    let mut first: Option<(WheelTrace, Vec<Estimate<f64>>)> = None;
+    for (w, name) in names.iter().enumerate() {
+        let tr = measure(&log, w, &sensors, a.seed);
+        let est = run_method(0, &p, &tables, w, &tr);
+        for (i, e) in est.iter().enumerate().step_by(10) {
+            let _ = writeln!(
+                csv,
+                "{:.3},{},{:.3},{:.4},{:.4},{},{:.3}",
+                tr.rows[i].t,
+                name,
+                tr.mu_true[i],
+                e.mu,
+                e.sigma,
+                e.state.name(),
+                tr.util[i]
+            );
+        }
+        let m = metrics(std::slice::from_ref(&tr), std::slice::from_ref(&est));
+        let last = est.last().copied().unwrap_or(Estimate {
+            mu: f64::NAN,
+            sigma: f64::NAN,
+            state: State::Fallback,
+            change: false,
+        });
+        println!(
+            "{:5} | {:.2} → {:.2} | {:.3} ± {:.3} | {} | {:.2} | {}",
+            name,
+            tr.mu_true.first().copied().unwrap_or(f64::NAN),
+            tr.mu_true.last().copied().unwrap_or(f64::NAN),
+            last.mu,
+            last.sigma,
+            last.state.name(),
+            tr.util.iter().copied().fold(0.0, f64::max),
+            fmt(m.util_within, 2)
+        );
+        if first.is_none() {
+            first = Some((tr, est));
+        }
+    }
+    std::fs::write(a.out.join("estimates.csv"), csv).map_err(|e| e.to_string())?;
+    if let Some((tr, est)) = first {
+        plot_mu(
+            &tr,
+            &[("gough", &est)],
+            &a.out.join("mu.png"),
+            &format!("{} on {} (front left)", case.manoeuvre, case.road),
+        )?;
+        plot_gough(&p, &log, 0, &a.out.join("gough.png"))?;
+    }
+    eprintln!("-> {}/estimates.csv, mu.png, gough.png", a.out.display());
+    Ok(())
+}
+
+/// μ against time: truth and estimates (σ band for the first).
+pub fn plot_mu(
+    tr: &WheelTrace,
+    series: &[(&str, &Vec<Estimate<f64>>)],
+    path: &Path,
+    title: &str,
+) -> Result<(), String> {
+    use plotters::prelude::*;
+    crate::sim::plot::font()?;
+    let e = |x: &dyn std::fmt::Display| format!("{}: {x}", path.display());
+    let root = BitMapBackend::new(path, (900, 450)).into_drawing_area();
+    root.fill(&WHITE).map_err(|x| e(&x))?;
+    let t_end = tr.rows.last().map_or(1.0, |r| r.t);
+    let mut ch = ChartBuilder::on(&root)
+        .caption(title, ("sans-serif", 18))
+        .margin(10)
+        .x_label_area_size(35)
+        .y_label_area_size(45)
+        .build_cartesian_2d(0.0..t_end, 0.0..1.4)
+        .map_err(|x| e(&x))?;
+    ch.configure_mesh()
+        .x_desc("t [s]")
+        .y_desc("μ")
+        .label_style(("sans-serif", 12))
+        .draw()
+        .map_err(|x| e(&x))?;
+    let step = (tr.rows.len() / 2000).max(1);
+    ch.draw_series(LineSeries::new(
+        tr.rows
+            .iter()
+            .zip(&tr.mu_true)
+            .step_by(step)
+            .map(|(r, &m)| (r.t, m)),
+        BLACK.stroke_width(2),
+    ))
+    .map_err(|x| e(&x))?
+    .label("true μ")
+    .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 15, y)], BLACK));
+    ch.draw_series(LineSeries::new(
+        tr.rows
+            .iter()
+            .zip(&tr.util)
+            .step_by(step)
+            .map(|(r, &u)| (r.t, u.min(1.4))),
+        RGBColor(180, 180, 180),
+    ))
+    .map_err(|x| e(&x))?
+    .label("utilisation |F|/(μFz)")
+    .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 15, y)], RGBColor(180, 180, 180)));
+    let colours = [
+        RGBColor(214, 39, 40),
+        RGBColor(31, 119, 180),
+        RGBColor(44, 160, 44),
+    ];
+    for (k, (name, est)) in series.iter().enumerate() {
+        let c = colours[k % 3];
+        ch.draw_series(
+            tr.rows
+                .iter()
+                .zip(est.iter())
+                .step_by(step)
+                .filter(|(_, e)| e.state == State::Identifiable)
+                .map(|(r, e)| Circle::new((r.t, e.mu), 1, c.filled())),
+        )
+        .map_err(|x| e(&x))?
+        .label(format!("{name} (identifiable)"))
+        .legend(move |(x, y)| Circle::new((x + 7, y), 3, c.filled()));
+        ch.draw_series(LineSeries::new(
+            tr.rows
+                .iter()
+                .zip(est.iter())
+                .step_by(step)
+                .map(|(r, e)| (r.t, e.mu)),
+            c.mix(0.5),
+        ))
+        .map_err(|x| e(&x))?;
+    }
+    ch.configure_series_labels()
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .label_font(("sans-serif", 12))
+        .draw()
+        .map_err(|x| e(&x))?;
+    root.present().map_err(|x| e(&x))?;
+    Ok(())
+}
+
+/// The Gough plot: the model's Fy–Mz family for μ = 0.1…1.0 at the wheel's mean load, and the
+/// wheel's simulated trajectory.
+pub fn plot_gough(p: &Params<f64>, log: &Log, w: usize, path: &Path) -> Result<(), String> {
+    use gough::mf::{self, Input, Options};
+    use plotters::prelude::*;
+    crate::sim::plot::font()?;
+    let e = |x: &dyn std::fmt::Display| format!("{}: {x}", path.display());
+    let fz_mean =
+        log.records.iter().map(|r| r.wheels[w].fz).sum::<f64>() / log.records.len().max(1) as f64;
+    let mu0 = log.mu_y0;
+    let mut curves = Vec::new();
+    for mu in [0.1, 0.3, 0.5, 0.7, 1.0] {
+        let mut q = p.clone();
+        q.lmux = mu / mu0;
+        q.lmuy = mu / mu0;
+        let pts: Vec<(f64, f64)> = (-120..=120)
+            .filter_map(|i| {
+                let a = i as f64 * 0.0025;
+                mf::eval::<f64, Libm>(
+                    &q,
+                    &Input {
+                        fz: fz_mean,
+                        alpha: a,
+                        vx: 20.0,
+                        ..Input::default()
+                    },
+                    &Options {
+                        limits: false,
+                        ..Options::default()
+                    },
+                )
+                .ok()
+                .map(|o| (o.mz, o.fy))
+            })
+            .collect();
+        curves.push((mu, pts));
+    }
+    let (mut mz_lo, mut mz_hi, mut fy_lo, mut fy_hi) = (0.0f64, 0.0f64, 0.0f64, 0.0f64);
+    for (_, pts) in &curves {
+        for &(m, f) in pts {
+            mz_lo = mz_lo.min(m);
+            mz_hi = mz_hi.max(m);
+            fy_lo = fy_lo.min(f);
+            fy_hi = fy_hi.max(f);
+        }
+    }
+    let root = BitMapBackend::new(path, (700, 600)).into_drawing_area();
+    root.fill(&WHITE).map_err(|x| e(&x))?;
+    let mut ch = ChartBuilder::on(&root)
+        .caption(
+            format!("Gough plot: model family at Fz = {fz_mean:.0} N, and the wheel's trajectory"),
+            ("sans-serif", 16),
+        )
+        .margin(10)
+        .x_label_area_size(35)
+        .y_label_area_size(55)
+        .build_cartesian_2d(mz_lo * 1.1..mz_hi * 1.1, fy_lo * 1.1..fy_hi * 1.1)
+        .map_err(|x| e(&x))?;
+    ch.configure_mesh()
+        .x_desc("Mz [N·m]")
+        .y_desc("Fy [N]")
+        .label_style(("sans-serif", 12))
+        .draw()
+        .map_err(|x| e(&x))?;
+    for (k, (mu, pts)) in curves.iter().enumerate() {
+        let c = Palette99::pick(k);
+        ch.draw_series(LineSeries::new(pts.iter().copied(), c.stroke_width(2)))
+            .map_err(|x| e(&x))?
+            .label(format!("μ = {mu}"))
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 15, y)], Palette99::pick(k)));
+    }
+    let step = (log.records.len() / 3000).max(1);
+    ch.draw_series(
+        log.records
+            .iter()
+            .step_by(step)
+            .map(|r| Circle::new((r.wheels[w].mz, r.wheels[w].fy), 1, BLACK.filled())),
+    )
+    .map_err(|x| e(&x))?
+    .label("simulated wheel")
+    .legend(|(x, y)| Circle::new((x + 7, y), 3, BLACK.filled()));
+    ch.configure_series_labels()
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .label_font(("sans-serif", 12))
+        .draw()
+        .map_err(|x| e(&x))?;
+    root.present().map_err(|x| e(&x))?;
+    Ok(())
+}

@@ -1,0 +1,82 @@
+//! `gough mu ...` subcommands.
+use super::{estimate, read_log, Method, Precision};
+use crate::tyre;
+use clap::{Args, Subcommand};
+use std::io::Write;
+use std::path::PathBuf;
+
+/// `gough mu` subcommands.
+#[derive(Subcommand)]
+pub enum MuCmd {
+    /// Run one wheel's friction estimator over a log.
+    ///
+    /// LOG columns: t,fz,fy,mz required; fx,vx,kappa,alpha,gamma optional (SI, ISO-W). The Gough
+    /// method never reads alpha. EST columns: t,mu,sigma,state (identifiable, not_identifiable,
+    /// fallback).
+    Estimate(EstimateArgs),
+    /// Benchmark the Gough estimator and its peers on the simulation's manoeuvre suite.
+    Bench(super::bench::BenchArgs),
+    /// The main job: a simulated manoeuvre on a road whose friction changes, the estimator at
+    /// every wheel, a table on the terminal, plots and estimates written.
+    Demo(super::bench::DemoArgs),
+}
+
+/// Arguments of `gough mu estimate`.
+#[derive(Args)]
+pub struct EstimateArgs {
+    /// Tyre property file (.tir).
+    #[arg(long)]
+    pub tir: PathBuf,
+    /// Measurement log (CSV).
+    #[arg(long)]
+    pub log: PathBuf,
+    /// Output CSV.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Float path of the core estimator.
+    #[arg(long, value_enum, default_value_t = Precision::F64)]
+    pub precision: Precision,
+    /// Estimator.
+    #[arg(long, value_enum, default_value_t = Method::Gough)]
+    pub method: Method,
+}
+
+/// Runs a `gough mu` subcommand.
+pub fn run(cmd: MuCmd) -> Result<(), String> {
+    match cmd {
+        MuCmd::Estimate(a) => {
+            let t = tyre::load(&a.tir)?;
+            let (rows, gamma, present) = read_log(&a.log)?;
+            let est = estimate(&t.params, &rows, present[0], &gamma, a.method, a.precision)?;
+            if let Some(dir) = a.out.parent().filter(|d| !d.as_os_str().is_empty()) {
+                std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+            }
+            let tmp = a.out.with_extension("csv.tmp");
+            let write = || -> std::io::Result<()> {
+                let mut w = std::io::BufWriter::new(std::fs::File::create(&tmp)?);
+                writeln!(w, "t,mu,sigma,state")?;
+                for (r, e) in rows.iter().zip(&est) {
+                    writeln!(w, "{},{:.6},{:.6},{}", r.t, e.mu, e.sigma, e.state.name())?;
+                }
+                w.flush()?;
+                std::fs::rename(&tmp, &a.out)
+            };
+            write().map_err(|e| format!("{}: cannot write: {e}", a.out.display()))?;
+            let n_id = est
+                .iter()
+                .filter(|e| e.state == gough::mu::State::Identifiable)
+                .count();
+            let last = est.last().map(|e| (e.mu, e.sigma, e.state.name()));
+            eprintln!(
+                "{} rows, {} identifiable; last: {:?} -> {}",
+                rows.len(),
+                n_id,
+                last,
+                a.out.display()
+            );
+            Ok(())
+        }
+        MuCmd::Bench(b) => super::bench::run(b),
+        MuCmd::Demo(d) => super::bench::demo(d),
+    }
+}

@@ -1,0 +1,151 @@
+//! Friction estimation on logs: the core's Gough-plot estimator (`gough::mu`) driven by CSV
+//! rows, the literature baselines ([`peers`]), and the closed-loop benchmark on the vehicle
+//! simulation ([`bench`]). Nothing here re-implements the estimator.
+pub mod bench;
+pub mod cli;
+pub mod peers;
+
+use crate::csvio;
+use gough::math::Libm;
+use gough::mf::Params;
+use gough::mu::{Config, Estimate, GoughTable, MuEstimator, Sample};
+use peers::{HsuGerdes, Row, SlipSlope};
+use std::path::Path;
+
+/// Which estimator.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum Method {
+    /// The Gough-plot estimator of the core (uses Fy, Mz, Fz, Fx, Vx — never α).
+    Gough,
+    /// Hsu, Laws & Gerdes (2010): pneumatic trail with the slip angle.
+    HsuGerdes,
+    /// Gustafsson (1997): longitudinal slip slope.
+    SlipSlope,
+}
+
+/// Float path of the core estimator.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum Precision {
+    /// f64 (host).
+    F64,
+    /// f32 (the device's).
+    F32,
+}
+
+/// Log columns: required, then optional.
+pub const REQUIRED: [&str; 4] = ["t", "fz", "fy", "mz"];
+/// Optional log columns (NaN when absent: `fx` then reads as not measured).
+pub const OPTIONAL: [&str; 5] = ["fx", "vx", "kappa", "alpha", "gamma"];
+
+/// A log as the estimators read it: rows, the camber column (NaN where absent) and which of
+/// [`OPTIONAL`] were present.
+pub type Log = (Vec<Row>, Vec<f64>, [bool; 5]);
+
+/// Reads a log into rows; the error is one line naming file, line and column. Time must
+/// increase strictly.
+pub fn read_log(path: &Path) -> Result<Log, String> {
+    let opt: Vec<(&str, f64)> = OPTIONAL.iter().map(|&c| (c, f64::NAN)).collect();
+    // Absent optional columns read as NaN (never mistaken for a measured 0).
+    let t = csvio::read_with(path, &REQUIRED, &opt, false).map_err(|e| e.to_string())?;
+    let mut rows = Vec::with_capacity(t.rows.len());
+    let mut gamma = Vec::with_capacity(t.rows.len());
+    let mut last = f64::NEG_INFINITY;
+    for (r, line) in t.rows.iter().zip(&t.lines) {
+        if r[0] <= last {
+            return Err(format!(
+                "{}: line {line}, column t: time does not increase ({} after {last})",
+                path.display(),
+                r[0]
+            ));
+        }
+        last = r[0];
+        rows.push(Row {
+            t: r[0],
+            fz: r[1],
+            fy: r[2],
+            mz: r[3],
+            fx: r[4],
+            vx: r[5],
+            kappa: r[6],
+            alpha: r[7],
+        });
+        gamma.push(r[8]);
+    }
+    let mut present = [false; 5];
+    for (p, &q) in present.iter_mut().zip(&t.present) {
+        *p = q;
+    }
+    Ok((rows, gamma, present))
+}
+
+/// Runs one estimator over rows; returns one estimate per row.
+pub fn estimate(
+    p: &Params<f64>,
+    rows: &[Row],
+    has_fx: bool,
+    gamma: &[f64],
+    method: Method,
+    prec: Precision,
+) -> Result<Vec<Estimate<f64>>, String> {
+    // Per-row camber when the log has it (NaN = not logged → the estimator's default).
+    let g_of = |i: usize| gamma.get(i).copied().filter(|g| g.is_finite());
+    let cfg = Config::<f64>::default();
+    match method {
+        Method::Gough => match prec {
+            Precision::F64 => {
+                let table = GoughTable::for_tyre::<Libm>(p).map_err(|e| e.to_string())?;
+                let mut est = MuEstimator::for_tyre(&table, p, cfg);
+                Ok(rows
+                    .iter()
+                    .enumerate()
+                    .map(|(i, r)| {
+                        est.update::<Libm>(&Sample {
+                            t: r.t,
+                            fz: r.fz,
+                            fy: r.fy,
+                            mz: r.mz,
+                            fx: has_fx.then_some(r.fx),
+                            vx: r.vx.is_finite().then_some(r.vx),
+                            gamma: g_of(i),
+                        })
+                    })
+                    .collect())
+            }
+            Precision::F32 => {
+                let p32 = p.cast::<f32>();
+                let table = GoughTable::for_tyre::<Libm>(&p32).map_err(|e| e.to_string())?;
+                let cfg32 = Config::<f32>::default();
+                let mut est = MuEstimator::for_tyre(&table, &p32, cfg32);
+                Ok(rows
+                    .iter()
+                    .enumerate()
+                    .map(|(i, r)| {
+                        let e = est.update::<Libm>(&Sample {
+                            t: r.t as f32,
+                            fz: r.fz as f32,
+                            fy: r.fy as f32,
+                            mz: r.mz as f32,
+                            fx: has_fx.then_some(r.fx as f32),
+                            vx: r.vx.is_finite().then_some(r.vx as f32),
+                            gamma: g_of(i).map(|g| g as f32),
+                        });
+                        Estimate {
+                            mu: e.mu as f64,
+                            sigma: e.sigma as f64,
+                            state: e.state,
+                            change: e.change,
+                        }
+                    })
+                    .collect())
+            }
+        },
+        Method::HsuGerdes => {
+            let mut e = HsuGerdes::new(p).ok_or("the tyre gives no Hsu-Gerdes model")?;
+            Ok(rows.iter().map(|r| e.update(r)).collect())
+        }
+        Method::SlipSlope => {
+            let mut e = SlipSlope::new(p).ok_or("the tyre gives no slip-slope calibration")?;
+            Ok(rows.iter().map(|r| e.update(r)).collect())
+        }
+    }
+}

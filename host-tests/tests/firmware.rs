@@ -1,0 +1,112 @@
+//! The firmware under QEMU, end to end over SLCAN/TCP. Needs `qemu-system-arm` and the release
+//! firmware (`cargo build --release` in firmware/), so the tests are `#[ignore]`d in a plain
+//! `cargo test`; `cargo xtask test-all` builds the firmware and runs them with `--ignored`
+//! (and fails, never skips, when QEMU is missing).
+use gough::proto::{Command, Measurement, Msg, Wheel};
+use gough_host::device::{self, Device, Qemu, SlcanTcp};
+use std::path::Path;
+use std::process::Command as Proc;
+use std::time::Duration;
+
+fn root() -> &'static Path {
+    Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/.."))
+}
+
+#[test]
+#[ignore = "needs QEMU and the release firmware; run by `cargo xtask test-all`"]
+fn replay_answers_equal_the_host_f32_run() {
+    let out = std::env::temp_dir().join(format!("gough-replay-{}.csv", std::process::id()));
+    let o = Proc::new(env!("CARGO_BIN_EXE_gough"))
+        .args(["replay", "--no-build", "--check"])
+        .arg("--tir")
+        .arg(root().join("host-tests/data/tyres/MagicFormula61_Parameters.tir"))
+        .arg("--log")
+        .arg(root().join("examples/replay_log.csv"))
+        .arg("--out")
+        .arg(&out)
+        .arg("--workdir")
+        .arg(root().join("target/qemu-replay"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    eprintln!("{err}");
+    assert!(o.status.success(), "gough replay failed");
+    assert!(err.contains("check: device answers = host f32 run, worst 0 ulp"));
+    assert!(err.contains("dropped 0"));
+    let res = std::fs::read_to_string(&out).unwrap();
+    let mut lines = res.lines();
+    assert_eq!(
+        lines.next(),
+        Some("t,wheel,fx,fy,mz,flags,ack,mu,sigma,state")
+    );
+    assert_eq!(lines.count(), 200);
+}
+
+#[test]
+#[ignore = "needs QEMU and the release firmware; run by `cargo xtask test-all`"]
+fn garbage_on_the_uart_is_counted_and_harmless() {
+    let mut q = Qemu::start(
+        &device::firmware_elf("gough-firmware"),
+        &root().join("target/qemu-garbage"),
+        true,
+        None,
+    )
+    .unwrap();
+    let mut dev = Device::new(SlcanTcp::connect(q.port, Duration::from_secs(20)).unwrap());
+    let before = dev.status(Duration::from_secs(10)).unwrap();
+    // Random bytes, overlong lines, bad hex, frames on our identifiers with random payloads.
+    let mut x = 0x9e37_79b9u32;
+    let mut rnd = || {
+        x ^= x << 13;
+        x ^= x >> 17;
+        x ^= x << 5;
+        x
+    };
+    let mut junk = Vec::new();
+    for _ in 0..3000 {
+        junk.push(rnd() as u8);
+    }
+    junk.extend_from_slice(b"\rtZZZ8\rt3008\rt3001\rt301FFF\r");
+    for _ in 0..200 {
+        let id = if rnd() % 2 == 0 { 0x300 } else { 0x301 };
+        let n = (rnd() % 9) as usize;
+        let mut l = format!("t{id:03X}{n}");
+        for _ in 0..n {
+            l.push_str(&format!("{:02X}", rnd() as u8));
+        }
+        l.push('\r');
+        junk.extend_from_slice(l.as_bytes());
+    }
+    junk.extend_from_slice(b"\r");
+    dev.link.write_raw(&junk).unwrap();
+    // The device still answers a good measurement correctly.
+    let m = Measurement {
+        wheel: Wheel::RearLeft,
+        t_us: 42,
+        fz: 5000.0,
+        alpha: Some(0.03),
+        vx: Some(20.0),
+        ..Measurement::default()
+    };
+    dev.send(&Msg::Measurement(m)).unwrap();
+    let ans = loop {
+        match dev.recv(Duration::from_secs(10)).unwrap() {
+            Msg::Forces(f) => break f,
+            _ => continue,
+        }
+    };
+    assert_eq!((ans.wheel, ans.t_us), (Wheel::RearLeft, 42));
+    let after = dev.status(Duration::from_secs(10)).unwrap();
+    eprintln!("before {before:?}\nafter {after:?}");
+    assert!(
+        after.link_errors > before.link_errors,
+        "bad SLCAN lines are counted"
+    );
+    assert!(
+        after.rx.dropped() > before.rx.dropped(),
+        "bad frames are counted"
+    );
+    assert!(after.rx.frames >= before.rx.frames + 200);
+    dev.send(&Msg::Command(Command::Stop)).unwrap();
+    assert_eq!(q.wait(Duration::from_secs(20)), Some(0));
+}

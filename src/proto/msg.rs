@@ -1,0 +1,555 @@
+//! The messages and their encoding: `[PROTO_VERSION][MsgType][postcard body][CRC-32 LE]`.
+//!
+//! Every quantity is SI, angles in radians, forces and moments in ISO-W axes at the contact
+//! point (x forward, y left, z up): α > 0 gives Fy < 0. Timestamps are the sender's clock in
+//! microseconds as a `u32` (wraps after 71.6 min), sent as 4 fixed bytes (little endian) so that
+//! they sit at fixed offsets. Floats are IEEE-754 `f32`, 4 bytes little endian; `Option<f32>`
+//! is a tag byte (0 none, 1 some) followed by the value when present.
+
+use super::crc::crc32;
+use super::{Error, PROTO_VERSION};
+use crate::mf::{Input, Params};
+use core::fmt;
+use postcard::experimental::max_size::MaxSize;
+use serde::de::DeserializeOwned;
+use serde::{Deserialize, Serialize};
+
+/// Bytes of `.tir` text per [`ParamChunk`].
+pub const CHUNK_LEN: usize = 48;
+
+/// Longest `.tir` text a device accepts for upload \[bytes\] (the largest sample file, MF 6.2,
+/// is 26 341 bytes).
+pub const MAX_TIR_LEN: usize = 32 * 1024;
+
+/// The message type, the second byte of every encoded message. Host → device types are
+/// below 0x80, device → host types above.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[repr(u8)]
+pub enum MsgType {
+    /// [`Msg::Measurement`]
+    Measurement = 0x01,
+    /// [`Msg::ParamBegin`]
+    ParamBegin = 0x02,
+    /// [`Msg::ParamChunk`]
+    ParamChunk = 0x03,
+    /// [`Msg::ParamCommit`]
+    ParamCommit = 0x04,
+    /// [`Msg::Settings`]
+    Settings = 0x05,
+    /// [`Msg::Command`]
+    Command = 0x06,
+    /// [`Msg::Forces`]
+    Forces = 0x81,
+    /// [`Msg::Estimate`]
+    Estimate = 0x82,
+    /// [`Msg::Status`]
+    Status = 0x83,
+    /// [`Msg::Ack`]
+    Ack = 0x84,
+}
+
+impl MsgType {
+    /// Every type, in code order.
+    pub const ALL: [MsgType; 10] = [
+        MsgType::Measurement,
+        MsgType::ParamBegin,
+        MsgType::ParamChunk,
+        MsgType::ParamCommit,
+        MsgType::Settings,
+        MsgType::Command,
+        MsgType::Forces,
+        MsgType::Estimate,
+        MsgType::Status,
+        MsgType::Ack,
+    ];
+    /// The type of a header byte, if known.
+    pub fn from_u8(b: u8) -> Option<MsgType> {
+        MsgType::ALL.iter().copied().find(|t| *t as u8 == b)
+    }
+    /// Name as in the README's table.
+    pub const fn name(self) -> &'static str {
+        match self {
+            MsgType::Measurement => "Measurement",
+            MsgType::ParamBegin => "ParamBegin",
+            MsgType::ParamChunk => "ParamChunk",
+            MsgType::ParamCommit => "ParamCommit",
+            MsgType::Settings => "Settings",
+            MsgType::Command => "Command",
+            MsgType::Forces => "Forces",
+            MsgType::Estimate => "Estimate",
+            MsgType::Status => "Status",
+            MsgType::Ack => "Ack",
+        }
+    }
+}
+
+/// Which wheel a sample or a result belongs to. Encoded as one byte, 0..=3.
+#[derive(Serialize, Deserialize, MaxSize, Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Wheel {
+    /// Front left (0).
+    #[default]
+    FrontLeft,
+    /// Front right (1).
+    FrontRight,
+    /// Rear left (2).
+    RearLeft,
+    /// Rear right (3).
+    RearRight,
+}
+
+impl Wheel {
+    /// All wheels, by index.
+    pub const ALL: [Wheel; 4] = [
+        Wheel::FrontLeft,
+        Wheel::FrontRight,
+        Wheel::RearLeft,
+        Wheel::RearRight,
+    ];
+    /// 0..=3.
+    pub const fn index(self) -> usize {
+        self as usize
+    }
+    /// The wheel of an index 0..=3.
+    pub fn from_index(i: usize) -> Option<Wheel> {
+        Wheel::ALL.get(i).copied()
+    }
+}
+
+/// One sample of one wheel's measured forces (from a force-sensing hub or bearing, or from a
+/// vehicle observer), with what the vehicle knows of its motion.
+#[derive(Serialize, Deserialize, MaxSize, Debug, Clone, Copy, PartialEq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Measurement {
+    /// The wheel.
+    pub wheel: Wheel,
+    /// Sample time \[µs\], sender's clock, wrapping.
+    #[serde(with = "postcard::fixint::le")]
+    pub t_us: u32,
+    /// Vertical load Fz \[N\], ≥ 0 in contact.
+    pub fz: f32,
+    /// Lateral force Fy \[N\], ISO-W.
+    pub fy: f32,
+    /// Aligning moment Mz \[N·m\], ISO-W.
+    pub mz: f32,
+    /// Longitudinal force Fx \[N\], ISO-W, if measured.
+    pub fx: Option<f32>,
+    /// Longitudinal speed of the wheel centre Vx \[m/s\], if known (default: the tyre's LONGVL).
+    pub vx: Option<f32>,
+    /// Wheel spin speed ω \[rad/s\], if known.
+    pub omega: Option<f32>,
+    /// Road-wheel steering angle δ \[rad\], positive to the left, if known.
+    pub delta: Option<f32>,
+    /// Slip angle α \[rad\], ISO-W, if the vehicle estimates it.
+    pub alpha: Option<f32>,
+    /// Longitudinal slip κ \[-\], if the vehicle estimates it.
+    pub kappa: Option<f32>,
+    /// Inclination (camber) angle γ \[rad\], if known (default 0).
+    pub gamma: Option<f32>,
+}
+
+impl Measurement {
+    /// The Magic Formula operating point of this sample, or `None` when neither α nor κ is
+    /// given (nothing to predict). Absent α, κ, γ are 0; absent Vx is the tyre's `LONGVL`;
+    /// the pressure is the parameter set's `INFLPRES`. Device and host both use this, so they
+    /// evaluate the same point.
+    pub fn mf_input(&self, p: &Params<f32>) -> Option<Input<f32>> {
+        if self.alpha.is_none() && self.kappa.is_none() {
+            return None;
+        }
+        Some(Input {
+            fz: self.fz,
+            kappa: self.kappa.unwrap_or(0.0),
+            alpha: self.alpha.unwrap_or(0.0),
+            gamma: self.gamma.unwrap_or(0.0),
+            phit: 0.0,
+            vx: self.vx.unwrap_or(p.longvl),
+            p: None,
+        })
+    }
+}
+
+/// Starts a tyre parameter upload: the `.tir` text that follows in [`ParamChunk`]s.
+#[derive(Serialize, Deserialize, MaxSize, Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct ParamBegin {
+    /// Length of the text \[bytes\], ≤ [`MAX_TIR_LEN`].
+    #[serde(with = "postcard::fixint::le")]
+    pub len: u32,
+    /// CRC-32 ([`crc32`]) of the whole text.
+    #[serde(with = "postcard::fixint::le")]
+    pub hash: u32,
+}
+
+/// Up to `N` bytes (postcard: a length byte, then the bytes).
+#[derive(Clone, Copy)]
+pub struct Bytes<const N: usize> {
+    len: u8,
+    buf: [u8; N],
+}
+
+impl<const N: usize> Bytes<N> {
+    const OK: () = assert!(N < 128, "the length must fit one varint byte");
+    /// A copy of `data`, or `None` when it is longer than `N`.
+    pub fn new(data: &[u8]) -> Option<Self> {
+        let () = Self::OK;
+        let mut buf = [0u8; N];
+        buf.get_mut(..data.len())?.copy_from_slice(data);
+        Some(Bytes {
+            len: u8::try_from(data.len()).ok()?,
+            buf,
+        })
+    }
+    /// The bytes.
+    pub fn as_slice(&self) -> &[u8] {
+        self.buf.get(..usize::from(self.len)).unwrap_or(&[])
+    }
+}
+
+impl<const N: usize> PartialEq for Bytes<N> {
+    fn eq(&self, other: &Self) -> bool {
+        self.as_slice() == other.as_slice()
+    }
+}
+impl<const N: usize> Eq for Bytes<N> {}
+
+impl<const N: usize> fmt::Debug for Bytes<N> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "Bytes({:02x?})", self.as_slice())
+    }
+}
+
+#[cfg(feature = "defmt")]
+impl<const N: usize> defmt::Format for Bytes<N> {
+    fn format(&self, f: defmt::Formatter<'_>) {
+        defmt::write!(f, "Bytes({=[u8]:x})", self.as_slice())
+    }
+}
+
+impl<const N: usize> MaxSize for Bytes<N> {
+    const POSTCARD_MAX_SIZE: usize = N + 1;
+}
+
+impl<const N: usize> Serialize for Bytes<N> {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_bytes(self.as_slice())
+    }
+}
+
+impl<'de, const N: usize> Deserialize<'de> for Bytes<N> {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V<const N: usize>;
+        impl<'de, const N: usize> serde::de::Visitor<'de> for V<N> {
+            type Value = Bytes<N>;
+            fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+                write!(f, "at most {N} bytes")
+            }
+            fn visit_bytes<E: serde::de::Error>(self, v: &[u8]) -> Result<Bytes<N>, E> {
+                Bytes::new(v).ok_or_else(|| E::invalid_length(v.len(), &self))
+            }
+        }
+        d.deserialize_bytes(V::<N>)
+    }
+}
+
+/// A piece of the `.tir` text announced by [`ParamBegin`].
+#[derive(Serialize, Deserialize, MaxSize, Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct ParamChunk {
+    /// Offset of the first byte in the text \[bytes\]; chunks are sent in order.
+    #[serde(with = "postcard::fixint::le")]
+    pub offset: u32,
+    /// Up to [`CHUNK_LEN`] bytes of text.
+    pub data: Bytes<CHUNK_LEN>,
+}
+
+/// Ends an upload: the device checks length and hash, parses and validates the text, and only
+/// then replaces its parameter set. Answered by an [`Ack`].
+#[derive(Serialize, Deserialize, MaxSize, Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct ParamCommit {
+    /// The hash of [`ParamBegin::hash`] again.
+    #[serde(with = "postcard::fixint::le")]
+    pub hash: u32,
+}
+
+/// Evaluation and estimator settings. Answered by an [`Ack`].
+#[derive(Serialize, Deserialize, MaxSize, Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Settings {
+    /// Clip inputs to the `.tir` ranges (`mf::Options::limits`).
+    pub limits: bool,
+    /// Friction μ \[-\] reported in [`EstimateState::Fallback`] (on the `.tir` surface's scale).
+    pub fallback_mu: f32,
+    /// Estimator window \[samples\].
+    pub window: u16,
+    /// Minimum utilisation |F|/(μ·Fz) \[-\] before the estimator trusts a sample.
+    pub min_utilisation: f32,
+}
+
+impl Default for Settings {
+    fn default() -> Self {
+        Settings {
+            limits: true,
+            fallback_mu: 0.3,
+            window: 64,
+            min_utilisation: 0.3,
+        }
+    }
+}
+
+/// A command.
+#[derive(Serialize, Deserialize, MaxSize, Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Command {
+    /// Restart the device (counters, settings and uploaded parameters are lost).
+    Reset,
+    /// Send a [`Status`].
+    StatusRequest,
+    /// End the session: the QEMU board sends a [`Status`], logs its counters and exits with
+    /// code 0; a real board answers [`AckCode::NotSupported`].
+    Stop,
+}
+
+/// Predicted steady-state forces of one wheel, from the Magic Formula at the sample's Fz and
+/// the α, κ, γ it carried.
+#[derive(Serialize, Deserialize, MaxSize, Debug, Clone, Copy, PartialEq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Forces {
+    /// The wheel.
+    pub wheel: Wheel,
+    /// Time of the sample this answers \[µs\].
+    #[serde(with = "postcard::fixint::le")]
+    pub t_us: u32,
+    /// Longitudinal force Fx \[N\], ISO-W.
+    pub fx: f32,
+    /// Lateral force Fy \[N\], ISO-W.
+    pub fy: f32,
+    /// Aligning moment Mz \[N·m\], ISO-W.
+    pub mz: f32,
+    /// `mf::Flags` bits: what was clipped or regularised.
+    #[serde(with = "postcard::fixint::le")]
+    pub flags: u16,
+}
+
+/// State of a friction estimate.
+#[derive(Serialize, Deserialize, MaxSize, Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum EstimateState {
+    /// Enough excitation: μ is an estimate.
+    Identifiable,
+    /// Too little excitation: μ is the last identifiable value, not new information.
+    NotIdentifiable,
+    /// No estimate yet (or it was reset): μ is [`Settings::fallback_mu`].
+    Fallback,
+}
+
+/// Road friction estimate of one wheel.
+#[derive(Serialize, Deserialize, MaxSize, Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Estimate {
+    /// The wheel.
+    pub wheel: Wheel,
+    /// Time of the sample the estimate includes \[µs\].
+    #[serde(with = "postcard::fixint::le")]
+    pub t_us: u32,
+    /// Peak friction μ \[-\], on the scale of the `.tir` file's surface.
+    pub mu: f32,
+    /// Standard deviation of μ \[-\] (the confidence).
+    pub sigma: f32,
+    /// How to read μ.
+    pub state: EstimateState,
+}
+
+/// Where the device's parameter set came from.
+#[derive(Serialize, Deserialize, MaxSize, Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum ParamSource {
+    /// None loaded: measurements are answered with [`AckCode::NoParams`].
+    None,
+    /// Built into the firmware.
+    Bundled,
+    /// Uploaded and committed.
+    Uploaded,
+}
+
+/// Device status and diagnostics.
+#[derive(Serialize, Deserialize, MaxSize, Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Status {
+    /// Firmware version (major, minor, patch).
+    pub firmware: [u8; 3],
+    /// [`PROTO_VERSION`] of the firmware.
+    pub proto: u8,
+    /// Where the parameter set came from.
+    pub source: ParamSource,
+    /// CRC-32 of the `.tir` text in use (0 when none).
+    #[serde(with = "postcard::fixint::le")]
+    pub param_hash: u32,
+    /// Time since boot \[ms\].
+    pub uptime_ms: u32,
+    /// Frames and messages received, and drops by reason, over all receive identifiers.
+    pub rx: super::Counters,
+    /// Transport errors below the frames: malformed SLCAN lines, receive overruns.
+    pub link_errors: u32,
+    /// Measurements that got no [`Forces`] (no parameters, no slip, evaluation error).
+    pub eval_errors: u32,
+    /// Messages sent.
+    pub tx_messages: u32,
+    /// Deepest stack use since boot \[bytes\] (stack painting; 0 if not measured).
+    pub stack_peak: u32,
+}
+
+/// Result of a host → device request.
+#[derive(Serialize, Deserialize, MaxSize, Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum AckCode {
+    /// Done.
+    Ok,
+    /// The text's CRC-32 differs from the announced hash.
+    BadHash,
+    /// The announced length is 0 or above [`MAX_TIR_LEN`], or the chunks did not fill it.
+    BadLength,
+    /// A chunk's offset is not where the previous one ended.
+    BadOffset,
+    /// A chunk or commit came without a [`ParamBegin`].
+    NotInUpload,
+    /// The text is not a valid `.tir` file; the line of the first error (0: the file as a
+    /// whole). The previous parameter set stays in use.
+    TirError {
+        /// 1-based line.
+        line: u32,
+    },
+    /// A measurement came before any parameter set.
+    NoParams,
+    /// A measurement carried neither α nor κ: no forces to predict.
+    NoSlip,
+    /// The Magic Formula rejected the sample (non-finite input).
+    EvalError,
+    /// This board does not do that.
+    NotSupported,
+}
+
+/// Answer to a request ([`ParamBegin`], [`ParamCommit`], [`Settings`], [`Command`]), to a
+/// failed [`ParamChunk`], and to a [`Measurement`] that gives no [`Forces`].
+#[derive(Serialize, Deserialize, MaxSize, Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Ack {
+    /// [`MsgType`] byte of the request.
+    pub of: u8,
+    /// Sequence number of the request's frames.
+    pub seq: u8,
+    /// Result.
+    pub code: AckCode,
+}
+
+/// Every message of the protocol.
+#[derive(MaxSize, Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Msg {
+    /// Host → device: a per-wheel sample.
+    Measurement(Measurement),
+    /// Host → device: start a parameter upload.
+    ParamBegin(ParamBegin),
+    /// Host → device: a piece of the parameter text.
+    ParamChunk(ParamChunk),
+    /// Host → device: check and use the uploaded parameters.
+    ParamCommit(ParamCommit),
+    /// Host → device: evaluation and estimator settings.
+    Settings(Settings),
+    /// Host → device: reset, status request, stop.
+    Command(Command),
+    /// Device → host: predicted forces.
+    Forces(Forces),
+    /// Device → host: friction estimate.
+    Estimate(Estimate),
+    /// Device → host: status and counters.
+    Status(Status),
+    /// Device → host: acknowledgement.
+    Ack(Ack),
+}
+
+fn body<T: DeserializeOwned>(b: &[u8]) -> Result<T, Error> {
+    match postcard::take_from_bytes::<T>(b) {
+        Ok((v, [])) => Ok(v),
+        _ => Err(Error::Decode),
+    }
+}
+
+impl Msg {
+    /// The message's type byte.
+    pub const fn msg_type(&self) -> MsgType {
+        match self {
+            Msg::Measurement(_) => MsgType::Measurement,
+            Msg::ParamBegin(_) => MsgType::ParamBegin,
+            Msg::ParamChunk(_) => MsgType::ParamChunk,
+            Msg::ParamCommit(_) => MsgType::ParamCommit,
+            Msg::Settings(_) => MsgType::Settings,
+            Msg::Command(_) => MsgType::Command,
+            Msg::Forces(_) => MsgType::Forces,
+            Msg::Estimate(_) => MsgType::Estimate,
+            Msg::Status(_) => MsgType::Status,
+            Msg::Ack(_) => MsgType::Ack,
+        }
+    }
+
+    /// Encodes into `out` as `[PROTO_VERSION][type][body][CRC-32 LE]`; returns the length.
+    /// [`Error::Overflow`] if `out` is too short (a buffer of [`super::MAX_MSG_LEN`] never is).
+    pub fn encode(&self, out: &mut [u8]) -> Result<usize, Error> {
+        let (head, rest) = out.split_at_mut_checked(2).ok_or(Error::Overflow)?;
+        head.copy_from_slice(&[PROTO_VERSION, self.msg_type() as u8]);
+        let n = match self {
+            Msg::Measurement(m) => postcard::to_slice(m, rest),
+            Msg::ParamBegin(m) => postcard::to_slice(m, rest),
+            Msg::ParamChunk(m) => postcard::to_slice(m, rest),
+            Msg::ParamCommit(m) => postcard::to_slice(m, rest),
+            Msg::Settings(m) => postcard::to_slice(m, rest),
+            Msg::Command(m) => postcard::to_slice(m, rest),
+            Msg::Forces(m) => postcard::to_slice(m, rest),
+            Msg::Estimate(m) => postcard::to_slice(m, rest),
+            Msg::Status(m) => postcard::to_slice(m, rest),
+            Msg::Ack(m) => postcard::to_slice(m, rest),
+        }
+        .map_err(|_| Error::Overflow)?
+        .len();
+        let end = n.checked_add(2).ok_or(Error::Overflow)?;
+        let crc = crc32(out.get(..end).ok_or(Error::Overflow)?);
+        out.get_mut(end..end.saturating_add(4))
+            .filter(|s| s.len() == 4)
+            .ok_or(Error::Overflow)?
+            .copy_from_slice(&crc.to_le_bytes());
+        Ok(end.saturating_add(4))
+    }
+
+    /// Decodes one whole encoded message (exactly; no bytes over). Checks, in order: length,
+    /// CRC (skipped when fuzzing, so the fuzzer reaches the body), version, type, body.
+    pub fn decode(bytes: &[u8]) -> Result<Msg, Error> {
+        let split = bytes.len().checked_sub(4).ok_or(Error::Truncated)?;
+        let (data, crc) = bytes.split_at_checked(split).ok_or(Error::Truncated)?;
+        let (head, b) = data.split_at_checked(2).ok_or(Error::Truncated)?;
+        let crc = u32::from_le_bytes(crc.try_into().map_err(|_| Error::Truncated)?);
+        if !cfg!(fuzzing) && crc32(data) != crc {
+            return Err(Error::BadCrc);
+        }
+        let (&version, &t) = (
+            head.first().ok_or(Error::Truncated)?,
+            head.get(1).ok_or(Error::Truncated)?,
+        );
+        if version != PROTO_VERSION {
+            return Err(Error::Version);
+        }
+        Ok(match MsgType::from_u8(t).ok_or(Error::UnknownType)? {
+            MsgType::Measurement => Msg::Measurement(body(b)?),
+            MsgType::ParamBegin => Msg::ParamBegin(body(b)?),
+            MsgType::ParamChunk => Msg::ParamChunk(body(b)?),
+            MsgType::ParamCommit => Msg::ParamCommit(body(b)?),
+            MsgType::Settings => Msg::Settings(body(b)?),
+            MsgType::Command => Msg::Command(body(b)?),
+            MsgType::Forces => Msg::Forces(body(b)?),
+            MsgType::Estimate => Msg::Estimate(body(b)?),
+            MsgType::Status => Msg::Status(body(b)?),
+            MsgType::Ack => Msg::Ack(body(b)?),
+        })
+    }
+}

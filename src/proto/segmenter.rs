@@ -1,0 +1,120 @@
+//! Message → frames.
+
+use super::frame::{Frame, FrameRepr, Position};
+use super::{Error, Msg, MAX_MSG_LEN};
+
+/// Largest frame of the bus.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Mtu {
+    /// Classic CAN: 8 data bytes.
+    Classic,
+    /// CAN FD: 64 data bytes; a last frame is padded with 0x00 to a valid FD length
+    /// (0..=8, 12, 16, 20, 24, 32, 48, 64).
+    Fd,
+}
+
+impl Mtu {
+    /// Data bytes per frame.
+    pub const fn bytes(self) -> usize {
+        match self {
+            Mtu::Classic => 8,
+            Mtu::Fd => 64,
+        }
+    }
+}
+
+/// The smallest valid CAN FD data length ≥ `n` (n ≤ 64).
+pub const fn fd_len(n: usize) -> usize {
+    match n {
+        0..=8 => n,
+        9..=12 => 12,
+        13..=16 => 16,
+        17..=20 => 20,
+        21..=24 => 24,
+        25..=32 => 32,
+        33..=48 => 48,
+        _ => 64,
+    }
+}
+
+/// Cuts one encoded message into frames: `new`, then `next_frame` until `None`.
+#[derive(Debug, Clone)]
+pub struct Segmenter {
+    buf: [u8; MAX_MSG_LEN],
+    len: usize,
+    pos: usize,
+    index: u8,
+    seq: u8,
+    mtu: Mtu,
+}
+
+impl Segmenter {
+    /// Encodes `msg` with sequence number `seq` (the sender increments it per message and
+    /// identifier).
+    pub fn new(msg: &Msg, seq: u8, mtu: Mtu) -> Result<Segmenter, Error> {
+        let mut buf = [0u8; MAX_MSG_LEN];
+        let len = msg.encode(&mut buf)?;
+        Ok(Segmenter {
+            buf,
+            len,
+            pos: 0,
+            index: 0,
+            seq,
+            mtu,
+        })
+    }
+
+    /// The encoded message.
+    pub fn encoded(&self) -> &[u8] {
+        self.buf.get(..self.len).unwrap_or(&[])
+    }
+
+    /// Number of frames the message takes.
+    pub fn frame_count(&self) -> usize {
+        let m = self.mtu.bytes();
+        let first = m - 3;
+        if self.len <= first {
+            1
+        } else {
+            1 + (self.len - first).div_ceil(m - 2)
+        }
+    }
+
+    /// Writes the next frame into `out` and returns it, or `None` when all are out.
+    pub fn next_frame<'b>(&mut self, out: &'b mut [u8; 64]) -> Option<&'b [u8]> {
+        if self.pos >= self.len {
+            return None;
+        }
+        let first = self.pos == 0;
+        let header = if first { 3 } else { 2 };
+        let room = self.mtu.bytes() - header;
+        let n = (self.len - self.pos).min(room);
+        let last = self.pos + n == self.len;
+        let repr = FrameRepr {
+            seq: self.seq,
+            pos: if first {
+                Position::First {
+                    total_len: u8::try_from(self.len).unwrap_or(u8::MAX),
+                }
+            } else {
+                Position::Next { index: self.index }
+            },
+            last,
+        };
+        let mut frame_len = repr.buffer_len(n);
+        if last && self.mtu == Mtu::Fd {
+            frame_len = fd_len(frame_len);
+        }
+        let fb = out.get_mut(..frame_len)?;
+        fb.fill(0);
+        let mut f = Frame::new_unchecked(&mut *fb);
+        repr.emit(&mut f);
+        f.payload_mut()
+            .get_mut(..n)?
+            .copy_from_slice(self.buf.get(self.pos..self.pos + n)?);
+        self.pos += n;
+        self.index = self.index.saturating_add(1);
+        out.get(..frame_len)
+    }
+}

@@ -1,0 +1,400 @@
+//! Protocol tests: byte-exact encodings, round trips of every message through frames, the
+//! size bounds, and the reassembler against lost, duplicated, reordered, truncated and
+//! garbage frames.
+use super::*;
+use proptest::prelude::*;
+use std::vec::Vec;
+use std::{format, vec};
+
+fn meas() -> Measurement {
+    Measurement {
+        wheel: Wheel::RearLeft,
+        t_us: 0x0102_0304,
+        fz: 4000.0,
+        fy: -1500.0,
+        mz: 40.0,
+        fx: Some(200.0),
+        vx: Some(20.0),
+        omega: None,
+        delta: Some(0.01),
+        alpha: Some(0.05),
+        kappa: Some(-0.02),
+        gamma: None,
+    }
+}
+
+/// The largest value of each variant (every option present, longest chunk, largest integers).
+pub(crate) fn largest() -> Vec<Msg> {
+    let c = Counters {
+        frames: u32::MAX,
+        messages: u32::MAX,
+        duplicates: u32::MAX,
+        truncated: u32::MAX,
+        bad_header: u32::MAX,
+        bad_crc: u32::MAX,
+        out_of_order: u32::MAX,
+        overflow: u32::MAX,
+        timeout: u32::MAX,
+        decode: u32::MAX,
+    };
+    vec![
+        Msg::Measurement(Measurement {
+            omega: Some(1.0),
+            gamma: Some(1.0),
+            ..meas()
+        }),
+        Msg::ParamBegin(ParamBegin {
+            len: u32::MAX,
+            hash: u32::MAX,
+        }),
+        Msg::ParamChunk(ParamChunk {
+            offset: u32::MAX,
+            data: Bytes::new(&[0xFF; CHUNK_LEN]).unwrap(),
+        }),
+        Msg::ParamCommit(ParamCommit { hash: u32::MAX }),
+        Msg::Settings(Settings {
+            window: u16::MAX,
+            ..Settings::default()
+        }),
+        Msg::Command(Command::Stop),
+        Msg::Forces(Forces {
+            flags: u16::MAX,
+            ..Forces::default()
+        }),
+        Msg::Estimate(Estimate {
+            wheel: Wheel::RearRight,
+            t_us: u32::MAX,
+            mu: 1.0,
+            sigma: 0.1,
+            state: EstimateState::Fallback,
+        }),
+        Msg::Status(Status {
+            firmware: [255; 3],
+            proto: 255,
+            source: ParamSource::Uploaded,
+            param_hash: u32::MAX,
+            uptime_ms: u32::MAX,
+            rx: c,
+            link_errors: u32::MAX,
+            eval_errors: u32::MAX,
+            tx_messages: u32::MAX,
+            stack_peak: u32::MAX,
+        }),
+        Msg::Ack(Ack {
+            of: 255,
+            seq: 255,
+            code: AckCode::TirError { line: u32::MAX },
+        }),
+    ]
+}
+
+#[test]
+fn every_variant_fits_its_bound() {
+    for m in largest() {
+        let mut buf = [0u8; MAX_MSG_LEN];
+        let n = m.encode(&mut buf).unwrap();
+        assert!(n <= MAX_MSG_LEN, "{m:?}: {n}");
+        assert_eq!(Msg::decode(&buf[..n]), Ok(m));
+    }
+}
+
+#[test]
+fn measurement_bytes() {
+    // Byte-exact: header, then postcard (wheel index, t_us fixed LE, f32 LE, option tags), CRC.
+    let m = Msg::Measurement(Measurement {
+        wheel: Wheel::FrontRight,
+        t_us: 1000,
+        fz: 1.0,
+        fy: -2.0,
+        mz: 0.5,
+        fx: None,
+        vx: None,
+        omega: None,
+        delta: None,
+        alpha: Some(0.25),
+        kappa: None,
+        gamma: None,
+    });
+    let mut buf = [0xa5u8; MAX_MSG_LEN];
+    let n = m.encode(&mut buf).unwrap();
+    let body: &[u8] = &[
+        0x01, 0x01, // version 1, type Measurement
+        0x01, // wheel FrontRight
+        0xe8, 0x03, 0x00, 0x00, // t_us 1000
+        0x00, 0x00, 0x80, 0x3f, // fz 1.0
+        0x00, 0x00, 0x00, 0xc0, // fy -2.0
+        0x00, 0x00, 0x00, 0x3f, // mz 0.5
+        0x00, 0x00, 0x00, 0x00, // fx vx omega delta: None
+        0x01, 0x00, 0x00, 0x80, 0x3e, // alpha Some(0.25)
+        0x00, 0x00, // kappa gamma None
+    ];
+    assert_eq!(&buf[..n - 4], body);
+    assert_eq!(&buf[n - 4..n], &crc32(body).to_le_bytes());
+    assert_eq!(buf[n], 0xa5, "nothing written past the message");
+}
+
+#[test]
+fn decode_errors() {
+    let mut buf = [0u8; MAX_MSG_LEN];
+    let n = Msg::Command(Command::Reset).encode(&mut buf).unwrap();
+    assert_eq!(Msg::decode(&buf[..5]), Err(Error::Truncated));
+    let mut bad = buf;
+    bad[2] ^= 1;
+    assert_eq!(Msg::decode(&bad[..n]), Err(Error::BadCrc));
+    let reseal = |b: &mut [u8]| {
+        let c = crc32(&b[..b.len() - 4]);
+        let l = b.len();
+        b[l - 4..].copy_from_slice(&c.to_le_bytes());
+    };
+    let mut v = buf[..n].to_vec();
+    v[0] = 2;
+    reseal(&mut v);
+    assert_eq!(Msg::decode(&v), Err(Error::Version));
+    let mut v = buf[..n].to_vec();
+    v[1] = 0x7f;
+    reseal(&mut v);
+    assert_eq!(Msg::decode(&v), Err(Error::UnknownType));
+    let mut v = buf[..n].to_vec();
+    v.insert(3, 0);
+    reseal(&mut v);
+    assert_eq!(Msg::decode(&v), Err(Error::Decode), "bytes over");
+    let mut v = buf[..n].to_vec();
+    v[2] = 9;
+    reseal(&mut v);
+    assert_eq!(Msg::decode(&v), Err(Error::Decode), "no such command");
+}
+
+fn frames(m: &Msg, seq: u8, mtu: Mtu) -> Vec<Vec<u8>> {
+    let mut s = Segmenter::new(m, seq, mtu).unwrap();
+    let mut out = Vec::new();
+    let mut b = [0u8; 64];
+    while let Some(f) = s.next_frame(&mut b) {
+        out.push(f.to_vec());
+    }
+    assert_eq!(out.len(), s.frame_count());
+    out
+}
+
+#[test]
+fn round_trip_classic_and_fd() {
+    for mtu in [Mtu::Classic, Mtu::Fd] {
+        let mut r = Reassembler::<MSG_BUF>::new();
+        for (i, m) in largest().into_iter().enumerate() {
+            let fs = frames(&m, i as u8, mtu);
+            for f in &fs {
+                assert!(f.len() <= mtu.bytes());
+                if mtu == Mtu::Fd {
+                    assert_eq!(segmenter::fd_len(f.len()), f.len());
+                }
+            }
+            let mut got = None;
+            for (k, f) in fs.iter().enumerate() {
+                match r.feed(f, 0) {
+                    Feed::Pending => assert!(k + 1 < fs.len()),
+                    Feed::Done(d) => got = Some(d),
+                    Feed::Dropped(e) => panic!("{e}"),
+                }
+            }
+            assert_eq!(got, Some(m));
+        }
+        assert_eq!(r.counters().dropped(), 0);
+        assert_eq!(r.counters().messages, 10);
+    }
+}
+
+#[test]
+fn known_frames() {
+    // Command::StatusRequest, seq 5, classic: one frame c0 05 07 | 01 06 01 | crc.
+    let m = Msg::Command(Command::StatusRequest);
+    let fs = frames(&m, 5, Mtu::Classic);
+    let crc = crc32(&[1, 6, 1]).to_le_bytes();
+    assert_eq!(fs.len(), 2);
+    assert_eq!(fs[0], [0x80, 5, 7, 1, 6, 1, crc[0], crc[1]]);
+    assert_eq!(fs[1], [0x41, 5, crc[2], crc[3]]);
+    let fd = frames(&m, 5, Mtu::Fd);
+    assert_eq!(
+        fd,
+        [vec![
+            0xc0, 5, 7, 1, 6, 1, crc[0], crc[1], crc[2], crc[3], 0, 0
+        ]]
+    );
+}
+
+#[test]
+fn lost_duplicated_reordered_truncated() {
+    let m = Msg::Measurement(meas());
+    let fs = frames(&m, 9, Mtu::Classic);
+    assert!(fs.len() >= 4);
+    let feed_all = |r: &mut Reassembler<MSG_BUF>, seq: &[&Vec<u8>]| -> Vec<Feed> {
+        seq.iter().map(|f| r.feed(f, 0)).collect()
+    };
+    // lost frame 2
+    let mut r = Reassembler::<MSG_BUF>::new();
+    let seq: Vec<&Vec<u8>> = fs
+        .iter()
+        .enumerate()
+        .filter(|(i, _)| *i != 2)
+        .map(|(_, f)| f)
+        .collect();
+    let out = feed_all(&mut r, &seq);
+    assert!(!out.iter().any(|f| matches!(f, Feed::Done(_))));
+    assert!(r.counters().out_of_order > 0);
+    // duplicated frames are ignored: the message still arrives once
+    let mut r = Reassembler::<MSG_BUF>::new();
+    let seq: Vec<&Vec<u8>> = fs.iter().flat_map(|f| [f, f]).collect();
+    let out = feed_all(&mut r, &seq);
+    assert_eq!(out.iter().filter(|f| matches!(f, Feed::Done(_))).count(), 1);
+    assert_eq!(r.counters().duplicates as usize, fs.len());
+    // reordered
+    let mut r = Reassembler::<MSG_BUF>::new();
+    let mut seq: Vec<&Vec<u8>> = fs.iter().collect();
+    seq.swap(1, 2);
+    let out = feed_all(&mut r, &seq);
+    assert!(!out.iter().any(|f| matches!(f, Feed::Done(_))));
+    // truncated last frame: the message is dropped
+    let mut r = Reassembler::<MSG_BUF>::new();
+    let mut last = fs.last().unwrap().clone();
+    last.pop();
+    let mut seq: Vec<&Vec<u8>> = fs[..fs.len() - 1].iter().collect();
+    seq.push(&last);
+    let out = feed_all(&mut r, &seq);
+    assert_eq!(out.last(), Some(&Feed::Dropped(Error::Truncated)));
+    // then a good message goes through
+    let out = feed_all(&mut r, &fs.iter().collect::<Vec<_>>());
+    assert_eq!(out.last(), Some(&Feed::Done(m)));
+    // timeout between frames
+    let mut r = Reassembler::<MSG_BUF>::new();
+    assert_eq!(r.feed(&fs[0], 0), Feed::Pending);
+    assert_eq!(r.feed(&fs[1], 10), Feed::Pending);
+    assert_eq!(
+        r.feed(&fs[2], 10 + FRAME_TIMEOUT_MS + 1),
+        Feed::Dropped(Error::OutOfOrder)
+    );
+    assert_eq!(r.counters().timeout, 1);
+    // flipped bit in a middle frame: CRC
+    let mut r = Reassembler::<MSG_BUF>::new();
+    let mut bad = fs.clone();
+    bad[1][4] ^= 0x10;
+    let out = feed_all(&mut r, &bad.iter().collect::<Vec<_>>());
+    assert_eq!(out.last(), Some(&Feed::Dropped(Error::BadCrc)));
+    // a message longer than the buffer
+    let mut small = Reassembler::<16>::new();
+    assert_eq!(small.feed(&fs[0], 0), Feed::Dropped(Error::Overflow));
+}
+
+#[test]
+fn dbc_lists_every_identifier() {
+    let mut s = std::string::String::new();
+    dbc::write(&mut s).unwrap();
+    for (cid, name, _) in id::ALL {
+        assert!(s.contains(&format!("BO_ {cid} {name}: 8")));
+    }
+    assert!(s.contains("\"Measurement\""));
+}
+
+fn any_msg() -> impl Strategy<Value = Msg> {
+    let f = -1e6f32..1e6f32;
+    let of = proptest::option::of(-1e3f32..1e3f32);
+    prop_oneof![
+        (
+            0usize..4,
+            any::<u32>(),
+            f.clone(),
+            f.clone(),
+            f.clone(),
+            of.clone(),
+            of.clone(),
+            of.clone(),
+            of
+        )
+            .prop_map(|(w, t, fz, fy, mz, fx, vx, alpha, kappa)| Msg::Measurement(
+                Measurement {
+                    wheel: Wheel::from_index(w).unwrap(),
+                    t_us: t,
+                    fz,
+                    fy,
+                    mz,
+                    fx,
+                    vx,
+                    omega: None,
+                    delta: None,
+                    alpha,
+                    kappa,
+                    gamma: None,
+                }
+            )),
+        (
+            any::<u32>(),
+            proptest::collection::vec(any::<u8>(), 0..=CHUNK_LEN)
+        )
+            .prop_map(|(o, d)| {
+                Msg::ParamChunk(ParamChunk {
+                    offset: o,
+                    data: Bytes::new(&d).unwrap(),
+                })
+            }),
+        (any::<u8>(), any::<u8>(), any::<u32>()).prop_map(|(of, seq, line)| Msg::Ack(Ack {
+            of,
+            seq,
+            code: AckCode::TirError { line }
+        })),
+        (
+            0usize..4,
+            any::<u32>(),
+            f.clone(),
+            f.clone(),
+            f,
+            any::<u16>()
+        )
+            .prop_map(|(w, t_us, fx, fy, mz, flags)| Msg::Forces(Forces {
+                wheel: Wheel::from_index(w).unwrap(),
+                t_us,
+                fx,
+                fy,
+                mz,
+                flags
+            })),
+    ]
+}
+
+proptest! {
+    #[test]
+    fn parse_emit_round_trip(m in any_msg(), seq in any::<u8>(), fd in any::<bool>()) {
+        let mtu = if fd { Mtu::Fd } else { Mtu::Classic };
+        let mut r = Reassembler::<MSG_BUF>::new();
+        let fs = frames(&m, seq, mtu);
+        let mut done = None;
+        for f in &fs {
+            if let Feed::Done(d) = r.feed(f, 0) { done = Some(d); }
+        }
+        prop_assert_eq!(done, Some(m));
+    }
+
+    /// Any frame sequence: no panic, and every delivered message is one that was sent.
+    #[test]
+    fn feed_survives_anything(
+        msgs in proptest::collection::vec(any_msg(), 1..4),
+        ops in proptest::collection::vec((0u8..6, any::<u8>(), any::<u8>(), 0u32..100), 0..80),
+    ) {
+        let mut pool: Vec<Vec<u8>> = Vec::new();
+        for (i, m) in msgs.iter().enumerate() {
+            pool.extend(frames(m, i as u8, Mtu::Classic));
+        }
+        let mut r = Reassembler::<MSG_BUF>::new();
+        let mut now = 0u32;
+        for (op, a, b, dt) in ops {
+            now = now.wrapping_add(dt);
+            let pick = pool[a as usize % pool.len()].clone();
+            let frame = match op {
+                0 | 1 => pick,
+                2 => { let mut f = pick; let l = f.len(); f.truncate(b as usize % (l + 1)); f }
+                3 => { let mut f = pick; let l = f.len(); f[b as usize % l] ^= a | 1; f }
+                4 => vec![a, b, a ^ b, b, a],
+                _ => vec![a; b as usize % 70],
+            };
+            if let Feed::Done(d) = r.feed(&frame, now) {
+                prop_assert!(msgs.contains(&d), "delivered a message nobody sent: {:?}", d);
+            }
+        }
+    }
+}

@@ -1,0 +1,295 @@
+//! Firmware steps of `test-all`, and `snapshot [--overwrite]` (the golden outputs).
+use crate::{cargo, root, run, step};
+use std::io::Read;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+const TARGET: &str = "thumbv7em-none-eabihf";
+
+fn fw_dir() -> PathBuf {
+    root().join("firmware")
+}
+
+fn elf(bin: &str) -> PathBuf {
+    fw_dir()
+        .join("target")
+        .join(TARGET)
+        .join("release")
+        .join(bin)
+}
+
+fn fw_cargo() -> Command {
+    let mut c = cargo();
+    c.current_dir(fw_dir()).env_remove("CARGO_TARGET_DIR");
+    c
+}
+
+fn build_mps2() -> Result<(), String> {
+    step("firmware: build every mps2-an386 binary (thumbv7em-none-eabihf, release)");
+    run(fw_cargo().args(["build", "--release", "--bins"]))
+}
+
+/// Runs `elf` under QEMU mps2-an386 with semihosting; returns (exit code, stdout). A run that
+/// outlives `timeout` is killed and reported as hung.
+fn qemu(elf: &Path, extra: &[&str], timeout: Duration) -> Result<(i32, String), String> {
+    let wd = root().join("target/qemu");
+    std::fs::create_dir_all(&wd).map_err(|e| format!("{}: {e}", wd.display()))?;
+    let mut child = Command::new("qemu-system-arm")
+        .args(["-cpu", "cortex-m4", "-machine", "mps2-an386", "-nographic"])
+        .args(["-semihosting-config", "enable=on,target=native"])
+        .args(extra)
+        .arg("-kernel")
+        .arg(elf)
+        .current_dir(&wd)
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .spawn()
+        .map_err(|e| format!("qemu-system-arm: {e}"))?;
+    let mut out = child.stdout.take();
+    let reader = std::thread::spawn(move || {
+        let mut s = String::new();
+        if let Some(o) = out.as_mut() {
+            let _ = o.read_to_string(&mut s);
+        }
+        s
+    });
+    let t0 = Instant::now();
+    let code = loop {
+        if let Ok(Some(st)) = child.try_wait() {
+            break st.code().unwrap_or(-1);
+        }
+        if t0.elapsed() > timeout {
+            let _ = child.kill();
+            let _ = child.wait();
+            return Err(format!("{} hung (killed after {timeout:?})", elf.display()));
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    };
+    Ok((code, reader.join().unwrap_or_default()))
+}
+
+fn golden(name: &str) -> PathBuf {
+    fw_dir().join("golden").join(format!("{name}.out"))
+}
+
+fn selftest(overwrite: bool) -> Result<(), String> {
+    step("firmware selftest under QEMU: round trip, known MF output, garbage, upload (golden: firmware/golden/selftest.out)");
+    let (code, out) = qemu(&elf("selftest"), &[], Duration::from_secs(120))?;
+    print!("{out}");
+    if code != 0 {
+        return Err(format!("selftest exited with {code}"));
+    }
+    let g = golden("selftest");
+    if overwrite {
+        std::fs::write(&g, &out).map_err(|e| format!("{}: {e}", g.display()))?;
+        eprintln!("wrote {}", g.display());
+        return Ok(());
+    }
+    let want = std::fs::read_to_string(&g).map_err(|e| format!("{}: {e}", g.display()))?;
+    if want != out {
+        for (i, (a, b)) in want.lines().zip(out.lines()).enumerate() {
+            if a != b {
+                eprintln!("line {}: golden `{a}`, got `{b}`", i + 1);
+            }
+        }
+        return Err(format!(
+            "selftest output differs from {} (review, then `cargo xtask snapshot --overwrite`)",
+            g.display()
+        ));
+    }
+    Ok(())
+}
+
+/// `cargo xtask snapshot [--overwrite]`: builds, runs the selftest, compares or rewrites its golden output.
+pub fn snapshot(overwrite: bool) -> Result<(), String> {
+    build_mps2()?;
+    selftest(overwrite)
+}
+
+fn must_fail(bin: &str, marker: &str) -> Result<(), String> {
+    let (code, out) = qemu(&elf(bin), &[], Duration::from_secs(60))?;
+    print!("{out}");
+    if code == 1 && out.contains(marker) {
+        eprintln!("{bin}: QEMU exited with code 1, as it must");
+        Ok(())
+    } else {
+        Err(format!(
+            "{bin}: exit code {code} (want 1), output must contain `{marker}`"
+        ))
+    }
+}
+
+/// Sizes of an ELF32 image: (flash, RAM) in bytes. Flash = allocated sections with contents
+/// (vector table, code, read-only data, the initial values of .data); RAM = allocated sections
+/// at 0x2000_0000 and above (.data, .bss, .uninit), the stack not included.
+fn elf_sizes(path: &Path) -> Result<(u64, u64), String> {
+    let b = std::fs::read(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let u16at = |o: usize| {
+        b.get(o..o + 2)
+            .map(|s| u16::from_le_bytes([s[0], s[1]]) as usize)
+    };
+    let u32at = |o: usize| {
+        b.get(o..o + 4)
+            .map(|s| u32::from_le_bytes([s[0], s[1], s[2], s[3]]) as u64)
+    };
+    if b.get(..5) != Some(&[0x7f, b'E', b'L', b'F', 1][..]) {
+        return Err(format!("{}: not an ELF32 file", path.display()));
+    }
+    let bad = || format!("{}: truncated ELF", path.display());
+    let shoff = u32at(0x20).ok_or_else(bad)? as usize;
+    let shentsize = u16at(0x2e).ok_or_else(bad)?;
+    let shnum = u16at(0x30).ok_or_else(bad)?;
+    let (mut flash, mut ram) = (0, 0);
+    for i in 0..shnum {
+        let h = shoff + i * shentsize;
+        let (ty, flags, addr, size) = (
+            u32at(h + 4).ok_or_else(bad)?,
+            u32at(h + 8).ok_or_else(bad)?,
+            u32at(h + 12).ok_or_else(bad)?,
+            u32at(h + 20).ok_or_else(bad)?,
+        );
+        if flags & 2 == 0 {
+            continue; // not SHF_ALLOC
+        }
+        if ty != 8 {
+            flash += size; // PROGBITS (NOBITS = 8 takes no flash)
+        }
+        if addr >= 0x2000_0000 {
+            ram += size;
+        }
+    }
+    Ok((flash, ram))
+}
+
+fn report_size(what: &str, path: &Path) -> Result<(), String> {
+    let (f, r) = elf_sizes(path)?;
+    println!(
+        "size {what}: flash {f} bytes ({:.1} KiB), static RAM {r} bytes ({:.1} KiB)",
+        f as f64 / 1024.0,
+        r as f64 / 1024.0
+    );
+    Ok(())
+}
+
+fn python_client() -> Result<(), String> {
+    step("python-can client (independent protocol implementation) against the firmware");
+    let venv = root().join(".venv");
+    let py = venv.join("bin/python");
+    let req = root().join("host-tests/python/requirements.txt");
+    if !py.exists() {
+        run(Command::new("python3").arg("-m").arg("venv").arg(&venv))?;
+    }
+    run(Command::new(&py)
+        .args([
+            "-m",
+            "pip",
+            "install",
+            "--quiet",
+            "--disable-pip-version-check",
+            "-r",
+        ])
+        .arg(&req))?;
+    let port = std::net::TcpListener::bind("127.0.0.1:0")
+        .and_then(|l| l.local_addr())
+        .map_err(|e| e.to_string())?
+        .port();
+    let target = std::env::var_os("CARGO_TARGET_DIR")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| root().join("target"));
+    let gough = target.join("debug/gough");
+    run(cargo().args(["build", "-p", "gough-host", "--bin", "gough"]))?;
+    let mut fw = Command::new(&gough)
+        .args(["firmware", "run", "--no-build", "--port", &port.to_string()])
+        .arg("--elf")
+        .arg(elf("gough-firmware"))
+        .arg("--workdir")
+        .arg(root().join("target/qemu-python"))
+        .spawn()
+        .map_err(|e| format!("{}: {e}", gough.display()))?;
+    let client = run(Command::new(&py)
+        .arg(root().join("host-tests/python/test_slcan_client.py"))
+        .args(["--port", &port.to_string()])
+        .arg("--gough")
+        .arg(&gough)
+        .arg("--tir")
+        .arg(root().join("host-tests/data/tyres/MagicFormula61_Parameters.tir")));
+    let t0 = Instant::now();
+    let fw_status = loop {
+        if let Ok(Some(st)) = fw.try_wait() {
+            break Some(st);
+        }
+        if t0.elapsed() > Duration::from_secs(30) {
+            let _ = fw.kill();
+            let _ = fw.wait();
+            break None;
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    };
+    client?;
+    match fw_status {
+        Some(st) if st.success() => Ok(()),
+        other => Err(format!("firmware under the python client: {other:?}")),
+    }
+}
+
+/// The firmware part of `test-all`; adds the passed checks to `passed`.
+pub fn test_all(passed: &mut u64) -> Result<(), String> {
+    build_mps2()?;
+    report_size("mps2-an386 gough-firmware", &elf("gough-firmware"))?;
+    selftest(false)?;
+    *passed += 1;
+    step("panic and HardFault exit QEMU with a failure code, never hang");
+    must_fail("panic", "panicked")?;
+    must_fail("hardfault", "HardFault")?;
+    *passed += 2;
+    step("firmware <-> host over SLCAN/TCP: replay equals the host's f32 run, garbage is counted");
+    crate::cargo_test(
+        &[
+            "-p",
+            "gough-host",
+            "--test",
+            "firmware",
+            "--",
+            "--ignored",
+            "--test-threads",
+            "1",
+        ],
+        passed,
+        &mut 0,
+    )?;
+    python_client()?;
+    *passed += 1;
+    step("STM32F405 with bxCAN (stm32f4xx-hal): build and link, flash/RAM");
+    run(fw_cargo().args([
+        "build",
+        "--release",
+        "--no-default-features",
+        "--features",
+        "stm32f4",
+        "--bin",
+        "stm32f4",
+    ]))?;
+    report_size("stm32f405 stm32f4", &elf("stm32f4"))?;
+    *passed += 1;
+    step("bench: instructions per combined MF evaluation on the M4F (QEMU -icount shift=0)");
+    run(fw_cargo().args([
+        "build",
+        "--release",
+        "--bin",
+        "bench",
+        "--features",
+        "micromath,fast",
+    ]))?;
+    let (code, out) = qemu(
+        &elf("bench"),
+        &["-icount", "shift=0"],
+        Duration::from_secs(300),
+    )?;
+    print!("{out}");
+    if code != 0 {
+        return Err(format!("bench exited with {code}"));
+    }
+    *passed += 1;
+    Ok(())
+}
