@@ -482,34 +482,38 @@ impl<'t, F: Float> MuEstimator<'t, F> {
         // could read the point too, reads it as less grippy than itself (no second crossing),
         // and the point lies on none of their rising branches.
         if let Some(e) = pick {
-            let (gn, jn) = (g + usize::from(u > F::HALF), j + usize::from(w > F::HALF));
             let f_m = force / s.fz;
+            let corners = [
+                (g, j, (F::ONE - u) * (F::ONE - w)),
+                (g, j + 1, (F::ONE - u) * w),
+                (g + 1, j, u * (F::ONE - w)),
+                (g + 1, j + 1, u * w),
+            ];
             for (si, est) in ests.iter().enumerate() {
                 let lam_k = F::from_f64(*table::LAMBDA_NODES.get(si)?);
                 if lam_k <= e.lambda {
                     continue;
                 }
-                if est.is_none() {
+                let Some(k) = est else { return None };
+                // A second crossing further up: the point reads as a grippier surface too.
+                if k.lambda >= lam_k {
                     return None;
                 }
-                // A second crossing further up: the point reads as a grippier surface too.
-                if let Some(k) = est {
-                    if k.lambda >= lam_k {
-                        return None;
+                // On the grippier surface's rising branch (interpolated like the table)?
+                let (mut tr, mut wsum) = (F::ZERO, F::ZERO);
+                for &(gi, ji, wt) in &corners {
+                    let c = table::CurveIdx {
+                        g: gi,
+                        si,
+                        j: ji,
+                        side,
+                    };
+                    if let Some(x) = self.table.rise_tau(c, f_m) {
+                        tr += wt * x;
+                        wsum += wt;
                     }
                 }
-                let tol = F::from_f64(0.3) * self.table.tau0(gn, si, jn, side)?.abs();
-                if self.table.on_rise(
-                    table::CurveIdx {
-                        g: gn,
-                        si,
-                        j: jn,
-                        side,
-                    },
-                    f_m,
-                    tau,
-                    tol,
-                ) {
+                if wsum > F::HALF && (tau - tr / wsum).abs() <= F::from_f64(0.3) * k.tau0.abs() {
                     return None;
                 }
             }

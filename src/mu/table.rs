@@ -217,36 +217,26 @@ impl<F: Float> GoughTable<F> {
         Some(t)
     }
 
-    /// Is (f, τ) on the rising branch of curve (g, si, j, side), within `tol` of its trail?
-    /// f is interpolated along the branch (it grows with slip there).
-    pub fn on_rise(&self, c: CurveIdx, f: F, tau: F, tol: F) -> bool {
+    /// The trail of curve `c`'s rising branch at force `f` (interpolated along the branch), or
+    /// `None` when f lies above the branch (the trail has peaked by then). Below the branch's
+    /// first point the residual torque dominates: the first point's trail is returned.
+    pub fn rise_tau(&self, c: CurveIdx, f: F) -> Option<F> {
         let CurveIdx { g, si, j, side } = c;
-        let (Some(pts), Some(&n)) = (
-            self.rise
-                .get(g)
-                .and_then(|x| x.get(si))
-                .and_then(|x| x.get(j))
-                .and_then(|x| x.get(side)),
-            self.rise_len
-                .get(g)
-                .and_then(|x| x.get(si))
-                .and_then(|x| x.get(j))
-                .and_then(|x| x.get(side)),
-        ) else {
-            return false;
-        };
-        let pts = pts.get(..n as usize).unwrap_or(&[]);
+        let pts = self.rise.get(g)?.get(si)?.get(j)?.get(side)?;
+        let n = *self.rise_len.get(g)?.get(si)?.get(j)?.get(side)? as usize;
+        let pts = pts.get(..n)?;
+        let &(f_first, t_first) = pts.first()?;
+        if f < f_first {
+            return Some(t_first);
+        }
         for w in pts.windows(2) {
             if let [(f0, t0), (f1, t1)] = *w {
                 if f >= f0 && f <= f1 && f1 > f0 {
-                    let tr = t0 + (f - f0) / (f1 - f0) * (t1 - t0);
-                    return (tau - tr).abs() <= tol;
+                    return Some(t0 + (f - f0) / (f1 - f0) * (t1 - t0));
                 }
             }
         }
-        // Below the first point: the branch's start (residual torque dominates) — treat any
-        // reading with a force that small as on it.
-        pts.first().is_some_and(|&(f0, _)| f < f0)
+        None
     }
 
     /// τ0: the trail at the smallest usable slip of camber `g`, surface `si`, load `j`, side
