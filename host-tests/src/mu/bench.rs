@@ -552,6 +552,22 @@ pub fn demo(a: DemoArgs) -> Result<(), String> {
             tr.util.iter().copied().fold(0.0, f64::max),
             fmt(m.util_within, 2)
         );
+        if w == 0 {
+            // The front-left wheel's measured channels as a LOG for `gough mu estimate`.
+            let rows: Vec<Vec<f64>> = tr
+                .rows
+                .iter()
+                .zip(&tr.gamma)
+                .zip(&tr.mu_true)
+                .map(|((r, &g), &m)| vec![r.t, r.fz, r.fy, r.mz, r.fx, r.vx, r.kappa, r.alpha, g, m])
+                .collect();
+            crate::csvio::write(
+                &a.out.join("log_fl.csv"),
+                &["t", "fz", "fy", "mz", "fx", "vx", "kappa", "alpha", "gamma", "mu"],
+                &rows,
+            )
+            .map_err(|e| format!("{}: {e}", a.out.display()))?;
+        }
         if first.is_none() {
             first = Some((tr, est));
         }
@@ -566,7 +582,7 @@ pub fn demo(a: DemoArgs) -> Result<(), String> {
         )?;
         plot_gough(&p, &log, 0, &a.out.join("gough.png"))?;
     }
-    eprintln!("-> {}/estimates.csv, mu.png, gough.png", a.out.display());
+    eprintln!("-> {}/estimates.csv, log_fl.csv, mu.png, gough.png", a.out.display());
     Ok(())
 }
 

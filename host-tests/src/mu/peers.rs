@@ -6,7 +6,7 @@
 //!   Brush model with a pneumatic trail falling linearly with slip,
 //!   `tp = tp0 − sgn(α)·tp0·Cα/(3·μ·Fz)·tan α`, solved for μ given the measured trail
 //!   tp = −Mz/Fy and the slip angle; used only when |α| > 2°, tp < tp0 and Vx > 3 m/s (the
-//!   paper's gates), and smoothed by a first-order filter. Cα and tp0 are taken from the same
+//!   paper's gates), clamped to 0.05…1.5, and smoothed by a first-order filter. Cα and tp0 are taken from the same
 //!   `.tir` file at the current load (the paper fits them from data): a fair comparison.
 //! - [`SlipSlope`]: F. Gustafsson, "Slip-based tire-road friction estimation", Automatica 33(6),
 //!   1997. The normalised traction force μn = Fx/Fz is regressed on the longitudinal slip κ at
@@ -122,6 +122,8 @@ impl HsuGerdes {
                 }
                 // tp = tp0·(1 − Cα·|tan α|/(3·μ·Fz))  →  μ = Cα·|tan α|·tp0 / (3·Fz·(tp0 − tp))
                 let mu = c_alpha * r.alpha.tan().abs() * tp0 / (3.0 * r.fz * (tp0 - tp));
+                // Physically plausible range only (the linear trail model blows up as tp → tp0).
+                let mu = mu.clamp(0.05, 1.5);
                 (mu.is_finite() && mu > 0.0).then_some(mu)
             })
         } else {
