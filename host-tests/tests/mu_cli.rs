@@ -3,7 +3,10 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 fn gough(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_gough")).args(args).output().expect("run gough")
+    Command::new(env!("CARGO_BIN_EXE_gough"))
+        .args(args)
+        .output()
+        .expect("run gough")
 }
 
 fn tmp(name: &str) -> PathBuf {
@@ -13,15 +16,33 @@ fn tmp(name: &str) -> PathBuf {
 }
 
 fn tyre() -> String {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("data/tyres/MagicFormula61_Parameters.tir").to_string_lossy().into_owned()
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("data/tyres/MagicFormula61_Parameters.tir")
+        .to_string_lossy()
+        .into_owned()
 }
 
 /// A steady-state log from the Magic Formula itself: the slip angle ramps up on a μ = 0.5 road.
 fn write_log(path: &Path) {
     use gough::math::Libm;
     use gough::mf::{self, Input, Options};
-    let p = gough::tir::parse(&std::fs::read_to_string(tyre()).unwrap()).unwrap().params;
-    let mu0 = mf::eval::<f64, Libm>(&p, &Input { fz: p.fnomin, vx: 20.0, ..Input::default() }, &Options { limits: false, ..Options::default() }).unwrap().mu_y;
+    let p = gough::tir::parse(&std::fs::read_to_string(tyre()).unwrap())
+        .unwrap()
+        .params;
+    let mu0 = mf::eval::<f64, Libm>(
+        &p,
+        &Input {
+            fz: p.fnomin,
+            vx: 20.0,
+            ..Input::default()
+        },
+        &Options {
+            limits: false,
+            ..Options::default()
+        },
+    )
+    .unwrap()
+    .mu_y;
     let mut q = p.clone();
     q.lmux = 0.5 / mu0;
     q.lmuy = 0.5 / mu0;
@@ -29,7 +50,17 @@ fn write_log(path: &Path) {
     for i in 0..1500 {
         let t = i as f64 * 1e-3;
         let alpha = 0.04 * (t / 0.8).min(1.0);
-        let o = mf::eval::<f64, Libm>(&q, &Input { fz: 6000.0, alpha, vx: 20.0, ..Input::default() }, &Options::default()).unwrap();
+        let o = mf::eval::<f64, Libm>(
+            &q,
+            &Input {
+                fz: 6000.0,
+                alpha,
+                vx: 20.0,
+                ..Input::default()
+            },
+            &Options::default(),
+        )
+        .unwrap();
         s += &format!("{t},{},{},{},{},20,{alpha},0\n", o.fz, o.fy, o.mz, o.fx);
     }
     std::fs::write(path, s).unwrap();
@@ -39,9 +70,27 @@ fn write_log(path: &Path) {
 fn estimate_reads_mu_from_a_log() {
     let log = tmp("log.csv");
     write_log(&log);
-    for (method, prec) in [("gough", "f64"), ("gough", "f32"), ("hsu-gerdes", "f64"), ("slip-slope", "f64")] {
+    for (method, prec) in [
+        ("gough", "f64"),
+        ("gough", "f32"),
+        ("hsu-gerdes", "f64"),
+        ("slip-slope", "f64"),
+    ] {
         let out = tmp(&format!("est-{method}-{prec}.csv"));
-        let o = gough(&["mu", "estimate", "--tir", &tyre(), "--log", log.to_str().unwrap(), "--out", out.to_str().unwrap(), "--method", method, "--precision", prec]);
+        let o = gough(&[
+            "mu",
+            "estimate",
+            "--tir",
+            &tyre(),
+            "--log",
+            log.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--method",
+            method,
+            "--precision",
+            prec,
+        ]);
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
         let text = std::fs::read_to_string(&out).unwrap();
         let mut lines = text.lines();
@@ -57,11 +106,23 @@ fn estimate_reads_mu_from_a_log() {
 }
 
 fn expect_error(log_text: &str, want: &[&str]) {
-    let log = tmp(&format!("bad-{}.csv", want.join("-").replace([' ', ',', '.'], "")));
+    let log = tmp(&format!(
+        "bad-{}.csv",
+        want.join("-").replace([' ', ',', '.'], "")
+    ));
     std::fs::write(&log, log_text).unwrap();
     let out = tmp("bad-out.csv");
     let _ = std::fs::remove_file(&out);
-    let o = gough(&["mu", "estimate", "--tir", &tyre(), "--log", log.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+    let o = gough(&[
+        "mu",
+        "estimate",
+        "--tir",
+        &tyre(),
+        "--log",
+        log.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
     assert!(!o.status.success());
     let e = String::from_utf8_lossy(&o.stderr);
     assert_eq!(e.trim().lines().count(), 1, "one-line error: {e}");
@@ -74,7 +135,10 @@ fn expect_error(log_text: &str, want: &[&str]) {
 #[test]
 fn bad_logs_give_one_line_errors() {
     expect_error("t,fz,fy\n0,1,2\n", &["mz", "line 1"]);
-    expect_error("t,fz,fy,mz\n0,6000,100,1\n0,6000,100,1\n", &["line 3", "time does not increase"]);
+    expect_error(
+        "t,fz,fy,mz\n0,6000,100,1\n0,6000,100,1\n",
+        &["line 3", "time does not increase"],
+    );
     expect_error("t,fz,fy,mz\n0,6000,abc,1\n", &["line 2", "fy", "abc"]);
     expect_error("t,fz,fy,mz,fx\n0,6000,1,1,nan\n", &["line 2", "fx"]);
 }
@@ -82,7 +146,18 @@ fn bad_logs_give_one_line_errors() {
 #[test]
 fn demo_runs_and_writes_its_outputs() {
     let dir = tmp("demo");
-    let o = gough(&["mu", "demo", "--tir", &tyre(), "--manoeuvre", "step-steer", "--road", "mu=0.5", "--out", dir.to_str().unwrap()]);
+    let o = gough(&[
+        "mu",
+        "demo",
+        "--tir",
+        &tyre(),
+        "--manoeuvre",
+        "step-steer",
+        "--road",
+        "mu=0.5",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     for f in ["estimates.csv", "log_fl.csv", "mu.png", "gough.png"] {
         assert!(dir.join(f).exists(), "{f}");

@@ -28,6 +28,8 @@ pub struct Conditioned<F> {
     pub limits: bool,
     /// α*, γ* definitions on.
     pub use_alpha_star: bool,
+    /// Slips come from the transient model (`Options::transient`).
+    pub transient: bool,
     /// Fz for the forces \[N\] (≥ 0, clipped at FZMAX).
     pub fz: F,
     /// Fz for the aligning-torque terms Dt, Dr \[N\]: Fz raised to FZMIN when limits are on.
@@ -199,6 +201,7 @@ pub fn condition<F: Float, M: Backend<F>>(
         version: p.version,
         limits: opts.limits,
         use_alpha_star: opts.alpha_star,
+        transient: opts.transient,
         fz,
         fz_low,
         fz_u,

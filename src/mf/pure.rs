@@ -68,8 +68,11 @@ pub fn fx0<F: Float, M: Backend<F>>(p: &Params<F>, c: &mut Conditioned<F>) -> Fx
         (p.pex1 + p.pex2 * dfz + p.pex3 * dfz * dfz) * (F::ONE - p.pex4 * kappa_x.sign()) * p.lex; // (27), (4.E14)
     let e_x = clip_e(e_x, c);
     let mut fx0 = magic_sin::<F, M>(b_x, c_x, d_x, e_x, kappa_x) + s_vx; // (22), (4.E9)
-    if c.vx < F::ZERO {
-        // Running backwards: mirror image (appendix, first paragraph).
+    if c.vx < F::ZERO && !c.transient {
+        // Running backwards: mirror image (appendix, first paragraph), for steady-state slips
+        // defined with κ = −1 locked in both directions. Slips from the transient model
+        // (κ' = −Vsx/|Vx|) already carry the direction: a wheel locked while sliding backwards
+        // has κ' = +1 and must get Fx > 0 (MFeval's dynamic modes flip κ for the same reason).
         fx0 = -fx0;
     }
     Fx0 { fx0, mu_x, k_xk }

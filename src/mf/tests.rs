@@ -560,3 +560,37 @@ macro_rules! float_props {
 
 float_props!(props_f64, f64, 1e-9);
 float_props!(props_f32, f32, 1e-4);
+
+/// A wheel locked while its centre slides backwards (Vx < 0, Ω = 0): the transient slip is
+/// κ' = −Vsx/|Vx| = +1 and the force must oppose the sliding (Fx > 0); the steady-state
+/// convention (κ = −1 locked both ways) mirrors Fx0 instead.
+#[test]
+fn sliding_backwards_locked_wheel_opposes_motion() {
+    let p = load(TYRES[1].1);
+    let tr = Options {
+        transient: true,
+        ..Options::default()
+    };
+    let o = eval64(
+        &p,
+        Input {
+            fz: 5000.0,
+            kappa: 1.0,
+            vx: -5.0,
+            ..Input::default()
+        },
+        &tr,
+    );
+    assert!(o.fx > 0.0, "transient: {}", o.fx);
+    let o = eval64(
+        &p,
+        Input {
+            fz: 5000.0,
+            kappa: -1.0,
+            vx: -5.0,
+            ..Input::default()
+        },
+        &Options::default(),
+    );
+    assert!(o.fx > 0.0, "steady state: {}", o.fx);
+}

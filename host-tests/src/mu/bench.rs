@@ -559,11 +559,15 @@ pub fn demo(a: DemoArgs) -> Result<(), String> {
                 .iter()
                 .zip(&tr.gamma)
                 .zip(&tr.mu_true)
-                .map(|((r, &g), &m)| vec![r.t, r.fz, r.fy, r.mz, r.fx, r.vx, r.kappa, r.alpha, g, m])
+                .map(|((r, &g), &m)| {
+                    vec![r.t, r.fz, r.fy, r.mz, r.fx, r.vx, r.kappa, r.alpha, g, m]
+                })
                 .collect();
             crate::csvio::write(
                 &a.out.join("log_fl.csv"),
-                &["t", "fz", "fy", "mz", "fx", "vx", "kappa", "alpha", "gamma", "mu"],
+                &[
+                    "t", "fz", "fy", "mz", "fx", "vx", "kappa", "alpha", "gamma", "mu",
+                ],
                 &rows,
             )
             .map_err(|e| format!("{}: {e}", a.out.display()))?;
@@ -582,7 +586,10 @@ pub fn demo(a: DemoArgs) -> Result<(), String> {
         )?;
         plot_gough(&p, &log, 0, &a.out.join("gough.png"))?;
     }
-    eprintln!("-> {}/estimates.csv, log_fl.csv, mu.png, gough.png", a.out.display());
+    eprintln!(
+        "-> {}/estimates.csv, log_fl.csv, mu.png, gough.png",
+        a.out.display()
+    );
     Ok(())
 }
 

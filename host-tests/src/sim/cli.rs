@@ -121,7 +121,7 @@ pub fn run(a: SimArgs) -> Result<(), String> {
     let wall = start.elapsed().as_secs_f64();
     std::fs::create_dir_all(out).map_err(|e| format!("{}: cannot create: {e}", out.display()))?;
     log.write_csv(&out.join("log.csv"))?;
-    let simulated = log.records.last().map_or(0.0, |r| r.t + log.dt);
+    let simulated = log.t_end;
     if !a.no_plots {
         let road = a
             .road

@@ -71,6 +71,9 @@ impl SimConfig {
     }
 }
 
+/// Most rows a log may hold (each row is about 560 bytes in memory, 1.3 kB of CSV).
+pub const MAX_ROWS: usize = 1_000_000;
+
 /// Speed below which a run that ends at standstill stops \[m/s\].
 pub const STOP_SPEED: f64 = 0.5;
 
@@ -87,6 +90,8 @@ pub struct Log {
     pub stop: Option<Stop>,
     /// Mass times gravity m·g \[N\] (what the four Fz sum to on a flat road).
     pub weight: f64,
+    /// Time simulated \[s\] (the end of the last step).
+    pub t_end: f64,
 }
 
 /// Where a braking run stopped.
@@ -171,12 +176,19 @@ pub fn simulate(cfg: &SimConfig, tyre: &Params<f64>, progress: bool) -> Result<L
     let mut driver = Driver::new(man);
     let mut abs = cfg.abs.map(Abs::new);
     let steps = (cfg.duration / cfg.dt).round() as usize;
+    let rows = steps / cfg.log_every + 1;
+    if rows > MAX_ROWS {
+        return Err(format!(
+            "{rows} log rows (duration / (dt·log_every)) is more than {MAX_ROWS}: raise log_every (--log-every)"
+        ));
+    }
     let mut log = Log {
         dt: cfg.dt,
         mu_y0: v.mu_y0,
-        records: Vec::with_capacity(steps / cfg.log_every + 1),
+        records: Vec::with_capacity(rows),
         stop: None,
         weight: cfg.vehicle.m * G,
+        t_end: 0.0,
     };
     let mut bar = Progress::new(progress, steps);
     let mut brake_start: Option<(f64, f64, f64)> = None; // (t, X, Y)
@@ -194,6 +206,7 @@ pub fn simulate(cfg: &SimConfig, tyre: &Params<f64>, progress: bool) -> Result<L
             cmd.brake = a.update(&cmd.brake, &kappa, &vx, cfg.dt);
         }
         let (x0, y0) = (v.x, v.y);
+        v.t = t; // k·h exactly, no accumulated rounding
         v.step(&cmd, &cfg.road, cfg.dt)?;
         dist += (v.x - x0).hypot(v.y - y0);
         if k % cfg.log_every == 0 {
@@ -211,6 +224,7 @@ pub fn simulate(cfg: &SimConfig, tyre: &Params<f64>, progress: bool) -> Result<L
         }
     }
     bar.finish();
+    log.t_end = v.t;
     Ok(log)
 }
 

@@ -44,10 +44,9 @@
 //! longitudinal mode (≈ 50 Hz) needs h ≤ 2 ms ([`MAX_DT`]).
 //!
 //! ## Running backwards
-//! The transient slip of [`gough::relax`] is κ' = −Vsx/|Vx| in both directions, while
-//! [`gough::mf::eval`] mirrors Fx0 for Vx < 0 (MFeval's convention, κ = −1 locked both ways);
-//! for a wheel whose centre runs backwards (a spinning car) the sign of Fx is restored here so
-//! that a sliding tyre always takes energy out (marked `CORE ISSUE` in [`Vehicle::step`]).
+//! The transient slip of [`gough::relax`] is κ' = −Vsx/|Vx| in both directions and
+//! [`gough::mf::eval`] with `Options::transient` takes it as such (no steady-state mirror for
+//! Vx < 0), so a tyre sliding backwards takes energy out, as it must.
 //!
 //! ## What it leaves out
 //! Suspension kinematics and compliance (toe, bump steer, caster) beyond the one compliance
@@ -383,7 +382,6 @@ pub struct Vehicle {
     base_lmuy: f64,
     positions: [(f64, f64); 4],
     static_fz: [f64; 4],
-    flat: bool,
 }
 
 /// μy0: the file's μy at Fz = FNOMIN, zero camber, nominal pressure (architecture.md).
@@ -474,7 +472,6 @@ impl Vehicle {
             base_lmuy: tyre.lmuy,
             positions,
             static_fz,
-            flat: road.is_flat(),
         };
         v.update_mu(road);
         Ok(v)
@@ -570,6 +567,7 @@ impl Vehicle {
             wheels: [WheelRecord::default(); 4],
         };
         let (mut fxb, mut fyb, mut mzb) = (0.0, 0.0, 0.0);
+        let flat = road.is_flat();
         let (mut fx_tyres, mut fy_tyres) = (0.0, 0.0);
         let mut fy_front = 0.0;
         for i in 0..4 {
@@ -580,7 +578,7 @@ impl Vehicle {
             let vxw = u * c + w * s;
             let vyw = -u * s + w * c;
             let wheel = &mut self.wheels[i];
-            if !self.flat {
+            if !flat {
                 // Quarter-car on the road profile (module doc), semi-implicit Euler.
                 let wx = self.x + xi * cy - yi * sy;
                 let xdot = u * cy - w * sy; // dX/dt of the wheel centre
@@ -607,7 +605,7 @@ impl Vehicle {
                 gamma,
                 p: None,
             };
-            let mut out: Output<f64> = wheel
+            let out: Output<f64> = wheel
                 .tyre
                 .step::<Libm>(&wheel.params, &wheel.options, dt, &op)
                 .map_err(|e| {
@@ -616,13 +614,6 @@ impl Vehicle {
                         self.t, WHEELS[i]
                     )
                 })?;
-            if vxw < 0.0 {
-                // CORE ISSUE (reported): `relax` gives κ' = −Vsx/|Vx| (a wheel locked while
-                // sliding backwards has κ' = +1), but `mf::eval` mirrors Fx0 for Vx < 0 as if
-                // κ = −Vsx/Vx (locked = −1 both ways), so in reverse Fx would push along the
-                // sliding and feed energy in. Undo the mirror on Fx; Mz's s·Fx term keeps it.
-                out.fx = -out.fx;
-            }
             let slips = wheel.tyre.slips();
             let omega0 = wheel.omega;
             // Wheel spin: drive and tyre torque, then brake and rolling resistance as Coulomb
