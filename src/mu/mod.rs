@@ -75,6 +75,9 @@ pub struct Config<F> {
     pub gate: F,
     /// Consecutive one-sided outliers that declare a change of surface.
     pub change_count: u16,
+    /// Mutually consistent identifiable samples needed before the first estimate is reported
+    /// (a short burst of readings in a transient never becomes an estimate).
+    pub init_count: u16,
     /// Prior μ reported before any identifiable sample, and when the estimate has aged out.
     pub mu_prior: F,
     /// σ of the prior; an estimate whose σ grows beyond it falls back to the prior.
@@ -100,7 +103,8 @@ impl<F: Float> Default for Config<F> {
             trail_model_rel: c(0.02),
             q: c(0.02),
             gate: c(4.0),
-            change_count: 40,
+            change_count: 60,
+            init_count: 25,
             mu_prior: c(0.8),
             sigma_prior: c(0.4),
             lowpass_tau: c(0.01),
@@ -207,6 +211,8 @@ pub struct MuEstimator<'t, F> {
     p: F,
     have: bool,
     run: i32,
+    // candidate first estimate: inverse-variance mean, its variance, count
+    cand: (F, F, u16),
     // low-pass state
     lp: Option<Sample<F>>,
     last_t: Option<F>,
@@ -297,6 +303,7 @@ impl<'t, F: Float> MuEstimator<'t, F> {
             p: F::ZERO,
             have: false,
             run: 0,
+            cand: (F::ZERO, F::ZERO, 0),
             lp: None,
             last_t: None,
         }
@@ -316,6 +323,7 @@ impl<'t, F: Float> MuEstimator<'t, F> {
     pub fn reset(&mut self) {
         self.have = false;
         self.run = 0;
+        self.cand = (F::ZERO, F::ZERO, 0);
         self.lp = None;
         self.last_t = None;
     }
@@ -630,8 +638,27 @@ impl<'t, F: Float> MuEstimator<'t, F> {
         let mu0 = self.table.mu0;
         let mut change = false;
         if !self.have {
-            self.lambda = r.lambda;
-            self.p = r.var;
+            // Debounce: the first estimate needs `init_count` mutually consistent readings.
+            let (mean, var, n) = self.cand;
+            let consistent = n > 0 && (r.lambda - mean).sq() <= self.cfg.gate.sq() * (var + r.var);
+            self.cand = if consistent {
+                let w = var / (var + r.var);
+                (
+                    mean + (F::ONE - w) * (r.lambda - mean),
+                    var * r.var / (var + r.var),
+                    n.saturating_add(1),
+                )
+            } else {
+                (r.lambda, r.var, 1)
+            };
+            if self.cand.2 < self.cfg.init_count {
+                return self.hold::<M>();
+            }
+            self.lambda = self.cand.0;
+            self.p = self
+                .cand
+                .1
+                .max(r.var / F::from_f64(f64::from(self.cfg.init_count)));
             self.have = true;
             self.run = 0;
         } else {
