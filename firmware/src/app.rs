@@ -1,12 +1,40 @@
-//! The application: protocol state, parameter upload, the per-tick Magic Formula evaluations.
-//! Board independent: a board hands in its CAN driver (any `embedded_can::nb::Can`) and a
-//! millisecond clock.
+//! The application: protocol state, parameter upload, and at each tick every queued
+//! measurement through its wheel's pipeline ([`crate::wheel`]: transient filter, Magic Formula,
+//! friction estimator). Board independent: a board hands in its CAN driver (any
+//! `embedded_can::nb::Can`) and a millisecond clock.
+//!
+//! ## The estimator's table
+//! The estimators of the four wheels share one [`GoughTable`] (98 KB in f32, ~10 000 Magic
+//! Formula evaluations to build). The App never builds it inside [`App::poll`] or [`App::tick`]:
+//! after a parameter set is loaded it hands out a [`TableJob`] ([`App::table_job`]); the board
+//! builds it where it does not hold up reception and the tick — the mps2 board in thread mode
+//! while poll and tick run in the SysTick interrupt — and returns it with [`App::table_built`].
+//! Until then measurements get `Forces` and no `Estimate`; the `Ack` of a `ParamCommit` is sent
+//! once the new tyre's table is built, so a host that waits for it gets estimates from its first
+//! measurement on. A board that never builds (STM32F405: the table does not fit its RAM) leaves
+//! [`App::estimator`] off: commits are acknowledged at once and no `Estimate` is ever sent.
 
-use gough::math::Libm;
-use gough::mf::{self, Options, Params};
+use crate::wheel::{self, Wheel};
+use gough::mf::Params;
+use gough::mu::{BuildError, GoughTable};
 use gough::proto::{
-    self, crc32, id, link, Ack, AckCode, Command, Feed, Forces, Measurement, Msg, MsgType,
-    ParamSource, Reassembler, Settings, Status, MAX_TIR_LEN, MSG_BUF,
+    self, crc32, id, link, Ack, AckCode, Command, Estimate, Feed, Forces, Measurement, Msg,
+    MsgType, ParamSource, Reassembler, Settings, Status, MAX_TIR_LEN, MSG_BUF,
+};
+
+/// The math backend of the device's pipeline: `gough::math::Fast` (feature `fast`, on by
+/// default: as accurate as f32 libm, 7× cheaper on the M4F), else `gough::math::Libm`.
+#[cfg(feature = "fast")]
+pub type Math = gough::math::Fast;
+/// The math backend of the device's pipeline (`fast` feature off: the libm reference).
+#[cfg(not(feature = "fast"))]
+pub type Math = gough::math::Libm;
+
+/// Name of [`Math`], as the host's `gough replay --backend` spells it.
+pub const MATH_NAME: &str = if cfg!(feature = "fast") {
+    "fast"
+} else {
+    "libm"
 };
 
 /// Attempts per frame while the driver's transmit queue is full.
@@ -25,6 +53,25 @@ pub enum Event {
     Stop,
 }
 
+/// A table to build: the parameter set and its generation (see [`App::table_job`]).
+#[derive(Debug, Clone)]
+pub struct TableJob {
+    /// The tyre.
+    pub params: Params<f32>,
+    /// Generation of the parameter set; hand it back to [`App::table_built`].
+    pub gen: u32,
+}
+
+/// Builds the table of `job` into `slot` (~10 000 Magic Formula evaluations with [`Math`]; the
+/// core returns the 98 KB table by value, so the caller's stack needs about as much again).
+pub fn build_table(
+    job: &TableJob,
+    slot: &'static mut core::mem::MaybeUninit<GoughTable<f32>>,
+) -> Result<&'static GoughTable<f32>, BuildError> {
+    let t = GoughTable::for_tyre::<Math>(&job.params)?;
+    Ok(slot.write(t))
+}
+
 #[derive(Debug, Clone, Copy)]
 struct Upload {
     len: usize,
@@ -35,6 +82,19 @@ struct Upload {
 /// The whole device state. ~35 KiB (the upload buffer is 32 KiB): keep it in a `static`.
 pub struct App {
     params: Option<Params<f32>>,
+    /// Generation of `params` (counts every load).
+    gen: u32,
+    wheels: [Wheel<'static>; 4],
+    /// The estimators' table, when built for the current parameters.
+    table: Option<&'static GoughTable<f32>>,
+    /// Generation a table job is out for.
+    building: Option<u32>,
+    /// Generation the last finished build was for (success or not).
+    built: Option<u32>,
+    /// Sequence number of a `ParamCommit` whose `Ack` waits for the table.
+    commit_ack: Option<u8>,
+    /// Whether this board builds tables and runs the estimators (see the module doc).
+    pub estimator: bool,
     source: ParamSource,
     hash: u32,
     upload: Option<Upload>,
@@ -63,11 +123,20 @@ impl Default for App {
     }
 }
 
+const NO_WHEEL: Wheel<'static> = Wheel::new();
+
 impl App {
-    /// Empty state: no parameters, default settings.
+    /// Empty state: no parameters, default settings (`Settings::default()`), estimator off.
     pub const fn new() -> Self {
         App {
             params: None,
+            gen: 0,
+            wheels: [NO_WHEEL; 4],
+            table: None,
+            building: None,
+            built: None,
+            commit_ack: None,
+            estimator: false,
             source: ParamSource::None,
             hash: 0,
             upload: None,
@@ -96,9 +165,7 @@ impl App {
     /// Returns the 1-based line of the first error otherwise.
     pub fn load_tir(&mut self, text: &str, source: ParamSource) -> Result<(), u32> {
         let t = gough::tir::parse(text).map_err(|e| e.line)?;
-        self.params = Some(t.params.cast::<f32>());
-        self.hash = crc32(text.as_bytes());
-        self.source = source;
+        self.set_params(t.params.cast::<f32>(), crc32(text.as_bytes()), source);
         defmt::info!(
             "parameters loaded: {=u32:x} ({} bytes, {} warnings)",
             self.hash,
@@ -111,6 +178,85 @@ impl App {
     /// The parameter set in use.
     pub fn params(&self) -> Option<&Params<f32>> {
         self.params.as_ref()
+    }
+
+    /// Swaps in a parameter set: a new generation; filters restart, estimators stop until the
+    /// new table is built.
+    fn set_params(&mut self, p: Params<f32>, hash: u32, source: ParamSource) {
+        self.params = Some(p);
+        self.hash = hash;
+        self.source = source;
+        self.gen = self.gen.wrapping_add(1);
+        self.table = None;
+        for w in self.wheels.iter_mut() {
+            w.reset_filter();
+            w.stop_estimator();
+        }
+    }
+
+    /// The estimators' table, when one is built for the parameters in use (borrowed from the
+    /// App: the board rewrites the table's storage only after [`App::table_job`]).
+    pub fn table(&self) -> Option<&GoughTable<f32>> {
+        self.table
+    }
+
+    /// A table to build, if one is wanted (estimator on, parameters loaded, no table for them
+    /// and no build out). From here until [`App::table_built`] the App holds no reference to
+    /// any table: the board may write its table storage.
+    pub fn table_job(&mut self) -> Option<TableJob> {
+        if !self.estimator || self.building.is_some() || self.built == Some(self.gen) {
+            return None;
+        }
+        let params = self.params.clone()?;
+        self.table = None;
+        for w in self.wheels.iter_mut() {
+            w.stop_estimator();
+        }
+        self.building = Some(self.gen);
+        Some(TableJob {
+            params,
+            gen: self.gen,
+        })
+    }
+
+    /// A build is done: installs the table and starts the estimators if it is for the
+    /// parameters in use (a stale one is dropped; [`App::table_job`] then asks again), and
+    /// sends the `ParamCommit` acknowledgement that waited for it.
+    pub fn table_built<C: embedded_can::nb::Can>(
+        &mut self,
+        can: &mut C,
+        gen: u32,
+        result: Result<&'static GoughTable<f32>, BuildError>,
+    ) {
+        if self.building == Some(gen) {
+            self.building = None;
+        }
+        if gen != self.gen {
+            return;
+        }
+        self.built = Some(gen);
+        match result {
+            Ok(t) => {
+                self.table = Some(t);
+                self.start_estimators();
+                defmt::info!(
+                    "estimator table built ({} bytes)",
+                    core::mem::size_of_val(t)
+                );
+            }
+            Err(e) => defmt::warn!("no estimator for this tyre: {}", e),
+        }
+        if let Some(seq) = self.commit_ack.take() {
+            self.ack(can, MsgType::ParamCommit, seq, AckCode::Ok);
+        }
+    }
+
+    fn start_estimators(&mut self) {
+        if let (Some(t), Some(p)) = (self.table, self.params.as_ref()) {
+            for w in self.wheels.iter_mut() {
+                w.start_estimator(t, p, &self.settings);
+            }
+        }
     }
 
     /// The status report.
@@ -258,9 +404,8 @@ impl App {
                                     // Copy out of `self.text` borrow: parse needs &mut self after.
                                     match gough::tir::parse(s) {
                                         Ok(t) => {
-                                            self.params = Some(t.params.cast::<f32>());
-                                            self.hash = u.hash;
-                                            self.source = ParamSource::Uploaded;
+                                            let p = t.params.cast::<f32>();
+                                            self.set_params(p, u.hash, ParamSource::Uploaded);
                                             defmt::info!("uploaded parameters {=u32:x}", u.hash);
                                             AckCode::Ok
                                         }
@@ -271,10 +416,20 @@ impl App {
                         }
                     }
                 };
-                self.ack(can, MsgType::ParamCommit, seq, code);
+                if code == AckCode::Ok && self.estimator {
+                    // Acknowledged once the table is built (`table_built`); a commit this one
+                    // supersedes is acknowledged now.
+                    if let Some(old) = self.commit_ack.replace(seq) {
+                        self.ack(can, MsgType::ParamCommit, old, AckCode::Ok);
+                    }
+                } else {
+                    self.ack(can, MsgType::ParamCommit, seq, code);
+                }
             }
             Msg::Settings(s) => {
                 self.settings = s;
+                // The estimators restart with the new prior (they forget what they learnt).
+                self.start_estimators();
                 self.ack(can, MsgType::Settings, seq, AckCode::Ok);
             }
             Msg::Command(Command::StatusRequest) => {
@@ -299,38 +454,47 @@ impl App {
         None
     }
 
-    /// One fixed-rate step: every queued measurement → `mf::eval` → `Forces` (or an `Ack`
-    /// saying why not). The estimator hooks in here.
+    /// One fixed-rate step: every queued measurement through its wheel's pipeline → `Forces`
+    /// (or an `Ack` saying why not), then `Estimate` when the estimator runs.
     pub fn tick<C: embedded_can::nb::Can>(&mut self, can: &mut C, now_ms: u32) {
         self.now_ms = now_ms;
         while let Some((m, seq)) = self.queue.pop_front() {
-            let reply = self.evaluate(&m);
-            match reply {
+            let (forces, estimate) = self.process(&m);
+            match forces {
                 Ok(f) => self.send(can, &Msg::Forces(f)),
                 Err(code) => {
                     self.eval_errors = self.eval_errors.wrapping_add(1);
                     self.ack(can, MsgType::Measurement, seq, code);
                 }
             }
+            if let Some(e) = estimate {
+                self.send(can, &Msg::Estimate(e));
+            }
         }
     }
 
-    /// The predicted forces of one sample (the same call the host's replay check makes).
+    /// One measurement through its wheel's pipeline ([`crate::wheel`]): the forces (or why
+    /// none) and the estimate (when the estimator runs). The host's replay check runs the same.
+    pub fn process(&mut self, m: &Measurement) -> (Result<Forces, AckCode>, Option<Estimate>) {
+        let Some(w) = self.wheels.get_mut(m.wheel.index()) else {
+            return (Err(AckCode::EvalError), None);
+        };
+        let forces = match self.params.as_ref() {
+            Some(p) => w.forces::<Math>(p, self.settings.limits, m),
+            None => Err(AckCode::NoParams),
+        };
+        let estimate = w.estimate::<Math>(m).map(|(e, change)| {
+            if change {
+                defmt::info!("wheel {}: change of surface, mu {}", m.wheel, e.mu);
+            }
+            e
+        });
+        (forces, estimate)
+    }
+
+    /// The steady-state forces of one sample, without the filter (the selftest's oracle point).
     pub fn evaluate(&self, m: &Measurement) -> Result<Forces, AckCode> {
         let p = self.params.as_ref().ok_or(AckCode::NoParams)?;
-        let input = m.mf_input(p).ok_or(AckCode::NoSlip)?;
-        let opts = Options {
-            limits: self.settings.limits,
-            ..Options::default()
-        };
-        let o = mf::eval::<f32, Libm>(p, &input, &opts).map_err(|_| AckCode::EvalError)?;
-        Ok(Forces {
-            wheel: m.wheel,
-            t_us: m.t_us,
-            fx: o.fx,
-            fy: o.fy,
-            mz: o.mz,
-            flags: o.flags.0,
-        })
+        wheel::steady::<Math>(p, self.settings.limits, m)
     }
 }

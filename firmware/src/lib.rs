@@ -1,9 +1,11 @@
 //! gough firmware: the board-independent application ([`app`]) and the boards.
 //!
 //! The loop (see `architecture.md`): CAN frames → `proto::Reassembler` → `Msg`; measurements
-//! are queued and, at each 1 kHz tick, run through `mf::eval` (f32, libm); the predicted forces
-//! go back as `Msg::Forces` through `proto::Segmenter`. The relaxation-length filter and the
-//! friction estimator plug in at [`app::App::tick`] when they land in the core.
+//! are queued and, at each 1 kHz tick, run through their wheel's pipeline ([`wheel`]: the
+//! relaxation-length filter, `mf::eval` at the transient slips, the Gough-plot friction
+//! estimator; f32, `math::Fast` by default); the predicted forces and the estimates go back as
+//! `Msg::Forces` and `Msg::Estimate` through `proto::Segmenter`. The estimator's table is built
+//! outside the tick ([`app`]).
 //!
 //! Boards: [`mps2`] (QEMU mps2-an386: SLCAN over the CMSDK UART0, SysTick, semihosting) and
 //! `src/bin/stm32f4.rs` (STM32F405, bxCAN1 through stm32f4xx-hal). Any driver implementing
@@ -17,9 +19,10 @@ pub mod app;
 #[cfg(feature = "mps2")]
 pub mod mps2;
 pub mod stack;
+pub mod wheel;
 
 /// Firmware version reported in `Status` (major, minor, patch).
-pub const VERSION: [u8; 3] = [0, 2, 0];
+pub const VERSION: [u8; 3] = [0, 3, 0];
 
 /// The parameter set a device boots with, until one is uploaded.
 pub const BUNDLED_TIR: &str =

@@ -27,9 +27,28 @@ pub fn start_systick(mut syst: cortex_m::peripheral::SYST) {
     syst.enable_counter();
 }
 
-/// The SysTick handler's body (each binary declares `#[exception] fn SysTick`).
-pub fn on_systick() {
-    TICKS.fetch_add(1, Ordering::Relaxed);
+/// The SysTick handler's body (each binary declares `#[exception] fn SysTick`): counts the
+/// millisecond; returns the new count.
+pub fn on_systick() -> u32 {
+    TICKS.fetch_add(1, Ordering::Relaxed).wrapping_add(1)
+}
+
+/// Priority of the UART0 receive interrupt: above SysTick's, so bytes keep flowing into the
+/// receive queue while the tick runs (priorities use the top bits: valid for any number of
+/// implemented priority bits ≥ 2).
+pub const PRIO_UART: u8 = 0x40;
+/// Priority of SysTick (poll and tick run in it): below the UART's, above thread mode.
+pub const PRIO_SYSTICK: u8 = 0xC0;
+
+/// Sets the priorities [`PRIO_UART`] and [`PRIO_SYSTICK`].
+pub fn set_priorities(scb: &mut cortex_m::peripheral::SCB, nvic: &mut cortex_m::peripheral::NVIC) {
+    use cortex_m::peripheral::scb::SystemHandler;
+    // SAFETY: changing priorities can break priority-based critical sections; this firmware
+    // uses none (its critical sections mask interrupts), and both handlers are ready.
+    unsafe {
+        scb.set_priority(SystemHandler::SysTick, PRIO_SYSTICK);
+        nvic.set_priority(Irq(UART0_RX_IRQ as u16), PRIO_UART);
+    }
 }
 
 /// The CMSDK APB UART (ARM DDI 0479, §4.3): 1-byte buffers each way; receive by interrupt.

@@ -1,8 +1,9 @@
 //! The `gough proto`, `gough firmware` and `gough replay` subcommands.
 use crate::device::{self, Device, Qemu, SlcanTcp};
-use crate::replay::{self, Answer};
+use crate::replay::{self, Answer, Backend32};
 use crate::tyre;
 use clap::{Args, Subcommand};
+use gough::proto::EstimateState;
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
@@ -70,6 +71,9 @@ pub struct ReplayArgs {
     /// Allowed difference for `--check`, in units in the last place of f32.
     #[arg(long, default_value_t = 0)]
     pub max_ulps: u64,
+    /// Math backend the firmware was built with, for `--check` (the default build: fast).
+    #[arg(long, value_enum, default_value_t = Backend32::Fast)]
+    pub backend: Backend32,
     #[command(flatten)]
     #[allow(missing_docs)]
     pub run: RunArgs,
@@ -150,13 +154,20 @@ pub fn replay(a: ReplayArgs) -> Result<(), String> {
     let got = replay::stream(&mut dev, &log, a.window)?;
     let n_forces = got
         .iter()
-        .filter(|g| matches!(g, Answer::Forces(_)))
+        .filter(|g| matches!(g.answer, Answer::Forces(_)))
+        .count();
+    let n_est = got.iter().filter(|g| g.estimate.is_some()).count();
+    let n_ident = got
+        .iter()
+        .filter(|g| matches!(g.estimate, Some(e) if e.state == EstimateState::Identifiable))
         .count();
     eprintln!(
-        "{} rows -> {} forces, {} without ({:.2} s)",
+        "{} rows -> {} forces, {} without; {} estimates, {} identifiable ({:.2} s)",
         log.len(),
         n_forces,
         log.len() - n_forces,
+        n_est,
+        n_ident,
         t1.elapsed().as_secs_f64()
     );
     replay::write_results(&a.out, &log, &got)
@@ -185,8 +196,16 @@ pub fn replay(a: ReplayArgs) -> Result<(), String> {
     }
     if a.check {
         let p32 = t.params.cast::<f32>();
-        let worst = replay::compare(&p32, &log, &got)?;
-        eprintln!("check: device answers = host f32 run, worst {worst} ulp");
+        let host = replay::host_f32(&p32, &log, a.backend);
+        let w = replay::compare(&host, &got)?;
+        eprintln!(
+            "check: device answers = host f32 run ({}): forces worst {} ulp; estimates worst {} ulp ({} rows)",
+            a.backend.name(),
+            w.forces,
+            w.estimates,
+            w.n_estimates
+        );
+        let worst = w.forces.max(w.estimates);
         if worst > a.max_ulps {
             return Err(format!(
                 "device and host f32 differ by {worst} ulp (allowed {})",

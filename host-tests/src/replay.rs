@@ -1,23 +1,37 @@
 //! `gough replay`: a measurement log → the device (as CAN frames) → the device's answers.
 //!
-//! LOG columns: `t,fz,fy,mz` required; `fx,vx,alpha,kappa,gamma,wheel` optional (SI, rad, ISO-W;
-//! `t` in s, `wheel` 0..3 = FL, FR, RL, RR, default 0). RESULTS columns: `t,wheel,fx,fy,mz,flags,ack`
-//! then `mu,sigma,state` (empty until the firmware runs the estimator). `ack` is empty when the
-//! device answered with forces, else the reason it did not (`NoSlip`, `EvalError`, ...).
+//! LOG columns: `t,fz,fy,mz` required; `fx,vx,alpha,kappa,gamma,wheel,omega` optional (SI, rad,
+//! ISO-W; `t` in s, `wheel` 0..3 = FL, FR, RL, RR, default 0, `omega` the wheel speed in rad/s).
+//! RESULTS columns: `t,wheel,fx,fy,mz,flags,ack` then `mu,sigma,state`. `ack` is empty when the
+//! device answered with forces, else the reason it did not (`NoSlip`, `EvalError`, ...);
+//! `mu,sigma,state` are the device's friction estimate after that sample (state
+//! `identifiable`, `not_identifiable` or `fallback`), empty when it sent none.
+//!
+//! The check ([`host_f32`], [`compare`]) runs the device's own per-wheel pipeline
+//! (`firmware/src/wheel.rs`, compiled here as [`wheel`]) on the host, in f32 with the same math
+//! backend, over the same measurement stream: transient filter, Magic Formula, and the core's
+//! `MuEstimator<f32>` on a table built on the host.
 use crate::csvio::{self, CsvError};
 use crate::device::Device;
-use gough::math::Libm;
-use gough::mf::{self, Options, Params};
-use gough::proto::{AckCode, Forces, Measurement, Msg, MsgType, Wheel};
+use gough::math::{Backend, Fast, Libm};
+use gough::mf::Params;
+use gough::mu::GoughTable;
+use gough::proto::{
+    AckCode, Command, Estimate, EstimateState, Forces, Measurement, Msg, MsgType, Settings, Wheel,
+};
 use std::collections::VecDeque;
 use std::fmt::Write as _;
 use std::path::Path;
 use std::time::Duration;
 
+/// The firmware's per-wheel pipeline, the very source file the device runs.
+#[path = "../../firmware/src/wheel.rs"]
+pub mod wheel;
+
 /// Required log columns.
 pub const REQUIRED: [&str; 4] = ["t", "fz", "fy", "mz"];
 /// Optional log columns.
-pub const OPTIONAL: [&str; 6] = ["fx", "vx", "alpha", "kappa", "gamma", "wheel"];
+pub const OPTIONAL: [&str; 7] = ["fx", "vx", "alpha", "kappa", "gamma", "wheel", "omega"];
 /// Result columns.
 pub const RESULT_COLUMNS: [&str; 10] = [
     "t", "wheel", "fx", "fy", "mz", "flags", "ack", "mu", "sigma", "state",
@@ -61,7 +75,7 @@ pub fn read_log(path: &Path) -> Result<Vec<Measurement>, CsvError> {
             mz: g(3) as f32,
             fx: o(0),
             vx: o(1),
-            omega: None,
+            omega: o(6),
             delta: None,
             alpha: o(2),
             kappa: o(3),
@@ -80,9 +94,36 @@ pub enum Answer {
     Ack(AckCode),
 }
 
-/// Streams `log` to the device, at most `window` measurements in flight; one answer per row.
-pub fn stream(dev: &mut Device, log: &[Measurement], window: usize) -> Result<Vec<Answer>, String> {
-    let mut out = Vec::with_capacity(log.len());
+/// Everything the device sent for one measurement.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Reply {
+    /// Forces, or why none.
+    pub answer: Answer,
+    /// The friction estimate after this sample (none while the device has no estimator).
+    pub estimate: Option<Estimate>,
+}
+
+/// Attaches an `Estimate` to the row it follows (the device sends it right after that row's
+/// forces or acknowledgement).
+fn attach(out: &mut [Reply], log: &[Measurement], e: Estimate) -> Result<(), String> {
+    let i = out.len();
+    let (Some(r), Some(m)) = (out.last_mut(), i.checked_sub(1).and_then(|k| log.get(k))) else {
+        return Err("an estimate arrived before any answer".into());
+    };
+    if (e.wheel, e.t_us) != (m.wheel, m.t_us) || r.estimate.is_some() {
+        return Err(format!(
+            "estimate for wheel {:?} t_us {} does not follow its row (row {i}: wheel {:?} t_us {})",
+            e.wheel, e.t_us, m.wheel, m.t_us
+        ));
+    }
+    r.estimate = Some(e);
+    Ok(())
+}
+
+/// Streams `log` to the device, at most `window` measurements in flight; one reply per row.
+/// Ends with a status request as a fence, so that the last row's estimate is in.
+pub fn stream(dev: &mut Device, log: &[Measurement], window: usize) -> Result<Vec<Reply>, String> {
+    let mut out: Vec<Reply> = Vec::with_capacity(log.len());
     let mut in_flight: VecDeque<usize> = VecDeque::new();
     let mut next = 0usize;
     while out.len() < log.len() {
@@ -91,16 +132,19 @@ pub fn stream(dev: &mut Device, log: &[Measurement], window: usize) -> Result<Ve
             in_flight.push_back(next);
             next += 1;
         }
-        let m = dev.recv(Duration::from_secs(10))?;
-        let ans = match m {
+        let answer = match dev.recv(Duration::from_secs(10))? {
             Msg::Forces(f) => Answer::Forces(f),
             Msg::Ack(a) if a.of == MsgType::Measurement as u8 => Answer::Ack(a.code),
+            Msg::Estimate(e) => {
+                attach(&mut out, log, e)?;
+                continue;
+            }
             _ => continue,
         };
         let Some(i) = in_flight.pop_front() else {
             return Err("the device answered a measurement that was not sent".into());
         };
-        if let Answer::Forces(f) = ans {
+        if let Answer::Forces(f) = answer {
             if f.t_us != log[i].t_us || f.wheel != log[i].wheel {
                 return Err(format!(
                     "answer out of order: row {} has t_us {}, the answer {}",
@@ -110,27 +154,74 @@ pub fn stream(dev: &mut Device, log: &[Measurement], window: usize) -> Result<Ve
                 ));
             }
         }
-        out.push(ans);
+        out.push(Reply {
+            answer,
+            estimate: None,
+        });
     }
-    Ok(out)
+    // The device answers a status request in its poll, after the tick that sent the last
+    // row's forces and estimate has finished.
+    dev.send(&Msg::Command(Command::StatusRequest))?;
+    loop {
+        match dev.recv(Duration::from_secs(10))? {
+            Msg::Estimate(e) => attach(&mut out, log, e)?,
+            Msg::Status(_) => return Ok(out),
+            _ => {}
+        }
+    }
 }
 
-/// The host's f32 run of the same core on one measurement: what the device must answer.
-pub fn host_f32(p: &Params<f32>, m: &Measurement) -> Answer {
-    let Some(input) = m.mf_input(p) else {
-        return Answer::Ack(AckCode::NoSlip);
-    };
-    match mf::eval::<f32, Libm>(p, &input, &Options::default()) {
-        Ok(o) => Answer::Forces(Forces {
-            wheel: m.wheel,
-            t_us: m.t_us,
-            fx: o.fx,
-            fy: o.fy,
-            mz: o.mz,
-            flags: o.flags.0,
-        }),
-        Err(_) => Answer::Ack(AckCode::EvalError),
+/// Math backend of the device's pipeline (the firmware's `app::Math`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum Backend32 {
+    /// `gough::math::Fast` (the firmware's default build).
+    Fast,
+    /// `gough::math::Libm` (a firmware built without its `fast` feature).
+    Libm,
+}
+
+impl Backend32 {
+    /// Name as printed.
+    pub fn name(self) -> &'static str {
+        match self {
+            Backend32::Fast => "math::Fast",
+            Backend32::Libm => "math::Libm",
+        }
     }
+}
+
+/// What the device must answer: its per-wheel pipeline run on the host in f32 with backend
+/// `backend`, from the state right after a parameter upload (filters at rest, estimators
+/// fresh with the default settings, table built for `p`).
+pub fn host_f32(p: &Params<f32>, log: &[Measurement], backend: Backend32) -> Vec<Reply> {
+    match backend {
+        Backend32::Fast => run::<Fast>(p, log),
+        Backend32::Libm => run::<Libm>(p, log),
+    }
+}
+
+fn run<M: Backend<f32>>(p: &Params<f32>, log: &[Measurement]) -> Vec<Reply> {
+    let settings = Settings::default();
+    let table = GoughTable::for_tyre::<M>(p).ok().map(Box::new);
+    let mut wheels: [wheel::Wheel<'_>; 4] = Default::default();
+    if let Some(t) = table.as_deref() {
+        for w in &mut wheels {
+            w.start_estimator(t, p, &settings);
+        }
+    }
+    log.iter()
+        .map(|m| {
+            let w = &mut wheels[m.wheel.index()];
+            let answer = match w.forces::<M>(p, settings.limits, m) {
+                Ok(f) => Answer::Forces(f),
+                Err(c) => Answer::Ack(c),
+            };
+            Reply {
+                answer,
+                estimate: w.estimate::<M>(m).map(|(e, _)| e),
+            }
+        })
+        .collect()
 }
 
 /// Distance in units in the last place between two f32 (0 when equal; large across signs).
@@ -149,14 +240,34 @@ pub fn ulps(a: f32, b: f32) -> u64 {
     (key(a) - key(b)).unsigned_abs()
 }
 
-/// Compares device answers with the host's f32 run; the largest ulp distance over fx, fy, mz,
-/// or an error naming the first row that differs in kind.
-pub fn compare(p: &Params<f32>, log: &[Measurement], got: &[Answer]) -> Result<u64, String> {
-    let mut worst = 0;
-    for (i, (m, g)) in log.iter().zip(got).enumerate() {
-        match (host_f32(p, m), g) {
+/// The largest differences found by [`compare`], in ulps.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct Worst {
+    /// Over Fx, Fy, Mz.
+    pub forces: u64,
+    /// Over μ and σ.
+    pub estimates: u64,
+    /// Rows with an estimate.
+    pub n_estimates: usize,
+}
+
+/// Compares device replies with the host's f32 run ([`host_f32`]); the largest ulp distances,
+/// or an error naming the first row that differs in kind (forces vs none, flags, estimate
+/// present or not, estimator state).
+pub fn compare(host: &[Reply], got: &[Reply]) -> Result<Worst, String> {
+    let mut w = Worst::default();
+    if host.len() != got.len() {
+        return Err(format!(
+            "{} host rows, {} device rows",
+            host.len(),
+            got.len()
+        ));
+    }
+    for (i, (h, d)) in host.iter().zip(got).enumerate() {
+        match (h.answer, d.answer) {
             (Answer::Forces(h), Answer::Forces(d)) => {
-                worst = worst
+                w.forces = w
+                    .forces
                     .max(ulps(h.fx, d.fx))
                     .max(ulps(h.fy, d.fy))
                     .max(ulps(h.mz, d.mz));
@@ -169,31 +280,60 @@ pub fn compare(p: &Params<f32>, log: &[Measurement], got: &[Answer]) -> Result<u
                     ));
                 }
             }
-            (Answer::Ack(a), Answer::Ack(b)) if a == *b => {}
+            (Answer::Ack(a), Answer::Ack(b)) if a == b => {}
             (h, d) => return Err(format!("row {}: host {h:?}, device {d:?}", i + 1)),
         }
+        match (h.estimate, d.estimate) {
+            (None, None) => {}
+            (Some(h), Some(d)) if h.state == d.state => {
+                w.n_estimates += 1;
+                w.estimates = w
+                    .estimates
+                    .max(ulps(h.mu, d.mu))
+                    .max(ulps(h.sigma, d.sigma));
+            }
+            (h, d) => {
+                return Err(format!(
+                    "row {}: host estimate {h:?}, device estimate {d:?}",
+                    i + 1
+                ))
+            }
+        }
     }
-    Ok(worst)
+    Ok(w)
+}
+
+/// Name of an estimator state as in the RESULTS file (and `gough mu estimate`).
+pub fn state_name(s: EstimateState) -> &'static str {
+    match s {
+        EstimateState::Identifiable => "identifiable",
+        EstimateState::NotIdentifiable => "not_identifiable",
+        EstimateState::Fallback => "fallback",
+    }
 }
 
 /// Writes the RESULTS file (atomically: temporary file, then rename).
-pub fn write_results(path: &Path, log: &[Measurement], got: &[Answer]) -> std::io::Result<()> {
+pub fn write_results(path: &Path, log: &[Measurement], got: &[Reply]) -> std::io::Result<()> {
     let mut s = String::new();
     s.push_str(&RESULT_COLUMNS.join(","));
     s.push('\n');
-    for (m, a) in log.iter().zip(got) {
-        let t = f64::from(m.t_us) * 1e-6;
-        let _ = match a {
-            Answer::Forces(f) => writeln!(
+    for (m, r) in log.iter().zip(got) {
+        let t = f64::from(m.t_us) / 1e6;
+        let _ = match r.answer {
+            Answer::Forces(f) => write!(
                 s,
-                "{t},{},{:e},{:e},{:e},{},,,,",
+                "{t},{},{:e},{:e},{:e},{},,",
                 m.wheel.index(),
                 f.fx,
                 f.fy,
                 f.mz,
                 f.flags
             ),
-            Answer::Ack(c) => writeln!(s, "{t},{},,,,,{c:?},,,", m.wheel.index()),
+            Answer::Ack(c) => write!(s, "{t},{},,,,,{c:?},", m.wheel.index()),
+        };
+        let _ = match r.estimate {
+            Some(e) => writeln!(s, "{:e},{:e},{}", e.mu, e.sigma, state_name(e.state)),
+            None => writeln!(s, ",,"),
         };
     }
     if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {

@@ -153,7 +153,9 @@ fn test_all() -> Result<(), String> {
     let (mut passed, mut failed) = (0u64, 0u64);
     ensure_targets()?;
     for t in TARGETS {
-        step(&format!("core builds for {t} (no_std, no alloc), default and all backends"));
+        step(&format!(
+            "core builds for {t} (no_std, no alloc), default and all backends"
+        ));
         run(cargo().args(["build", "-p", "gough", "--release", "--target", t]))?;
         run(cargo().args([
             "build",

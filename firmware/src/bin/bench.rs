@@ -5,17 +5,27 @@
 //! Each workload is bracketed by `bench_start`/`bench_stop`: exported, never inlined, with
 //! distinct bodies, so an outside instruction counter (a QEMU plugin, a debugger) can check
 //! the figures. Printed: instructions per evaluation, and the largest error against the f64
-//! path over the same inputs.
+//! path over the same inputs; then, per wheel per sample, the friction estimator alone and the
+//! firmware's whole per-wheel pipeline (transient filter + Magic Formula + estimator), each with
+//! `Fast` and `Libm`, on a 1 kHz slalom with sensor noise: the mean over the stream (one
+//! bracket) and the worst sample (each sample timed alone: ±40 instructions); the cost of
+//! building the estimator's table, and the RAM.
 #![no_std]
 #![no_main]
 
+use core::mem::{size_of, MaybeUninit};
+use core::ptr::addr_of_mut;
 use core::sync::atomic::{AtomicU32, Ordering};
 use cortex_m::peripheral::{syst::SystClkSource, SYST};
 use cortex_m_rt::{entry, exception};
 use cortex_m_semihosting::hprintln;
 use gough::math::{Backend, Float, Libm};
 use gough::mf::{self, Input, Options, Params};
-use gough_firmware::mps2;
+use gough::mu::{GoughTable, MuEstimator, Sample, State};
+use gough::proto::{Measurement, Settings, Wheel as WheelId};
+use gough_firmware::app::{self, App, TableJob};
+use gough_firmware::wheel::Wheel;
+use gough_firmware::{mps2, stack};
 
 static WRAPS: AtomicU32 = AtomicU32::new(0);
 const RELOAD: u32 = 0x00FF_FFFF;
@@ -111,8 +121,214 @@ fn run<M: Backend<f32>>(
     (t1 - t0, ef, em)
 }
 
+/// Samples in the estimator's stream (1 s at 1 kHz).
+const NS: usize = 1000;
+static mut STREAM: [Measurement; NS] = [Measurement {
+    wheel: WheelId::FrontLeft,
+    t_us: 0,
+    fz: 0.0,
+    fy: 0.0,
+    mz: 0.0,
+    fx: None,
+    vx: None,
+    omega: None,
+    delta: None,
+    alpha: None,
+    kappa: None,
+    gamma: None,
+}; NS];
+static mut TABLE_FAST: MaybeUninit<GoughTable<f32>> = MaybeUninit::uninit();
+static mut TABLE_LIBM: MaybeUninit<GoughTable<f32>> = MaybeUninit::uninit();
+
+/// A 1 s slalom at 20 m/s and 1 kHz: α = 0.1 rad·sin(2π·1 Hz·t), Fz = Fz0·(1 + 0.15·sin), light
+/// braking κ = −0.02·sin², roll camber γ = `camber`·sin, sent when `camber` ≠ 0 (then γ lies
+/// between the table's camber nodes: the estimator interpolates over twice the curves; without
+/// γ the estimator takes its static camber 0, a node); "measured" Fx, Fy, Mz = the f32 Magic
+/// Formula plus noise (uniform: Mz ±3.5 N·m ≈ 2 N·m rms, Fy ±1.7 % Fz ≈ 1 % rms).
+fn slalom(p: &Params<f32>, camber: f32, out: &mut [Measurement; NS]) {
+    let mut x = 0x2545_f491u32;
+    let mut rnd = || {
+        x ^= x << 13;
+        x ^= x >> 17;
+        x ^= x << 5;
+        (x >> 8) as f32 / (1u32 << 24) as f32 * 2.0 - 1.0
+    };
+    for (i, m) in out.iter_mut().enumerate() {
+        let t = i as f32 * 1e-3;
+        let s = <Libm as Backend<f32>>::sin(core::f32::consts::TAU * t);
+        let (alpha, kappa, fz) = (0.1 * s, -0.02 * s * s, p.fnomin * (1.0 + 0.15 * s));
+        let gamma = camber * s;
+        let input = Input {
+            fz,
+            kappa,
+            alpha,
+            gamma,
+            phit: 0.0,
+            vx: 20.0,
+            p: None,
+        };
+        let (fx, fy, mz) = match mf::eval::<f32, Libm>(p, &input, &Options::default()) {
+            Ok(o) => (o.fx, o.fy, o.mz),
+            Err(_) => (0.0, 0.0, 0.0),
+        };
+        *m = Measurement {
+            wheel: WheelId::FrontLeft,
+            t_us: 1_000 * i as u32,
+            fz,
+            fy: fy + 0.017 * fz * rnd(),
+            mz: mz + 3.5 * rnd(),
+            fx: Some(fx),
+            vx: Some(20.0),
+            omega: None,
+            delta: None,
+            alpha: Some(alpha),
+            kappa: Some(kappa),
+            gamma: (camber != 0.0).then_some(gamma),
+        };
+    }
+}
+
+/// Per-sample figures of one workload, in instructions.
+struct PerSample {
+    mean: u32,
+    max: u32,
+    /// Mean over the samples the estimator found identifiable.
+    mean_identifiable: u32,
+    identifiable: usize,
+}
+
+/// The timer: instructions per SysTick count, and the cost of timing one sample \[counts\].
+#[derive(Clone, Copy)]
+struct Clock {
+    per_count: f64,
+    overhead: f64,
+}
+
+/// Runs `step` over the stream twice: once in one bracket (the mean), once timing each sample
+/// (the worst, less the timer's own cost); `step` returns the estimator's state. `fresh` makes
+/// the per-wheel state for each pass.
+fn per_sample<S>(
+    id: u32,
+    clock: Clock,
+    stream: &[Measurement],
+    fresh: impl Fn() -> S,
+    step: impl Fn(&mut S, &Measurement) -> State,
+) -> PerSample {
+    let mut st = fresh();
+    bench_start(id);
+    let t0 = now();
+    for m in stream {
+        core::hint::black_box(step(&mut st, core::hint::black_box(m)));
+    }
+    let t1 = now();
+    bench_stop(id);
+    let Clock {
+        per_count,
+        overhead,
+    } = clock;
+    let mean = (t1 - t0) as f64 * per_count / stream.len() as f64;
+    let mut st = fresh();
+    let (mut max, mut sum_id, mut n_id) = (0f64, 0f64, 0usize);
+    for m in stream {
+        let t0 = now();
+        let state = step(&mut st, core::hint::black_box(m));
+        let t1 = now();
+        let ins = ((t1 - t0) as f64 - overhead).max(0.0) * per_count;
+        max = max.max(ins);
+        if state == State::Identifiable {
+            sum_id += ins;
+            n_id += 1;
+        }
+    }
+    PerSample {
+        mean: mean as u32,
+        max: max as u32,
+        mean_identifiable: if n_id > 0 {
+            (sum_id / n_id as f64) as u32
+        } else {
+            0
+        },
+        identifiable: n_id,
+    }
+}
+
+fn to_state(s: gough::proto::EstimateState) -> State {
+    match s {
+        gough::proto::EstimateState::Identifiable => State::Identifiable,
+        gough::proto::EstimateState::NotIdentifiable => State::NotIdentifiable,
+        gough::proto::EstimateState::Fallback => State::Fallback,
+    }
+}
+
+/// The estimator alone and the whole per-wheel pipeline with backend `M` on table `t`.
+fn estimator_figures<M: Backend<f32>>(
+    name: &str,
+    ids: (u32, u32),
+    clock: Clock,
+    p: &Params<f32>,
+    t: &GoughTable<f32>,
+    stream: &[Measurement],
+) {
+    let cfg = gough_firmware::wheel::estimator_config(&Settings::default());
+    let e = per_sample(
+        ids.0,
+        clock,
+        stream,
+        || MuEstimator::for_tyre(t, p, cfg),
+        |est, m| {
+            let s = Sample {
+                t: m.t_us as f32 / 1.0e6,
+                fz: m.fz,
+                fy: m.fy,
+                mz: m.mz,
+                fx: m.fx,
+                vx: m.vx,
+                gamma: m.gamma,
+            };
+            est.update::<M>(&s).state
+        },
+    );
+    hprintln!(
+        "estimator (MuEstimator::update), {}: {} instructions per wheel per sample (mean over {} samples; identifiable samples {} mean; worst sample {}; {} identifiable)",
+        name, e.mean, NS, e.mean_identifiable, e.max, e.identifiable
+    );
+    let settings = Settings::default();
+    let w = per_sample(
+        ids.1,
+        clock,
+        stream,
+        || {
+            let mut w = Wheel::new();
+            w.start_estimator(t, p, &settings);
+            w
+        },
+        |w, m| {
+            let f = w.forces::<M>(p, true, m);
+            core::hint::black_box(&f);
+            w.estimate::<M>(m)
+                .map_or(State::Fallback, |(e, _)| to_state(e.state))
+        },
+    );
+    hprintln!(
+        "pipeline (transient filter + MF + estimator, firmware wheel::Wheel), {}: {} instructions per wheel per sample (mean; identifiable samples {} mean; worst sample {})",
+        name, w.mean, w.mean_identifiable, w.max
+    );
+}
+
+/// `app::build_table` in a frame of its own (not merged into `main`'s), so that its stack use
+/// shows.
+#[inline(never)]
+fn build_table(
+    job: &TableJob,
+    slot: &'static mut MaybeUninit<GoughTable<f32>>,
+) -> Result<&'static GoughTable<f32>, gough::mu::BuildError> {
+    app::build_table(job, slot)
+}
+
 #[entry]
 fn main() -> ! {
+    // SAFETY: first thing in main.
+    unsafe { stack::paint() };
     let Some(cp) = cortex_m::Peripherals::take() else {
         mps2::exit(false)
     };
@@ -171,5 +387,100 @@ fn main() -> ! {
     hprintln!(
         "micromath: not built (firmware feature `micromath` needs gough's `micromath` backend)"
     );
+
+    // The friction estimator. The tables first: the firmware's own (`app::build_table`, the
+    // firmware's backend `app::Math`) and, when that is `Fast`, a `Libm` one to compare.
+    let job = TableJob {
+        params: p32.clone(),
+        gen: 1,
+    };
+    // Repaint, so that the peak below is this build's (plus main's frame, `stack_before`).
+    // SAFETY: nothing lives below the current frame (SysTick's handler frames come and go).
+    unsafe { stack::paint() };
+    let stack_before = stack::peak();
+    // SAFETY: the only reference to TABLE_FAST, taken once.
+    let slot = unsafe { &mut *addr_of_mut!(TABLE_FAST) };
+    bench_start(10);
+    let t0 = now();
+    let built = build_table(&job, slot);
+    let t1 = now();
+    bench_stop(10);
+    let Ok(t_math) = built else {
+        hprintln!("table build failed");
+        mps2::exit(false)
+    };
+    let ins = ((t1 - t0) as f64 * per_count) as u64;
+    hprintln!(
+        "table build (GoughTable::for_tyre), {}: {} instructions ({:.0} ms at 168 MHz); {} bytes, shared by the wheels; building it takes {} bytes of stack",
+        app::MATH_NAME,
+        ins,
+        ins as f64 / 168e3,
+        size_of::<GoughTable<f32>>(),
+        stack::peak() - stack_before
+    );
+    hprintln!(
+        "RAM per wheel: MuEstimator<f32> {} bytes, wheel::Wheel (filter + estimator + clock) {} bytes; App {} bytes; Params<f32> {} bytes",
+        size_of::<MuEstimator<'static, f32>>(),
+        size_of::<Wheel<'static>>(),
+        size_of::<App>(),
+        size_of::<Params<f32>>()
+    );
+    // SAFETY: the only reference to STREAM, taken once.
+    let stream = unsafe { &mut *addr_of_mut!(STREAM) };
+    // The timer's own cost per timed sample [counts].
+    let mut o = 0u64;
+    for _ in 0..64 {
+        let t0 = now();
+        core::hint::black_box(0);
+        let t1 = now();
+        o += t1 - t0;
+    }
+    let clock = Clock {
+        per_count,
+        overhead: o as f64 / 64.0,
+    };
+    // SAFETY: the only reference to TABLE_LIBM, taken once.
+    let slot = unsafe { &mut *addr_of_mut!(TABLE_LIBM) };
+    let t_libm: Option<&GoughTable<f32>> = if cfg!(feature = "fast") {
+        bench_start(20);
+        let t0 = now();
+        let built = GoughTable::for_tyre::<Libm>(&p32);
+        let t1 = now();
+        bench_stop(20);
+        let ins = ((t1 - t0) as f64 * per_count) as u64;
+        hprintln!(
+            "table build (GoughTable::for_tyre), libm: {} instructions ({:.0} ms at 168 MHz)",
+            ins,
+            ins as f64 / 168e3
+        );
+        built.ok().map(|t| &*slot.write(t))
+    } else {
+        None
+    };
+    for (k, (camber, what)) in [
+        (
+            0.02,
+            "camber measured (roll, ±0.02 rad: between table nodes)",
+        ),
+        (0.0, "no camber in the message (static 0: a table node)"),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        slalom(&p32, camber, stream);
+        hprintln!("stream: 1 s slalom at 1 kHz, noise; {}", what);
+        let id = 30 + 10 * k as u32;
+        estimator_figures::<app::Math>(
+            app::MATH_NAME,
+            (id + 1, id + 2),
+            clock,
+            &p32,
+            t_math,
+            stream,
+        );
+        if let Some(t) = t_libm {
+            estimator_figures::<Libm>("libm", (id + 3, id + 4), clock, &p32, t, stream);
+        }
+    }
     mps2::exit(true)
 }

@@ -5,19 +5,34 @@
 //! 3. garbage (pseudo-random bytes and frames) never panics, is counted, and a good message
 //!    still gets through afterwards;
 //! 4. the application over a loopback driver: parameter upload (good, bad hash, bad text),
-//!    a measurement answered with forces, a status report.
+//!    a measurement answered with forces and an estimate, a status report;
+//! 5. the friction estimator on the device: a slip-angle ramp on the bundled tyre's own surface
+//!    is read as that surface's μ, within ±0.1, and said to be identifiable.
 #![no_std]
 #![no_main]
 
+use core::mem::MaybeUninit;
 use cortex_m_rt::entry;
 use cortex_m_semihosting::hprintln;
 use embedded_can::Frame as _;
+use gough::mu::GoughTable;
 use gough::proto::slcan::{self, CanFrame, Decoder, Line};
 use gough::proto::*;
-use gough_firmware::app::App;
+use gough_firmware::app::{self, App};
 use gough_firmware::mps2;
 
 static mut APP: App = App::new();
+static mut TABLE: MaybeUninit<GoughTable<f32>> = MaybeUninit::uninit();
+
+/// Builds the table the App asks for, here and now (the firmware does it in thread mode).
+fn build_pending<C: embedded_can::nb::Can>(app: &mut App, can: &mut C) {
+    while let Some(job) = app.table_job() {
+        // SAFETY: a job is out: the App holds no reference into TABLE; single-threaded here.
+        let slot = unsafe { &mut *core::ptr::addr_of_mut!(TABLE) };
+        let built = app::build_table(&job, slot);
+        app.table_built(can, job.gen, built);
+    }
+}
 
 fn check(ok: bool, what: &str, fails: &mut u32) {
     hprintln!("{} {}", if ok { "ok  " } else { "FAIL" }, what);
@@ -110,9 +125,11 @@ impl Loopback {
             let _ = app.poll(self, 0);
         }
     }
-    /// Runs one tick; returns what the device sent since the last call.
+    /// Runs one tick and any table build it asked for; returns what the device sent since the
+    /// last call.
     fn finish(&mut self, app: &mut App) -> heapless::Vec<Msg, 8> {
         app.tick(self, 1);
+        build_pending(app, self);
         let out = self.got.clone();
         self.got.clear();
         out
@@ -220,10 +237,22 @@ fn main() -> ! {
     // Fz 6752 N, kappa 0.05, alpha 0.04 rad, Vx 16.6 m/s (oracle combined sweep).
     // SAFETY: the only reference to APP.
     let app: &mut App = unsafe { &mut *core::ptr::addr_of_mut!(APP) };
+    app.estimator = true;
+    let mut lb = Loopback {
+        rx: heapless::Deque::new(),
+        tx: Reassembler::new(),
+        got: heapless::Vec::new(),
+    };
     let ok = app
         .load_tir(gough_firmware::BUNDLED_TIR, ParamSource::Bundled)
         .is_ok();
     check(ok, "bundled tyre parses on the device", &mut fails);
+    build_pending(app, &mut lb);
+    check(
+        app.table().is_some(),
+        "the estimator's Gough table builds on the device",
+        &mut fails,
+    );
     let (fx0, fy0, mz0) = (
         6_897.759_634_803_259_f64,
         -4_219.670_752_246_919_f64,
@@ -307,11 +336,6 @@ fn main() -> ! {
     );
 
     // 4. the application over a loopback driver
-    let mut lb = Loopback {
-        rx: heapless::Deque::new(),
-        tx: Reassembler::new(),
-        got: heapless::Vec::new(),
-    };
     let text = gough_firmware::BUNDLED_TIR.as_bytes();
     let hash = crc32(text);
     let mut seq = 0u8;
@@ -345,12 +369,73 @@ fn main() -> ! {
         Msg::Status(s) => Some(*s),
         _ => None,
     });
-    check(forces, "measurement answered with forces", &mut fails);
+    let estimate = out
+        .iter()
+        .any(|m| matches!(m, Msg::Estimate(e) if e.t_us == 1_000 && e.wheel == Wheel::FrontLeft));
+    check(
+        forces && estimate,
+        "measurement answered with forces and an estimate",
+        &mut fails,
+    );
     check(
         matches!(status, Some(s) if s.source == ParamSource::Uploaded && s.param_hash == hash),
         "status reports the uploaded parameter set",
         &mut fails,
     );
+
+    // 5. the estimator: a slip-angle ramp at 1 kHz on the tyre's own surface (λμ = 1), the
+    // "measured" forces from the Magic Formula itself; the estimate must find μy0.
+    let mu0 = app.table().map_or(0.0, |t| t.mu0);
+    let mut last = None;
+    let mut n_forces = 0u32;
+    for i in 0..300u32 {
+        let alpha = 0.1 * i as f32 / 300.0;
+        let probe = Measurement {
+            wheel: Wheel::RearRight,
+            t_us: 10_000 + 1_000 * i,
+            fz: 6752.0,
+            vx: Some(20.0),
+            alpha: Some(alpha),
+            ..Measurement::default()
+        };
+        let Ok(f) = app.evaluate(&probe) else {
+            fails += 1;
+            break;
+        };
+        let m = Measurement {
+            fy: f.fy,
+            mz: f.mz,
+            ..probe
+        };
+        lb.send(app, &Msg::Measurement(m), i as u8);
+        for msg in lb.finish(app) {
+            match msg {
+                Msg::Forces(_) => n_forces += 1,
+                Msg::Estimate(e) => last = Some(e),
+                _ => {}
+            }
+        }
+    }
+    match last {
+        Some(e) => {
+            // Coarse on purpose: the estimator's tuning (src/mu) moves the digits.
+            hprintln!(
+                "estimator: 300 samples, {} forces; final {:?}, mu {:.1} (tyre's mu0 {:.1})",
+                n_forces,
+                e.state,
+                e.mu,
+                mu0
+            );
+            check(
+                n_forces == 300
+                    && e.state == EstimateState::Identifiable
+                    && (e.mu - mu0).abs() <= 0.1,
+                "estimator on the device reads the tyre's own surface within 0.1",
+                &mut fails,
+            );
+        }
+        None => check(false, "estimator on the device answers", &mut fails),
+    }
 
     hprintln!("selftest: {} failed", fails);
     mps2::exit(fails == 0)

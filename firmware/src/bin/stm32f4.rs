@@ -2,6 +2,11 @@
 //! stm32f4xx-hal. The same `App` as on QEMU; the driver is `bxcan::Can`, which implements
 //! `embedded_can::nb::Can`. defmt logs over RTT. Built and linked in CI (flash/RAM reported
 //! by `cargo xtask test-all`); not run there (no hardware).
+//!
+//! Magic Formula and transient filter only: the friction estimator's table (98 KB, and as much
+//! again of stack while the core builds it by value) does not fit the 128 KiB SRAM next to the
+//! App, so `App::estimator` stays off here — no table job, no `Estimate`, commits acknowledged
+//! at once.
 #![no_std]
 #![no_main]
 

@@ -1,0 +1,242 @@
+//! The firmware's per-wheel pipeline (`firmware/src/wheel.rs`, compiled into gough-host as
+//! `replay::wheel`) on the host: what it must do, checked against the core directly — the replay
+//! test only shows that device and host agree.
+use gough::math::Fast;
+use gough::mf::{self, Input, Options, Params};
+use gough::mu::{self, GoughTable, MuEstimator, Sample};
+use gough::proto::{AckCode, EstimateState, Measurement, Settings, Wheel as WheelId};
+use gough_host::replay::wheel::{effective_radius, estimator_config, Wheel};
+
+fn tyre() -> Params<f32> {
+    let text = include_str!("../data/tyres/MagicFormula61_Parameters.tir");
+    gough::tir::parse(text).unwrap().params.cast::<f32>()
+}
+
+fn steady(p: &Params<f32>, fz: f32, alpha: f32, kappa: f32, vx: f32) -> mf::Output<f32> {
+    let input = Input {
+        fz,
+        kappa,
+        alpha,
+        gamma: 0.0,
+        phit: 0.0,
+        vx,
+        p: None,
+    };
+    mf::eval::<f32, Fast>(p, &input, &Options::default()).unwrap()
+}
+
+fn meas(t_us: u32, alpha: f32, kappa: f32, vx: f32) -> Measurement {
+    Measurement {
+        wheel: WheelId::FrontLeft,
+        t_us,
+        fz: 5000.0,
+        vx: Some(vx),
+        alpha: Some(alpha),
+        kappa: Some(kappa),
+        ..Measurement::default()
+    }
+}
+
+#[test]
+fn a_constant_input_gives_the_steady_state_forces_from_the_first_sample_on() {
+    let p = tyre();
+    let want = steady(&p, 5000.0, 0.05, -0.03, 20.0);
+    let mut w = Wheel::new();
+    for i in 0..500u32 {
+        let f = w
+            .forces::<Fast>(&p, true, &meas(1000 * i, 0.05, -0.03, 20.0))
+            .unwrap();
+        let tol = 1e-4 * 5000.0;
+        assert!(
+            (f.fx - want.fx).abs() < tol && (f.fy - want.fy).abs() < tol,
+            "sample {i}: {f:?} vs {want:?}"
+        );
+        if i == 0 {
+            // The start is the steady-state Magic Formula itself.
+            assert_eq!((f.fx, f.fy, f.mz), (want.fx, want.fy, want.mz));
+        }
+    }
+}
+
+#[test]
+fn a_slip_angle_step_is_followed_over_the_relaxation_length() {
+    let p = tyre();
+    let (vx, a1) = (10.0, 0.02);
+    let f1 = steady(&p, 5000.0, a1, 0.0, vx);
+    let sigma = f1.sigma_y;
+    assert!(sigma > 0.05 && sigma < 2.0, "σα {sigma}");
+    let mut w = Wheel::new();
+    w.forces::<Fast>(&p, true, &meas(0, 0.0, 0.0, vx)).unwrap();
+    // After travelling σα the deflection has covered 1 − 1/e of the step (first order in
+    // distance); in the linear range the force follows the deflection.
+    let dt_us = 100u32;
+    let n = (sigma / vx * 1e6 / dt_us as f32).round() as u32;
+    let mut f = None;
+    for i in 1..=n {
+        f = Some(
+            w.forces::<Fast>(&p, true, &meas(dt_us * i, a1, 0.0, vx))
+                .unwrap(),
+        );
+    }
+    let ratio = f.unwrap().fy / f1.fy;
+    assert!(
+        (ratio - (1.0 - (-1.0f32).exp())).abs() < 0.05,
+        "Fy after σα: {ratio} of the step"
+    );
+    // And it settles.
+    for i in n + 1..20 * n {
+        f = Some(
+            w.forces::<Fast>(&p, true, &meas(dt_us * i, a1, 0.0, vx))
+                .unwrap(),
+        );
+    }
+    assert!((f.unwrap().fy / f1.fy - 1.0).abs() < 1e-3);
+}
+
+#[test]
+fn wheel_speed_gives_the_same_slip_as_kappa() {
+    let p = tyre();
+    let (vx, kappa) = (20.0f32, -0.05f32);
+    let re = effective_radius::<Fast>(&p, 5000.0);
+    assert!(
+        re > 0.9 * p.unloaded_radius && re < p.unloaded_radius,
+        "Re {re}"
+    );
+    let omega = vx * (1.0 + kappa) / re;
+    let mut a = Wheel::new();
+    let mut b = Wheel::new();
+    for i in 0..50u32 {
+        let fa = a
+            .forces::<Fast>(&p, true, &meas(1000 * i, 0.03, kappa, vx))
+            .unwrap();
+        let m = Measurement {
+            kappa: None,
+            omega: Some(omega),
+            ..meas(1000 * i, 0.03, kappa, vx)
+        };
+        let fb = b.forces::<Fast>(&p, true, &m).unwrap();
+        assert!((fa.fx - fb.fx).abs() < 1.0, "{fa:?} vs {fb:?}");
+    }
+}
+
+#[test]
+fn without_kinematics_the_steady_state_path_answers_and_restarts_the_filter() {
+    let p = tyre();
+    let mut w = Wheel::new();
+    w.forces::<Fast>(&p, true, &meas(0, 0.05, 0.0, 20.0))
+        .unwrap();
+    assert!(w.deflection().is_some());
+    let m = Measurement {
+        vx: None,
+        ..meas(1000, 0.05, 0.0, 20.0)
+    };
+    let f = w.forces::<Fast>(&p, true, &m).unwrap();
+    let want = steady(&p, 5000.0, 0.05, 0.0, p.longvl);
+    assert_eq!(f.fy, want.fy);
+    assert!(w.deflection().is_none());
+    let none = Measurement {
+        alpha: None,
+        kappa: None,
+        vx: None,
+        ..m
+    };
+    assert_eq!(w.forces::<Fast>(&p, true, &none), Err(AckCode::NoSlip));
+}
+
+#[test]
+fn a_gap_or_a_stale_timestamp_restarts_the_filter_in_the_steady_state() {
+    let p = tyre();
+    let mut w = Wheel::new();
+    w.forces::<Fast>(&p, true, &meas(0, 0.0, 0.0, 20.0))
+        .unwrap();
+    w.forces::<Fast>(&p, true, &meas(1000, 0.0, 0.0, 20.0))
+        .unwrap();
+    let want = steady(&p, 5000.0, 0.06, 0.0, 20.0);
+    for t in [1000 + 1_000_001, 1000 + 1_000_001 /* not advancing */] {
+        let f = w
+            .forces::<Fast>(&p, true, &meas(t, 0.06, 0.0, 20.0))
+            .unwrap();
+        assert_eq!(f.fy, want.fy);
+    }
+}
+
+/// A slalom's measurements (the MF's own forces) with timestamps from `t0` at 1 kHz.
+fn slalom(p: &Params<f32>, t0: u32, n: u32) -> Vec<Measurement> {
+    (0..n)
+        .map(|i| {
+            let s = (std::f32::consts::TAU * i as f32 * 1e-3).sin();
+            let (alpha, fz) = (0.09 * s, 6000.0 * (1.0 + 0.1 * s));
+            let o = steady(p, fz, alpha, 0.0, 20.0);
+            Measurement {
+                wheel: WheelId::RearLeft,
+                t_us: t0.wrapping_add(1000 * i),
+                fz,
+                fy: o.fy,
+                mz: o.mz,
+                fx: Some(o.fx),
+                vx: Some(20.0),
+                alpha: Some(alpha),
+                ..Measurement::default()
+            }
+        })
+        .collect()
+}
+
+#[test]
+fn the_estimate_is_the_core_estimator_on_the_measured_forces() {
+    let p = tyre();
+    let table = Box::new(GoughTable::for_tyre::<Fast>(&p).unwrap());
+    let settings = Settings::default();
+    let mut w = Wheel::new();
+    w.start_estimator(&table, &p, &settings);
+    let mut direct = MuEstimator::for_tyre(&table, &p, estimator_config(&settings));
+    assert_eq!(estimator_config(&settings).mu_prior, settings.fallback_mu);
+    let log = slalom(&p, 0, 2000);
+    let mut identifiable = 0;
+    for m in &log {
+        let (e, _) = w.estimate::<Fast>(m).unwrap();
+        let d = direct.update::<Fast>(&Sample {
+            t: m.t_us as f32 / 1e6,
+            fz: m.fz,
+            fy: m.fy,
+            mz: m.mz,
+            fx: m.fx,
+            vx: m.vx,
+            gamma: m.gamma,
+        });
+        assert_eq!((e.mu, e.sigma), (d.mu, d.sigma), "t_us {}", m.t_us);
+        assert_eq!(
+            e.state == EstimateState::Identifiable,
+            d.state == mu::State::Identifiable
+        );
+        assert_eq!((e.wheel, e.t_us), (m.wheel, m.t_us));
+        identifiable += usize::from(e.state == EstimateState::Identifiable);
+    }
+    assert!(identifiable > 0);
+}
+
+#[test]
+fn the_estimator_runs_on_through_a_timestamp_wrap() {
+    let p = tyre();
+    let table = Box::new(GoughTable::for_tyre::<Fast>(&p).unwrap());
+    let settings = Settings::default();
+    let run = |t0: u32| {
+        let mut w = Wheel::new();
+        w.start_estimator(&table, &p, &settings);
+        slalom(&p, t0, 2000)
+            .iter()
+            .map(|m| w.estimate::<Fast>(m).unwrap().0)
+            .map(|e| (e.mu, e.sigma, e.state))
+            .collect::<Vec<_>>()
+    };
+    // The same stream with its u32 clock wrapping in the middle: the same estimates.
+    assert_eq!(run(0), run(u32::MAX - 999_999));
+}
+
+#[test]
+fn no_estimator_no_estimate() {
+    let p = tyre();
+    let mut w = Wheel::new();
+    assert!(w.estimate::<Fast>(&slalom(&p, 0, 1)[0]).is_none());
+    assert!(!w.has_estimator());
+}
