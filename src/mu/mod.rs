@@ -188,7 +188,7 @@ impl core::fmt::Display for BuildError {
 impl core::error::Error for BuildError {}
 
 /// One wheel's estimator: a few words of state and a reference to the tyre's shared
-/// [`GoughTable`] (about 27 KB in f32, built once per tyre and side). No allocation.
+/// [`GoughTable`] (about 98 KB in f32, built once per tyre and side). No allocation.
 ///
 /// ```
 /// use gough::{math::Libm, mu::{Config, GoughTable, MuEstimator, Sample, State}};
@@ -373,7 +373,7 @@ impl<'t, F: Float> MuEstimator<'t, F> {
         if f <= F::ZERO {
             return None;
         }
-        let lam_node = F::from_f64(*table::LAMBDA_NODES.get(si)?);
+        let lam_node = *self.table.lam.get(si)?;
         let lambda = lam_node * force / (fz * f); // radial scaling about the node
         Some(NodeEst {
             lambda,
@@ -433,12 +433,12 @@ impl<'t, F: Float> MuEstimator<'t, F> {
         let (za, zb) = (*nodes.get(j)?, *nodes.get(j + 1)?);
         let w = ((s.fz - za) / (zb - za)).max(F::ZERO).min(F::ONE);
         // Camber nodes bracketing γ (clamped at the ends).
-        let cn = &table::CAMBER_NODES;
+        let cn = &self.table.cam;
         let mut g = 0;
-        while g + 2 < cn.len() && cn.get(g + 1).is_some_and(|&x| gamma.to_f64() > x) {
+        while g + 2 < cn.len() && cn.get(g + 1).is_some_and(|&x| gamma > x) {
             g += 1;
         }
-        let (ga, gb) = (F::from_f64(*cn.get(g)?), F::from_f64(*cn.get(g + 1)?));
+        let (ga, gb) = (*cn.get(g)?, *cn.get(g + 1)?);
         let u = ((gamma - ga) / (gb - ga)).max(F::ZERO).min(F::ONE);
         let reading = Reading {
             j,
@@ -461,7 +461,7 @@ impl<'t, F: Float> MuEstimator<'t, F> {
         let mut pick: Option<NodeEst<F>> = None;
         for (si, e) in ests.iter().enumerate() {
             let Some(e) = *e else { continue };
-            let d = e.lambda - F::from_f64(*table::LAMBDA_NODES.get(si)?);
+            let d = e.lambda - *self.table.lam.get(si)?;
             match prev {
                 Some((dp, ep)) if dp >= F::ZERO && d < F::ZERO => {
                     let u = dp / (dp - d);
@@ -498,7 +498,7 @@ impl<'t, F: Float> MuEstimator<'t, F> {
                 (g + 1, j + 1, u * w),
             ];
             for (si, est) in ests.iter().enumerate() {
-                let lam_k = F::from_f64(*table::LAMBDA_NODES.get(si)?);
+                let lam_k = *self.table.lam.get(si)?;
                 if lam_k <= e.lambda {
                     continue;
                 }

@@ -68,13 +68,17 @@ pub enum Model<'a, F> {
     Brush(Brush<F>),
 }
 
-/// The tabulated Gough curves: 3 cambers × 4 surfaces × 7 loads × 2 sides × 20 points × (τ, f),
-/// about 27 KB in f32. Built once per tyre (and mounting side) and shared by the estimators of
+/// The tabulated Gough curves: 7 cambers × 4 surfaces × 7 loads × 2 sides × 20 points × (τ, f),
+/// plus each curve's rising branch: about 98 KB in f32. Built once per tyre (and mounting side) and shared by the estimators of
 /// the wheels on that side.
 #[derive(Debug, Clone)]
 pub struct GoughTable<F> {
     /// Loads of the nodes \[N\].
     pub fz: [F; NL],
+    /// [`LAMBDA_NODES`] in `F` (no conversion on the per-sample path).
+    pub lam: [F; NS],
+    /// [`CAMBER_NODES`] in `F` \[rad\].
+    pub cam: [F; NG],
     /// τ \[m\] per surface, load, side (0: α > 0, 1: α < 0), node; strictly decreasing over
     /// `len`.
     pub tau: PerCurve<[F; POINTS]>,
@@ -153,6 +157,8 @@ impl<F: Float> GoughTable<F> {
         };
         let mut t = GoughTable {
             fz: [F::ZERO; NL],
+            lam: LAMBDA_NODES.map(F::from_f64),
+            cam: CAMBER_NODES.map(F::from_f64),
             tau: [[[[[F::ZERO; POINTS]; 2]; NL]; NS]; NG],
             f: [[[[[F::ZERO; POINTS]; 2]; NL]; NS]; NG],
             len: [[[[0; 2]; NL]; NS]; NG],
