@@ -5,7 +5,7 @@
 //! A test-trailer programme: every input a smooth random multisine (seeded, reproducible) —
 //! α (±0.2 rad, content to 4 Hz), κ (±0.25), Fz (0.2–1.9 Fz0, with 1–6 Hz content), Vx
 //! (4–35 m/s), γ (within CAMMAX), p (±8 % about NOMPRES, or 2.2 bar for MF 5.x files, which
-//! ignore it), φt (±0.1 1/m). The truth model is the sim of the tyre file with one effect on
+//! ignore it), φt (±0.1 1/m); `p` and `phit` can be left out of the log (then INFLPRES, φt = 0). The truth model is the sim of the tyre file with one effect on
 //! ([`truth`]); its outputs get white noise of `noise` × each clean channel's RMS.
 //!
 //! The truth forms deliberately differ from the diagnosis's extensions where physics allows
@@ -51,6 +51,10 @@ pub struct GenConfig {
     pub noise: f64,
     /// Add a reference `mu` column (the file's μy0: the truth runs on the file's own surface).
     pub mu: bool,
+    /// Log (and vary) the inflation pressure; without, the log has no `p` column (INFLPRES).
+    pub p: bool,
+    /// Log (and vary) the turn slip; without, the log has no `phit` column (φt = 0).
+    pub phit: bool,
 }
 
 impl Default for GenConfig {
@@ -63,6 +67,8 @@ impl Default for GenConfig {
             magnitude: 1.0,
             noise: 0.01,
             mu: false,
+            p: true,
+            phit: true,
         }
     }
 }
@@ -148,8 +154,8 @@ pub fn inputs(p: &Params<f64>, cfg: &GenConfig) -> Log {
         gamma,
         fz,
         meas: vec![[0.0; 3]; n],
-        p: Some(pr),
-        phit: Some(phit),
+        p: cfg.p.then_some(pr),
+        phit: cfg.phit.then_some(phit),
         mu: None,
         lines: vec![],
     }
@@ -415,6 +421,8 @@ pub struct CaseResult {
     pub achievable: f64,
     /// Best held-out shrink of any effect.
     pub best_shrink: f64,
+    /// That effect's significance z.
+    pub best_z: f64,
     /// Wall time of the diagnosis \[s\].
     pub seconds: f64,
 }
@@ -439,11 +447,8 @@ pub fn run_case(p: &Params<f64>, tyre: &str, cfg: &GenConfig) -> Result<CaseResu
         .truth
         .and_then(|t| d.shrinks.iter().find(|s| s.0 == t).map(|s| s.1))
         .unwrap_or(0.0);
-    let best_shrink = d
-        .shrinks
-        .iter()
-        .map(|s| s.1)
-        .fold(f64::NEG_INFINITY, f64::max);
+    let best = d.shrinks.iter().max_by(|a, b| a.1.total_cmp(&b.1)).copied();
+    let (best_shrink, best_z) = best.map(|b| (b.1, b.2)).unwrap_or((0.0, 0.0));
     Ok(CaseResult {
         tyre: tyre.into(),
         truth: cfg.truth,
@@ -455,6 +460,7 @@ pub fn run_case(p: &Params<f64>, tyre: &str, cfg: &GenConfig) -> Result<CaseResu
         achieved,
         achievable,
         best_shrink,
+        best_z,
         seconds,
     })
 }
@@ -503,7 +509,7 @@ pub fn run(cfg: &BenchConfig) -> Result<Vec<CaseResult>, String> {
                         truth: None,
                         magnitude: 0.0,
                         noise,
-                        mu: false,
+                        ..GenConfig::default()
                     },
                 ));
             }
@@ -519,7 +525,7 @@ pub fn run(cfg: &BenchConfig) -> Result<Vec<CaseResult>, String> {
                                 truth: Some(e),
                                 magnitude: m,
                                 noise,
-                                mu: false,
+                                ..GenConfig::default()
                             },
                         ));
                     }
@@ -587,13 +593,13 @@ pub fn run(cfg: &BenchConfig) -> Result<Vec<CaseResult>, String> {
 /// The case results as CSV (one row per log).
 pub fn cases_csv(res: &[CaseResult]) -> String {
     let mut s = String::from(
-        "tyre,truth,magnitude,noise,seed,verdict,indistinguishable,achieved,achievable,best_shrink,seconds\n",
+        "tyre,truth,magnitude,noise,seed,verdict,indistinguishable,achieved,achievable,best_shrink,best_z,seconds\n",
     );
     for r in res {
         let ind: Vec<&str> = r.indistinguishable.iter().map(|e| e.name()).collect();
         let _ = writeln!(
             s,
-            "{},{},{},{},{},{},{},{:.5},{:.5},{:.5},{:.3}",
+            "{},{},{},{},{},{},{},{:.5},{:.5},{:.5},{:.2},{:.3}",
             r.tyre,
             name(r.truth),
             r.magnitude,
@@ -604,6 +610,7 @@ pub fn cases_csv(res: &[CaseResult]) -> String {
             r.achieved,
             r.achievable,
             r.best_shrink,
+            r.best_z,
             r.seconds
         );
     }
@@ -679,13 +686,19 @@ pub fn table(cfg: &BenchConfig, res: &[CaseResult]) -> String {
         .iter()
         .map(|r| r.best_shrink)
         .fold(f64::NEG_INFINITY, f64::max);
+    let max_z = none
+        .iter()
+        .map(|r| r.best_z)
+        .fold(f64::NEG_INFINITY, f64::max);
     let _ = writeln!(
         s,
-        "\n**None-case false alarm rate**: {fa}/{} = {:.1} %; the largest best held-out shrink in a none case was {:.4} (verdict threshold {}).\n",
+        "\n**None-case false alarm rate**: {fa}/{} = {:.1} %; in the none cases the best effect's held-out shrink was at most {:.4} (verdict threshold {}) and its significance z at most {:.1} (threshold {}).\n",
         none.len(),
         100.0 * fa as f64 / none.len().max(1) as f64,
         max_none,
-        super::MIN_SHRINK
+        super::MIN_SHRINK,
+        max_z,
+        super::MIN_Z
     );
     // Detection by magnitude and achieved vs achievable.
     let _ = writeln!(s, "**Detection rate by magnitude** (verdict = truth; in brackets: verdict = truth or truth indistinguishable from it) and **held-out shrink achieved / achievable** (mean over that magnitude's logs)\n");
@@ -731,6 +744,7 @@ pub fn default_config(data: &Path, quick: bool) -> BenchConfig {
         "MagicFormula61_Parameters.tir",
         "MagicFormula62_Parameters.tir",
         "MagicFormula52_Parameters.tir",
+        "reference_tire_tvd3.tir",
     ]
     .iter()
     .map(|f| data.join(f))

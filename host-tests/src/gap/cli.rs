@@ -11,7 +11,7 @@ pub enum GapCmd {
     /// Diagnose the gap between the sim of SIM.tir and a measured log; write a JSON report.
     ///
     /// Log: CSV with header, SI units, ISO-W; required t,vx,alpha,kappa,gamma,fz,fx,fy,mz;
-    /// optional p [Pa], phit [1/m], mu (reference friction); other columns ignored.
+    /// optional p (Pa), phit (1/m), mu (reference friction); other columns ignored.
     Diagnose {
         /// Tyre property file of the sim (.tir).
         #[arg(long, value_name = "SIM.tir")]
@@ -65,7 +65,7 @@ pub enum GapCmd {
         /// Rows.
         #[arg(long, default_value_t = 6000)]
         rows: usize,
-        /// Sample rate [Hz].
+        /// Sample rate (Hz).
         #[arg(long, default_value_t = 200.0)]
         rate: f64,
         /// Seed.
@@ -77,6 +77,12 @@ pub enum GapCmd {
         /// Add a reference `mu` column.
         #[arg(long)]
         mu: bool,
+        /// No `p` column (the pressure stays INFLPRES).
+        #[arg(long)]
+        no_p: bool,
+        /// No `phit` column (no turn slip).
+        #[arg(long)]
+        no_phit: bool,
     },
 }
 
@@ -192,6 +198,8 @@ pub fn run(cmd: GapCmd) -> Result<(), String> {
             seed,
             noise,
             mu,
+            no_p,
+            no_phit,
         } => {
             let truth = effect_arg(&effect)?;
             if rows < super::log::MIN_ROWS {
@@ -200,7 +208,7 @@ pub fn run(cmd: GapCmd) -> Result<(), String> {
             if !(rate > 0.0 && rate.is_finite()) {
                 return Err(format!("--rate {rate}: must be > 0"));
             }
-            if !(noise >= 0.0 && noise.is_finite()) || !magnitude.is_finite() {
+            if !(noise >= 0.0 && noise.is_finite() && magnitude.is_finite()) {
                 return Err("--noise must be >= 0 and --magnitude finite".into());
             }
             let tyre = crate::tyre::load(&tir)?;
@@ -214,6 +222,8 @@ pub fn run(cmd: GapCmd) -> Result<(), String> {
                     magnitude,
                     noise,
                     mu,
+                    p: !no_p,
+                    phit: !no_phit,
                 },
             )?;
             super::log::write(&out, &g.log)

@@ -85,19 +85,30 @@ pub struct Score {
     pub shrink_by_channel: [f64; 3],
     /// Held-out residual per row.
     pub heldout_resid: Vec<Out>,
+    /// Significance of the held-out improvement against the noise floor ([`z_value`]).
+    pub z: f64,
 }
 
-impl Score {
-    /// Mean of the block shrinks over their standard error (∞ when they agree exactly).
-    pub fn t_value(&self) -> f64 {
-        let m = stats::mean(&self.fold_shrinks);
-        if self.shrink_se > 0.0 {
-            m / self.shrink_se
-        } else if m > 0.0 {
-            f64::INFINITY
-        } else {
-            0.0
+/// The held-out improvement in noise units, ΔSSE = Σ_i Σ_c ((rb/σc)² − (ra/σc)²), over its
+/// standard deviation under the hypothesis that the effect only fits noise: with δ = rb − ra
+/// the change of prediction and white noise ε at the floor, rb² − ra² = 2εδ − δ², whose sum has
+/// sd 2·√(Σ(δ/σ)²). So z = ΔSSE / (2·√(Σ(δ/σ)²)), a χ²-style test against the noise floor that
+/// does not care in how many blocks the effect shows (a friction effect may be excited in one
+/// block only). Under that hypothesis z has mean −√(Σ(δ/σ)²)/2 ≤ 0 and unit sd; a real gap
+/// closed by δ gives z ≈ ‖δ/σ‖/2.
+pub fn z_value(before: &[Out], after: &[Out], noise: &[f64; 3]) -> f64 {
+    let (mut dsse, mut dd) = (0.0, 0.0);
+    for (b, a) in before.iter().zip(after) {
+        for c in 0..3 {
+            let (zb, za) = (b[c] / noise[c], a[c] / noise[c]);
+            dsse += zb * zb - za * za;
+            dd += (zb - za) * (zb - za);
         }
+    }
+    if dd > 0.0 {
+        dsse / (2.0 * dd.sqrt())
+    } else {
+        0.0
     }
 }
 
@@ -121,6 +132,7 @@ pub fn score(ctx: &Ctx, effect: Effect, fit_rows: usize, tick: &mut dyn FnMut())
         shrink_se: 0.0,
         shrink_by_channel: [0.0; 3],
         heldout_resid: base_r.clone(),
+        z: 0.0,
     };
     let sp = match spec(effect, ctx) {
         Ok(s) => s,
@@ -169,6 +181,7 @@ pub fn score(ctx: &Ctx, effect: Effect, fit_rows: usize, tick: &mut dyn FnMut())
             0.0
         };
     }
+    sc.z = z_value(&base_r, &held, &ctx.noise);
     sc.heldout_resid = held;
     sc.spec = Some(sp);
     sc

@@ -6,8 +6,8 @@
 //! | effect | form | parameters |
 //! |---|---|---|
 //! | `camber` | the file's camber terms re-fitted: MF 6.x Fy camber stiffness Kyγ (4.E30) and camber vertical shift Svyγ (4.E28), Mzr camber (4.E47); MF 5.x/Delft 96 the camber shift Shy (PHY3) instead of Kyγ | `pky6 pvy3 qdz8` (6.x), `phy3 pvy3 qdz8` |
-//! | `inflation_pressure` | MF 6.x: the pressure terms of Kxκ, μx, Kyα, μy and the trail re-fitted (4.E17, 4.E13, 4.E25, 4.E23, 4.E40); MF 5.x (no pressure model): λKx, λKy, λμx, λμy each times (1 + a·dpi), dpi = (p − p̃)/p̃ about the log's median p̃ | `ppx1 ppx3 ppy1 ppy3 ppz1` / `a_kx a_ky a_mux a_muy` |
-//! | `turn_slip` | MF 6.x with turn-slip coefficients: the reductions of Kyα, μy, trail and the spin moment re-fitted (4.79, 4.77, 4.91, 4.102); otherwise a linear spin force and moment ΔFy = c_fy·Fz·R0·φt, ΔMz = c_mz·Fz·R0²·φt | `pkyp1 pdyp1 qdtp1 qdrp1` / `c_fy c_mz` |
+//! | `inflation_pressure` | MF 6.x: the pressure terms of Kxκ, μx, Kyα, μy and the trail re-fitted (4.E15, 4.E13, 4.E25, 4.E23, A60); MF 5.x (no pressure model): λKx, λKy, λμx, λμy each times (1 + a·dpi), dpi = (p − p̃)/p̃ about the log's median p̃ | `ppx1 ppx3 ppy1 ppy3 ppz1` / `a_kx a_ky a_mux a_muy` |
+//! | `turn_slip` | MF 6.x with turn-slip coefficients: the reductions of Kyα, μy, trail and the spin moment re-fitted (4.79, 4.78, 4.91, 4.96); otherwise a linear spin force and moment ΔFy = c_fy·Fz·R0·φt, ΔMz = c_mz·Fz·R0²·φt | `pkyp1 pdyp1 qdtp1 qdrp1` / `c_fy c_mz` |
 //! | `combined_slip` | the weighting-function slopes Bxα (4.E54), Byκ (4.E62) and the Fx moment arm s (4.E76) re-fitted | `rbx1 rby1 ssz1` |
 //! | `relaxation_length` | σκ, σα times s·(1 + c·dfz) (a σ(Fz) relaxation); without filters in SIM.tir, σα = s_alpha·R0·Fz/Fz0, σκ = s_kappa·R0·Fz/(2·Fz0) | `s_kappa s_alpha c_fz` |
 //! | `speed_dependent_friction` | λμx = λμy = (1 + b·(|Vx| − V0)/V0)/(1 + a·Vs/V0), Vs the slip speed (TNO's λμV form plus a forward-speed trend), V0 = LONGVL | `a_vs b_vx` |

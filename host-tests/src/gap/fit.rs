@@ -84,8 +84,8 @@ where
 {
     let p = start.len();
     let clamp = |th: &mut [f64]| {
-        for j in 0..p {
-            th[j] = th[j].clamp(bounds.lo[j], bounds.hi[j]);
+        for ((x, lo), hi) in th.iter_mut().zip(&bounds.lo).zip(&bounds.hi) {
+            *x = x.clamp(*lo, *hi);
         }
     };
     let mut theta = start.to_vec();

@@ -184,8 +184,10 @@ fn from_table(table: &csvio::Table) -> Log {
     }
 }
 
-/// Writes a log as CSV (atomically), with the optional columns it has.
+/// Writes a log as CSV (atomically: to `PATH.tmp`, then renamed), with the optional columns it
+/// has; 8 significant digits (far below any sensor's resolution).
 pub fn write(path: &Path, log: &Log) -> std::io::Result<()> {
+    use std::io::Write;
     let mut header: Vec<&str> = REQUIRED.to_vec();
     let opts: [(&str, &Option<Vec<f64>>); 3] =
         [("p", &log.p), ("phit", &log.phit), ("mu", &log.mu)];
@@ -194,8 +196,14 @@ pub fn write(path: &Path, log: &Log) -> std::io::Result<()> {
             header.push(name);
         }
     }
-    let rows: Vec<Vec<f64>> = (0..log.len())
-        .map(|i| {
+    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir)?;
+    }
+    let tmp = path.with_extension("csv.tmp");
+    {
+        let mut w = std::io::BufWriter::new(std::fs::File::create(&tmp)?);
+        writeln!(w, "{}", header.join(","))?;
+        for i in 0..log.len() {
             let mut r = vec![
                 log.t[i],
                 log.vx[i],
@@ -212,8 +220,23 @@ pub fn write(path: &Path, log: &Log) -> std::io::Result<()> {
                     r.push(c[i]);
                 }
             }
-            r
-        })
-        .collect();
-    crate::csvio::write(path, &header, &rows)
+            let cells: Vec<String> = r
+                .iter()
+                .map(|v| {
+                    let s = format!("{v:.7e}");
+                    // 1.2345000e3 -> 1.2345e3: shorter, same value.
+                    match s.split_once('e') {
+                        Some((m, e)) if m.contains('.') => {
+                            let m = m.trim_end_matches('0').trim_end_matches('.');
+                            format!("{m}e{e}")
+                        }
+                        _ => s,
+                    }
+                })
+                .collect();
+            writeln!(w, "{}", cells.join(","))?;
+        }
+        w.flush()?;
+    }
+    std::fs::rename(&tmp, path)
 }

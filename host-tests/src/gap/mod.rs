@@ -10,12 +10,13 @@
 //! 4. [`effects`]: ten candidate effects, each a parametric extension with a physical form, each
 //!    fitted ([`fit`]: bounded Levenberg–Marquardt) and scored by blocked cross-validation
 //!    ([`cv`]): held-out shrink of the gap in noise units.
-//! 5. The verdict ([`verdict`]): the best effect when it closes a meaningful, consistent part
-//!    of the gap, else `none`; effects the data cannot tell apart are reported with it.
+//! 5. The verdict: the best effect when it closes a meaningful ([`MIN_SHRINK`]), significant
+//!    ([`MIN_Z`]) part of the gap, else `none`; effects the data cannot tell apart
+//!    ([`IND_T`]) are reported with it.
 //! 6. With a `mu` column, the same questions for the friction estimator's output ([`mu`]).
 //! 7. [`plot`]: residual maps before and after the winning effect.
 //!
-//! [`bench`] is the withheld-effect benchmark (`gough gap bench`): logs from a truth model with
+//! [`mod@bench`] is the withheld-effect benchmark (`gough gap bench`): logs from a truth model with
 //! one effect switched on, diagnosed from SIM.tir and the log alone.
 //!
 //! Leaves out: Mx and My (not in the log's required channels); several simultaneous effects
@@ -46,10 +47,11 @@ pub const CHANNELS: [&str; 3] = ["fx", "fy", "mz"];
 /// Verdict rule: the best effect must close at least this share of the gap (held-out, noise
 /// units). Set from the benchmark's none cases (`gough gap bench`, README): the largest best
 /// shrink over its none-case logs was below a third of it.
-pub const MIN_SHRINK: f64 = 0.01;
-/// ... and do so consistently: mean block shrink / its standard error at least t(0.975, K−1)
-/// = 2.776 for K = 5 blocks.
-pub const MIN_T: f64 = 2.776;
+pub const MIN_SHRINK: f64 = 0.005;
+/// ... and the held-out improvement must be significant against the noise floor:
+/// [`cv::z_value`] at least this (a χ²-style test; under "the effect only fits noise" z ≤ 0 on
+/// average with unit standard deviation).
+pub const MIN_Z: f64 = 5.0;
 /// Two effects are indistinguishable when their shrinks differ by less than this many standard
 /// errors of the paired block differences (a 1-SE band would call two identical explanations
 /// different about a third of the time).
@@ -80,8 +82,8 @@ pub struct Diagnosis {
     pub verdict: Option<Effect>,
     /// Effects indistinguishable from the verdict.
     pub indistinguishable: Vec<Effect>,
-    /// Held-out shrink per effect (0 for those not applicable).
-    pub shrinks: Vec<(Effect, f64)>,
+    /// Held-out shrink and its significance z per effect (0 for those not applicable).
+    pub shrinks: Vec<(Effect, f64, f64)>,
 }
 
 fn method() -> Method {
@@ -97,10 +99,12 @@ fn method() -> Method {
                  on held-out rows"
             .into(),
         verdict_rule: format!(
-            "the best effect is the verdict when its held-out shrink >= {MIN_SHRINK} and its \
-             block shrinks are consistently positive (mean/SE >= {MIN_T}, t(0.975, 4)); else \
-             none. {MIN_SHRINK} is set from the benchmark's none-case logs (gough gap bench): \
-             the largest best shrink found there stays well below it"
+            "the best effect is the verdict when its held-out shrink >= {MIN_SHRINK} and the \
+             held-out improvement is significant against the noise floor: z = dSSE / (2 \
+             sqrt(sum (delta/noise)^2)) >= {MIN_Z}, delta the change of prediction (chi2-style; \
+             z <= 0 on average when the effect only fits noise); else none. {MIN_SHRINK} is set \
+             from the benchmark's none-case logs (gough gap bench): the largest best shrink \
+             found there stays far below it"
         ),
         indistinguishable_rule: format!(
             "an effect is indistinguishable from the verdict when their shrinks differ by at \
@@ -154,11 +158,12 @@ pub fn diagnose(
     if let Some(b) = &bar {
         b.finish_and_clear();
     }
+    // Largest held-out shrink first (an effect that does not apply scores 0); among equals the
+    // applicable ones first.
     scores.sort_by(|a, b| {
-        b.not_applicable
-            .is_none()
-            .cmp(&a.not_applicable.is_none())
-            .then(b.shrink.total_cmp(&a.shrink))
+        b.shrink
+            .total_cmp(&a.shrink)
+            .then(b.not_applicable.is_none().cmp(&a.not_applicable.is_none()))
     });
     let base_r = ctx.base_resid();
     let noise = ctx.noise;
@@ -166,13 +171,16 @@ pub fn diagnose(
     let rmse_before = cv::rmse_rows(&base_r, 0..n);
 
     // Verdict.
-    let best = scores.first().filter(|s| s.not_applicable.is_none());
-    let winner = best.filter(|s| s.shrink >= MIN_SHRINK && s.t_value() >= MIN_T);
+    let best = scores.iter().find(|s| s.not_applicable.is_none());
+    let winner = best.filter(|s| s.shrink >= MIN_SHRINK && s.z >= MIN_Z);
     let indist: Vec<Effect> = match winner {
         Some(w) => scores
             .iter()
-            .skip(1)
-            .filter(|s| s.not_applicable.is_none() && cv::indistinguishable(w, s, IND_T))
+            .filter(|s| {
+                s.effect != w.effect
+                    && s.not_applicable.is_none()
+                    && cv::indistinguishable(w, s, IND_T)
+            })
             .map(|s| s.effect)
             .collect(),
         None => vec![],
@@ -200,10 +208,10 @@ pub fn diagnose(
             indistinguishable_from: vec![],
             reason: Some(format!(
                 "best candidate {} closes {:.4} of the gap held-out (needs >= {MIN_SHRINK}) with \
-                 block consistency mean/SE = {:.2} (needs >= {MIN_T})",
+                 significance z = {:.1} against the noise floor (needs >= {MIN_Z})",
                 b.effect.name(),
                 b.shrink,
-                b.t_value()
+                b.z
             )),
         },
         (None, None) => Verdict {
@@ -237,6 +245,7 @@ pub fn diagnose(
                 effect: s.effect.name().into(),
                 shrink: s.shrink,
                 shrink_se: s.shrink_se,
+                z: s.z,
                 shrink_by_channel: s.shrink_by_channel.into(),
                 heldout: HeldOut {
                     rmse_before: s.rmse_before.into(),
@@ -301,6 +310,6 @@ pub fn diagnose(
         rmse_before,
         verdict: winner.map(|w| w.effect),
         indistinguishable: indist,
-        shrinks: scores.iter().map(|s| (s.effect, s.shrink)).collect(),
+        shrinks: scores.iter().map(|s| (s.effect, s.shrink, s.z)).collect(),
     })
 }

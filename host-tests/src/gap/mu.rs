@@ -18,11 +18,14 @@
 //!   as far as that shrinks it.
 //! - `verdict`: the effect with the largest μ shrink 1 − rmse_after/rmse_before when that is at
 //!   least [`MU_MIN_SHRINK`] and the estimator's error is at least [`MU_MIN_RMSE`]; else `none`.
+//!   Effects within 20 % of its shrink are reported as indistinguishable, and if the force
+//!   verdict is among them it is the μ verdict (the forces are the stronger evidence of which
+//!   effect is present).
 
 use super::cv::Score;
+use super::effects::Spec;
 use super::effects::{Ctx, Effect};
 use super::log::Log;
-use super::effects::Spec;
 use super::sim::{Mods, Out, Sim};
 use super::stats;
 use gough::math::Libm;
@@ -34,6 +37,8 @@ use serde::Serialize;
 pub const MU_MIN_SHRINK: f64 = 0.2;
 /// ... of an error of at least this RMS (μ units): below it the estimator is right.
 pub const MU_MIN_RMSE: f64 = 0.02;
+/// Effects whose μ shrink is within this fraction of the best one's are reported with it.
+pub const MU_CLOSE: f64 = 0.2;
 
 /// The μ part of the report.
 #[derive(Debug, Clone, Serialize)]
@@ -95,6 +100,10 @@ pub struct MuVerdict {
     pub shrink: Option<f64>,
     /// Is it the force diagnosis's verdict too?
     pub agrees_with_forces: bool,
+    /// Effects that explain the μ error about as well (μ shrink within [`MU_CLOSE`] of the
+    /// best, relative, or 0.02).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub indistinguishable_from: Vec<String>,
 }
 
 /// Runs the estimator over the log; `meas` replaces the measured channels, `scale` divides each
@@ -200,19 +209,10 @@ pub fn diagnose(
             }),
         }
     }
-    effects.sort_by(|a, b| b.shrink.total_cmp(&a.shrink));
-    let verdict = match effects.first() {
-        Some(e) if rmse >= MU_MIN_RMSE && e.shrink >= MU_MIN_SHRINK => MuVerdict {
-            effect: e.effect.clone(),
-            shrink: Some(e.shrink),
-            agrees_with_forces: force_verdict.map(|f| f.name()) == Some(e.effect.as_str()),
-        },
-        _ => MuVerdict {
-            effect: "none".into(),
-            shrink: None,
-            agrees_with_forces: force_verdict.is_none(),
-        },
-    };
+    let verdict = mu_verdict(&effects, rmse, force_verdict);
+    let mut order: Vec<usize> = (0..effects.len()).collect();
+    order.sort_by(|&a, &b| effects[b].shrink.total_cmp(&effects[a].shrink));
+    let effects = order.iter().map(|&k| effects[k].clone()).collect();
     Ok(MuReport {
         coverage: n_est as f64 / log.len().max(1) as f64,
         rmse,
@@ -221,6 +221,53 @@ pub fn diagnose(
         effects,
         verdict,
     })
+}
+
+/// The μ verdict: the effect with the largest μ shrink, and those that come close to it (within
+/// [`MU_CLOSE`] of its shrink, relative, or 0.02). The estimator's error is strongly
+/// autocorrelated (a Kalman filter) and concentrated where the effect acts, so neither a row-level
+/// nor a 5-block test has a usable standard error here; the band is a practical-equivalence
+/// margin. When the force diagnosis's verdict is in that group (and itself shrinks the error by
+/// [`MU_MIN_SHRINK`]) it is preferred: the forces are the stronger evidence of which effect is
+/// present. Needs an error of at least [`MU_MIN_RMSE`] and a shrink of at least [`MU_MIN_SHRINK`].
+fn mu_verdict(effects: &[MuEffect], rmse: f64, force: Option<Effect>) -> MuVerdict {
+    let none = MuVerdict {
+        effect: "none".into(),
+        shrink: None,
+        agrees_with_forces: force.is_none(),
+        indistinguishable_from: vec![],
+    };
+    let Some(top) =
+        (0..effects.len()).max_by(|&a, &b| effects[a].shrink.total_cmp(&effects[b].shrink))
+    else {
+        return none;
+    };
+    let best = effects[top].shrink;
+    if rmse < MU_MIN_RMSE || best < MU_MIN_SHRINK {
+        return none;
+    }
+    let margin = (MU_CLOSE * best).max(0.02);
+    let group: Vec<usize> = (0..effects.len())
+        .filter(|&k| effects[k].shrink >= best - margin)
+        .collect();
+    let pick = force
+        .and_then(|f| {
+            group
+                .iter()
+                .copied()
+                .find(|&k| effects[k].effect == f.name() && effects[k].shrink >= MU_MIN_SHRINK)
+        })
+        .unwrap_or(top);
+    MuVerdict {
+        effect: effects[pick].effect.clone(),
+        shrink: Some(effects[pick].shrink),
+        agrees_with_forces: force.map(|f| f.name()) == Some(effects[pick].effect.as_str()),
+        indistinguishable_from: group
+            .iter()
+            .filter(|&&k| k != pick)
+            .map(|&k| effects[k].effect.clone())
+            .collect(),
+    }
 }
 
 /// The effect's contribution to the channels, Δ = with − without (module doc), and a note.
@@ -243,20 +290,29 @@ fn contribution(
             l.gamma.iter_mut().for_each(|x| *x = g);
             let s2 = Sim::new(sim.params.clone(), &l);
             let w = s2.run(&l, &sim.params, &Mods::default()).map_err(fail)?;
-            (w.out, "camber contribution (varying γ, re-fitted terms) removed")
+            (
+                w.out,
+                "camber contribution (varying γ, re-fitted terms) removed",
+            )
         }
         Effect::InflationPressure => {
             let mut l = log.clone();
             l.p = None;
             let w = sim.run(&l, &sim.params, &Mods::default()).map_err(fail)?;
-            (w.out, "pressure contribution (p ≠ INFLPRES, re-fitted terms) removed")
+            (
+                w.out,
+                "pressure contribution (p ≠ INFLPRES, re-fitted terms) removed",
+            )
         }
         Effect::TurnSlip => {
             let mut l = log.clone();
             l.phit = None;
             let s2 = Sim::new(sim.params.clone(), &l);
             let w = s2.run(&l, &sim.params, &Mods::default()).map_err(fail)?;
-            (w.out, "turn-slip contribution removed (the estimator's table has none)")
+            (
+                w.out,
+                "turn-slip contribution removed (the estimator's table has none)",
+            )
         }
         Effect::RelaxationLength => {
             let mut s2 = sim.clone();
@@ -289,7 +345,7 @@ fn mu_regions(log: &Log, err: &[f64], mask: &[bool]) -> Vec<MuRegion> {
             .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
                 (a.min(v), b.max(v))
             });
-        if !(hi > lo) {
+        if hi.partial_cmp(&lo) != Some(std::cmp::Ordering::Greater) {
             continue;
         }
         let nb = super::regions::BINS;

@@ -5,7 +5,7 @@
 //!   predicted by parameters fitted on the others). At most 2000 points per series (even stride).
 //! - `DIR/map_alpha_fz.png`: the RMS residual in noise units, summed over the channels, on an
 //!   α × Fz grid (quantile bins), before (left) and after (right); white is the noise floor,
-//!   red ≥ 5× it.
+//!   red ≥ 20× it (log scale).
 //!
 //! Text uses the DejaVu Sans subset bundled in `host-tests/assets/fonts/` (no system font).
 
@@ -177,7 +177,7 @@ fn heatmap(
     let (title, body) = root.split_vertically(40);
     title
         .draw_text(
-            "RMS residual / noise floor on an α × Fz grid (white = noise, red ≥ 5× noise)",
+            "RMS residual / noise floor on an α × Fz grid (log scale: white = noise, red ≥ 20× noise)",
             &("sans-serif", 18).into_text_style(&title),
             (10, 10),
         )
@@ -188,7 +188,7 @@ fn heatmap(
         let mut chart = ChartBuilder::on(area)
             .caption(
                 if r.is_some() {
-                    format!("{label}")
+                    label.to_string()
                 } else {
                     "no winning effect".to_string()
                 },
@@ -222,7 +222,7 @@ fn heatmap(
                     .map(|(a, f)| {
                         let v = g[a][f];
                         let col = if v.is_finite() {
-                            let w = ((v - 1.0) / 4.0).clamp(0.0, 1.0);
+                            let w = (v.max(1.0).ln() / 20f64.ln()).clamp(0.0, 1.0);
                             RGBColor(255, (255.0 * (1.0 - w)) as u8, (255.0 * (1.0 - w)) as u8)
                         } else {
                             RGBColor(220, 220, 220)

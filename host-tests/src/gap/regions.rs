@@ -101,7 +101,7 @@ fn edges(x: &[f64], equal: bool) -> Vec<f64> {
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
             (a.min(v), b.max(v))
         });
-    if !(hi > lo) {
+    if hi.partial_cmp(&lo) != Some(std::cmp::Ordering::Greater) {
         return vec![];
     }
     let mut e: Vec<f64> = (0..=BINS)

@@ -76,6 +76,8 @@ pub struct EffectReport {
     pub shrink: f64,
     /// Its standard error over the cross-validation blocks.
     pub shrink_se: f64,
+    /// Significance of the held-out improvement against the noise floor (`method`).
+    pub z: f64,
     /// 1 − rmse_after/rmse_before per channel.
     pub shrink_by_channel: Channels,
     /// Held-out RMSE.
