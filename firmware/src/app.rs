@@ -62,14 +62,21 @@ pub struct TableJob {
     pub gen: u32,
 }
 
-/// Builds the table of `job` into `slot` (~10 000 Magic Formula evaluations with [`Math`]; the
-/// core returns the 98 KB table by value, so the caller's stack needs about as much again).
+/// Builds the table of `job` into `slot`, in place (~10 000 Magic Formula evaluations with
+/// [`Math`]; no 98 KB temporary on the stack).
 pub fn build_table(
     job: &TableJob,
     slot: &'static mut core::mem::MaybeUninit<GoughTable<f32>>,
 ) -> Result<&'static GoughTable<f32>, BuildError> {
-    let t = GoughTable::for_tyre::<Math>(&job.params)?;
-    Ok(slot.write(t))
+    // SAFETY: `GoughTable<f32>` holds only f32, u8 and bool fields (arrays and tuples of them),
+    // for which the all-zero bit pattern is a valid value (`GoughTable::zeroed()`), so after
+    // zeroing the slot is initialised.
+    let t = unsafe {
+        core::ptr::write_bytes(slot.as_mut_ptr(), 0, 1);
+        slot.assume_init_mut()
+    };
+    t.for_wheel_into::<Math>(&job.params, None)?;
+    Ok(t)
 }
 
 #[derive(Debug, Clone, Copy)]

@@ -244,6 +244,15 @@ impl<F: Float> GoughTable<F> {
         GoughTable::build::<M>(Model::Mf(tyre), mounted).ok_or(BuildError::NoGoughCurve)
     }
 
+    /// [`GoughTable::for_wheel`] in place (no 98 KB temporary on the stack).
+    pub fn for_wheel_into<M: Backend<F>>(
+        &mut self,
+        tyre: &Params<F>,
+        mounted: Option<Side>,
+    ) -> Result<(), BuildError> {
+        GoughTable::build_into::<M>(self, Model::Mf(tyre), mounted).ok_or(BuildError::NoGoughCurve)
+    }
+
     /// The table of the paper's brush model (no `.tir` at hand).
     pub fn for_brush<M: Backend<F>>(brush: Brush<F>) -> Result<Self, BuildError> {
         GoughTable::build::<M>(Model::Brush(brush), None).ok_or(BuildError::NoGoughCurve)

@@ -136,6 +136,39 @@ impl<F: Float> GoughTable<F> {
     /// when that differs from the file's TYRESIDE; `None`: as the file is). `None` if the model
     /// gives no usable curve at the nominal load.
     pub fn build<M: Backend<F>>(model: Model<'_, F>, mounted: Option<Side>) -> Option<Self> {
+        let mut t = Self::zeroed();
+        Self::build_into::<M>(&mut t, model, mounted)?;
+        Some(t)
+    }
+
+    /// An all-zero table (no usable curve): the starting point of [`GoughTable::build_into`].
+    /// The all-zero bit pattern is exactly this value, so a device may also zero the memory of
+    /// a static slot instead of constructing one on the stack.
+    pub fn zeroed() -> Self {
+        GoughTable {
+            fz: [F::ZERO; NL],
+            lam: [F::ZERO; NS],
+            cam: [F::ZERO; NG],
+            tau: [[[[[F::ZERO; POINTS]; 2]; NL]; NS]; NG],
+            f: [[[[[F::ZERO; POINTS]; 2]; NL]; NS]; NG],
+            len: [[[[0; 2]; NL]; NS]; NG],
+            f_neg: [[[[[F::ZERO; 2]; 2]; NL]; NS]; NG],
+            rise: [[[[[(F::ZERO, F::ZERO); RISE]; 2]; NL]; NS]; NG],
+            rise_len: [[[[0; 2]; NL]; NS]; NG],
+            fy_sign: F::ZERO,
+            mu0: F::ZERO,
+            mu_ratio: F::ZERO,
+            mirrored: false,
+        }
+    }
+
+    /// [`GoughTable::build`] into an existing table, in place: no 98 KB temporary on the stack
+    /// (what a device needs). On `None` the slot holds a partial table: rebuild or zero it.
+    pub fn build_into<M: Backend<F>>(
+        slot: &mut Self,
+        model: Model<'_, F>,
+        mounted: Option<Side>,
+    ) -> Option<()> {
         let mirrored = match (model, mounted) {
             (Model::Mf(p), Some(m)) => p.tyreside.is_some_and(|s| s != m),
             _ => false,
@@ -155,21 +188,14 @@ impl<F: Float> GoughTable<F> {
             }
             Src::Brush(b) => (b.fz0, b.mu, F::ONE),
         };
-        let mut t = GoughTable {
-            fz: [F::ZERO; NL],
-            lam: LAMBDA_NODES.map(F::from_f64),
-            cam: CAMBER_NODES.map(F::from_f64),
-            tau: [[[[[F::ZERO; POINTS]; 2]; NL]; NS]; NG],
-            f: [[[[[F::ZERO; POINTS]; 2]; NL]; NS]; NG],
-            len: [[[[0; 2]; NL]; NS]; NG],
-            f_neg: [[[[[F::ZERO; 2]; 2]; NL]; NS]; NG],
-            rise: [[[[[(F::ZERO, F::ZERO); RISE]; 2]; NL]; NS]; NG],
-            rise_len: [[[[0; 2]; NL]; NS]; NG],
-            fy_sign: F::ZERO,
-            mu0,
-            mu_ratio,
-            mirrored,
-        };
+        let t = slot;
+        t.fz = [F::ZERO; NL];
+        t.lam = LAMBDA_NODES.map(F::from_f64);
+        t.cam = CAMBER_NODES.map(F::from_f64);
+        t.fy_sign = F::ZERO;
+        t.mu0 = mu0;
+        t.mu_ratio = mu_ratio;
+        t.mirrored = mirrored;
         let (fy_probe, _) = src.eval::<M>(F::from_f64(0.05), fz_ref, F::ZERO)?;
         t.fy_sign = fy_probe.sign_nz();
         for (j, &ln) in LOAD_NODES.iter().enumerate() {
@@ -220,7 +246,7 @@ impl<F: Float> GoughTable<F> {
         if own.iter().any(|&n| n < 4) {
             return None;
         }
-        Some(t)
+        Some(())
     }
 
     /// The trail of curve `c`'s rising branch at force `f` (interpolated along the branch), or

@@ -393,3 +393,15 @@ proptest! {
         }
     }
 }
+
+#[test]
+fn building_in_place_equals_building_by_value() {
+    let p = tyre().cast::<f32>();
+    let a = GoughTable::for_tyre::<Libm>(&p).unwrap();
+    let mut b = GoughTable::zeroed();
+    b.for_wheel_into::<Libm>(&p, None).unwrap();
+    assert_eq!(a.tau, b.tau);
+    assert_eq!(a.f, b.f);
+    assert_eq!(a.rise_len, b.rise_len);
+    assert_eq!((a.mu0, a.mu_ratio, a.fy_sign, a.mirrored), (b.mu0, b.mu_ratio, b.fy_sign, b.mirrored));
+}
