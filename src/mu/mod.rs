@@ -84,6 +84,9 @@ pub struct Config<F> {
     pub sigma_prior: F,
     /// Low-pass time constant of the inputs \[s\] (0: none).
     pub lowpass_tau: F,
+    /// Time after the lateral force changes side before readings count again \[s\] (the
+    /// deflection rebuilds over a relaxation length: ~0.3 m / 20 m/s ≈ 15 ms, with margin).
+    pub settle: F,
 }
 
 impl<F: Float> Default for Config<F> {
@@ -108,6 +111,7 @@ impl<F: Float> Default for Config<F> {
             mu_prior: c(0.8),
             sigma_prior: c(0.4),
             lowpass_tau: c(0.01),
+            settle: c(0.1),
         }
     }
 }
@@ -216,6 +220,9 @@ pub struct MuEstimator<'t, F> {
     // low-pass state
     lp: Option<Sample<F>>,
     last_t: Option<F>,
+    // side of the last clear lateral force (+1/−1, 0 none) and when it last changed
+    fy_side: i8,
+    side_since: F,
 }
 
 /// A per-sample λμ with its variance (before filtering).
@@ -315,6 +322,8 @@ impl<'t, F: Float> MuEstimator<'t, F> {
             cand: (F::ZERO, F::ZERO, 0),
             lp: None,
             last_t: None,
+            fy_side: 0,
+            side_since: F::ZERO,
         }
     }
 
@@ -330,6 +339,7 @@ impl<'t, F: Float> MuEstimator<'t, F> {
 
     /// Forgets everything learnt (e.g. after a reset command).
     pub fn reset(&mut self) {
+        self.fy_side = 0;
         self.have = false;
         self.run = 0;
         self.cand = (F::ZERO, F::ZERO, 0);
@@ -615,6 +625,21 @@ impl<'t, F: Float> MuEstimator<'t, F> {
         self.lp = Some(filt);
         if self.have {
             self.p += self.cfg.q * dt;
+        }
+        // After the lateral force changes side (a steering reversal) the contact patch's
+        // deflection rebuilds over a relaxation length: the steady-state Gough curve does not
+        // hold yet, and a force passing through zero with the residual torque still there reads
+        // like ice. Readings wait `settle` after each reversal.
+        let clear = filt.fy.abs() > self.cfg.fy_min_rel * filt.fz;
+        if clear {
+            let side: i8 = if filt.fy > F::ZERO { 1 } else { -1 };
+            if side != self.fy_side {
+                self.fy_side = side;
+                self.side_since = filt.t;
+            }
+        }
+        if !clear || filt.t - self.side_since < self.cfg.settle {
+            return self.hold::<M>();
         }
         match self.raw::<M>(&filt) {
             None => self.hold::<M>(),

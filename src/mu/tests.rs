@@ -403,5 +403,8 @@ fn building_in_place_equals_building_by_value() {
     assert_eq!(a.tau, b.tau);
     assert_eq!(a.f, b.f);
     assert_eq!(a.rise_len, b.rise_len);
-    assert_eq!((a.mu0, a.mu_ratio, a.fy_sign, a.mirrored), (b.mu0, b.mu_ratio, b.fy_sign, b.mirrored));
+    assert_eq!(
+        (a.mu0, a.mu_ratio, a.fy_sign, a.mirrored),
+        (b.mu0, b.mu_ratio, b.fy_sign, b.mirrored)
+    );
 }
