@@ -291,5 +291,68 @@ pub fn test_all(passed: &mut u64) -> Result<(), String> {
         return Err(format!("bench exited with {code}"));
     }
     *passed += 1;
+    bench_m0()?;
+    *passed += 1;
+    Ok(())
+}
+
+/// The Cortex-M0 bench (`firmware-m0/`, QEMU microbit): flash of each configuration, then both
+/// workloads in one run.
+fn bench_m0() -> Result<(), String> {
+    step("bench: instructions on the M0 (QEMU microbit, -icount shift=0): combined MF evaluation, soft-float f32 (math::Fast) vs Q31.32 fixed point; flash of each");
+    let dir = root().join("firmware-m0");
+    let elf = dir.join("target/thumbv6m-none-eabi/release/bench");
+    let m0_cargo = || {
+        let mut c = cargo();
+        c.current_dir(&dir).env_remove("CARGO_TARGET_DIR");
+        c
+    };
+    for (feature, what) in [("fast", "f32 math::Fast"), ("fix", "Q31.32 Fix")] {
+        run(m0_cargo().args([
+            "build",
+            "--release",
+            "--bin",
+            "bench",
+            "--no-default-features",
+            "--features",
+            feature,
+        ]))?;
+        report_size(&format!("microbit bench, {what} only"), &elf)?;
+    }
+    run(m0_cargo().args(["build", "--release", "--bin", "bench"]))?;
+    report_size("microbit bench, both", &elf)?;
+    let mut child = Command::new("qemu-system-arm")
+        .args(["-cpu", "cortex-m0", "-machine", "microbit", "-nographic"])
+        .args(["-semihosting-config", "enable=on,target=native"])
+        .args(["-icount", "shift=0", "-kernel"])
+        .arg(&elf)
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .spawn()
+        .map_err(|e| format!("qemu-system-arm: {e}"))?;
+    let mut out = child.stdout.take();
+    let reader = std::thread::spawn(move || {
+        let mut s = String::new();
+        if let Some(o) = out.as_mut() {
+            let _ = o.read_to_string(&mut s);
+        }
+        s
+    });
+    let (t0, timeout) = (Instant::now(), Duration::from_secs(120));
+    let code = loop {
+        if let Ok(Some(st)) = child.try_wait() {
+            break st.code().unwrap_or(-1);
+        }
+        if t0.elapsed() > timeout {
+            let _ = child.kill();
+            let _ = child.wait();
+            return Err(format!("{} hung (killed after {timeout:?})", elf.display()));
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    };
+    print!("{}", reader.join().unwrap_or_default());
+    if code != 0 {
+        return Err(format!("M0 bench exited with {code}"));
+    }
     Ok(())
 }

@@ -1,0 +1,260 @@
+//! Instruction counts of the combined-slip Magic Formula on a Cortex-M0 without FPU (QEMU's
+//! `microbit`, an nRF51822), soft-float f32 with `math::Fast` against Q31.32 fixed point
+//! (`fixed::Fix` + `fixed::FixMath`), under QEMU with `-icount shift=0`: one instruction = 1 ns
+//! of virtual time, SysTick counts the 16 MHz core clock (about 62.5 instructions per count),
+//! calibrated below on a loop of known length, as in `firmware/src/bin/bench.rs`.
+//!
+//! The bundled MF 6.1 tyre is parsed by `gough::tir::parse` on the host, in build.rs, and
+//! embedded as f64 values, converted at boot to `f32` and `Fix` as `Params::cast` does: parsing
+//! on the device does not fit the nRF51822's 16 KiB of RAM (`tir::parse` alone takes a 7.9 KB
+//! frame on thumbv6m, plus the `Params<f64>` it returns and the cast copies; it overflowed). Each
+//! workload is bracketed by `bench_start`/`bench_stop` (exported, never inlined, distinct
+//! bodies). It runs the points in blocks of [`B`] (inputs built before the clock starts, outputs
+//! checked after it stops; the timer's own cost is subtracted); the largest error is against the
+//! f64 reference that build.rs computes on the host for the same points.
+#![no_std]
+#![no_main]
+
+use core::sync::atomic::{AtomicU32, Ordering};
+use cortex_m::peripheral::{syst::SystClkSource, SYST};
+use cortex_m_rt::{entry, exception};
+use cortex_m_semihosting::{debug, hprintln};
+use gough::math::{Backend, Float};
+use gough::mf::{self, Input, Options, Params};
+
+include!("../points.rs");
+include!(concat!(env!("OUT_DIR"), "/reference.rs"));
+
+static WRAPS: AtomicU32 = AtomicU32::new(0);
+const RELOAD: u32 = 0x00FF_FFFF;
+/// Points per timed block.
+const B: usize = 16;
+const PAINT: u32 = 0xDEAD_BEEF;
+
+/// Marks the start of a measured workload (its id in r0).
+#[no_mangle]
+#[inline(never)]
+pub extern "C" fn bench_start(id: u32) {
+    core::hint::black_box(id);
+    cortex_m::asm::nop();
+}
+
+/// Marks the end of a measured workload (its id in r0).
+#[no_mangle]
+#[inline(never)]
+pub extern "C" fn bench_stop(id: u32) {
+    core::hint::black_box(id.wrapping_add(0x5700));
+    cortex_m::asm::nop();
+    cortex_m::asm::nop();
+}
+
+fn exit(ok: bool) -> ! {
+    debug::exit(if ok {
+        debug::EXIT_SUCCESS
+    } else {
+        debug::EXIT_FAILURE
+    });
+    #[allow(clippy::empty_loop)]
+    loop {}
+}
+
+/// Panics print their message through semihosting and exit QEMU with failure, never hang.
+#[panic_handler]
+fn panic(info: &core::panic::PanicInfo) -> ! {
+    cortex_m::interrupt::disable();
+    hprintln!("panicked: {}", info);
+    exit(false)
+}
+
+#[exception]
+unsafe fn HardFault(frame: &cortex_m_rt::ExceptionFrame) -> ! {
+    hprintln!("HardFault at pc {:#010x}", frame.pc());
+    exit(false)
+}
+
+#[exception]
+fn SysTick() {
+    // No read-modify-write atomics on ARMv6-M; this handler is the only writer.
+    WRAPS.store(
+        WRAPS.load(Ordering::SeqCst).wrapping_add(1),
+        Ordering::SeqCst,
+    );
+}
+
+fn now() -> u64 {
+    loop {
+        let w = WRAPS.load(Ordering::SeqCst);
+        let c = SYST::get_current();
+        if WRAPS.load(Ordering::SeqCst) == w {
+            return u64::from(w) * u64::from(RELOAD + 1) + u64::from(RELOAD - c);
+        }
+    }
+}
+
+extern "C" {
+    static mut __sheap: u32;
+    static _stack_start: u32;
+}
+
+/// Paints the free stack (from the end of static RAM to just below the current frame).
+#[inline(never)]
+fn paint() {
+    let sp = cortex_m::register::msp::read() as usize - 64;
+    let mut p = core::ptr::addr_of_mut!(__sheap) as usize;
+    while p < sp {
+        // SAFETY: unused RAM between the statics and the live stack.
+        unsafe { core::ptr::write_volatile(p as *mut u32, PAINT) };
+        p += 4;
+    }
+}
+
+/// Peak stack use since [`paint`] \[bytes\].
+fn stack_peak() -> usize {
+    let top = core::ptr::addr_of!(_stack_start) as usize;
+    let mut p = core::ptr::addr_of_mut!(__sheap) as usize;
+    // SAFETY: reads RAM between the statics and the stack top.
+    while p < top && unsafe { core::ptr::read_volatile(p as *const u32) } == PAINT {
+        p += 4;
+    }
+    top - p
+}
+
+fn input<F: Float>(i: usize) -> Input<F> {
+    let (fz, k, a) = inputs(i);
+    Input {
+        fz: F::from_f64(fz),
+        kappa: F::from_f64(k),
+        alpha: F::from_f64(a),
+        gamma: F::ZERO,
+        phit: F::ZERO,
+        vx: F::from_f64(16.6),
+        p: None,
+    }
+}
+
+/// Workload `id`: the N points with scalar `F` and backend `M`. Returns (SysTick counts less the
+/// timer's cost, max |ΔFx|,|ΔFy| \[N\], max |ΔMz| \[N m\], failed evaluations).
+#[inline(never)]
+fn run<F: Float, M: Backend<F>>(id: u32, p: &Params<F>, overhead: u64) -> (u64, f64, f64, usize) {
+    let opts = Options::default();
+    let (mut counts, mut ef, mut em, mut failed) = (0u64, 0f64, 0f64, 0usize);
+    bench_start(id);
+    for base in (0..N).step_by(B) {
+        let ins: [Input<F>; B] = core::array::from_fn(|j| input::<F>(base + j));
+        let mut out = [None; B];
+        let t0 = now();
+        for (x, o) in ins.iter().zip(out.iter_mut()) {
+            *o = mf::eval::<F, M>(p, core::hint::black_box(x), &opts)
+                .ok()
+                .map(|r| (r.fx, r.fy, r.mz));
+        }
+        let t1 = now();
+        counts += (t1 - t0).saturating_sub(overhead);
+        for (j, o) in out.iter().enumerate() {
+            let r = REF.get(base + j).copied().unwrap_or([f64::NAN; 3]);
+            match o {
+                Some((fx, fy, mz)) if r.iter().all(|v| v.is_finite()) => {
+                    ef = ef
+                        .max((fx.to_f64() - r[0]).abs())
+                        .max((fy.to_f64() - r[1]).abs());
+                    em = em.max((mz.to_f64() - r[2]).abs());
+                }
+                _ => failed += 1,
+            }
+        }
+    }
+    bench_stop(id);
+    (counts, ef, em, failed)
+}
+
+fn report(name: &str, per_count: f64, (c, ef, em, failed): (u64, f64, f64, usize)) -> bool {
+    hprintln!(
+        "{}: {} instructions per combined evaluation (Fx, Fy, Mz, Mx, My; mean over {} points); max error vs f64: forces {:.3e} N, Mz {:.3e} N m; failed {}",
+        name,
+        (c as f64 * per_count / N as f64) as u32,
+        N,
+        ef,
+        em,
+        failed
+    );
+    failed == 0 && ef < 1.0 && em < 0.1
+}
+
+/// The bundled tyre in `F`: the f64 values `gough::tir::parse` read on the host (build.rs),
+/// converted as [`Params::cast`] does.
+#[inline(never)]
+fn params<F: Float>() -> Params<F> {
+    let mut p = Params::<F>::zeroed(VERSION);
+    p.tyreside = TYRESIDE;
+    for &(k, v) in PARAMS.iter() {
+        p.set(k, F::from_f64(v));
+    }
+    p
+}
+
+/// One workload in a frame of its own (main's stays small: 16 KiB of RAM): parameters, run.
+#[inline(never)]
+fn workload<F: Float, M: Backend<F>>(id: u32, name: &str, per_count: f64, overhead: u64) -> bool {
+    let p = params::<F>();
+    report(name, per_count, run::<F, M>(id, &p, overhead))
+}
+
+#[entry]
+fn main() -> ! {
+    paint();
+    let Some(cp) = cortex_m::Peripherals::take() else {
+        exit(false)
+    };
+    let mut syst = cp.SYST;
+    syst.set_clock_source(SystClkSource::Core);
+    syst.set_reload(RELOAD);
+    syst.clear_current();
+    syst.enable_interrupt();
+    syst.enable_counter();
+    // After `clear_current` the counter reads 0 until its first reload: wait for it.
+    while SYST::get_current() == 0 {}
+
+    // Calibration: a loop of exactly 2 instructions per iteration (subs + bne).
+    const LOOPS: u32 = 1_000_000;
+    bench_start(0);
+    let t0 = now();
+    // SAFETY: a register-only countdown loop.
+    unsafe {
+        core::arch::asm!("1:", "subs r0, #1", "bne 1b", inout("r0") LOOPS => _, options(nomem, nostack));
+    }
+    let t1 = now();
+    bench_stop(0);
+    let per_count = (2 * LOOPS) as f64 / (t1 - t0) as f64;
+    hprintln!("calibration: {} instructions per SysTick count", per_count);
+    // The timer's own cost per bracket [counts].
+    let mut o = 0u64;
+    for _ in 0..64 {
+        let t0 = now();
+        core::hint::black_box(0);
+        let t1 = now();
+        o += t1 - t0;
+    }
+    let overhead = o / 64;
+
+    let mut ok = true;
+    #[cfg(feature = "fast")]
+    {
+        ok &= workload::<f32, gough::math::Fast>(
+            1,
+            "M0 soft-float f32, math::Fast",
+            per_count,
+            overhead,
+        );
+    }
+    #[cfg(feature = "fix")]
+    {
+        use gough::fixed::{Fix, FixMath};
+        ok &= workload::<Fix, FixMath>(2, "M0 Q31.32 fixed::Fix + FixMath", per_count, overhead);
+    }
+    hprintln!(
+        "stack peak {} bytes of 16384 RAM; Params<f32> {} bytes",
+        stack_peak(),
+        core::mem::size_of::<Params<f32>>()
+    );
+    exit(ok)
+}

@@ -1,0 +1,17 @@
+// The measured inputs, shared by the bench (`include!`) and build.rs (the f64 reference): the
+// M4F bench's grid over the operating range, Fz 0.5..1.5 FNOMIN, kappa -0.2..0.2,
+// alpha -0.15..0.15 (gamma 0, vx 16.6 m/s).
+
+/// Evaluations per workload.
+pub const N: usize = 256;
+
+/// Point `i`: (Fz \[N\], kappa, alpha \[rad\]).
+pub fn inputs(i: usize) -> (f64, f64, f64) {
+    let a = (i % 16) as f64 / 15.0;
+    let b = ((i / 16) % 16) as f64 / 15.0;
+    (
+        6752.0 * (0.5 + a),
+        -0.2 + 0.4 * b,
+        -0.15 + 0.3 * ((i * 7 % 16) as f64 / 15.0),
+    )
+}
