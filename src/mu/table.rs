@@ -303,6 +303,12 @@ impl<F: Float> GoughTable<F> {
         }
         let last = len.checked_sub(1)?;
         let (tau_end, f_end) = (*taus.get(last)?, *fs.get(last)?);
+        // Far below the most negative trail the curve ever shows (deep sliding stays close to
+        // it): not a point of this curve at all — e.g. a lateral force near zero from the shifts
+        // with the residual torque still acting.
+        if tau < tau_end - F::from_f64(0.25) * tau0.abs() {
+            return None;
+        }
         let [neg_lo, neg_hi] = *self.f_neg.get(g)?.get(si)?.get(j)?.get(side)?;
         if tau <= tau_end || (tau <= F::ZERO && neg_hi > F::ZERO) {
             // Past the aligning torque's sign change: near the force peak or in deep sliding,
