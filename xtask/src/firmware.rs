@@ -33,10 +33,26 @@ fn build_mps2() -> Result<(), String> {
 /// Runs `elf` under QEMU mps2-an386 with semihosting; returns (exit code, stdout). A run that
 /// outlives `timeout` is killed and reported as hung.
 fn qemu(elf: &Path, extra: &[&str], timeout: Duration) -> Result<(i32, String), String> {
+    qemu_on(
+        &["-cpu", "cortex-m4", "-machine", "mps2-an386"],
+        elf,
+        extra,
+        timeout,
+    )
+}
+
+/// [`qemu`] on any board: `board` gives `-cpu`/`-machine`.
+fn qemu_on(
+    board: &[&str],
+    elf: &Path,
+    extra: &[&str],
+    timeout: Duration,
+) -> Result<(i32, String), String> {
     let wd = root().join("target/qemu");
     std::fs::create_dir_all(&wd).map_err(|e| format!("{}: {e}", wd.display()))?;
     let mut child = Command::new("qemu-system-arm")
-        .args(["-cpu", "cortex-m4", "-machine", "mps2-an386", "-nographic"])
+        .args(board)
+        .arg("-nographic")
         .args(["-semihosting-config", "enable=on,target=native"])
         .args(extra)
         .arg("-kernel")
@@ -321,36 +337,13 @@ fn bench_m0() -> Result<(), String> {
     }
     run(m0_cargo().args(["build", "--release", "--bin", "bench"]))?;
     report_size("microbit bench, both", &elf)?;
-    let mut child = Command::new("qemu-system-arm")
-        .args(["-cpu", "cortex-m0", "-machine", "microbit", "-nographic"])
-        .args(["-semihosting-config", "enable=on,target=native"])
-        .args(["-icount", "shift=0", "-kernel"])
-        .arg(&elf)
-        .stdin(Stdio::null())
-        .stdout(Stdio::piped())
-        .spawn()
-        .map_err(|e| format!("qemu-system-arm: {e}"))?;
-    let mut out = child.stdout.take();
-    let reader = std::thread::spawn(move || {
-        let mut s = String::new();
-        if let Some(o) = out.as_mut() {
-            let _ = o.read_to_string(&mut s);
-        }
-        s
-    });
-    let (t0, timeout) = (Instant::now(), Duration::from_secs(120));
-    let code = loop {
-        if let Ok(Some(st)) = child.try_wait() {
-            break st.code().unwrap_or(-1);
-        }
-        if t0.elapsed() > timeout {
-            let _ = child.kill();
-            let _ = child.wait();
-            return Err(format!("{} hung (killed after {timeout:?})", elf.display()));
-        }
-        std::thread::sleep(Duration::from_millis(20));
-    };
-    print!("{}", reader.join().unwrap_or_default());
+    let (code, out) = qemu_on(
+        &["-cpu", "cortex-m0", "-machine", "microbit"],
+        &elf,
+        &["-icount", "shift=0"],
+        Duration::from_secs(120),
+    )?;
+    print!("{out}");
     if code != 0 {
         return Err(format!("M0 bench exited with {code}"));
     }
