@@ -69,10 +69,36 @@ pub struct Config<F> {
     /// the shifts that make λμ-scaling not exactly radial): added to the measurement variance,
     /// so that where the inversion is ill-conditioned the sample is not identifiable.
     pub trail_model_rel: F,
+    /// Model uncertainty of the Fx moment s·Fx removed from Mz (eq. (17)), as a fraction of it:
+    /// the arm s is a one-line fit and the combined-slip torque is the model's least certain
+    /// part, so readings dominated by it (hard braking with camber) are not identifiable.
+    pub arm_model_rel: F,
+    /// Model uncertainty of the trail under combined slip, as a fraction of τ0 per unit share
+    /// |Fx|/|F| of the longitudinal force: the table is pure side slip, and with Fx the
+    /// residual torque Mzr no longer stands to Fy as it does there (Fy shrinks by Gyκ, Mzr
+    /// by the equivalent slip of (A54)), so the trail of a braked wheel reads too short.
+    pub combined_model_rel: F,
+    /// Model uncertainty of λμ under combined slip, as a fraction of it per unit share
+    /// |Fx|/|F|: the resultant of the combined-slip forces (weighting functions G, eq. (12))
+    /// falls short of the pure-slip force at the equivalent slip by up to ~10 % at equal shares,
+    /// which the friction ellipse does not capture.
+    pub combined_force_rel: F,
+    /// Model uncertainty of the residual torque Mzr (conicity, camber torque, the camber
+    /// interpolation between table nodes), as a fraction of Fz·R0 \[-\]: it enters the trail as
+    /// σ/|Fy|, so small lateral forces — where the residual torque, not the trail, shapes the
+    /// Gough curve — are not identifiable.
+    pub mzr_model_rel: F,
     /// Random-walk intensity of λμ \[1/s\] (variance growth per second).
     pub q: F,
     /// Outlier gate in standard deviations of the innovation.
     pub gate: F,
+    /// Largest σ of μ the outlier gate grants the estimate \[-\]: while it is held, its σ grows
+    /// (the road may change unseen), but a single reading must not move it further than this
+    /// allows — a larger jump needs `change_count` consistent readings (change detection).
+    pub gate_sigma_max: F,
+    /// Smallest step of μ reported as a change of surface \[-\] (smaller re-alignments after
+    /// `change_count` outliers move the estimate without the flag).
+    pub change_min: F,
     /// Consecutive one-sided outliers that declare a change of surface.
     pub change_count: u16,
     /// Mutually consistent identifiable samples needed before the first estimate is reported
@@ -87,6 +113,13 @@ pub struct Config<F> {
     /// Time after the lateral force changes side before readings count again \[s\] (the
     /// deflection rebuilds over a relaxation length: ~0.3 m / 20 m/s ≈ 15 ms, with margin).
     pub settle: F,
+    /// A reading is not identifiable when a surface grippier than the estimate by more than
+    /// `ambiguity_margin` (in λμ) reads the same point, within this many standard deviations
+    /// of the trail (low-passed measurement noise and `trail_model_rel`), as lying on its own
+    /// curve: where that curve is flat, noise alone would pick the wrong surface.
+    pub ambiguity_sigmas: F,
+    /// See `ambiguity_sigmas` \[-\] (λμ).
+    pub ambiguity_margin: F,
 }
 
 impl<F: Float> Default for Config<F> {
@@ -104,14 +137,22 @@ impl<F: Float> Default for Config<F> {
             trail_drop_abs_min: c(0.004),
             sigma_max: c(0.08),
             trail_model_rel: c(0.02),
+            arm_model_rel: c(0.2),
+            combined_model_rel: c(0.5),
+            combined_force_rel: c(0.25),
+            mzr_model_rel: c(0.0006),
             q: c(0.02),
             gate: c(4.0),
+            gate_sigma_max: c(0.03),
+            change_min: c(0.1),
             change_count: 60,
             init_count: 25,
             mu_prior: c(0.8),
             sigma_prior: c(0.4),
             lowpass_tau: c(0.01),
             settle: c(0.1),
+            ambiguity_sigmas: c(2.0),
+            ambiguity_margin: c(0.1),
         }
     }
 }
@@ -215,6 +256,8 @@ pub struct MuEstimator<'t, F> {
     p: F,
     have: bool,
     run: i32,
+    // inverse-variance mean and variance of the current outlier run
+    run_acc: (F, F),
     // candidate first estimate: inverse-variance mean, its variance, count
     cand: (F, F, u16),
     // low-pass state
@@ -223,6 +266,8 @@ pub struct MuEstimator<'t, F> {
     // side of the last clear lateral force (+1/−1, 0 none) and when it last changed
     fy_side: i8,
     side_since: F,
+    // rms of the low-passed noise relative to the raw noise (1 until a sample interval is known)
+    noise_scale: F,
 }
 
 /// A per-sample λμ with its variance (before filtering).
@@ -319,11 +364,13 @@ impl<'t, F: Float> MuEstimator<'t, F> {
             p: F::ZERO,
             have: false,
             run: 0,
+            run_acc: (F::ZERO, F::ZERO),
             cand: (F::ZERO, F::ZERO, 0),
             lp: None,
             last_t: None,
             fy_side: 0,
             side_since: F::ZERO,
+            noise_scale: F::ONE,
         }
     }
 
@@ -429,6 +476,9 @@ impl<'t, F: Float> MuEstimator<'t, F> {
             self.arm.s(fy, dfz, gamma)
         };
         let mz = s.mz - arm * fx;
+        // Trail variance of the model's Fx moment.
+        let var_tau_arm = (cfg.arm_model_rel * arm * fx / fy).sq()
+            + (cfg.mzr_model_rel * s.fz * self.arm.r0 / fy).sq();
         let tau = -mz / fy;
         // Side: Fy along the model's α > 0 direction → side 0.
         let side = if fy * self.table.fy_sign > F::ZERO {
@@ -442,6 +492,7 @@ impl<'t, F: Float> MuEstimator<'t, F> {
         if fy.abs() < cfg.fy_share_min * force {
             return None;
         }
+        let fx_share = fxe.abs() / force;
         // Load nodes bracketing Fz (clamped at the ends).
         let nodes = &self.table.fz;
         let n = nodes.len();
@@ -503,11 +554,18 @@ impl<'t, F: Float> MuEstimator<'t, F> {
             prev = Some((d, e));
             pick = Some(e); // above every node so far: the highest one
         }
+        // Variance of the trail from the (low-passed) measurement noise.
+        let s_m = cfg.sigma_mz * self.noise_scale;
+        let s_f = cfg.sigma_fy_rel * s.fz * self.noise_scale;
+        let var_tau = (s_m / fy).sq() + (tau * s_f / fy).sq();
         // Ambiguity guard: the same (τ, |F|) can be a slippery surface at moderate slip or a
         // grippy one at small slip, where the trail has not dropped (or is still rising, with
-        // the residual torque). An estimate is believed only if every grippier surface node
-        // could read the point too, reads it as less grippy than itself (no second crossing),
-        // and the point lies on none of their rising branches.
+        // the residual torque). An estimate is believed only if no surface grippier than it by
+        // more than `ambiguity_margin` could produce the point too: its curve's trail at the
+        // measured force must differ from the measured trail by more than `ambiguity_sigmas`
+        // standard deviations (measurement noise after the low-pass, residual-torque, Fx-arm,
+        // combined-slip and table uncertainty); and none may read the point as grippier than
+        // itself (a second crossing).
         if let Some(e) = pick {
             let f_m = force / s.fz;
             let corners = [
@@ -522,12 +580,15 @@ impl<'t, F: Float> MuEstimator<'t, F> {
                     continue;
                 }
                 let Some(k) = est else { return None };
-                // A second crossing further up: the point reads as a grippier surface too.
                 if k.lambda >= lam_k {
                     return None;
                 }
-                // On the grippier surface's rising branch (interpolated like the table)?
-                let (mut tr, mut wsum) = (F::ZERO, F::ZERO);
+                if lam_k - e.lambda <= cfg.ambiguity_margin {
+                    continue;
+                }
+                // The grippier curve's trail at the measured force (interpolated like the
+                // table); a curve that never reaches this force cannot hold the point.
+                let (mut tk, mut wsum) = (F::ZERO, F::ZERO);
                 for &(gi, ji, wt) in &corners {
                     let c = table::CurveIdx {
                         g: gi,
@@ -535,13 +596,19 @@ impl<'t, F: Float> MuEstimator<'t, F> {
                         j: ji,
                         side,
                     };
-                    if let Some(x) = self.table.rise_tau(c, f_m) {
-                        tr += wt * x;
+                    if let Some(x) = self.table.tau_at(c, f_m) {
+                        tk += wt * x;
                         wsum += wt;
                     }
                 }
-                if wsum > F::HALF && (tau - tr / wsum).abs() <= F::from_f64(0.3) * k.tau0.abs() {
-                    return None;
+                if wsum > F::HALF {
+                    let var_k = var_tau
+                        + var_tau_arm
+                        + (cfg.trail_model_rel * k.tau0).sq()
+                        + (cfg.combined_model_rel * fx_share * k.tau0).sq();
+                    if (tau - tk / wsum).sq() <= cfg.ambiguity_sigmas.sq() * var_k {
+                        return None;
+                    }
                 }
             }
         }
@@ -555,7 +622,11 @@ impl<'t, F: Float> MuEstimator<'t, F> {
             + (lambda * s_f / force).sq();
         // The model's own uncertainty does not average out over samples: it alone decides
         // whether the inversion is well-conditioned enough to be believed at all.
-        let var_model = (e.dl_dtau * cfg.trail_model_rel * e.tau0).sq() + (lambda * e.spread).sq();
+        let var_comb = (cfg.combined_model_rel * fx_share * e.tau0).sq();
+        let var_model = e.dl_dtau.sq()
+            * ((cfg.trail_model_rel * e.tau0).sq() + var_tau_arm + var_comb)
+            + (lambda * e.spread).sq()
+            + (cfg.combined_force_rel * fx_share * lambda).sq();
         let mu0 = self.table.mu0;
         if e.drop < cfg.trail_drop_min
             || e.drop * e.tau0 < cfg.trail_drop_abs_min
@@ -623,6 +694,11 @@ impl<'t, F: Float> MuEstimator<'t, F> {
             }
         };
         self.lp = Some(filt);
+        if dt > F::ZERO && self.cfg.lowpass_tau > F::ZERO {
+            // First-order low-pass of white noise: variance × a/(2 − a), a = dt/(τ + dt).
+            let a = dt / (self.cfg.lowpass_tau + dt);
+            self.noise_scale = M::sqrt(a / (F::TWO - a));
+        }
         if self.have {
             self.p += self.cfg.q * dt;
         }
@@ -698,26 +774,33 @@ impl<'t, F: Float> MuEstimator<'t, F> {
         } else {
             let e = r.lambda - self.lambda;
             let s = self.p + r.var;
-            if e * e > self.cfg.gate.sq() * s {
+            let p_gate = self.p.min((self.cfg.gate_sigma_max / mu0).sq());
+            if e * e > self.cfg.gate.sq() * (p_gate + r.var) {
                 // Outlier: counted, not used, unless it persists on one side (a new surface).
                 let dir = if e > F::ZERO { 1 } else { -1 };
-                self.run = if self.run.signum() == dir {
-                    self.run + dir
+                if self.run.signum() == dir {
+                    self.run += dir;
+                    let (m, v) = self.run_acc;
+                    self.run_acc = (
+                        m + v / (v + r.var) * (r.lambda - m),
+                        v * r.var / (v + r.var),
+                    );
                 } else {
-                    dir
-                };
+                    self.run = dir;
+                    self.run_acc = (r.lambda, r.var);
+                }
                 if self.run.unsigned_abs() >= u32::from(self.cfg.change_count) {
-                    self.lambda = r.lambda;
-                    self.p = r.var;
+                    // The run's evidence replaces the estimate. A change of surface is declared
+                    // only when that moves μ by at least `change_min`: a smaller step is the
+                    // estimate re-aligning within its accuracy, not a new road.
+                    let (m, v) = self.run_acc;
+                    change = (m - self.lambda).abs() * mu0 >= self.cfg.change_min;
+                    self.lambda = m;
+                    self.p = v.max(r.var / F::from_f64(f64::from(self.cfg.change_count)));
                     self.run = 0;
-                    change = true;
                 } else {
-                    return Estimate {
-                        mu: self.lambda * mu0,
-                        sigma: M::sqrt(self.p) * mu0,
-                        state: State::Identifiable,
-                        change: false,
-                    };
+                    // Not used: the estimate is held, as for any uninformative sample.
+                    return self.hold::<M>();
                 }
             } else {
                 let k = self.p / s;

@@ -11,7 +11,7 @@
 
 use crate::brush::Brush;
 use crate::math::{Backend, Float};
-use crate::mf::{self, Input, Options, Params, Side};
+use crate::mf::{self, combined::Arm, Input, Options, Params, Side};
 
 /// Loads the table holds, as multiples of the reference load.
 pub const LOAD_NODES: [f64; 7] = [0.2, 0.4, 0.6, 0.8, 1.0, 1.35, 1.8];
@@ -249,24 +249,38 @@ impl<F: Float> GoughTable<F> {
         Some(())
     }
 
-    /// The trail of curve `c`'s rising branch at force `f` (interpolated along the branch), or
-    /// `None` when f lies above the branch (the trail has peaked by then). Below the branch's
-    /// first point the residual torque dominates: the first point's trail is returned.
-    pub fn rise_tau(&self, c: CurveIdx, f: F) -> Option<F> {
+    /// The trail of curve `c` where its force is `f`: along the rising branch and then the
+    /// monotone part, up to the curve's force peak (linear in f between table points; below the
+    /// first point, that point's trail). `None` when f lies beyond the curve's peak force — no
+    /// point of this curve has that force — or the curve is empty.
+    pub fn tau_at(&self, c: CurveIdx, f: F) -> Option<F> {
         let CurveIdx { g, si, j, side } = c;
-        let pts = self.rise.get(g)?.get(si)?.get(j)?.get(side)?;
-        let n = *self.rise_len.get(g)?.get(si)?.get(j)?.get(side)? as usize;
-        let pts = pts.get(..n)?;
-        let &(f_first, t_first) = pts.first()?;
-        if f < f_first {
-            return Some(t_first);
-        }
-        for w in pts.windows(2) {
-            if let [(f0, t0), (f1, t1)] = *w {
-                if f >= f0 && f <= f1 && f1 > f0 {
-                    return Some(t0 + (f - f0) / (f1 - f0) * (t1 - t0));
-                }
+        let rise = self.rise.get(g)?.get(si)?.get(j)?.get(side)?;
+        let nr = *self.rise_len.get(g)?.get(si)?.get(j)?.get(side)? as usize;
+        let taus = self.tau.get(g)?.get(si)?.get(j)?.get(side)?;
+        let fs = self.f.get(g)?.get(si)?.get(j)?.get(side)?;
+        let n = *self.len.get(g)?.get(si)?.get(j)?.get(side)? as usize;
+        // One walk over rise points then monotone points, in increasing force.
+        let point = |k: usize| -> Option<(F, F)> {
+            if k < nr {
+                rise.get(k).copied()
+            } else {
+                Some((*fs.get(k - nr)?, *taus.get(k - nr)?))
             }
+        };
+        let (mut f0, mut t0) = point(0)?;
+        if f <= f0 {
+            return Some(t0);
+        }
+        for k in 1..nr + n {
+            let (f1, t1) = point(k)?;
+            if f1 <= f0 {
+                return None; // past the force peak
+            }
+            if f <= f1 {
+                return Some(t0 + (f - f0) / (f1 - f0) * (t1 - t0));
+            }
+            (f0, t0) = (f1, t1);
         }
         None
     }
@@ -381,7 +395,18 @@ fn mf_fy_mz<F: Float, M: Backend<F>>(
         ..Input::default()
     };
     let o = mf::eval::<F, M>(q, &inp, &opts).ok()?;
-    Some((o.fy, o.mz, o.mu_y, o.mu_x))
+    // The table holds the torque of the lateral force alone: the moment s·Fx of the free-rolling
+    // Fx (the shifts SHx, SVx make it nonzero at κ = 0) is removed with the same arm the estimator
+    // removes from each sample, mirrored like the tyre (eq. (17), (A56)).
+    let arm = Arm::from_params(q);
+    let dfz = (fz - q.fnomin) / q.fnomin;
+    let mirrored = matches!((mounted, q.tyreside), (Some(m), Some(s)) if m != s);
+    let s = if mirrored {
+        -arm.s(-o.fy, dfz, -gamma)
+    } else {
+        arm.s(o.fy, dfz, gamma)
+    };
+    Some((o.fy, o.mz - s * o.fx, o.mu_y, o.mu_x))
 }
 
 /// The model behind the table, on a settable surface λμ.
