@@ -7,11 +7,11 @@
 //! The estimators of the four wheels share one [`GoughTable`] (98 KB in f32, ~10 000 Magic
 //! Formula evaluations to build). The App never builds it inside [`App::poll`] or [`App::tick`]:
 //! after a parameter set is loaded it hands out a [`TableJob`] ([`App::table_job`]); the board
-//! builds it where it does not hold up reception and the tick — the mps2 board in thread mode
-//! while poll and tick run in the SysTick interrupt — and returns it with [`App::table_built`].
-//! Until then measurements get `Forces` and no `Estimate`; the `Ack` of a `ParamCommit` is sent
-//! once the new tyre's table is built, so a host that waits for it gets estimates from its first
-//! measurement on. A board that never builds (STM32F405: the table does not fit its RAM) leaves
+//! builds it — the mps2 board in thread mode while poll and tick run in the SysTick interrupt;
+//! the STM32F405 board between polls of its main loop — and returns it with
+//! [`App::table_built`]. Until then measurements get `Forces` and no `Estimate`; the `Ack` of a
+//! `ParamCommit` is sent once the new tyre's table is built, so a host that waits for it gets
+//! estimates from its first measurement on. A board that never builds leaves
 //! [`App::estimator`] off: commits are acknowledged at once and no `Estimate` is ever sent.
 
 use crate::wheel::{self, Wheel};

@@ -3,31 +3,71 @@
 //! `embedded_can::nb::Can`. defmt logs over RTT. Built and linked in CI (flash/RAM reported
 //! by `cargo xtask test-all`); not run there (no hardware).
 //!
-//! Magic Formula and transient filter only: the friction estimator's table (98 KB, and as much
-//! again of stack while the core builds it by value) does not fit the 128 KiB SRAM next to the
-//! App, so `App::estimator` stays off here — no table job, no `Estimate`, commits acknowledged
-//! at once.
+//! Memory (`boards/stm32f405.x`): the friction estimator's 98 KB table fills the 128 KiB SRAM;
+//! the App (~36 KiB, mostly the upload buffer) and the stack live in the 64 KiB CCM. The App's
+//! initial value is copied from flash into CCM first thing in `main` (cortex-m-rt initialises
+//! only SRAM).
+//!
+//! The table is built in thread mode between polls, at boot and after each parameter upload
+//! (~41 M instructions: ~0.25 s at 168 MHz). The loop polls bxCAN, whose receive FIFOs hold 3
+//! frames each, so frames arriving during a build after an upload overrun and are lost (the
+//! reassembler counts the broken messages; the `ParamCommit` is acknowledged once the table is
+//! in). A board that must not lose frames then would move polling into the CAN receive
+//! interrupt, as the QEMU board does with its UART.
 #![no_std]
 #![no_main]
 
+use core::mem::MaybeUninit;
+use core::ptr::addr_of_mut;
 use core::sync::atomic::{AtomicU32, Ordering};
 use cortex_m_rt::{entry, exception};
 use defmt_rtt as _;
+use gough::mu::GoughTable;
 use gough::proto::ParamSource;
-use gough_firmware::app::{App, Event};
+use gough_firmware::app::{self, App, Event};
 use gough_firmware::{stack, BUNDLED_TIR};
 use stm32f4xx_hal::{can::Can, pac, prelude::*, rcc::Config};
 
 static TICKS: AtomicU32 = AtomicU32::new(0);
+/// The device state, in CCM (`.ccmdata`: its initial value is in flash, copied by `ccm_init`).
+#[link_section = ".ccmdata.APP"]
 static mut APP: App = App::new();
+/// The estimators' table (98 KB, SRAM). Written only while a table job is out (the App then
+/// holds no reference to it).
+static mut TABLE: MaybeUninit<GoughTable<f32>> = MaybeUninit::uninit();
+
+extern "C" {
+    // boards/stm32f405.x: the `.ccmdata` section in CCM and its load address in flash.
+    static mut __sccmdata: u32;
+    static mut __eccmdata: u32;
+    static __siccmdata: u32;
+}
+
+/// Copies `.ccmdata`'s initial values from flash to CCM, word by word.
+///
+/// # Safety
+/// Call once, before anything reads or writes a `.ccmdata` static.
+unsafe fn ccm_init() {
+    let mut dst = addr_of_mut!(__sccmdata);
+    let end = addr_of_mut!(__eccmdata);
+    let mut src: *const u32 = core::ptr::addr_of!(__siccmdata);
+    while dst < end {
+        dst.write_volatile(src.read());
+        dst = dst.add(1);
+        src = src.add(1);
+    }
+}
 
 #[entry]
 fn main() -> ! {
-    // SAFETY: first thing in main, below the live frames.
+    // SAFETY: first thing in main: nothing has touched APP; the stack lies above `.ccmdata`.
+    unsafe { ccm_init() };
+    // SAFETY: below the live frames.
     unsafe { stack::paint() };
     // SAFETY: the only reference to APP, taken once.
-    let app: &'static mut App = unsafe { &mut *core::ptr::addr_of_mut!(APP) };
+    let app: &'static mut App = unsafe { &mut *addr_of_mut!(APP) };
     app.stack_probe = Some(stack::peak);
+    app.estimator = true;
     let _ = app.load_tir(BUNDLED_TIR, ParamSource::Bundled);
     let (Some(dp), Some(cp)) = (pac::Peripherals::take(), cortex_m::Peripherals::take()) else {
         halt()
@@ -59,6 +99,13 @@ fn main() -> ! {
         if now != last {
             last = now;
             app.tick(&mut can, now);
+        }
+        if let Some(job) = app.table_job() {
+            // SAFETY: a job is out, so the App holds no reference into TABLE until the build
+            // is handed back; this loop is the only writer.
+            let slot = unsafe { &mut *addr_of_mut!(TABLE) };
+            let built = app::build_table(&job, slot);
+            app.table_built(&mut can, job.gen, built);
         }
     }
 }
