@@ -8,7 +8,7 @@ const PAINT: u32 = 0xCCCC_CCCC;
 
 extern "C" {
     // cortex-m-rt's linker script: the stack grows down from `_stack_start` to `_stack_end`
-    // (the end of .bss/.uninit).
+    // (the end of .bss/.uninit, unless the board's memory.x sets both: the STM32F405's CCM).
     static mut _stack_end: u32;
     static _stack_start: u32;
 }

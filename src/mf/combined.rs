@@ -116,6 +116,16 @@ impl<F: Float> Arm<F> {
         let [s1, s2, s3, s4] = self.ssz;
         self.r0 * (s1 + s2 * (fy / self.fz0) + (s3 + s4 * dfz) * gamma) * self.ls
     }
+
+    /// [`Arm::s`] of the tyre as mounted: a mirrored tyre's arm is the mirror of the file's,
+    /// −s(−Fy, dfz, −γ), as `mf::eval` computes it for a wheel on the other side.
+    pub fn s_mounted(&self, mirrored: bool, fy: F, dfz: F, gamma: F) -> F {
+        if mirrored {
+            -self.s(-fy, dfz, -gamma)
+        } else {
+            self.s(fy, dfz, gamma)
+        }
+    }
 }
 
 /// Results of [`mz`].

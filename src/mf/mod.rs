@@ -301,10 +301,7 @@ pub fn eval<F: Float, M: Backend<F>>(
     input: &Input<F>,
     opts: &Options,
 ) -> Result<Output<F>, EvalError> {
-    let mirrored = match (opts.mounted, p.tyreside) {
-        (Some(m), Some(s)) => m != s,
-        _ => false,
-    };
+    let mirrored = p.mirrored_on(opts.mounted);
     let mut inp = *input;
     if mirrored {
         inp.alpha = -inp.alpha;

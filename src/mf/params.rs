@@ -173,6 +173,11 @@ macro_rules! tir_params {
             pub fn set(&mut self, key: Key, value: F) {
                 match key { $( Key::$key => self.$field = value, )* }
             }
+            /// Whether a tyre mounted on `mounted` is the mirror image of this file's tyre (the
+            /// side differs from `TYRESIDE`; never when either is unknown).
+            pub fn mirrored_on(&self, mounted: Option<Side>) -> bool {
+                matches!((mounted, self.tyreside), (Some(m), Some(s)) if m != s)
+            }
             /// The same parameter set in another float type (f64 → f32 rounds to nearest).
             pub fn cast<G: Float>(&self) -> Params<G> {
                 Params {

@@ -114,9 +114,10 @@ pub struct Config<F> {
     /// deflection rebuilds over a relaxation length: ~0.3 m / 20 m/s ≈ 15 ms, with margin).
     pub settle: F,
     /// A reading is not identifiable when a surface grippier than the estimate by more than
-    /// `ambiguity_margin` (in λμ) reads the same point, within this many standard deviations
-    /// of the trail (low-passed measurement noise and `trail_model_rel`), as lying on its own
-    /// curve: where that curve is flat, noise alone would pick the wrong surface.
+    /// `ambiguity_margin` (in λμ) could hold the point: its curve's trail at the measured force
+    /// lies within this many standard deviations of the measured trail (low-passed measurement
+    /// noise and the model terms `trail_model_rel`, `arm_model_rel`, `mzr_model_rel`,
+    /// `combined_model_rel`). Where that curve is flat, noise alone would pick the wrong surface.
     pub ambiguity_sigmas: F,
     /// See `ambiguity_sigmas` \[-\] (λμ).
     pub ambiguity_margin: F,
@@ -469,12 +470,8 @@ impl<'t, F: Float> MuEstimator<'t, F> {
         let fx = s.fx.unwrap_or(F::ZERO);
         let dfz = (s.fz - self.fz0) / self.fz0;
         let gamma = s.gamma.filter(|g| g.is_finite()).unwrap_or(cfg.gamma);
-        // (17): remove s·Fx. A mirrored tyre's arm is the mirror of the file's: −s(−Fy, −γ).
-        let arm = if self.table.mirrored {
-            -self.arm.s(-fy, dfz, -gamma)
-        } else {
-            self.arm.s(fy, dfz, gamma)
-        };
+        // (17): remove s·Fx, with the arm of the tyre as mounted (as the table did).
+        let arm = self.arm.s_mounted(self.table.mirrored, fy, dfz, gamma);
         let mz = s.mz - arm * fx;
         // Trail variance of the model's Fx moment.
         let var_tau_arm = (cfg.arm_model_rel * arm * fx / fy).sq()
@@ -493,6 +490,10 @@ impl<'t, F: Float> MuEstimator<'t, F> {
             return None;
         }
         let fx_share = fxe.abs() / force;
+        // The model's uncertainty of the trail on a curve whose small-slip trail is τ0: the
+        // table, the Fx moment and residual torque (`var_tau_arm`), combined slip.
+        let trail_rel_sq = cfg.trail_model_rel.sq() + (cfg.combined_model_rel * fx_share).sq();
+        let var_tau_model = |tau0: F| tau0.sq() * trail_rel_sq + var_tau_arm;
         // Load nodes bracketing Fz (clamped at the ends).
         let nodes = &self.table.fz;
         let n = nodes.len();
@@ -602,10 +603,7 @@ impl<'t, F: Float> MuEstimator<'t, F> {
                     }
                 }
                 if wsum > F::HALF {
-                    let var_k = var_tau
-                        + var_tau_arm
-                        + (cfg.trail_model_rel * k.tau0).sq()
-                        + (cfg.combined_model_rel * fx_share * k.tau0).sq();
+                    let var_k = var_tau + var_tau_model(k.tau0);
                     if (tau - tk / wsum).sq() <= cfg.ambiguity_sigmas.sq() * var_k {
                         return None;
                     }
@@ -622,9 +620,7 @@ impl<'t, F: Float> MuEstimator<'t, F> {
             + (lambda * s_f / force).sq();
         // The model's own uncertainty does not average out over samples: it alone decides
         // whether the inversion is well-conditioned enough to be believed at all.
-        let var_comb = (cfg.combined_model_rel * fx_share * e.tau0).sq();
-        let var_model = e.dl_dtau.sq()
-            * ((cfg.trail_model_rel * e.tau0).sq() + var_tau_arm + var_comb)
+        let var_model = e.dl_dtau.sq() * var_tau_model(e.tau0)
             + (lambda * e.spread).sq()
             + (cfg.combined_force_rel * fx_share * lambda).sq();
         let mu0 = self.table.mu0;

@@ -169,9 +169,9 @@ impl<F: Float> GoughTable<F> {
         model: Model<'_, F>,
         mounted: Option<Side>,
     ) -> Option<()> {
-        let mirrored = match (model, mounted) {
-            (Model::Mf(p), Some(m)) => p.tyreside.is_some_and(|s| s != m),
-            _ => false,
+        let mirrored = match model {
+            Model::Mf(p) => p.mirrored_on(mounted),
+            Model::Brush(_) => false,
         };
         let mut src = match model {
             Model::Mf(p) => Src::Mf(p.clone(), mounted),
@@ -398,14 +398,8 @@ fn mf_fy_mz<F: Float, M: Backend<F>>(
     // The table holds the torque of the lateral force alone: the moment s·Fx of the free-rolling
     // Fx (the shifts SHx, SVx make it nonzero at κ = 0) is removed with the same arm the estimator
     // removes from each sample, mirrored like the tyre (eq. (17), (A56)).
-    let arm = Arm::from_params(q);
     let dfz = (fz - q.fnomin) / q.fnomin;
-    let mirrored = matches!((mounted, q.tyreside), (Some(m), Some(s)) if m != s);
-    let s = if mirrored {
-        -arm.s(-o.fy, dfz, -gamma)
-    } else {
-        arm.s(o.fy, dfz, gamma)
-    };
+    let s = Arm::from_params(q).s_mounted(q.mirrored_on(mounted), o.fy, dfz, gamma);
     Some((o.fy, o.mz - s * o.fx, o.mu_y, o.mu_x))
 }
 

@@ -413,3 +413,102 @@ fn building_in_place_equals_building_by_value() {
         (b.mu0, b.mu_ratio, b.fy_sign, b.mirrored)
     );
 }
+
+/// `tau_at` walks a curve by force: at each tabulated point it returns that point's trail,
+/// below the first point the first trail, and beyond the curve's force peak nothing.
+#[test]
+fn tau_at_walks_the_curve_by_force() {
+    let p = tyre();
+    let t = GoughTable::for_tyre::<Libm>(&p).unwrap();
+    let flat = CAMBER_NODES.iter().position(|&g| g == 0.0).unwrap();
+    let nominal = LOAD_NODES.iter().position(|&l| l == 1.0).unwrap();
+    for si in 0..LAMBDA_NODES.len() {
+        for side in 0..2 {
+            let c = table::CurveIdx {
+                g: flat,
+                si,
+                j: nominal,
+                side,
+            };
+            let nr = t.rise_len[flat][si][nominal][side] as usize;
+            let n = t.len[flat][si][nominal][side] as usize;
+            let rise = &t.rise[flat][si][nominal][side][..nr];
+            let (fs, taus) = (
+                &t.f[flat][si][nominal][side][..n],
+                &t.tau[flat][si][nominal][side][..n],
+            );
+            let pts: Vec<(f64, f64)> = rise
+                .iter()
+                .copied()
+                .chain(fs.iter().copied().zip(taus.iter().copied()))
+                .collect();
+            assert_eq!(t.tau_at(c, 0.0), Some(pts[0].1));
+            let mut f_max = 0.0;
+            for &(f, tau) in &pts {
+                if f <= f_max {
+                    break; // past the force peak
+                }
+                f_max = f;
+                let got = t.tau_at(c, f).unwrap();
+                assert!((got - tau).abs() < 1e-12, "λ node {si} side {side} f {f}");
+            }
+            assert_eq!(t.tau_at(c, f_max * 1.01), None, "beyond the peak force");
+        }
+    }
+}
+
+/// A held estimate whose σ has grown is not dragged by a short burst of confident readings
+/// from another surface: the outlier gate grants it at most `gate_sigma_max`, so they are
+/// outliers (not identifiable, no change); a persistent run of them is a change of surface,
+/// flagged once. (Confident: a sensor 10× better than the default noise, so each reading's own
+/// σ is small; a reading with a large σ can pass the gate and then moves a held estimate with
+/// the full Kalman gain — see the README.)
+#[test]
+fn a_burst_after_a_hold_is_an_outlier_a_run_is_a_change() {
+    let p = tyre();
+    let table = GoughTable::for_tyre::<Libm>(&p).unwrap();
+    let cfg = Config {
+        sigma_mz: 0.2,
+        sigma_fy_rel: 0.001,
+        ..Config::default()
+    };
+    let mut est = MuEstimator::for_tyre(&table, &p, cfg);
+    let mu0 = est.mu0();
+    let corner = truth(&p, 0.5, mu0, p.fnomin, 0.04, 0.0);
+    let straight = truth(&p, 0.5, mu0, p.fnomin, 0.0, 0.0);
+    let mut t = 0.0;
+    let mut step = |est: &mut MuEstimator<'_, f64>, o: &mf::Output<f64>| {
+        t += 1e-3;
+        est.update::<Libm>(&sample(o, t, false))
+    };
+    for _ in 0..300 {
+        step(&mut est, &corner);
+    }
+    // Steer back over 0.3 s, then straight for 3 s: held, σ grows well past the gate's cap.
+    for i in 0..300 {
+        let o = truth(&p, 0.5, mu0, p.fnomin, 0.04 * (1.0 - i as f64 / 300.0), 0.0);
+        step(&mut est, &o);
+    }
+    let mut held = step(&mut est, &straight);
+    for _ in 0..3000 {
+        held = step(&mut est, &straight);
+    }
+    assert_eq!(held.state, State::NotIdentifiable);
+    assert!(held.sigma > 2.0 * Config::<f64>::default().gate_sigma_max);
+    // A 30 ms burst of cornering on ice (μ 0.15, well into the trail's collapse), then straight.
+    let ice = truth(&p, 0.15, mu0, p.fnomin, 0.03, 0.0);
+    let mut burst = Vec::new();
+    for i in 0..130 {
+        burst.push(step(&mut est, if i < 30 { &ice } else { &straight }));
+    }
+    for (i, e) in burst.iter().enumerate() {
+        assert!(!e.change, "burst sample {i}: {e:?}");
+        assert!((e.mu - 0.5).abs() < 0.05, "burst sample {i}: {e:?}");
+    }
+    assert!(burst.iter().all(|e| e.state != State::Identifiable));
+    // Cornering on ice for 0.4 s: a change of surface, flagged once.
+    let rest: Vec<Estimate<f64>> = (0..400).map(|_| step(&mut est, &ice)).collect();
+    assert_eq!(rest.iter().filter(|e| e.change).count(), 1, "one change");
+    let last = rest.last().unwrap();
+    assert!((last.mu - 0.15).abs() < 0.05, "{last:?}");
+}
