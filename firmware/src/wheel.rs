@@ -161,6 +161,7 @@ pub fn steady<M: Backend<f32>>(
     let input = m.mf_input(p).ok_or(AckCode::NoSlip)?;
     let opts = Options {
         limits,
+        moments: false, // the Forces message carries Fx, Fy, Mz
         ..Options::default()
     };
     eval::<M>(p, &input, &opts).map(|o| forces_of(m, &o))
@@ -235,6 +236,7 @@ impl<'t> Wheel<'t> {
                 let opts = Options {
                     limits,
                     transient: true,
+                    moments: false, // the Forces message carries Fx, Fy, Mz
                     ..Options::default()
                 };
                 let o = eval::<M>(p, &input(s.kappa, s.alpha), &opts)?;
@@ -254,6 +256,7 @@ impl<'t> Wheel<'t> {
         self.defl = None;
         let opts = Options {
             limits,
+            moments: false, // the Forces message carries Fx, Fy, Mz
             ..Options::default()
         };
         let o = eval::<M>(p, &input(k.kappa, k.alpha), &opts)?;

@@ -135,8 +135,12 @@ fn low_friction_caps_lateral_acceleration() {
 }
 
 fn abs_split(abs: bool, driver: bool) -> Log {
+    abs_split_from(25.0, abs, driver)
+}
+
+fn abs_split_from(speed: f64, abs: bool, driver: bool) -> Log {
     let mut cfg = SimConfig::new(Manoeuvre::AbsSplit {
-        speed: 25.0,
+        speed,
         brake_at: 0.3,
         decel: 1.2 * G,
         driver,
@@ -162,20 +166,29 @@ fn abs_on_mu_split() {
         "ABS {} m vs locked {dist_locked} m",
         stop.distance
     );
-    // Slips bounded while the ABS works (above 5 m/s, after the first 0.3 s of braking).
-    for rec in with
-        .records
-        .iter()
-        .filter(|r| r.t > 0.6 && r.vehicle.vx > 5.0)
-    {
-        for (i, w) in rec.wheels.iter().enumerate() {
-            assert!(
-                w.kappa > -0.35 && w.omega > 0.0,
-                "t {}: wheel {i} slip {} omega {}",
-                rec.t,
-                w.kappa,
-                w.omega
-            );
+    // While the ABS works (after the first 0.3 s of braking, above 5 m/s) every wheel rolls,
+    // and above 8 m/s the slip stays within 0.25. Below about 6 m/s this threshold ABS (no
+    // wheel-deceleration logic) overshoots on the low-μ rear wheel — slip is Δv/v and grows
+    // fast as v falls — to 0.3–0.5 depending on where its dump cycles fall: rounding-level
+    // changes of the tyre model move them (seen over start speeds 24.5–25.5 m/s). Checked at
+    // three start speeds so that the bound is not a lucky phase.
+    for speed in [24.9, 25.0, 25.4] {
+        let log = abs_split_from(speed, true, true);
+        for rec in log
+            .records
+            .iter()
+            .filter(|r| r.t > 0.6 && r.vehicle.vx > 5.0)
+        {
+            for (i, w) in rec.wheels.iter().enumerate() {
+                assert!(
+                    w.omega > 0.0 && (rec.vehicle.vx < 8.0 || w.kappa > -0.25),
+                    "start {speed} m/s, t {}: wheel {i} slip {} omega {} at {} m/s",
+                    rec.t,
+                    w.kappa,
+                    w.omega,
+                    rec.vehicle.vx
+                );
+            }
         }
     }
     // Locked wheels do lock.

@@ -14,7 +14,11 @@ use crate::math::{Backend, Float};
 /// G = cos[C·atan{B·x − E(B·x − atan B·x)}] / cos[C·atan{B·S − E(B·S − atan B·S)}], eqs. (14),
 /// (4.E51)/(4.E52), (4.E59)/(4.E60), at x = slip + S. A vanishing denominator (only for C > 1
 /// with a large shift S: outside any fitted tyre) returns G = 1 and flags [`Flags::GUARD`].
+/// Without a shift (S = 0) the denominator is cos 0 = 1 exactly and is not evaluated.
 fn weight<F: Float, M: Backend<F>>(b: F, c: F, e: F, s_h: F, x: F, flags: &mut Flags) -> F {
+    if s_h == F::ZERO {
+        return magic_cos::<F, M>(b, c, e, x);
+    }
     let g0 = magic_cos::<F, M>(b, c, e, s_h);
     if g0.abs() < F::from_f64(1e-6) {
         flags.insert(Flags::GUARD);
@@ -42,10 +46,13 @@ pub fn fx<F: Float, M: Backend<F>>(p: &Params<F>, c: &mut Conditioned<F>, fx0: F
 pub struct Fy<F> {
     /// Combined-slip lateral force Fy \[N\] (13), (4.E58).
     pub fy: F,
-    /// Gyκ (14), (4.E59).
+    /// Gyκ (14), (4.E59). It does not depend on Fy0, μy or ζ2: the aligning torque reuses it.
     pub g_yk: F,
     /// κ-induced side force SVyκ \[N\] (16), (4.E66).
     pub s_vyk: F,
+    /// SVyκ per unit μy·ζ2 \[N\]: SVyκ = μy·ζ2·`s_vyk_per_mu` (with the low-speed reduction),
+    /// so that the aligning torque gets SVyκ at another μy without the kernels again.
+    pub s_vyk_per_mu: F,
 }
 
 /// Combined-slip lateral force, eqs. (13)–(16), (63)–(68), (4.E58)–(4.E67), given Fy0 and μy
@@ -59,12 +66,22 @@ pub fn fy<F: Float, M: Backend<F>>(
     zeta2: F,
 ) -> Fy<F> {
     let dfz = c.dfz;
-    let d_vyk = mu_y
-        * c.fz
-        * (p.rvy1 + p.rvy2 * dfz + p.rvy3 * gamma_star)
-        * cos_atan::<F, M>(p.rvy4 * c.alpha_star)
-        * zeta2; // (68), (4.E67)
-    let mut s_vyk = d_vyk * M::sin(p.rvy5 * M::atan(p.rvy6 * c.kappa)) * p.lvyka; // (16), (4.E66)
+    // (68), (4.E67) DVyκ = μy·Fz·(rVy1 + rVy2·dfz + rVy3·γ*)·cos(atan(rVy4·α*))·ζ2, and
+    // (16), (4.E66) SVyκ = DVyκ·sin(rVy5·atan(rVy6·κ))·λVyκ, computed per unit μy·ζ2 (and not
+    // at all for a file without the κ-induced side force).
+    let r_vy = p.rvy1 + p.rvy2 * dfz + p.rvy3 * gamma_star;
+    let mut s_vyk_per_mu = if r_vy == F::ZERO {
+        F::ZERO
+    } else {
+        c.fz * r_vy
+            * cos_atan::<F, M>(p.rvy4 * c.alpha_star)
+            * M::sin(p.rvy5 * M::atan(p.rvy6 * c.kappa))
+            * p.lvyka
+    };
+    if c.low_speed {
+        s_vyk_per_mu *= c.red_smooth;
+    }
+    let s_vyk = mu_y * zeta2 * s_vyk_per_mu;
     let s_hyk = p.rhy1 + p.rhy2 * dfz; // (4.E65); RHY2 from MF 5.2 on
     let e_yk = clip_e(p.rey1 + p.rey2 * dfz, c); // (4.E64); 0 for Delft 96
     let c_yk = p.rcy1; // (4.E63)
@@ -73,13 +90,11 @@ pub fn fy<F: Float, M: Backend<F>>(
         * p.lyka; // (15), (4.E62)
     let kappa_s = c.kappa + s_hyk; // (4.E61)
     let g_yk = weight::<F, M>(b_yk, c_yk, e_yk, s_hyk, kappa_s, &mut c.flags); // (14), (4.E59), (4.E60)
-    if c.low_speed {
-        s_vyk *= c.red_smooth;
-    }
     Fy {
         fy: g_yk * fy0 + s_vyk, // (13), (4.E58)
         g_yk,
         s_vyk,
+        s_vyk_per_mu,
     }
 }
 
@@ -149,7 +164,7 @@ pub fn mz<F: Float, M: Backend<F>>(
     fy0_full: &Fy0<F>,
     m: &Mz0<F>,
     fx: F,
-    fy_c: F,
+    fy_c: &Fy<F>,
 ) -> Mz<F> {
     let kappa = c.kappa;
     // (18), (74), (75), (A54), (A55): equivalent slip angles with (Kxκ/Kyα')²κ².
@@ -160,8 +175,13 @@ pub fn mz<F: Float, M: Backend<F>>(
     let alpha_r_eq = M::atan(M::sqrt(tan_r * tan_r + kk2)) * m.alpha_r.sign(); // (75), (A54)
     let alpha_t_eq = M::atan(M::sqrt(tan_t * tan_t + kk2)) * m.alpha_t.sign(); // (74), (A55)
                                                                                // (73), (A56): s with Fy/Fz0 and γ (not Fz0', γ*), as the paper and TNO.
-    let s = Arm::from_params(p).s(fy_c, c.dfz, c.gamma);
-    let mut m_zr = m.d_r * M::cos(m.c_r * M::atan(m.b_r * alpha_r_eq)); // (72), (4.E75)
+    let s = Arm::from_params(p).s(fy_c.fy, c.dfz, c.gamma);
+    // (72), (4.E75); Cr = 1 without turn slip, and cos(atan x) = 1/√(1 + x²) exactly.
+    let mut m_zr = if m.c_r == F::ONE {
+        m.d_r * cos_atan::<F, M>(m.b_r * alpha_r_eq)
+    } else {
+        m.d_r * M::cos(m.c_r * M::atan(m.b_r * alpha_r_eq))
+    };
 
     // F'y (4.E74): Fy at γ = 0 (MF 6.x); the weighting Gyκ keeps the actual γ* (TNO, MFeval).
     // At γ* = 0 that is the Fy0 already computed (the common case on a car: no extra cost).
@@ -172,9 +192,10 @@ pub fn mz<F: Float, M: Backend<F>>(
         (f.fy0, f.mu_y)
     };
     // The weight and the κ-induced shift of F'y are taken without the turn-slip ζ2 (MFeval's
-    // `internalParams_sub0`).
-    let sub = fy::<F, M>(p, c, fy0_g0, mu_y_g0, c.gamma_star, F::ONE);
-    let fy_prime = sub.g_yk * fy0_g0; // (4.E74)
+    // `internalParams_sub0`): Gyκ is Fy's own (it depends on neither Fy0, μy nor ζ2), SVyκ is
+    // Fy's per unit μy at μy(γ = 0).
+    let fy_prime = fy_c.g_yk * fy0_g0; // (4.E74)
+    let s_vyk_sub = mu_y_g0 * fy_c.s_vyk_per_mu;
 
     let mut t =
         m.d_t * super::magic_cos::<F, M>(m.b_t, m.c_t, m.e_t, alpha_t_eq) * c.cos_alpha_prime; // (70), (4.E73)
@@ -185,7 +206,7 @@ pub fn mz<F: Float, M: Backend<F>>(
     let mz = match p.version {
         // (69)–(71) and MF 5.2: Mz = −t·(Fy − SVyκ) + Mzr + s·Fx.
         // RECONSTRUCTED (69): the scan reads "s·Fz"; eq. (17) of the body has s·Fx.
-        Version::Delft96 | Version::Mf52 => -t * (fy_c - sub.s_vyk) + m_zr + s * fx,
+        Version::Delft96 | Version::Mf52 => -t * (fy_c.fy - s_vyk_sub) + m_zr + s * fx,
         // (4.E71), (4.E72): Mz = −t·F'y + Mzr + s·Fx.
         Version::Mf61 | Version::Mf62 => -t * fy_prime + m_zr + s * fx,
     };

@@ -62,6 +62,8 @@ pub struct Conditioned<F> {
     pub alpha_star: F,
     /// γ* (4.E4): sin(γ) with `alpha_star`, else γ.
     pub gamma_star: F,
+    /// cos α* \[-\], for Dr (4.E47).
+    pub cos_alpha_star: F,
     /// cos α' = Vx/Vc' (4.E6), (4.E6a); cos(acos(x)) = x saves two calls.
     pub cos_alpha_prime: F,
     /// λμx* (4.E7); the slip-speed decay λμV is 0 (not a `.tir` key): λμx* = λμx.
@@ -123,10 +125,15 @@ pub fn condition<F: Float, M: Backend<F>>(
     let mut red_smooth = F::ONE;
     let mut low_speed = false;
 
+    // tan α, reused below (computed again only if α is reduced or clipped).
+    let alpha_in = alpha;
+    let mut tan_alpha = M::tan(alpha);
     if opts.limits {
         // Turn slip seen by the contact patch shrinks with the slip angle (MFeval "empirically
-        // discovered"; TNO behaviour).
-        phit *= M::cos(alpha);
+        // discovered"; TNO behaviour). φt is read by the turn-slip equations only.
+        if opts.turn_slip {
+            phit *= M::cos(alpha);
+        }
         let vxlow = p.vxlow;
         if vx.abs() <= vxlow && vxlow > F::ZERO {
             low_speed = true;
@@ -144,7 +151,7 @@ pub fn condition<F: Float, M: Backend<F>>(
             phit = -phit;
         }
         // α fades when the total speed |Vx| + |Vsy| falls below VXLOW (Vsy = tan(α)·Vx).
-        let speed_sum = vx.abs() + (M::tan(alpha) * vx).abs();
+        let speed_sum = vx.abs() + (tan_alpha * vx).abs();
         if speed_sum < p.vxlow && !opts.transient {
             alpha *= speed_sum / p.vxlow;
         }
@@ -173,6 +180,9 @@ pub fn condition<F: Float, M: Backend<F>>(
         flags.set_if(Flags::KAPPA, fk);
     }
 
+    if alpha != alpha_in {
+        tan_alpha = M::tan(alpha);
+    }
     let fz0_prime = p.lfzo * p.fnomin; // (4.E1)
     let dfz = (fz - fz0_prime) / fz0_prime; // (4.E2a)
     let dpi = if mf6 {
@@ -181,12 +191,19 @@ pub fn condition<F: Float, M: Backend<F>>(
         F::ZERO
     };
     let (alpha_star, gamma_star) = if opts.alpha_star {
-        (M::tan(alpha) * vx.sign(), M::sin(gamma)) // (4.E3), (4.E4)
+        (tan_alpha * vx.sign(), M::sin(gamma)) // (4.E3), (4.E4)
     } else {
         (alpha, gamma)
     };
+    // cos α* for Dr (4.E47): without α*, from tan α as 1/√(1 + tan²α) where that is exact
+    // (|α| < π/2, where cos α > 0): one square root instead of a cosine.
+    let cos_alpha_star = if !opts.alpha_star && alpha.abs() < F::FRAC_PI_2 {
+        F::ONE / M::sqrt(F::ONE + tan_alpha * tan_alpha)
+    } else {
+        M::cos(alpha_star)
+    };
     // (4.E6), (4.E6a): Vc' = Vc + ε·sign(Vc), with Vsy = tan(α)·|Vx| and Vcy = Vsy.
-    let vsy = M::tan(alpha) * vx.abs();
+    let vsy = tan_alpha * vx.abs();
     let vc = M::sqrt(vx * vx + vsy * vsy);
     let vc_prime = vc + F::from_f64(EPS) * vc.sign_nz();
     let cos_alpha_prime = vx / vc_prime;
@@ -218,6 +235,7 @@ pub fn condition<F: Float, M: Backend<F>>(
         dpi,
         alpha_star,
         gamma_star,
+        cos_alpha_star,
         cos_alpha_prime,
         lmux_star,
         lmuy_star,

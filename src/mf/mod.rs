@@ -88,6 +88,11 @@ pub struct Options {
     /// low-speed reductions of κ and α (the transient model's own damping handles standstill),
     /// as TNO's and MFeval's dynamic modes do.
     pub transient: bool,
+    /// Evaluate the overturning and rolling resistance moments Mx, My (on by default). Off,
+    /// [`Output::mx`] and [`Output::my`] are 0 and an evaluation is the combined Fx, Fy, Mz
+    /// (with μ, K, t, Mzr, σ) alone: what a friction or stability controller needs, at about
+    /// a quarter less cost on the device.
+    pub moments: bool,
 }
 
 impl Default for Options {
@@ -98,6 +103,7 @@ impl Default for Options {
             turn_slip: false,
             mounted: None,
             transient: false,
+            moments: true,
         }
     }
 }
@@ -127,6 +133,7 @@ impl Options {
             turn_slip,
             mounted: None,
             transient: false,
+            moments: true,
         })
     }
 }
@@ -346,9 +353,15 @@ fn eval_unmirrored<F: Float, M: Backend<F>>(
     let mz0 = pure::mz0::<F, M>(p, &mut c, &fy0);
     let fx = combined::fx::<F, M>(p, &mut c, fx0.fx0);
     let fy = combined::fy::<F, M>(p, &mut c, fy0.fy0, fy0.mu_y, gamma_star, fy0.zeta2);
-    let mx = moments::mx::<F, M>(p, &c, fy.fy);
-    let my = moments::my::<F, M>(p, &c, fx);
-    let mz = combined::mz::<F, M>(p, &mut c, &fx0, &fy0, &mz0, fx, fy.fy);
+    let (mx, my) = if opts.moments {
+        (
+            moments::mx::<F, M>(p, &c, fy.fy),
+            moments::my::<F, M>(p, &c, fx),
+        )
+    } else {
+        (F::ZERO, F::ZERO)
+    };
+    let mz = combined::mz::<F, M>(p, &mut c, &fx0, &fy0, &mz0, fx, &fy);
     let (sigma_x, sigma_y) = sigma::sigma::<F, M>(p, &c, fx0.k_xk, fy0.k_ya);
 
     let mu_y = if c.fz == F::ZERO {
@@ -399,16 +412,26 @@ fn eval_unmirrored<F: Float, M: Backend<F>>(
 /// The sine version of the Magic Formula, eq. (3): D·sin[C·atan{B·x − E·(B·x − atan(B·x))}].
 #[inline]
 pub fn magic_sin<F: Float, M: Backend<F>>(b: F, c: F, d: F, e: F, x: F) -> F {
+    d * M::sin(c * M::atan(magic_arg::<F, M>(b, e, x)))
+}
+
+/// B·x − E·(B·x − atan(B·x)), the argument of the outer atan in eqs. (3) and (8); with E = 0
+/// it is B·x exactly, and the inner atan is skipped.
+#[inline]
+fn magic_arg<F: Float, M: Backend<F>>(b: F, e: F, x: F) -> F {
     let bx = b * x;
-    d * M::sin(c * M::atan(bx - e * (bx - M::atan(bx))))
+    if e == F::ZERO {
+        bx
+    } else {
+        bx - e * (bx - M::atan(bx))
+    }
 }
 
 /// The cosine version of the Magic Formula, eq. (8) without its D: cos[C·atan{B·x − E·(B·x −
 /// atan(B·x))}]. Also the weighting functions G, eq. (12).
 #[inline]
 pub fn magic_cos<F: Float, M: Backend<F>>(b: F, c: F, e: F, x: F) -> F {
-    let bx = b * x;
-    M::cos(c * M::atan(bx - e * (bx - M::atan(bx))))
+    M::cos(c * M::atan(magic_arg::<F, M>(b, e, x)))
 }
 
 /// cos(atan(x)) = 1/√(1 + x²), exactly; one square root instead of two trigonometric calls.

@@ -291,7 +291,7 @@ pub fn mz0<F: Float, M: Backend<F>>(p: &Params<F>, c: &mut Conditioned<F>, fy0: 
         * ((p.qdz6 + p.qdz7 * dfz) * p.lres * zeta2 + camber_torque)
         * c.lmuy_star
         * c.vx.sign()
-        * M::cos(c.alpha_star)
+        * c.cos_alpha_star
         + zeta8
         - F::ONE; // (56), (4.E47); the cos α of (46)/(72) is carried here
     let b_r = (p.qbz9 * p.lky / c.lmuy_star + p.qbz10 * fy0.b_y * fy0.c_y) * zeta6; // (55), (4.E45)

@@ -482,7 +482,7 @@ macro_rules! float_props {
                     let s: f64 = if big { 1e25 } else { 1.0 };
                     let i = Input { fz: (fz * s) as $t, kappa: kappa as $t, alpha: alpha as $t,
                         gamma: gamma as $t, phit: phit as $t, vx: (vx * s) as $t, p: None };
-                    let o = Options { limits, alpha_star: star, turn_slip: turn, mounted: None, transient: false };
+                    let o = Options { limits, alpha_star: star, turn_slip: turn, mounted: None, transient: false, moments: true };
                     match eval::<$t, Libm>(p, &i, &o) {
                         Ok(out) => {
                             for v in [out.fx, out.fy, out.mz, out.mx, out.my, out.t, out.m_zr,
@@ -593,4 +593,49 @@ fn sliding_backwards_locked_wheel_opposes_motion() {
         &Options::default(),
     );
     assert!(o.fx > 0.0, "steady state: {}", o.fx);
+}
+
+/// `Options::moments` off skips Mx and My and nothing else: every other output is the same
+/// number, bit for bit, on every bundled tyre, with camber, at low speed, with and without
+/// limits, on both sides.
+#[test]
+fn moments_off_changes_only_mx_my() {
+    for p in all_tyres() {
+        for limits in [true, false] {
+            for mounted in [None, Some(Side::Left), Some(Side::Right)] {
+                for i in 0..200 {
+                    let f = i as f64 / 199.0;
+                    let input = Input {
+                        fz: p.fnomin * (0.2 + 1.6 * f),
+                        kappa: -0.3 + 0.6 * ((i * 7) % 200) as f64 / 199.0,
+                        alpha: -0.3 + 0.6 * ((i * 13) % 200) as f64 / 199.0,
+                        gamma: -0.06 + 0.12 * ((i * 3) % 200) as f64 / 199.0,
+                        vx: if i % 10 == 0 { 0.3 } else { 20.0 },
+                        ..Input::default()
+                    };
+                    let all = Options {
+                        limits,
+                        mounted,
+                        ..Options::default()
+                    };
+                    let forces = Options {
+                        moments: false,
+                        ..all
+                    };
+                    let a = eval64(p, input, &all);
+                    let b = eval64(p, input, &forces);
+                    assert_eq!((b.mx, b.my), (0.0, 0.0));
+                    assert_eq!(
+                        Output {
+                            mx: 0.0,
+                            my: 0.0,
+                            ..a
+                        },
+                        b,
+                        "{input:?}"
+                    );
+                }
+            }
+        }
+    }
 }

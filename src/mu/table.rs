@@ -385,6 +385,7 @@ fn mf_fy_mz<F: Float, M: Backend<F>>(
     let opts = Options {
         limits: false,
         mounted,
+        moments: false,
         ..Options::default()
     };
     let inp = Input {

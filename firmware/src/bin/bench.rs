@@ -121,6 +121,38 @@ fn run<M: Backend<f32>>(
     (t1 - t0, ef, em)
 }
 
+/// Instructions per call of each kernel of backend `M` (mean over 256 arguments spread over the
+/// ranges the Magic Formula uses), less the loop's own cost.
+fn kernels<M: Backend<f32>>(name: &str) {
+    const K: usize = 256;
+    let mut xs = [0f32; K];
+    for (i, x) in xs.iter_mut().enumerate() {
+        *x = -3.0 + 6.0 * i as f32 / K as f32;
+    }
+    let time = |f: &dyn Fn(f32) -> f32| {
+        let t0 = now();
+        let mut acc = 0f32;
+        for x in xs.iter() {
+            acc += f(core::hint::black_box(*x));
+        }
+        core::hint::black_box(acc);
+        now() - t0
+    };
+    let base = time(&|x| x) as f64;
+    let per = |c: u64| ((c as f64 - base) * 40.0 / K as f64) as u32;
+    hprintln!(
+        "kernels, {}: instructions per call: sin {} cos {} tan {} atan {} exp {} ln {} sqrt {}",
+        name,
+        per(time(&|x| M::sin(x))),
+        per(time(&|x| M::cos(x))),
+        per(time(&|x| M::tan(0.5 * x))),
+        per(time(&|x| M::atan(3.0 * x))),
+        per(time(&|x| M::exp(x))),
+        per(time(&|x| M::ln(x.abs() + 0.1))),
+        per(time(&|x| M::sqrt(x.abs()))),
+    );
+}
+
 /// Samples in the estimator's stream (1 s at 1 kHz).
 const NS: usize = 1000;
 static mut STREAM: [Measurement; NS] = [Measurement {
@@ -359,30 +391,44 @@ fn main() -> ! {
     };
     let p64 = t.params;
     let p32 = p64.cast::<f32>();
-    let opts = Options::default();
-    let (c, ef, em) = run::<Libm>(1, &p32, &p64, &opts);
-    hprintln!(
-        "libm: {} instructions per combined evaluation (Fx, Fy, Mz, Mx, My); max error vs f64: forces {:.3e} N, Mz {:.3e} N m",
-        (c as f64 * per_count / N as f64) as u32, ef, em
-    );
-    #[cfg(feature = "micromath")]
+    // The combined Fx, Fy, Mz alone (issue 7's unit; what a friction or stability controller
+    // needs: `Options::moments` off), then with Mx and My.
+    for (k, (moments, what)) in [
+        (
+            false,
+            "combined Fx, Fy, Mz evaluation (Options::moments off)",
+        ),
+        (true, "combined evaluation with Mx, My"),
+    ]
+    .into_iter()
+    .enumerate()
     {
-        let (c, ef, em) = run::<gough::math::Micromath>(2, &p32, &p64, &opts);
-        hprintln!(
-            "micromath: {} instructions per combined evaluation; max error vs f64: forces {:.3e} N, Mz {:.3e} N m",
-            (c as f64 * per_count / N as f64) as u32, ef, em
+        let opts = Options {
+            moments,
+            ..Options::default()
+        };
+        let id = 1 + 3 * k as u32;
+        let line = |name: &str, (c, ef, em): (u64, f64, f64)| {
+            hprintln!(
+                "{}: {} instructions per {}; max error vs f64: forces {:.3e} N, Mz {:.3e} N m",
+                name,
+                (c as f64 * per_count / N as f64) as u32,
+                what,
+                ef,
+                em
+            );
+        };
+        line("libm", run::<Libm>(id, &p32, &p64, &opts));
+        #[cfg(feature = "micromath")]
+        line(
+            "micromath",
+            run::<gough::math::Micromath>(id + 1, &p32, &p64, &opts),
         );
+        #[cfg(feature = "fast")]
+        line("fast", run::<gough::math::Fast>(id + 2, &p32, &p64, &opts));
     }
     #[cfg(feature = "fast")]
-    {
-        let (c, ef, em) = run::<gough::math::Fast>(3, &p32, &p64, &opts);
-        hprintln!(
-            "fast: {} instructions per combined evaluation; max error vs f64: forces {:.3e} N, Mz {:.3e} N m",
-            (c as f64 * per_count / N as f64) as u32,
-            ef,
-            em
-        );
-    }
+    kernels::<gough::math::Fast>("fast");
     #[cfg(not(feature = "micromath"))]
     hprintln!(
         "micromath: not built (firmware feature `micromath` needs gough's `micromath` backend)"
