@@ -402,3 +402,96 @@ fn transient_tyre_converges_to_the_steady_state() {
     let i = ((0.5 * sigma / vx) / 1e-3) as usize;
     assert!(outs[i].fy.abs() < 0.6 * ss.fy.abs());
 }
+
+/// The fixed-point path (issue 7): the same filter and Magic Formula in Q31.32 (`fixed::Fix`,
+/// `FixMath`) against f64, over 4 s at 1 kHz — a steering sine with braking pulses while the
+/// speed falls from 20 m/s through standstill and rises again, σ from each step's evaluation
+/// as the firmware does it. Error ≤ 0.5 % of the run's peak force (issue 7's bound); the
+/// measured figures print with `--nocapture`.
+#[cfg(feature = "fixed")]
+#[test]
+fn fixed_point_filter_and_forces_track_f64() {
+    use crate::fixed::{Fix, FixMath};
+    use crate::math::Float;
+    use crate::mf::Input;
+    let p64 = tyre61();
+    let pfx = p64.cast::<Fix>();
+    let (c64, cfx) = (Config::from_params(&p64), Config::from_params(&pfx));
+    let opts = Options {
+        transient: true,
+        moments: false,
+        ..Options::default()
+    };
+    let (mut a, mut b) = (Transient::new(0.0f64), Transient::new(Fix::ZERO));
+    let (mut s64, mut sfx) = (
+        SIGMA,
+        Sigma {
+            sigma_kappa: Fix::from_f64(SIGMA.sigma_kappa),
+            sigma_alpha: Fix::from_f64(SIGMA.sigma_alpha),
+        },
+    );
+    let (mut peak, mut worst_f, mut worst_m, mut worst_slip) = (0.0f64, 0.0f64, 0.0f64, 0.0f64);
+    let tau = 2.0 * core::f64::consts::PI;
+    for i in 0..4000 {
+        let t = i as f64 * 1e-3;
+        let vx = if t < 2.0 {
+            20.0 * (1.0 - t / 2.0)
+        } else {
+            2.5 * (t - 2.0)
+        };
+        let tan_a = 0.08 * (tau * 1.5 * t).sin();
+        let kappa = -0.06 * (tau * 0.7 * t).sin().max(0.0);
+        let k = Kinematics {
+            vx,
+            vsx: -kappa * vx.abs(),
+            vsy: tan_a * vx.abs(),
+        };
+        let kf = Kinematics {
+            vx: Fix::from_f64(k.vx),
+            vsx: Fix::from_f64(k.vsx),
+            vsy: Fix::from_f64(k.vsy),
+        };
+        let x = a.step::<Libm>(&c64, 1e-3, &k, &s64).unwrap();
+        let y = b
+            .step::<FixMath>(&cfx, Fix::from_f64(1e-3), &kf, &sfx)
+            .unwrap();
+        worst_slip = worst_slip
+            .max((x.alpha - y.alpha.to_f64()).abs())
+            .max((x.kappa - y.kappa.to_f64()).abs());
+        let i64 = Input {
+            fz: 4500.0,
+            kappa: x.kappa,
+            alpha: x.alpha,
+            vx,
+            ..Input::default()
+        };
+        let ifx = Input {
+            fz: Fix::from_f64(4500.0),
+            kappa: y.kappa,
+            alpha: y.alpha,
+            vx: kf.vx,
+            ..Input::default()
+        };
+        let o = mf::eval::<f64, Libm>(&p64, &i64, &opts).unwrap();
+        let q = mf::eval::<Fix, FixMath>(&pfx, &ifx, &opts).unwrap();
+        peak = peak.max(o.fx.hypot(o.fy));
+        worst_f = worst_f
+            .max((o.fx - q.fx.to_f64()).abs())
+            .max((o.fy - q.fy.to_f64()).abs());
+        worst_m = worst_m.max((o.mz - q.mz.to_f64()).abs());
+        s64 = Sigma {
+            sigma_kappa: o.sigma_x,
+            sigma_alpha: o.sigma_y,
+        };
+        sfx = Sigma {
+            sigma_kappa: q.sigma_x,
+            sigma_alpha: q.sigma_y,
+        };
+    }
+    std::println!(
+        "Q31.32 filter + MF vs f64 over 4 s: slips {worst_slip:.2e}, forces {worst_f:.3e} N ({:.2e} of the peak {peak:.0} N), Mz {worst_m:.3e} N m",
+        worst_f / peak
+    );
+    assert!(peak > 3000.0, "the run reaches large forces: {peak}");
+    assert!(worst_f <= 0.005 * peak, "{worst_f} N of {peak} N");
+}
