@@ -315,12 +315,10 @@ impl<F: Float> GoughTable<F> {
 /// A sample reduced to what the table needs: load bracket (node `j`, weight `w`), side, trail,
 /// force, load.
 #[derive(Clone, Copy)]
-struct Reading<F> {
-    j: usize,
-    w: F,
-    g: usize,
-    u: F,
-    side: usize,
+struct Reading<'a, F> {
+    /// The four curves bracketing the reading's load and camber, every surface of each, with
+    /// their bilinear weights.
+    corners: [(&'a [table::Curve<F>; table::LAMBDA_NODES.len()], F); 4],
     tau: F,
     force: F,
     fz: F,
@@ -396,28 +394,23 @@ impl<'t, F: Float> MuEstimator<'t, F> {
     }
 
     /// The radial estimate on surface node `si` for the reading `q`.
-    fn node(&self, si: usize, q: &Reading<F>) -> Option<NodeEst<F>> {
+    /// `seg` is where the search along the curves starts (see [`table::Curve::invert`]); it is
+    /// set to the segment found.
+    fn node(&self, si: usize, q: &Reading<F>, seg: &mut usize) -> Option<NodeEst<F>> {
         let Reading {
-            j,
-            w,
-            g,
-            u,
-            side,
+            corners,
             tau,
             force,
             fz,
         } = *q;
-        let t = self.table;
-        // Bilinear in (load, camber) over the four bracketing curves.
-        let corners = [
-            (g, j, (F::ONE - u) * (F::ONE - w)),
-            (g, j + 1, (F::ONE - u) * w),
-            (g + 1, j, u * (F::ONE - w)),
-            (g + 1, j + 1, u * w),
-        ];
+        // Bilinear in (load, camber) over the four bracketing curves (a corner of weight 0, as
+        // on a camber or load node, is not read).
+        let corners = corners.map(|(cs, wt)| (cs.get(si), wt));
         let mut tau0 = F::ZERO;
-        for &(gi, ji, wt) in &corners {
-            tau0 += wt * t.tau0(gi, si, ji, side)?;
+        for &(c, wt) in &corners {
+            if wt != F::ZERO {
+                tau0 += wt * c?.tau0();
+            }
         }
         // The trail's length scales with load (Dt ∝ Fz·(qDz1 + qDz2·dfz)): compare curves at
         // the same fraction of their own small-slip trail τ0, not at the same τ.
@@ -426,17 +419,20 @@ impl<'t, F: Float> MuEstimator<'t, F> {
         }
         let rho = tau / tau0;
         let (mut f, mut f_spread, mut dfdtau) = (F::ZERO, F::ZERO, F::ZERO);
-        for &(gi, ji, wt) in &corners {
-            let t0 = t.tau0(gi, si, ji, side)?;
+        let mut hint = *seg;
+        for &(c, wt) in &corners {
             if wt == F::ZERO {
                 continue;
             }
-            let inv = t.invert(gi, si, ji, side, rho * t0)?;
+            let c = c?;
+            let t0 = c.tau0();
+            let inv = c.invert(rho * t0, &mut hint)?;
             f += wt * inv.f;
             f_spread += wt * inv.f_spread;
             // ∂f/∂τ through ρ: ∂f_k/∂τ = f_k'·τ0_k/τ0.
             dfdtau += wt * inv.df_dtau * t0 / tau0;
         }
+        *seg = hint;
         if f <= F::ZERO {
             return None;
         }
@@ -511,12 +507,14 @@ impl<'t, F: Float> MuEstimator<'t, F> {
         }
         let (ga, gb) = (*cn.get(g)?, *cn.get(g + 1)?);
         let u = ((gamma - ga) / (gb - ga)).max(F::ZERO).min(F::ONE);
+        let t = self.table;
         let reading = Reading {
-            j,
-            w,
-            g,
-            u,
-            side,
+            corners: [
+                (t.surfaces(g, j, side)?, (F::ONE - u) * (F::ONE - w)),
+                (t.surfaces(g, j + 1, side)?, (F::ONE - u) * w),
+                (t.surfaces(g + 1, j, side)?, u * (F::ONE - w)),
+                (t.surfaces(g + 1, j + 1, side)?, u * w),
+            ],
             tau,
             force,
             fz: s.fz,
@@ -525,8 +523,9 @@ impl<'t, F: Float> MuEstimator<'t, F> {
         // crosses its own node (d = λ̂ − λnode changes sign), interpolated between the two.
         let mut ests: [Option<NodeEst<F>>; table::LAMBDA_NODES.len()] =
             [None; table::LAMBDA_NODES.len()];
+        let mut seg = table::POINTS / 2;
         for (si, slot) in ests.iter_mut().enumerate() {
-            *slot = self.node(si, &reading);
+            *slot = self.node(si, &reading, &mut seg);
         }
         let mut prev: Option<(F, NodeEst<F>)> = None;
         let mut pick: Option<NodeEst<F>> = None;
@@ -569,12 +568,6 @@ impl<'t, F: Float> MuEstimator<'t, F> {
         // itself (a second crossing).
         if let Some(e) = pick {
             let f_m = force / s.fz;
-            let corners = [
-                (g, j, (F::ONE - u) * (F::ONE - w)),
-                (g, j + 1, (F::ONE - u) * w),
-                (g + 1, j, u * (F::ONE - w)),
-                (g + 1, j + 1, u * w),
-            ];
             for (si, est) in ests.iter().enumerate() {
                 let lam_k = *self.table.lam.get(si)?;
                 if lam_k <= e.lambda {
@@ -590,14 +583,11 @@ impl<'t, F: Float> MuEstimator<'t, F> {
                 // The grippier curve's trail at the measured force (interpolated like the
                 // table); a curve that never reaches this force cannot hold the point.
                 let (mut tk, mut wsum) = (F::ZERO, F::ZERO);
-                for &(gi, ji, wt) in &corners {
-                    let c = table::CurveIdx {
-                        g: gi,
-                        si,
-                        j: ji,
-                        side,
-                    };
-                    if let Some(x) = self.table.tau_at(c, f_m) {
+                for &(cs, wt) in &reading.corners {
+                    if wt == F::ZERO {
+                        continue;
+                    }
+                    if let Some(x) = cs.get(si).and_then(|c| c.tau_at(f_m)) {
                         tk += wt * x;
                         wsum += wt;
                     }

@@ -31,8 +31,9 @@ const NG: usize = CAMBER_NODES.len();
 /// Points kept of the rising branch (small slip, before the trail peaks).
 pub const RISE: usize = POINTS / 2;
 
-/// One value per curve: camber × surface × load × side.
-pub type PerCurve<T> = [[[[T; 2]; NL]; NS]; NG];
+/// One value per curve: camber × load × side × surface (the surfaces innermost: a reading
+/// looks up its camber, load and side once and then reads every surface there).
+pub type PerCurve<T> = [[[[T; NS]; 2]; NL]; NG];
 
 /// Index of one tabulated curve.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -47,15 +48,62 @@ pub struct CurveIdx {
     pub side: usize,
 }
 
-/// A curve as [`curve`] samples it.
-struct Curve<F> {
-    tau: [F; POINTS],
-    f: [F; POINTS],
-    len: u8,
-    neg: [F; 2],
-    rise: [(F, F); RISE],
-    rise_len: u8,
+/// One tabulated curve of the Gough plot (one camber, surface, load and side): everything the
+/// per-sample path reads of it, in one record so that one index reaches it all.
+/// τ in m, f = |Fy|/Fz dimensionless (ISO-W forces, as in the `.tir` file).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Curve<F> {
+    /// The usable (monotone) part, (f, τ) per point: f = |Fy|/Fz \[-\] (absolute, on that
+    /// surface), τ \[m\] strictly decreasing over `len`.
+    pub pts: [(F, F); POINTS],
+    /// Range (lo, hi) of f once the trail has turned negative (past the aligning torque's sign
+    /// change, near and beyond the force peak, out into deep sliding where τ rises again and no
+    /// longer tells the slip): what a reading with τ < 0 can mean. (0, 0) when the curve has no
+    /// negative trail.
+    pub f_neg: [F; 2],
+    /// The rising branch (f, τ) before the trail's peak: at small slip the residual torque and
+    /// the shifts make the trail grow first, so a reading there can look like a slippery surface
+    /// at large slip. Kept to recognise that ambiguity.
+    pub rise: [(F, F); RISE],
+    /// Number of usable (monotone) points.
+    pub len: u8,
+    /// Number of rising-branch points.
+    pub rise_len: u8,
+    /// Number of leading points of the rising branch followed by the monotone part over which
+    /// f strictly increases: the points before the curve's force peak, where [`Curve::tau_at`]
+    /// searches.
+    pub peak: u8,
 }
+
+impl<F: Float> Curve<F> {
+    /// A curve with no usable point.
+    pub const fn empty() -> Self {
+        Curve {
+            pts: [(F::ZERO, F::ZERO); POINTS],
+            f_neg: [F::ZERO; 2],
+            rise: [(F::ZERO, F::ZERO); RISE],
+            len: 0,
+            rise_len: 0,
+            peak: 0,
+        }
+    }
+
+    /// Point `k` (f, τ) of the rising branch followed by the monotone part.
+    fn point(&self, k: usize) -> Option<(F, F)> {
+        let nr = self.rise_len as usize;
+        if k < nr {
+            self.rise.get(k).copied()
+        } else {
+            self.pts.get(k - nr).copied()
+        }
+    }
+
+    /// τ0: the trail at the smallest usable slip \[m\] (0 for an empty curve).
+    pub fn tau0(&self) -> F {
+        self.pts[0].1
+    }
+}
+
 /// Largest tabulated slip angle at λμ = 1 \[rad\]: well past full sliding of any car tyre.
 pub const ALPHA_MAX: f64 = 0.6;
 
@@ -79,24 +127,8 @@ pub struct GoughTable<F> {
     pub lam: [F; NS],
     /// [`CAMBER_NODES`] in `F` \[rad\].
     pub cam: [F; NG],
-    /// τ \[m\] per surface, load, side (0: α > 0, 1: α < 0), node; strictly decreasing over
-    /// `len`.
-    pub tau: PerCurve<[F; POINTS]>,
-    /// f = |Fy|/Fz \[-\] (absolute, on that surface) per surface, load, side, node.
-    pub f: PerCurve<[F; POINTS]>,
-    /// Number of usable (monotone) nodes per surface, load and side.
-    pub len: PerCurve<u8>,
-    /// Range (lo, hi) of f once the trail has turned negative (past the aligning torque's sign
-    /// change, near and beyond the force peak, out into deep sliding where τ rises again and no
-    /// longer tells the slip): what a reading with τ < 0 can mean. (0, 0) when the curve has no
-    /// negative trail.
-    pub f_neg: PerCurve<[F; 2]>,
-    /// The rising branch (f, τ) before the trail's peak, per camber, surface, load, side: at
-    /// small slip the residual torque and the shifts make the trail grow first, so a reading
-    /// there can look like a slippery surface at large slip. Kept to recognise that ambiguity.
-    pub rise: PerCurve<[(F, F); RISE]>,
-    /// Number of rising-branch points.
-    pub rise_len: PerCurve<u8>,
+    /// The curves per camber, load, side (0: α > 0, 1: α < 0) and surface.
+    pub curves: PerCurve<Curve<F>>,
     /// Sign of Fy for α > 0 in this model (−1 for ISO-W files).
     pub fy_sign: F,
     /// μ of the table's surface: μy0 (Magic Formula: μy at Fz0, γ = 0, nominal pressure).
@@ -149,12 +181,7 @@ impl<F: Float> GoughTable<F> {
             fz: [F::ZERO; NL],
             lam: [F::ZERO; NS],
             cam: [F::ZERO; NG],
-            tau: [[[[[F::ZERO; POINTS]; 2]; NL]; NS]; NG],
-            f: [[[[[F::ZERO; POINTS]; 2]; NL]; NS]; NG],
-            len: [[[[0; 2]; NL]; NS]; NG],
-            f_neg: [[[[[F::ZERO; 2]; 2]; NL]; NS]; NG],
-            rise: [[[[[(F::ZERO, F::ZERO); RISE]; 2]; NL]; NS]; NG],
-            rise_len: [[[[0; 2]; NL]; NS]; NG],
+            curves: [[[[Curve::empty(); NS]; 2]; NL]; NG],
             fy_sign: F::ZERO,
             mu0: F::ZERO,
             mu_ratio: F::ZERO,
@@ -211,30 +238,12 @@ impl<F: Float> GoughTable<F> {
                         // A curve with no usable monotone part (an asymmetric tyre's ply-steer side
                         // at low friction) stays empty: its points are simply not identifiable.
                         let c = curve::<F, M>(&src, fz, gamma, side, t.fy_sign, lam, mu0)
-                            .unwrap_or(Curve {
-                                tau: [F::ZERO; POINTS],
-                                f: [F::ZERO; POINTS],
-                                len: 0,
-                                neg: [F::ZERO; 2],
-                                rise: [(F::ZERO, F::ZERO); RISE],
-                                rise_len: 0,
-                            });
-                        let (taus, fs, n, neg, rise, nr) =
-                            (c.tau, c.f, c.len, c.neg, c.rise, c.rise_len);
-                        *t.rise.get_mut(gi)?.get_mut(si)?.get_mut(j)?.get_mut(side)? = rise;
-                        *t.rise_len
+                            .unwrap_or(Curve::empty());
+                        *t.curves
                             .get_mut(gi)?
-                            .get_mut(si)?
                             .get_mut(j)?
-                            .get_mut(side)? = nr;
-                        *t.f_neg
-                            .get_mut(gi)?
-                            .get_mut(si)?
-                            .get_mut(j)?
-                            .get_mut(side)? = neg;
-                        *t.tau.get_mut(gi)?.get_mut(si)?.get_mut(j)?.get_mut(side)? = taus;
-                        *t.f.get_mut(gi)?.get_mut(si)?.get_mut(j)?.get_mut(side)? = fs;
-                        *t.len.get_mut(gi)?.get_mut(si)?.get_mut(j)?.get_mut(side)? = n;
+                            .get_mut(side)?
+                            .get_mut(si)? = c;
                     }
                 }
             }
@@ -242,88 +251,81 @@ impl<F: Float> GoughTable<F> {
         // The tyre's own surface at the nominal load must be usable on both sides.
         let nominal = LOAD_NODES.iter().position(|&x| x == 1.0)?;
         let flat = CAMBER_NODES.iter().position(|&x| x == 0.0)?;
-        let own = t.len.get(flat)?.get(NS - 1)?.get(nominal)?;
-        if own.iter().any(|&n| n < 4) {
+        let own = t.curves.get(flat)?.get(nominal)?;
+        if own
+            .iter()
+            .any(|sides| sides.get(NS - 1).is_none_or(|c| c.len < 4))
+        {
             return None;
         }
         Some(())
     }
 
-    /// The trail of curve `c` where its force is `f`: along the rising branch and then the
+    /// The curve `c` (`None` when an index is out of range).
+    pub fn curve(&self, c: CurveIdx) -> Option<&Curve<F>> {
+        self.surfaces(c.g, c.j, c.side)?.get(c.si)
+    }
+
+    /// The curves of every surface at camber node `g`, load node `j`, side `side`.
+    pub fn surfaces(&self, g: usize, j: usize, side: usize) -> Option<&[Curve<F>; NS]> {
+        self.curves.get(g)?.get(j)?.get(side)
+    }
+}
+
+impl<F: Float> Curve<F> {
+    /// The trail where the curve's force is `f`: along the rising branch and then the
     /// monotone part, up to the curve's force peak (linear in f between table points; below the
     /// first point, that point's trail). `None` when f lies beyond the curve's peak force — no
     /// point of this curve has that force — or the curve is empty.
-    pub fn tau_at(&self, c: CurveIdx, f: F) -> Option<F> {
-        let CurveIdx { g, si, j, side } = c;
-        let rise = self.rise.get(g)?.get(si)?.get(j)?.get(side)?;
-        let nr = *self.rise_len.get(g)?.get(si)?.get(j)?.get(side)? as usize;
-        let taus = self.tau.get(g)?.get(si)?.get(j)?.get(side)?;
-        let fs = self.f.get(g)?.get(si)?.get(j)?.get(side)?;
-        let n = *self.len.get(g)?.get(si)?.get(j)?.get(side)? as usize;
-        // One walk over rise points then monotone points, in increasing force.
-        let point = |k: usize| -> Option<(F, F)> {
-            if k < nr {
-                rise.get(k).copied()
-            } else {
-                Some((*fs.get(k - nr)?, *taus.get(k - nr)?))
-            }
-        };
-        let (mut f0, mut t0) = point(0)?;
+    pub fn tau_at(&self, f: F) -> Option<F> {
+        let (f0, t0) = self.point(0)?;
         if f <= f0 {
             return Some(t0);
         }
-        for k in 1..nr + n {
-            let (f1, t1) = point(k)?;
-            if f1 <= f0 {
-                return None; // past the force peak
-            }
-            if f <= f1 {
-                return Some(t0 + (f - f0) / (f1 - f0) * (t1 - t0));
-            }
-            (f0, t0) = (f1, t1);
+        // Smallest k before the peak with f ≤ f_k (f strictly increases there): bisection.
+        let (mut lo, mut hi) = (0, (self.peak as usize).checked_sub(1)?);
+        if f > self.point(hi)?.0 {
+            return None; // beyond the force peak
         }
-        None
+        while hi - lo > 1 {
+            let mid = (lo + hi) / 2;
+            if f <= self.point(mid)?.0 {
+                hi = mid;
+            } else {
+                lo = mid;
+            }
+        }
+        let ((f0, t0), (f1, t1)) = (self.point(lo)?, self.point(hi)?);
+        Some(t0 + (f - f0) / (f1 - f0) * (t1 - t0))
     }
 
-    /// τ0: the trail at the smallest usable slip of camber `g`, surface `si`, load `j`, side
-    /// `side` \[m\].
-    pub fn tau0(&self, g: usize, si: usize, j: usize, side: usize) -> Option<F> {
-        self.tau
-            .get(g)?
-            .get(si)?
-            .get(j)?
-            .get(side)?
-            .first()
-            .copied()
-    }
-
-    /// Inverts τ → f on surface `si`, load `j`, side `side`. `None` when τ is above the usable
-    /// range (the trail has not dropped: the point is not identifiable).
-    pub fn invert(
-        &self,
-        g: usize,
-        si: usize,
-        j: usize,
-        side: usize,
-        tau: F,
-    ) -> Option<Inversion<F>> {
-        let taus = self.tau.get(g)?.get(si)?.get(j)?.get(side)?;
-        let fs = self.f.get(g)?.get(si)?.get(j)?.get(side)?;
-        let len = *self.len.get(g)?.get(si)?.get(j)?.get(side)? as usize;
+    /// Inverts τ → f. `None` when τ is above the usable range (the trail has not dropped: the
+    /// point is not identifiable).
+    ///
+    /// `hint` is the table segment to start the search from; it is set to the segment found.
+    /// Any start gives the same result; a near one is cheaper. The curves of neighbouring loads,
+    /// cambers and surfaces are sampled at the same fractions of their slip range, so the
+    /// segment found on one is a good start on the next.
+    pub fn invert(&self, tau: F, hint: &mut usize) -> Option<Inversion<F>> {
+        let pts = &self.pts;
+        let len = self.len as usize;
         let start = 0;
-        let tau0 = *taus.get(start)?;
-        if tau >= tau0 || !tau.is_finite() {
+        let (_, tau0) = *pts.get(start)?;
+        // Not below τ0, NaN included (one comparison where `>=` plus a finiteness test took
+        // two); −∞ is caught by the floor below.
+        #[allow(clippy::neg_cmp_op_on_partial_ord)]
+        if !(tau < tau0) {
             return None;
         }
         let last = len.checked_sub(1)?;
-        let (tau_end, f_end) = (*taus.get(last)?, *fs.get(last)?);
+        let (f_end, tau_end) = *pts.get(last)?;
         // Far below the most negative trail the curve ever shows (deep sliding stays close to
         // it): not a point of this curve at all — e.g. a lateral force near zero from the shifts
         // with the residual torque still acting.
         if tau < tau_end - F::from_f64(0.25) * tau0.abs() {
             return None;
         }
-        let [neg_lo, neg_hi] = *self.f_neg.get(g)?.get(si)?.get(j)?.get(side)?;
+        let [neg_lo, neg_hi] = self.f_neg;
         if tau <= tau_end || (tau <= F::ZERO && neg_hi > F::ZERO) {
             // Past the aligning torque's sign change: near the force peak or in deep sliding,
             // where the trail no longer tells where on the (falling) force curve the tyre is.
@@ -346,17 +348,18 @@ impl<F: Float> GoughTable<F> {
                 f_spread: F::HALF * (hi - lo),
             });
         }
-        // Binary search for k with taus[k] > tau >= taus[k+1] on [start, last].
-        let (mut lo, mut hi) = (start, last);
-        while hi - lo > 1 {
-            let mid = (lo + hi) / 2;
-            if *taus.get(mid)? > tau {
-                lo = mid;
-            } else {
-                hi = mid;
-            }
+        // The k with taus[k] > tau >= taus[k+1] on [start, last] (unique: τ strictly
+        // decreases, taus[start] > tau > taus[last]), walking from the hint.
+        let mut lo = (*hint).min(last.saturating_sub(1));
+        while lo > start && pts.get(lo)?.1 <= tau {
+            lo -= 1;
         }
-        let (t0, t1, f0, f1) = (*taus.get(lo)?, *taus.get(hi)?, *fs.get(lo)?, *fs.get(hi)?);
+        while lo + 1 < last && pts.get(lo + 1)?.1 > tau {
+            lo += 1;
+        }
+        *hint = lo;
+        let hi = lo + 1;
+        let ((f0, t0), (f1, t1)) = (*pts.get(lo)?, *pts.get(hi)?);
         let slope = (f1 - f0) / (t1 - t0); // t1 < t0 strictly
         let f = f0 + (tau - t0) * slope;
         let drop = if tau0 > F::ZERO {
@@ -485,17 +488,15 @@ fn curve<F: Float, M: Backend<F>>(
     if best <= F::ZERO {
         return None; // no positive trail to collapse from: nothing to read
     }
-    let mut kept_t = [F::ZERO; POINTS];
-    let mut kept_f = [F::ZERO; POINTS];
+    let mut kept = [(F::ZERO, F::ZERO); POINTS];
     let mut n = 0;
     for k in first..POINTS {
         let (tk, fk) = (*taus.get(k)?, *fs.get(k)?);
-        let ok = n == 0 || kept_t.get(n - 1).is_some_and(|&prev| tk < prev);
+        let ok = n == 0 || kept.get(n - 1).is_some_and(|&(_, prev)| tk < prev);
         if !ok || fk <= F::ZERO {
             break;
         }
-        *kept_t.get_mut(n)? = tk;
-        *kept_f.get_mut(n)? = fk;
+        *kept.get_mut(n)? = (fk, tk);
         n += 1;
     }
     if n < 4 {
@@ -539,12 +540,18 @@ fn curve<F: Float, M: Backend<F>>(
             nr += 1;
         }
     }
-    Some(Curve {
-        tau: kept_t,
-        f: kept_f,
+    let mut c = Curve {
+        pts: kept,
         len: n as u8,
-        neg,
+        f_neg: neg,
         rise,
         rise_len: nr as u8,
-    })
+        peak: 0,
+    };
+    let mut peak = 1;
+    while peak < nr + n && c.point(peak)?.0 > c.point(peak - 1)?.0 {
+        peak += 1;
+    }
+    c.peak = peak as u8;
+    Some(c)
 }

@@ -405,9 +405,7 @@ fn building_in_place_equals_building_by_value() {
     let a = GoughTable::for_tyre::<Libm>(&p).unwrap();
     let mut b = GoughTable::zeroed();
     b.for_wheel_into::<Libm>(&p, None).unwrap();
-    assert_eq!(a.tau, b.tau);
-    assert_eq!(a.f, b.f);
-    assert_eq!(a.rise_len, b.rise_len);
+    assert!(a.curves == b.curves, "the curves differ");
     assert_eq!(
         (a.mu0, a.mu_ratio, a.fy_sign, a.mirrored),
         (b.mu0, b.mu_ratio, b.fy_sign, b.mirrored)
@@ -430,29 +428,26 @@ fn tau_at_walks_the_curve_by_force() {
                 j: nominal,
                 side,
             };
-            let nr = t.rise_len[flat][si][nominal][side] as usize;
-            let n = t.len[flat][si][nominal][side] as usize;
-            let rise = &t.rise[flat][si][nominal][side][..nr];
-            let (fs, taus) = (
-                &t.f[flat][si][nominal][side][..n],
-                &t.tau[flat][si][nominal][side][..n],
-            );
+            let cv = t.curve(c).unwrap();
+            let (nr, n) = (cv.rise_len as usize, cv.len as usize);
+            let rise = &cv.rise[..nr];
+            let monotone = &cv.pts[..n];
             let pts: Vec<(f64, f64)> = rise
                 .iter()
                 .copied()
-                .chain(fs.iter().copied().zip(taus.iter().copied()))
+                .chain(monotone.iter().copied())
                 .collect();
-            assert_eq!(t.tau_at(c, 0.0), Some(pts[0].1));
+            assert_eq!(cv.tau_at(0.0), Some(pts[0].1));
             let mut f_max = 0.0;
             for &(f, tau) in &pts {
                 if f <= f_max {
                     break; // past the force peak
                 }
                 f_max = f;
-                let got = t.tau_at(c, f).unwrap();
+                let got = cv.tau_at(f).unwrap();
                 assert!((got - tau).abs() < 1e-12, "λ node {si} side {side} f {f}");
             }
-            assert_eq!(t.tau_at(c, f_max * 1.01), None, "beyond the peak force");
+            assert_eq!(cv.tau_at(f_max * 1.01), None, "beyond the peak force");
         }
     }
 }
@@ -565,4 +560,50 @@ fn fixed_point_estimator_reads_what_f64_reads() {
     assert!(both > 300, "{both}");
     assert!(only_one <= both / 100, "{only_one} of {both}");
     assert!(worst < 1e-4, "{worst}");
+}
+
+/// `Curve::invert` gives the same inversion from every starting segment (the hint only saves
+/// work), and nothing for τ that is NaN or infinite.
+#[test]
+fn invert_is_independent_of_the_hint() {
+    let p = tyre();
+    let t = GoughTable::for_tyre::<Libm>(&p).unwrap();
+    let mut checked = 0;
+    for g in 0..CAMBER_NODES.len() {
+        for j in 0..LOAD_NODES.len() {
+            for side in 0..2 {
+                for (si, c) in t.surfaces(g, j, side).unwrap().iter().enumerate() {
+                    for x in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+                        assert_eq!(c.invert(x, &mut 3), None, "τ = {x}");
+                    }
+                    let n = c.len as usize;
+                    if n < 2 {
+                        continue;
+                    }
+                    let (hi, lo) = (c.pts[0].1, c.pts[n - 1].1);
+                    for k in 1..40 {
+                        let tau = lo + (hi - lo) * k as f64 / 40.0;
+                        let mut h0 = 0;
+                        let want = c.invert(tau, &mut h0);
+                        for start in 0..table::POINTS + 2 {
+                            let mut h = start;
+                            assert_eq!(
+                                c.invert(tau, &mut h),
+                                want,
+                                "γ {g} load {j} side {side} λ {si}"
+                            );
+                            if want.is_some_and(|i| !i.saturated) {
+                                assert_eq!(h, h0, "segment found from {start}");
+                            }
+                        }
+                        checked += usize::from(want.is_some_and(|i| !i.saturated));
+                    }
+                }
+            }
+        }
+    }
+    assert!(
+        checked > 5_000,
+        "only {checked} interior inversions checked"
+    );
 }
