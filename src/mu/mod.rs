@@ -24,7 +24,8 @@
 //!    guessing ([`State::NotIdentifiable`]) and holds its last estimate with a growing σ.
 //! 5. A scalar Kalman filter (random walk, intensity `q`) fuses identifiable samples; innovations
 //!    beyond `gate` σ are outliers and rejected, and `change_count` consecutive outliers of one
-//!    sign declare a change of surface (dry → ice): the filter restarts from the new evidence.
+//!    sign, none more than `run_gap` after the previous one, declare a change of surface
+//!    (dry → ice): the filter restarts from the new evidence.
 //!    Isolated outliers (noise) never move the estimate.
 //!
 //! ## Leaves out
@@ -101,6 +102,10 @@ pub struct Config<F> {
     pub change_min: F,
     /// Consecutive one-sided outliers that declare a change of surface.
     pub change_count: u16,
+    /// Longest time \[s\] between two outliers of one run: a run interrupted by a longer stretch
+    /// of uninformative samples (straight running, a hold) starts again, so readings from
+    /// before and after it never add up to a change.
+    pub run_gap: F,
     /// Mutually consistent identifiable samples needed before the first estimate is reported
     /// (a short burst of readings in a transient never becomes an estimate).
     pub init_count: u16,
@@ -147,6 +152,7 @@ impl<F: Float> Default for Config<F> {
             gate_sigma_max: c(0.03),
             change_min: c(0.1),
             change_count: 60,
+            run_gap: c(0.1),
             init_count: 25,
             mu_prior: c(0.8),
             sigma_prior: c(0.4),
@@ -257,8 +263,9 @@ pub struct MuEstimator<'t, F> {
     p: F,
     have: bool,
     run: i32,
-    // inverse-variance mean and variance of the current outlier run
+    // inverse-variance mean and variance of the current outlier run, time of its last outlier
     run_acc: (F, F),
+    run_last: F,
     // candidate first estimate: inverse-variance mean, its variance, count
     cand: (F, F, u16),
     // low-pass state
@@ -316,12 +323,21 @@ impl<F: Float> GoughTable<F> {
 /// force, load.
 #[derive(Clone, Copy)]
 struct Reading<'a, F> {
-    /// The four curves bracketing the reading's load and camber, every surface of each, with
-    /// their bilinear weights.
+    /// The curves bracketing the reading's load and camber, every surface of each, with their
+    /// bilinear weights: the first `n` of the four are those of nonzero weight (a reading on a
+    /// camber or load node needs fewer), in the order (γ, Fz), (γ, Fz⁺), (γ⁺, Fz), (γ⁺, Fz⁺).
     corners: [(&'a [table::Curve<F>; table::LAMBDA_NODES.len()], F); 4],
+    n: usize,
     tau: F,
     force: F,
     fz: F,
+}
+
+impl<F> Reading<'_, F> {
+    /// The corners of nonzero weight.
+    fn active(&self) -> &[(&[table::Curve<F>; table::LAMBDA_NODES.len()], F)] {
+        self.corners.get(..self.n).unwrap_or(&[])
+    }
 }
 
 /// One surface's radial estimate.
@@ -364,6 +380,7 @@ impl<'t, F: Float> MuEstimator<'t, F> {
             have: false,
             run: 0,
             run_acc: (F::ZERO, F::ZERO),
+            run_last: F::ZERO,
             cand: (F::ZERO, F::ZERO, 0),
             lp: None,
             last_t: None,
@@ -397,20 +414,12 @@ impl<'t, F: Float> MuEstimator<'t, F> {
     /// `seg` is where the search along the curves starts (see [`table::Curve::invert`]); it is
     /// set to the segment found.
     fn node(&self, si: usize, q: &Reading<F>, seg: &mut usize) -> Option<NodeEst<F>> {
-        let Reading {
-            corners,
-            tau,
-            force,
-            fz,
-        } = *q;
-        // Bilinear in (load, camber) over the four bracketing curves (a corner of weight 0, as
-        // on a camber or load node, is not read).
-        let corners = corners.map(|(cs, wt)| (cs.get(si), wt));
+        let Reading { tau, force, fz, .. } = *q;
+        // Bilinear in (load, camber) over the bracketing curves.
+        let corners = q.active();
         let mut tau0 = F::ZERO;
-        for &(c, wt) in &corners {
-            if wt != F::ZERO {
-                tau0 += wt * c?.tau0();
-            }
+        for &(cs, wt) in corners {
+            tau0 += wt * cs.get(si)?.tau0();
         }
         // The trail's length scales with load (Dt ∝ Fz·(qDz1 + qDz2·dfz)): compare curves at
         // the same fraction of their own small-slip trail τ0, not at the same τ.
@@ -420,11 +429,8 @@ impl<'t, F: Float> MuEstimator<'t, F> {
         let rho = tau / tau0;
         let (mut f, mut f_spread, mut dfdtau) = (F::ZERO, F::ZERO, F::ZERO);
         let mut hint = *seg;
-        for &(c, wt) in &corners {
-            if wt == F::ZERO {
-                continue;
-            }
-            let c = c?;
+        for &(cs, wt) in corners {
+            let c = cs.get(si)?;
             let t0 = c.tau0();
             let inv = c.invert(rho * t0, &mut hint)?;
             f += wt * inv.f;
@@ -508,17 +514,25 @@ impl<'t, F: Float> MuEstimator<'t, F> {
         let (ga, gb) = (*cn.get(g)?, *cn.get(g + 1)?);
         let u = ((gamma - ga) / (gb - ga)).max(F::ZERO).min(F::ONE);
         let t = self.table;
-        let reading = Reading {
-            corners: [
-                (t.surfaces(g, j, side)?, (F::ONE - u) * (F::ONE - w)),
-                (t.surfaces(g, j + 1, side)?, (F::ONE - u) * w),
-                (t.surfaces(g + 1, j, side)?, u * (F::ONE - w)),
-                (t.surfaces(g + 1, j + 1, side)?, u * w),
-            ],
+        let all = [
+            (t.surfaces(g, j, side)?, (F::ONE - u) * (F::ONE - w)),
+            (t.surfaces(g, j + 1, side)?, (F::ONE - u) * w),
+            (t.surfaces(g + 1, j, side)?, u * (F::ONE - w)),
+            (t.surfaces(g + 1, j + 1, side)?, u * w),
+        ];
+        let mut reading = Reading {
+            corners: all,
+            n: 0,
             tau,
             force,
             fz: s.fz,
         };
+        for c in all {
+            if c.1 != F::ZERO {
+                *reading.corners.get_mut(reading.n)? = c;
+                reading.n += 1;
+            }
+        }
         // Radial estimates about each surface node; the consistent one is where the estimate
         // crosses its own node (d = λ̂ − λnode changes sign), interpolated between the two.
         let mut ests: [Option<NodeEst<F>>; table::LAMBDA_NODES.len()] =
@@ -583,10 +597,7 @@ impl<'t, F: Float> MuEstimator<'t, F> {
                 // The grippier curve's trail at the measured force (interpolated like the
                 // table); a curve that never reaches this force cannot hold the point.
                 let (mut tk, mut wsum) = (F::ZERO, F::ZERO);
-                for &(cs, wt) in &reading.corners {
-                    if wt == F::ZERO {
-                        continue;
-                    }
+                for &(cs, wt) in reading.active() {
                     if let Some(x) = cs.get(si).and_then(|c| c.tau_at(f_m)) {
                         tk += wt * x;
                         wsum += wt;
@@ -705,7 +716,7 @@ impl<'t, F: Float> MuEstimator<'t, F> {
         }
         match self.raw::<M>(&filt) {
             None => self.hold::<M>(),
-            Some(r) => self.fuse::<M>(r),
+            Some(r) => self.fuse::<M>(r, filt.t),
         }
     }
 
@@ -730,7 +741,8 @@ impl<'t, F: Float> MuEstimator<'t, F> {
         }
     }
 
-    fn fuse<M: Backend<F>>(&mut self, r: Raw<F>) -> Estimate<F> {
+    /// Folds the reading `r`, taken at time `t` \[s\], into the estimate.
+    fn fuse<M: Backend<F>>(&mut self, r: Raw<F>, t: F) -> Estimate<F> {
         let mu0 = self.table.mu0;
         let mut change = false;
         if !self.have {
@@ -764,7 +776,7 @@ impl<'t, F: Float> MuEstimator<'t, F> {
             if e * e > self.cfg.gate.sq() * (p_gate + r.var) {
                 // Outlier: counted, not used, unless it persists on one side (a new surface).
                 let dir = if e > F::ZERO { 1 } else { -1 };
-                if self.run.signum() == dir {
+                if self.run.signum() == dir && t - self.run_last <= self.cfg.run_gap {
                     self.run += dir;
                     let (m, v) = self.run_acc;
                     self.run_acc = (
@@ -775,6 +787,7 @@ impl<'t, F: Float> MuEstimator<'t, F> {
                     self.run = dir;
                     self.run_acc = (r.lambda, r.var);
                 }
+                self.run_last = t;
                 if self.run.unsigned_abs() >= u32::from(self.cfg.change_count) {
                     // The run's evidence replaces the estimate. A change of surface is declared
                     // only when that moves μ by at least `change_min`: a smaller step is the

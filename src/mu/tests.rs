@@ -508,6 +508,53 @@ fn a_burst_after_a_hold_is_an_outlier_a_run_is_a_change() {
     assert!((last.mu - 0.15).abs() < 0.05, "{last:?}");
 }
 
+/// Outliers of one sign separated by stretches of straight running (no information) are not one
+/// run: bursts of 40 readings on ice, 0.5 s apart, never add up to the 60 of a change; the same
+/// readings back to back do.
+#[test]
+fn an_outlier_run_does_not_span_a_hold() {
+    let p = tyre();
+    let table = GoughTable::for_tyre::<Libm>(&p).unwrap();
+    let cfg = Config {
+        sigma_mz: 0.2,
+        sigma_fy_rel: 0.001,
+        ..Config::default()
+    };
+    assert!(cfg.change_count <= 80 && cfg.change_count > 40);
+    let mu0 = MuEstimator::for_tyre(&table, &p, cfg).mu0();
+    let corner = truth(&p, 0.5, mu0, p.fnomin, 0.04, 0.0);
+    let straight = truth(&p, 0.5, mu0, p.fnomin, 0.0, 0.0);
+    let ice = truth(&p, 0.15, mu0, p.fnomin, 0.03, 0.0);
+    for gap in [500, 0] {
+        let mut est = MuEstimator::for_tyre(&table, &p, cfg);
+        let mut t = 0.0;
+        let mut step = |o: &mf::Output<f64>| {
+            t += 1e-3;
+            est.update::<Libm>(&sample(o, t, false))
+        };
+        for _ in 0..300 {
+            step(&corner);
+        }
+        let (mut changes, mut outliers) = (0, 0);
+        for _ in 0..4 {
+            for _ in 0..gap {
+                step(&straight);
+            }
+            for _ in 0..40 {
+                let e = step(&ice);
+                changes += usize::from(e.change);
+                outliers += usize::from(e.state == State::NotIdentifiable);
+            }
+        }
+        if gap > 0 {
+            assert_eq!(changes, 0, "bursts 0.5 s apart made a change");
+            assert_eq!(outliers, 160, "every burst reading an outlier");
+        } else {
+            assert_eq!(changes, 1, "back to back, the same readings are a change");
+        }
+    }
+}
+
 /// The estimator in Q31.32 fixed point (issue 7: `fixed::Fix`, `FixMath`, the same code): its
 /// table and its readings agree with f64 on a surface sweep (μ 1.0 … 0.1, loads 0.5 … 1.5·Fz0,
 /// slip up to the peak, braking in the turn). Identifiability is decided alike except within
