@@ -319,8 +319,8 @@ impl<F: Float> GoughTable<F> {
     }
 }
 
-/// A sample reduced to what the table needs: load bracket (node `j`, weight `w`), side, trail,
-/// force, load.
+/// A sample reduced to what the table needs: the curves bracketing its load and camber on its
+/// side, with their weights; trail, force, load.
 #[derive(Clone, Copy)]
 struct Reading<'a, F> {
     /// The curves bracketing the reading's load and camber, every surface of each, with their
