@@ -10,7 +10,7 @@
 //!
 //! | kernel | reduction | polynomial | max error (measured by the tests in each file) |
 //! |---|---|---|---|
-//! | [`sin`], [`cos`] | x = k·π/2 + r, \|r\| ≤ π/4, 4-part π/2 | odd deg 7 / even deg 6 | 2.1e-7 rel. (\|x\| ≤ 2π; 2.3e-7 up to 1e5) where \|y\| ≥ 2⁻¹⁰, 5.5e-11 abs. below |
+//! | [`sin`], [`cos`] | x = k·π/2 + r, \|r\| ≤ π/4: 2-part π/2 up to \|x\| = 8, 4-part beyond | odd deg 7 / even deg 6 | 2.1e-7 rel. (\|x\| ≤ 2π; 2.3e-7 up to 1e5) where \|y\| ≥ 2⁻¹⁰, 5.5e-11 abs. below |
 //! | [`tan`] | as sin; odd k: −1/tan r | odd deg 11 | 4.0e-7 rel. (\|x\| ≤ 2π, poles' neighbours included) |
 //! | [`atan`] | 1/x above tan 3π/8, (x−1)/(x+1) above tan π/8 | odd deg 9 | 2.1e-7 rel., all x |
 //! | [`acos`] | asin(√((1−\|x\|)/2)) above \|x\| = ½ | odd deg 9 (asin) | 2.1e-7 rel. on \[−1, 1\] |

@@ -30,7 +30,34 @@ pub const REDUCE_MAX: f32 = 1.0e5;
 /// Below this |x|, sin x = x and cos x = 1 in f32 (x²/6 and x²/2 < 2⁻²⁵).
 const TINY: f32 = 1.0 / 4096.0; // 2⁻¹²
 
-/// x = k·π/2 + r; returns (r, k mod 4). Callers handle NaN and ±∞ before.
+/// π/2 truncated to 20 significant bits, ⌊π/2·2¹⁹⌋/2¹⁹, for the short reduction: k·PIO2_HI is
+/// exact for |k| < 16.
+const PIO2_HI: f32 = f32::from_bits(0x3fc90fd0); // 1.570_795_059_204_101_6
+/// π/2 − PIO2_HI rounded to f32; residual 5.2e-14 (python3: `math.pi/2 - 823549/2**19`).
+const PIO2_LO: f32 = f32::from_bits(0x35aa2217); // 1.267_590_8e-6
+/// Up to this |x| (|k| ≤ 5) the short reduction is used: every argument of the Magic Formula.
+const SHORT: f32 = 8.0;
+/// 1.5·2²³: (y + ROUND) − ROUND rounds |y| < 2²² to the nearest integer (ties to even).
+const ROUND: f32 = 12_582_912.0;
+
+/// x = k·π/2 + r for sin and cos; returns (r, k mod 4). Callers handle NaN and ±∞ before.
+///
+/// For |x| ≤ [`SHORT`], two parts of π/2: x − k·PIO2_HI is exact (k·PIO2_HI has at most 23
+/// bits; Sterbenz), and k·PIO2_LO is off by |k|·5.2e-14 plus its rounding (4e-13), far below
+/// the 2⁻¹⁰·2e-7 that sin and cos need where their relative error is promised; k comes from the
+/// rounding constant, without a conversion to an integer and back. Beyond, [`reduce`]. (tan
+/// always takes [`reduce`]: next to its poles, tan = −1/r needs r to 1e-13 relative to π/2.)
+#[inline]
+fn reduce_sc(x: f32) -> (f32, u32) {
+    if x.abs() <= SHORT {
+        let kf = (x * FRAC_2_PI + ROUND) - ROUND;
+        let r = (x - kf * PIO2_HI) - kf * PIO2_LO;
+        return (r, (kf as i32 & 3) as u32);
+    }
+    reduce(x)
+}
+
+/// x = k·π/2 + r, four parts of π/2; returns (r, k mod 4). Callers handle NaN and ±∞ before.
 #[inline]
 fn reduce(x: f32) -> (f32, u32) {
     // round(x·2/π); `as` saturates, and |x| ≤ REDUCE_MAX keeps |k| < 2¹⁶ anyway.
@@ -67,7 +94,7 @@ pub fn sin(x: f32) -> f32 {
     if x.abs() < TINY {
         return x; // sin x = x − x³/6 rounds to x; keeps ±0 and subnormals
     }
-    let (r, q) = reduce(x);
+    let (r, q) = reduce_sc(x);
     match q {
         0 => sin_poly(r),
         1 => cos_poly(r),
@@ -87,7 +114,7 @@ pub fn cos(x: f32) -> f32 {
     if x.abs() < TINY {
         return 1.0; // cos x = 1 − x²/2 rounds to 1
     }
-    let (r, q) = reduce(x);
+    let (r, q) = reduce_sc(x);
     match q {
         0 => cos_poly(r),
         1 => -sin_poly(r),
@@ -223,6 +250,40 @@ mod tests {
                 (got - want).abs() < 1e-13,
                 "cos({x:e}) = {got:e}, want {want:e}"
             );
+        }
+    }
+
+    /// The short reduction (|x| ≤ SHORT) keeps r accurate to its own rounding: at the zeros of
+    /// sin and cos up to 8 (k ≤ 5) the output is the reduced argument, within 1e-12 absolute,
+    /// and sin and cos stay within 2.5e-7 relative across the switch to the long reduction.
+    #[test]
+    fn short_reduction_is_exact_enough() {
+        for k in 1..=5 {
+            let z = k as f32 * core::f32::consts::FRAC_PI_2;
+            for x in [
+                z,
+                f32::from_bits(z.to_bits() - 1),
+                f32::from_bits(z.to_bits() + 1),
+            ] {
+                assert!(x.abs() <= SHORT);
+                for (f, g) in [
+                    (sin as fn(f32) -> f32, f64::sin as fn(f64) -> f64),
+                    (cos, f64::cos),
+                ] {
+                    let (got, want) = (f(x) as f64, g(x as f64));
+                    assert!(
+                        (got - want).abs() < 1e-12,
+                        "k {k}: {got:e} vs {want:e} at {x:e}"
+                    );
+                }
+            }
+        }
+        for (name, f, g) in [
+            ("sin", sin as fn(f32) -> f32, f64::sin as fn(f64) -> f64),
+            ("cos", cos, f64::cos),
+        ] {
+            let e = sweep(name, f, g, ulp_walk(SHORT * 0.999, SHORT * 1.001, 1));
+            assert!(e.rel < 2.5e-7, "{name} across SHORT: {e:?}");
         }
     }
 
