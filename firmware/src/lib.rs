@@ -16,6 +16,7 @@
 compile_error!("choose one board: `mps2` (default) or `--no-default-features --features stm32f4`");
 
 pub mod app;
+pub mod marks;
 #[cfg(feature = "mps2")]
 pub mod mps2;
 pub mod stack;

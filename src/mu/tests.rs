@@ -452,6 +452,16 @@ fn tau_at_walks_the_curve_by_force() {
     }
 }
 
+/// A sensor 10× better than the default noise: each reading's own σ is small, so readings from
+/// another surface are outliers rather than informative.
+fn confident() -> Config<f64> {
+    Config {
+        sigma_mz: 0.2,
+        sigma_fy_rel: 0.001,
+        ..Config::default()
+    }
+}
+
 /// A held estimate whose σ has grown is not dragged by a short burst of confident readings
 /// from another surface: the outlier gate grants it at most `gate_sigma_max`, so they are
 /// outliers (not identifiable, no change); a persistent run of them is a change of surface,
@@ -462,11 +472,7 @@ fn tau_at_walks_the_curve_by_force() {
 fn a_burst_after_a_hold_is_an_outlier_a_run_is_a_change() {
     let p = tyre();
     let table = GoughTable::for_tyre::<Libm>(&p).unwrap();
-    let cfg = Config {
-        sigma_mz: 0.2,
-        sigma_fy_rel: 0.001,
-        ..Config::default()
-    };
+    let cfg = confident();
     let mut est = MuEstimator::for_tyre(&table, &p, cfg);
     let mu0 = est.mu0();
     let corner = truth(&p, 0.5, mu0, p.fnomin, 0.04, 0.0);
@@ -515,11 +521,7 @@ fn a_burst_after_a_hold_is_an_outlier_a_run_is_a_change() {
 fn an_outlier_run_does_not_span_a_hold() {
     let p = tyre();
     let table = GoughTable::for_tyre::<Libm>(&p).unwrap();
-    let cfg = Config {
-        sigma_mz: 0.2,
-        sigma_fy_rel: 0.001,
-        ..Config::default()
-    };
+    let cfg = confident();
     assert!(cfg.change_count <= 80 && cfg.change_count > 40);
     let mu0 = MuEstimator::for_tyre(&table, &p, cfg).mu0();
     let corner = truth(&p, 0.5, mu0, p.fnomin, 0.04, 0.0);

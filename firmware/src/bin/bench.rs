@@ -24,6 +24,7 @@ use gough::mf::{self, Input, Options, Params};
 use gough::mu::{GoughTable, MuEstimator, Sample, State};
 use gough::proto::{Measurement, Settings, Wheel as WheelId};
 use gough_firmware::app::{self, App, TableJob};
+use gough_firmware::marks::{bench_start, bench_stop};
 use gough_firmware::wheel::Wheel;
 use gough_firmware::{mps2, stack};
 
@@ -31,23 +32,6 @@ static WRAPS: AtomicU32 = AtomicU32::new(0);
 const RELOAD: u32 = 0x00FF_FFFF;
 /// Evaluations per workload.
 const N: usize = 256;
-
-/// Marks the start of a measured workload (its id in r0).
-#[no_mangle]
-#[inline(never)]
-pub extern "C" fn bench_start(id: u32) {
-    core::hint::black_box(id);
-    cortex_m::asm::nop();
-}
-
-/// Marks the end of a measured workload (its id in r0).
-#[no_mangle]
-#[inline(never)]
-pub extern "C" fn bench_stop(id: u32) {
-    core::hint::black_box(id.wrapping_add(0x5700));
-    cortex_m::asm::nop();
-    cortex_m::asm::nop();
-}
 
 fn now() -> u64 {
     loop {

@@ -17,27 +17,11 @@
 use cortex_m_rt::entry;
 use gough::math::Fast;
 use gough::mf::{self, Input, Options};
+use gough_firmware::marks::{bench_start, bench_stop};
 use gough_firmware::mps2;
 
 /// Evaluations in the bracket (the bench's 256-point grid).
 const N: usize = 256;
-
-/// Start of the profiled bracket (its id in r0).
-#[no_mangle]
-#[inline(never)]
-pub extern "C" fn bench_start(id: u32) {
-    core::hint::black_box(id);
-    cortex_m::asm::nop();
-}
-
-/// End of the profiled bracket.
-#[no_mangle]
-#[inline(never)]
-pub extern "C" fn bench_stop(id: u32) {
-    core::hint::black_box(id.wrapping_add(0x5700));
-    cortex_m::asm::nop();
-    cortex_m::asm::nop();
-}
 
 #[entry]
 fn main() -> ! {
