@@ -35,19 +35,6 @@ pub const RISE: usize = POINTS / 2;
 /// looks up its camber, load and side once and then reads every surface there).
 pub type PerCurve<T> = [[[[T; NS]; 2]; NL]; NG];
 
-/// Index of one tabulated curve.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct CurveIdx {
-    /// Camber node.
-    pub g: usize,
-    /// Surface (λμ) node.
-    pub si: usize,
-    /// Load node.
-    pub j: usize,
-    /// Side: 0 for α > 0, 1 for α < 0.
-    pub side: usize,
-}
-
 /// One tabulated curve of the Gough plot (one camber, surface, load and side): everything the
 /// per-sample path reads of it, in one record so that one index reaches it all.
 /// τ in m, f = |Fy|/Fz dimensionless (ISO-W forces, as in the `.tir` file).
@@ -261,12 +248,8 @@ impl<F: Float> GoughTable<F> {
         Some(())
     }
 
-    /// The curve `c` (`None` when an index is out of range).
-    pub fn curve(&self, c: CurveIdx) -> Option<&Curve<F>> {
-        self.surfaces(c.g, c.j, c.side)?.get(c.si)
-    }
-
-    /// The curves of every surface at camber node `g`, load node `j`, side `side`.
+    /// The curves of every surface at camber node `g`, load node `j`, side `side` (0: α > 0,
+    /// 1: α < 0); `None` when an index is out of range.
     pub fn surfaces(&self, g: usize, j: usize, side: usize) -> Option<&[Curve<F>; NS]> {
         self.curves.get(g)?.get(j)?.get(side)
     }

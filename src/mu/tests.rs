@@ -422,13 +422,7 @@ fn tau_at_walks_the_curve_by_force() {
     let nominal = LOAD_NODES.iter().position(|&l| l == 1.0).unwrap();
     for si in 0..LAMBDA_NODES.len() {
         for side in 0..2 {
-            let c = table::CurveIdx {
-                g: flat,
-                si,
-                j: nominal,
-                side,
-            };
-            let cv = t.curve(c).unwrap();
+            let cv = &t.surfaces(flat, nominal, side).unwrap()[si];
             let (nr, n) = (cv.rise_len as usize, cv.len as usize);
             let rise = &cv.rise[..nr];
             let monotone = &cv.pts[..n];

@@ -3,7 +3,10 @@
 //! Polynomials: sin r = r + r³·P(r²) (deg 7), cos r = 1 − r²/2 + r⁴·Q(r²) (deg 6), tan r = r +
 //! r³·T(r²) (deg 11); coefficients in `math::minimax`, from our own Remez fits
 //! (`tools/minimax.py`, which also prints the π/2 split below with its bit patterns).
-//! The reduction x = k·π/2 + r splits π/2 into four parts; the first three have 8 significant
+//! For sin and cos of |x| ≤ 8 (every Magic Formula argument) the reduction takes two parts of
+//! π/2 (a 20-bit head, exact times |k| ≤ 5, and the rest), which leaves r accurate to its own
+//! rounding there (`reduce_sc`). Otherwise, and always for tan (next to its poles tan = −1/r
+//! needs r to 1e-13 of π/2), the reduction splits π/2 into four parts; the first three have 8 significant
 //! bits, so k·PIO2_1, k·PIO2_2 and k·PIO2_3 are exact for |k| < 2¹⁶ and the subtractions that
 //! cancel are exact (Sterbenz); what is left is |k|·5e-17 from the truncated π/2 and the
 //! rounding of r. (With three parts, |k|·5e-14 was 1.2e-6 of tan next to π/2 and 3e-6 of
