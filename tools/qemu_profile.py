@@ -2,8 +2,9 @@
 """Instruction profile of a bracketed workload of an mps2-an386 firmware image under QEMU.
 
 Runs ELF under `qemu-system-arm -machine mps2-an386 -icount shift=0` with QEMU's execution log
-(`-d exec,nochain,in_asm`), counts every instruction executed between the first call of the
-image's `bench_start` and the next call of `bench_stop`, and attributes each to a source line
+(`-d exec,nochain,in_asm`), counts every instruction executed between the K-th call of the
+image's `bench_start` (`--bracket K`, default 1) and the next call of `bench_stop`, and
+attributes each to a source line
 through the debug info (`llvm-addr2line`, innermost inlined frame in the `gough` crate's `src/`,
 else the innermost frame). Prints the totals by file, function and line, divided by `--per`
 (e.g. the number of evaluations in the bracket).
@@ -11,10 +12,15 @@ else the innermost frame). Prints the totals by file, function and line, divided
 The counts are QEMU's: one per executed Thumb instruction (conditional ones included), the
 measure the README's instruction counts use. The log is large (about 50 MB per million
 instructions executed in the image, inside the bracket or not); it is written to a temporary
-directory and removed.
+directory and removed. `--only REGEX` keeps it to the functions whose demangled names match (QEMU's
+`-dfilter`; the markers are always kept): a workload after a long set-up (the estimator after its
+table build) is then profiled without gigabytes of log, but instructions in functions that do
+not match are not counted, so name every function the workload calls that is not inlined.
 
     cd firmware && cargo build --release --bin profile
     python3 ../tools/qemu_profile.py target/thumbv7em-none-eabihf/release/profile --per 256
+    python3 ../tools/qemu_profile.py target/thumbv7em-none-eabihf/release/profile \
+        --bracket 2 --only 'profile::estimator_stream|gough::mu::' --per 1000
 
 Needs qemu-system-arm and llvm-addr2line, llvm-nm (Debian: `apt-get install qemu-system-arm llvm`).
 """
@@ -43,9 +49,25 @@ def symbol(nm, elf, name):
     sys.exit(f"qemu_profile: no symbol {name} in {elf}")
 
 
-def count(log, start, stop):
-    """Instructions executed per address between the first `start` and the next `stop`."""
-    blocks, cur, on, done = {}, None, False, False
+def ranges(nm, elf, pattern):
+    """QEMU `-dfilter` ranges (start+size) of the functions whose demangled names match."""
+    out = subprocess.run(
+        [nm, "-S", "-C", "--defined-only", elf], capture_output=True, text=True, check=True
+    ).stdout
+    rx = re.compile(pattern)
+    found = []
+    for line in out.splitlines():
+        parts = line.split(None, 3)
+        if len(parts) == 4 and parts[2] in "tT" and rx.search(parts[3]):
+            found.append(f"0x{int(parts[0], 16) & ~1:x}+0x{int(parts[1], 16):x}")
+    if not found:
+        sys.exit(f"qemu_profile: no function matches {pattern!r} in {elf}")
+    return found
+
+
+def count(log, start, stop, nth):
+    """Instructions executed per address between the `nth` `start` and the next `stop`."""
+    blocks, cur, on, done, seen = {}, None, False, False, 0
     counts = collections.Counter()
     with open(log, errors="replace") as f:
         for line in f:
@@ -63,15 +85,16 @@ def count(log, start, stop):
             if m:
                 cur = None
                 a = int(m.group(1), 16)
-                if a == start and not done:
-                    on = True
+                if a == start and not done and not on:
+                    seen += 1
+                    on = seen == nth
                 elif a == stop and on:
                     on, done = False, True
                 if on:
                     for x in blocks.get(a, ()):
                         counts[x] += 1
     if not done:
-        sys.exit("qemu_profile: the bracket bench_start..bench_stop was not completed")
+        sys.exit(f"qemu_profile: bracket {nth} (bench_start..bench_stop) was not completed")
     return counts
 
 
@@ -108,6 +131,8 @@ def main():
     ap.add_argument("elf")
     ap.add_argument("--per", type=float, default=1.0, help="divide every count by this")
     ap.add_argument("--top", type=int, default=25, help="rows per table")
+    ap.add_argument("--bracket", type=int, default=1, help="profile the K-th bracket (from 1)")
+    ap.add_argument("--only", help="log only the functions whose demangled names match")
     ap.add_argument("--qemu", default="qemu-system-arm")
     ap.add_argument("--addr2line", default="llvm-addr2line")
     ap.add_argument("--nm", default="llvm-nm")
@@ -122,17 +147,22 @@ def main():
             sys.exit(f"qemu_profile: {tool} not found (apt-get install qemu-system-arm llvm)")
     start = symbol(args.nm, args.elf, "bench_start")
     stop = symbol(args.nm, args.elf, "bench_stop")
+    filt = []
+    if args.only:
+        keep = ranges(args.nm, args.elf, args.only)
+        keep += ranges(args.nm, args.elf, r"^bench_st(art|op)$")
+        filt = ["-dfilter", ",".join(keep)]
     with tempfile.TemporaryDirectory() as tmp:
         log = os.path.join(tmp, "exec.log")
         run = subprocess.run(
             [args.qemu, "-cpu", "cortex-m4", "-machine", "mps2-an386", "-nographic",
              "-semihosting-config", "enable=on,target=native", "-icount", "shift=0",
-             "-d", "exec,nochain,in_asm", "-D", log, "-kernel", args.elf],
+             "-d", "exec,nochain,in_asm", "-D", log] + filt + ["-kernel", args.elf],
             stdout=subprocess.DEVNULL, timeout=600,
         )
         if run.returncode != 0:
             sys.exit(f"qemu_profile: the image exited with {run.returncode}")
-        counts = count(log, start, stop)
+        counts = count(log, start, stop, args.bracket)
     src = os.path.normpath(args.src) + os.sep
     by = attribute(args.addr2line, args.elf, counts, src)
     total = sum(counts.values())

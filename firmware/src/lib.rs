@@ -21,6 +21,7 @@ pub mod marks;
 pub mod mps2;
 pub mod stack;
 pub mod wheel;
+pub mod workload;
 
 /// Firmware version reported in `Status` (major, minor, patch).
 pub const VERSION: [u8; 3] = [0, 3, 0];

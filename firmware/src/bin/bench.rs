@@ -22,11 +22,11 @@ use cortex_m_semihosting::hprintln;
 use gough::math::{Backend, Float, Libm};
 use gough::mf::{self, Input, Options, Params};
 use gough::mu::{GoughTable, MuEstimator, Sample, State};
-use gough::proto::{Measurement, Settings, Wheel as WheelId};
+use gough::proto::{Measurement, Settings};
 use gough_firmware::app::{self, App, TableJob};
 use gough_firmware::marks::{bench_start, bench_stop};
 use gough_firmware::wheel::Wheel;
-use gough_firmware::{mps2, stack};
+use gough_firmware::{mps2, stack, workload};
 
 static WRAPS: AtomicU32 = AtomicU32::new(0);
 const RELOAD: u32 = 0x00FF_FFFF;
@@ -139,70 +139,9 @@ fn kernels<M: Backend<f32>>(name: &str) {
 
 /// Samples in the estimator's stream (1 s at 1 kHz).
 const NS: usize = 1000;
-static mut STREAM: [Measurement; NS] = [Measurement {
-    wheel: WheelId::FrontLeft,
-    t_us: 0,
-    fz: 0.0,
-    fy: 0.0,
-    mz: 0.0,
-    fx: None,
-    vx: None,
-    omega: None,
-    delta: None,
-    alpha: None,
-    kappa: None,
-    gamma: None,
-}; NS];
+static mut STREAM: [Measurement; NS] = [workload::EMPTY; NS];
 static mut TABLE_FAST: MaybeUninit<GoughTable<f32>> = MaybeUninit::uninit();
 static mut TABLE_LIBM: MaybeUninit<GoughTable<f32>> = MaybeUninit::uninit();
-
-/// A 1 s slalom at 20 m/s and 1 kHz: α = 0.1 rad·sin(2π·1 Hz·t), Fz = Fz0·(1 + 0.15·sin), light
-/// braking κ = −0.02·sin², roll camber γ = `camber`·sin, sent when `camber` ≠ 0 (then γ lies
-/// between the table's camber nodes: the estimator interpolates over twice the curves; without
-/// γ the estimator takes its static camber 0, a node); "measured" Fx, Fy, Mz = the f32 Magic
-/// Formula plus noise (uniform: Mz ±3.5 N·m ≈ 2 N·m rms, Fy ±1.7 % Fz ≈ 1 % rms).
-fn slalom(p: &Params<f32>, camber: f32, out: &mut [Measurement; NS]) {
-    let mut x = 0x2545_f491u32;
-    let mut rnd = || {
-        x ^= x << 13;
-        x ^= x >> 17;
-        x ^= x << 5;
-        (x >> 8) as f32 / (1u32 << 24) as f32 * 2.0 - 1.0
-    };
-    for (i, m) in out.iter_mut().enumerate() {
-        let t = i as f32 * 1e-3;
-        let s = <Libm as Backend<f32>>::sin(core::f32::consts::TAU * t);
-        let (alpha, kappa, fz) = (0.1 * s, -0.02 * s * s, p.fnomin * (1.0 + 0.15 * s));
-        let gamma = camber * s;
-        let input = Input {
-            fz,
-            kappa,
-            alpha,
-            gamma,
-            phit: 0.0,
-            vx: 20.0,
-            p: None,
-        };
-        let (fx, fy, mz) = match mf::eval::<f32, Libm>(p, &input, &Options::default()) {
-            Ok(o) => (o.fx, o.fy, o.mz),
-            Err(_) => (0.0, 0.0, 0.0),
-        };
-        *m = Measurement {
-            wheel: WheelId::FrontLeft,
-            t_us: 1_000 * i as u32,
-            fz,
-            fy: fy + 0.017 * fz * rnd(),
-            mz: mz + 3.5 * rnd(),
-            fx: Some(fx),
-            vx: Some(20.0),
-            omega: None,
-            delta: None,
-            alpha: Some(alpha),
-            kappa: Some(kappa),
-            gamma: (camber != 0.0).then_some(gamma),
-        };
-    }
-}
 
 /// Per-sample figures of one workload, in instructions.
 struct PerSample {
@@ -497,7 +436,7 @@ fn main() -> ! {
     .into_iter()
     .enumerate()
     {
-        slalom(&p32, camber, stream);
+        workload::slalom(&p32, camber, stream);
         hprintln!("stream: 1 s slalom at 1 kHz, noise; {}", what);
         let id = 30 + 10 * k as u32;
         estimator_figures::<app::Math>(

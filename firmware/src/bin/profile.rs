@@ -1,27 +1,43 @@
-//! A workload for `tools/qemu_profile.py`: where the instructions of one combined Fx, Fy, Mz
-//! evaluation go (MF 6.1 bundled tyre, `math::Fast`, `Options::moments` off — as the firmware
-//! runs it), by source file, function and line.
+//! Workloads for `tools/qemu_profile.py`: where the instructions go, by source file, function
+//! and line, with `math::Fast` as the firmware runs it (MF 6.1 bundled tyre).
 //!
-//! The 256 evaluations of the bench's grid run between one `bench_start`/`bench_stop` pair; the
-//! profiler counts the instructions QEMU executes between them (`-d exec,in_asm`), then maps
+//! 1. One combined Fx, Fy, Mz evaluation (`Options::moments` off): the 256 evaluations of the
+//!    bench's grid in the first `bench_start`/`bench_stop` bracket.
+//! 2. The friction estimator per wheel per sample (`MuEstimator::update`): the bench's 1 s
+//!    slalom with measured camber (1,000 samples) in the second bracket.
+//!
+//! The profiler counts the instructions QEMU executes in a bracket (`-d exec,in_asm`), then maps
 //! them to source lines with the debug info. Everything else (parsing the `.tir`, building the
-//! inputs) is outside the bracket.
+//! inputs and the estimator's table) is outside the brackets.
 //!
 //! ```console
-//! $ cd firmware && cargo build --release --bin profile && python3 ../tools/qemu_profile.py \
-//!     target/thumbv7em-none-eabihf/release/profile --per 256
+//! $ cd firmware && cargo build --release --bin profile
+//! $ python3 ../tools/qemu_profile.py target/thumbv7em-none-eabihf/release/profile --per 256
+//! $ python3 ../tools/qemu_profile.py target/thumbv7em-none-eabihf/release/profile \
+//!     --bracket 2 --only 'gough::mu::' --per 1000
 //! ```
+//! (`--only` keeps the log to the estimator's functions: the table build before the bracket
+//! would otherwise log about 1.5 GB.)
 #![no_std]
 #![no_main]
 
+use core::mem::MaybeUninit;
+use core::ptr::addr_of_mut;
 use cortex_m_rt::entry;
 use gough::math::Fast;
 use gough::mf::{self, Input, Options};
+use gough::mu::{GoughTable, MuEstimator, Sample};
+use gough::proto::{Measurement, Settings};
+use gough_firmware::app::{self, TableJob};
 use gough_firmware::marks::{bench_start, bench_stop};
-use gough_firmware::mps2;
+use gough_firmware::{mps2, workload};
 
-/// Evaluations in the bracket (the bench's 256-point grid).
+/// Evaluations in the first bracket (the bench's 256-point grid).
 const N: usize = 256;
+/// Samples in the second bracket (the bench's stream).
+const NS: usize = 1000;
+static mut STREAM: [Measurement; NS] = [workload::EMPTY; NS];
+static mut TABLE: MaybeUninit<GoughTable<f32>> = MaybeUninit::uninit();
 
 #[entry]
 fn main() -> ! {
@@ -60,5 +76,42 @@ fn main() -> ! {
     }
     bench_stop(1);
     core::hint::black_box(acc);
-    mps2::exit(failed == 0 && acc.is_finite())
+
+    // The estimator: the firmware's table and config, the bench's slalom with camber.
+    let job = TableJob {
+        params: p32.clone(),
+        gen: 1,
+    };
+    // SAFETY: the only references to TABLE and STREAM, taken once.
+    let (slot, stream) = unsafe { (&mut *addr_of_mut!(TABLE), &mut *addr_of_mut!(STREAM)) };
+    let Ok(t) = app::build_table(&job, slot) else {
+        mps2::exit(false)
+    };
+    workload::slalom(&p32, 0.02, stream);
+    let cfg = gough_firmware::wheel::estimator_config(&Settings::default());
+    let seen = estimator_stream(MuEstimator::for_tyre(t, p, cfg), stream);
+    mps2::exit(failed == 0 && acc.is_finite() && seen > 0)
+}
+
+/// The second bracket: `MuEstimator::update` over the stream, in a function of its own so that
+/// `qemu_profile.py --only` can keep the log to it. Returns the identifiable samples.
+#[inline(never)]
+fn estimator_stream(mut est: MuEstimator<'_, f32>, stream: &[Measurement]) -> u32 {
+    let mut seen = 0u32;
+    bench_start(2);
+    for m in stream {
+        let s = Sample {
+            t: m.t_us as f32 / 1.0e6,
+            fz: m.fz,
+            fy: m.fy,
+            mz: m.mz,
+            fx: m.fx,
+            vx: m.vx,
+            gamma: m.gamma,
+        };
+        let e = est.update::<Fast>(core::hint::black_box(&s));
+        seen += u32::from(e.state == gough::mu::State::Identifiable);
+    }
+    bench_stop(2);
+    seen
 }
