@@ -276,6 +276,10 @@ pub struct MuEstimator<'t, F> {
     side_since: F,
     // rms of the low-passed noise relative to the raw noise (1 until a sample interval is known)
     noise_scale: F,
+    // table segment where the last reading's search along the curves started: the next
+    // reading's start (consecutive readings lie close on their curves; any start gives the
+    // same result, a near one is cheaper)
+    seg: core::cell::Cell<u8>,
 }
 
 /// A per-sample λμ with its variance (before filtering).
@@ -387,6 +391,7 @@ impl<'t, F: Float> MuEstimator<'t, F> {
             fy_side: 0,
             side_since: F::ZERO,
             noise_scale: F::ONE,
+            seg: core::cell::Cell::new((table::POINTS / 2) as u8),
         }
     }
 
@@ -537,9 +542,12 @@ impl<'t, F: Float> MuEstimator<'t, F> {
         // crosses its own node (d = λ̂ − λnode changes sign), interpolated between the two.
         let mut ests: [Option<NodeEst<F>>; table::LAMBDA_NODES.len()] =
             [None; table::LAMBDA_NODES.len()];
-        let mut seg = table::POINTS / 2;
+        let mut seg = usize::from(self.seg.get());
         for (si, slot) in ests.iter_mut().enumerate() {
             *slot = self.node(si, &reading, &mut seg);
+            if si == 0 {
+                self.seg.set(seg as u8);
+            }
         }
         let mut prev: Option<(F, NodeEst<F>)> = None;
         let mut pick: Option<NodeEst<F>> = None;

@@ -40,21 +40,29 @@ pub type PerCurve<T> = [[[[T; NS]; 2]; NL]; NG];
 /// τ in m, f = |Fy|/Fz dimensionless (ISO-W forces, as in the `.tir` file).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Curve<F> {
-    /// The usable (monotone) part, (f, τ) per point: f = |Fy|/Fz \[-\] (absolute, on that
-    /// surface), τ \[m\] strictly decreasing over `len`.
-    pub pts: [(F, F); POINTS],
-    /// Range (lo, hi) of f once the trail has turned negative (past the aligning torque's sign
-    /// change, near and beyond the force peak, out into deep sliding where τ rises again and no
-    /// longer tells the slip): what a reading with τ < 0 can mean. (0, 0) when the curve has no
-    /// negative trail.
-    pub f_neg: [F; 2],
-    /// The rising branch (f, τ) before the trail's peak: at small slip the residual torque and
-    /// the shifts make the trail grow first, so a reading there can look like a slippery surface
-    /// at large slip. Kept to recognise that ambiguity.
-    pub rise: [(F, F); RISE],
+    /// The points (f, τ): f = |Fy|/Fz \[-\] (absolute, on that surface), τ \[m\]. From index
+    /// [`RISE`] the usable (monotone) part, τ strictly decreasing over `len` points
+    /// ([`Curve::usable`]); right before it, ending at [`RISE`], the `rise_len` points of the
+    /// rising branch ([`Curve::rise`]), so that the two read on as one array.
+    pub points: [(F, F); RISE + POINTS],
+    /// What a reading past the aligning torque's sign change can mean (near and beyond the
+    /// force peak, out into deep sliding where τ rises again and no longer tells the slip): the
+    /// middle of the range of f seen there and its half-width (the range of f once the trail
+    /// has turned negative, with the last usable point's f; that point's f alone when the curve
+    /// has no negative trail).
+    pub sat: [F; 2],
+    /// A trail at or below this \[m\] is past the sign change (the last usable point's trail;
+    /// 0 if higher and the curve has a negative trail).
+    pub tau_sat: F,
+    /// A trail below this \[m\] is no point of this curve at all: far below the most negative
+    /// trail the curve ever shows, e.g. a lateral force near zero from the shifts with the
+    /// residual torque still acting (the last usable point's trail less a quarter of |τ0|).
+    pub tau_floor: F,
     /// Number of usable (monotone) points.
     pub len: u8,
-    /// Number of rising-branch points.
+    /// Number of points of the rising branch: the trail before its peak. At small slip the
+    /// residual torque and the shifts make the trail grow first, so a reading there can look
+    /// like a slippery surface at large slip; kept to recognise that ambiguity.
     pub rise_len: u8,
     /// Number of leading points of the rising branch followed by the monotone part over which
     /// f strictly increases: the points before the curve's force peak, where [`Curve::tau_at`]
@@ -66,28 +74,42 @@ impl<F: Float> Curve<F> {
     /// A curve with no usable point.
     pub const fn empty() -> Self {
         Curve {
-            pts: [(F::ZERO, F::ZERO); POINTS],
-            f_neg: [F::ZERO; 2],
-            rise: [(F::ZERO, F::ZERO); RISE],
+            points: [(F::ZERO, F::ZERO); RISE + POINTS],
+            sat: [F::ZERO; 2],
+            tau_sat: F::ZERO,
+            tau_floor: F::ZERO,
             len: 0,
             rise_len: 0,
             peak: 0,
         }
     }
 
-    /// Point `k` (f, τ) of the rising branch followed by the monotone part.
-    fn point(&self, k: usize) -> Option<(F, F)> {
-        let nr = self.rise_len as usize;
-        if k < nr {
-            self.rise.get(k).copied()
-        } else {
-            self.pts.get(k - nr).copied()
-        }
+    /// The usable (monotone) part: τ strictly decreases.
+    pub fn usable(&self) -> &[(F, F)] {
+        self.points
+            .get(RISE..RISE + self.len as usize)
+            .unwrap_or(&[])
+    }
+
+    /// The rising branch (before the trail's peak).
+    pub fn rise(&self) -> &[(F, F)] {
+        self.points
+            .get(RISE.saturating_sub(self.rise_len as usize)..RISE)
+            .unwrap_or(&[])
+    }
+
+    /// The rising branch followed by the monotone part up to the force peak (`peak` points),
+    /// where f strictly increases.
+    fn before_peak(&self) -> &[(F, F)] {
+        let from = RISE.saturating_sub(self.rise_len as usize);
+        self.points
+            .get(from..from + self.peak as usize)
+            .unwrap_or(&[])
     }
 
     /// τ0: the trail at the smallest usable slip \[m\] (0 for an empty curve).
     pub fn tau0(&self) -> F {
-        self.pts[0].1
+        self.points[RISE].1
     }
 }
 
@@ -261,24 +283,25 @@ impl<F: Float> Curve<F> {
     /// first point, that point's trail). `None` when f lies beyond the curve's peak force — no
     /// point of this curve has that force — or the curve is empty.
     pub fn tau_at(&self, f: F) -> Option<F> {
-        let (f0, t0) = self.point(0)?;
+        let pts = self.before_peak();
+        let (f0, t0) = *pts.first()?;
         if f <= f0 {
             return Some(t0);
         }
-        // Smallest k before the peak with f ≤ f_k (f strictly increases there): bisection.
-        let (mut lo, mut hi) = (0, (self.peak as usize).checked_sub(1)?);
-        if f > self.point(hi)?.0 {
+        // Smallest k with f ≤ f_k (f strictly increases here): bisection.
+        let (mut lo, mut hi) = (0, pts.len() - 1);
+        if f > pts.get(hi)?.0 {
             return None; // beyond the force peak
         }
         while hi - lo > 1 {
             let mid = (lo + hi) / 2;
-            if f <= self.point(mid)?.0 {
+            if f <= pts.get(mid)?.0 {
                 hi = mid;
             } else {
                 lo = mid;
             }
         }
-        let ((f0, t0), (f1, t1)) = (self.point(lo)?, self.point(hi)?);
+        let ((f0, t0), (f1, t1)) = (*pts.get(lo)?, *pts.get(hi)?);
         Some(t0 + (f - f0) / (f1 - f0) * (t1 - t0))
     }
 
@@ -290,70 +313,64 @@ impl<F: Float> Curve<F> {
     /// cambers and surfaces are sampled at the same fractions of their slip range, so the
     /// segment found on one is a good start on the next.
     pub fn invert(&self, tau: F, hint: &mut usize) -> Option<Inversion<F>> {
-        let pts = &self.pts;
-        let len = self.len as usize;
-        let start = 0;
-        let (_, tau0) = *pts.get(start)?;
+        let pts = self.points.get(RISE..)?;
+        // Usable points 0..=last, last ≥ 1 (an empty curve has none).
+        let last = (self.len as usize)
+            .min(POINTS)
+            .checked_sub(1)
+            .filter(|&l| l > 0)?;
+        let tau0 = pts.first()?.1;
         // Not below τ0, NaN included (one comparison where `>=` plus a finiteness test took
         // two); −∞ is caught by the floor below.
         #[allow(clippy::neg_cmp_op_on_partial_ord)]
         if !(tau < tau0) {
             return None;
         }
-        let last = len.checked_sub(1)?;
-        let (f_end, tau_end) = *pts.get(last)?;
-        // Far below the most negative trail the curve ever shows (deep sliding stays close to
-        // it): not a point of this curve at all — e.g. a lateral force near zero from the shifts
-        // with the residual torque still acting.
-        if tau < tau_end - F::from_f64(0.25) * tau0.abs() {
+        if tau < self.tau_floor {
             return None;
         }
-        let [neg_lo, neg_hi] = self.f_neg;
-        if tau <= tau_end || (tau <= F::ZERO && neg_hi > F::ZERO) {
-            // Past the aligning torque's sign change: near the force peak or in deep sliding,
-            // where the trail no longer tells where on the (falling) force curve the tyre is.
-            // Take the middle of the f range seen there and say how wide it is.
-            let drop = if tau0 > F::ZERO {
-                F::ONE - tau.max(tau_end) / tau0
+        let drop = |tau: F| {
+            if tau0 > F::ZERO {
+                F::ONE - tau / tau0
             } else {
                 F::ONE
-            };
-            let (lo, hi) = if neg_hi > F::ZERO {
-                (neg_lo.min(f_end), neg_hi.max(f_end))
-            } else {
-                (f_end, f_end)
-            };
+            }
+        };
+        if tau <= self.tau_sat {
+            // Past the aligning torque's sign change: near the force peak or in deep sliding,
+            // where the trail no longer tells where on the (falling) force curve the tyre is.
+            // The middle of the f range seen there, and how wide it is.
+            let [f, f_spread] = self.sat;
             return Some(Inversion {
-                f: F::HALF * (hi + lo),
+                f,
                 df_dtau: F::ZERO,
-                drop,
+                drop: drop(tau.max(pts.get(last)?.1)),
                 saturated: true,
-                f_spread: F::HALF * (hi - lo),
+                f_spread,
             });
         }
-        // The k with taus[k] > tau >= taus[k+1] on [start, last] (unique: τ strictly
-        // decreases, taus[start] > tau > taus[last]), walking from the hint.
-        let mut lo = (*hint).min(last.saturating_sub(1));
-        while lo > start && pts.get(lo)?.1 <= tau {
-            lo -= 1;
+        // The k with τ_k > τ ≥ τ_k+1 (unique: τ strictly decreases over the usable points,
+        // τ_0 > τ > τ_last), walking from the hint: down while τ_k ≤ τ (k > 0 there, as
+        // τ_0 > τ), up while τ_k+1 > τ (k + 1 < last there, as τ_last < τ). At most `POINTS`
+        // steps.
+        let mut k = (*hint).min(last - 1);
+        for _ in 0..POINTS {
+            let (a, b) = (pts.get(k)?.1, pts.get(k + 1)?.1);
+            if a <= tau {
+                k = k.saturating_sub(1);
+            } else if b > tau {
+                k += 1;
+            } else {
+                break;
+            }
         }
-        while lo + 1 < last && pts.get(lo + 1)?.1 > tau {
-            lo += 1;
-        }
-        *hint = lo;
-        let hi = lo + 1;
-        let ((f0, t0), (f1, t1)) = (*pts.get(lo)?, *pts.get(hi)?);
+        *hint = k;
+        let ((f0, t0), (f1, t1)) = (*pts.get(k)?, *pts.get(k + 1)?);
         let slope = (f1 - f0) / (t1 - t0); // t1 < t0 strictly
-        let f = f0 + (tau - t0) * slope;
-        let drop = if tau0 > F::ZERO {
-            F::ONE - tau / tau0
-        } else {
-            F::ONE
-        };
         Some(Inversion {
-            f,
+            f: f0 + (tau - t0) * slope,
             df_dtau: slope,
-            drop,
+            drop: drop(tau),
             saturated: false,
             f_spread: F::ZERO,
         })
@@ -523,16 +540,38 @@ fn curve<F: Float, M: Backend<F>>(
             nr += 1;
         }
     }
+    // One array: the rising branch right-aligned before `RISE`, the usable part from it.
+    let mut points = [(F::ZERO, F::ZERO); RISE + POINTS];
+    points
+        .get_mut(RISE - nr..RISE)?
+        .copy_from_slice(rise.get(..nr)?);
+    points
+        .get_mut(RISE..RISE + n)?
+        .copy_from_slice(kept.get(..n)?);
+    let [neg_lo, neg_hi] = neg;
+    let (f_end, tau_end) = *kept.get(n - 1)?;
+    let (lo, hi) = if neg_hi > F::ZERO {
+        (neg_lo.min(f_end), neg_hi.max(f_end))
+    } else {
+        (f_end, f_end)
+    };
+    let tau0 = kept[0].1;
     let mut c = Curve {
-        pts: kept,
+        points,
         len: n as u8,
-        f_neg: neg,
-        rise,
+        sat: [F::HALF * (hi + lo), F::HALF * (hi - lo)],
+        tau_sat: if neg_hi > F::ZERO {
+            tau_end.max(F::ZERO)
+        } else {
+            tau_end
+        },
+        tau_floor: tau_end - F::from_f64(0.25) * tau0.abs(),
         rise_len: nr as u8,
         peak: 0,
     };
+    let both = c.points.get(RISE - nr..RISE + n)?;
     let mut peak = 1;
-    while peak < nr + n && c.point(peak)?.0 > c.point(peak - 1)?.0 {
+    while peak < nr + n && both.get(peak)?.0 > both.get(peak - 1)?.0 {
         peak += 1;
     }
     c.peak = peak as u8;

@@ -423,9 +423,8 @@ fn tau_at_walks_the_curve_by_force() {
     for si in 0..LAMBDA_NODES.len() {
         for side in 0..2 {
             let cv = &t.surfaces(flat, nominal, side).unwrap()[si];
-            let (nr, n) = (cv.rise_len as usize, cv.len as usize);
-            let rise = &cv.rise[..nr];
-            let monotone = &cv.pts[..n];
+            let rise = cv.rise();
+            let monotone = cv.usable();
             let pts: Vec<(f64, f64)> = rise
                 .iter()
                 .copied()
@@ -606,7 +605,7 @@ fn fixed_point_estimator_reads_what_f64_reads() {
 }
 
 /// `Curve::invert` gives the same inversion from every starting segment (the hint only saves
-/// work), and nothing for τ that is NaN or infinite.
+/// work), the one a plain scan of the curve gives, and nothing for τ that is NaN or infinite.
 #[test]
 fn invert_is_independent_of_the_hint() {
     let p = tyre();
@@ -623,7 +622,8 @@ fn invert_is_independent_of_the_hint() {
                     if n < 2 {
                         continue;
                     }
-                    let (hi, lo) = (c.pts[0].1, c.pts[n - 1].1);
+                    let pts = c.usable();
+                    let (hi, lo) = (pts[0].1, pts[n - 1].1);
                     for k in 1..40 {
                         let tau = lo + (hi - lo) * k as f64 / 40.0;
                         let mut h0 = 0;
@@ -638,6 +638,16 @@ fn invert_is_independent_of_the_hint() {
                             if want.is_some_and(|i| !i.saturated) {
                                 assert_eq!(h, h0, "segment found from {start}");
                             }
+                        }
+                        // Against a plain scan from the curve's start: the segment with
+                        // τ_k > τ ≥ τ_k+1, interpolated linearly.
+                        if let Some(i) = want.filter(|i| !i.saturated) {
+                            let k = (0..n - 1)
+                                .find(|&k| pts[k].1 > tau && tau >= pts[k + 1].1)
+                                .expect("an interior τ lies on a segment");
+                            assert_eq!(h0, k);
+                            let ((f0, t0), (f1, t1)) = (pts[k], pts[k + 1]);
+                            assert_eq!(i.f, f0 + (tau - t0) * ((f1 - f0) / (t1 - t0)));
                         }
                         checked += usize::from(want.is_some_and(|i| !i.saturated));
                     }
