@@ -415,17 +415,14 @@ impl<'t, F: Float> MuEstimator<'t, F> {
         self.last_t = None;
     }
 
-    /// The radial estimate on surface node `si` for the reading `q`.
+    /// The radial estimate on surface node `si` (small-slip trail `tau0`) for the reading `q`.
     /// `seg` is where the search along the curves starts (see [`table::Curve::invert`]); it is
     /// set to the segment found.
-    fn node(&self, si: usize, q: &Reading<F>, seg: &mut usize) -> Option<NodeEst<F>> {
+    fn node(&self, si: usize, q: &Reading<F>, tau0: F, seg: &mut usize) -> Option<NodeEst<F>> {
         let Reading { tau, force, fz, .. } = *q;
-        // Bilinear in (load, camber) over the bracketing curves.
+        // Bilinear in (load, camber) over the bracketing curves; `tau0` is this surface's τ0
+        // interpolated so.
         let corners = q.active();
-        let mut tau0 = F::ZERO;
-        for &(cs, wt) in corners {
-            tau0 += wt * cs.get(si)?.tau0();
-        }
         // The trail's length scales with load (Dt ∝ Fz·(qDz1 + qDz2·dfz)): compare curves at
         // the same fraction of their own small-slip trail τ0, not at the same τ.
         if tau0 <= F::ZERO {
@@ -540,11 +537,33 @@ impl<'t, F: Float> MuEstimator<'t, F> {
         }
         // Radial estimates about each surface node; the consistent one is where the estimate
         // crosses its own node (d = λ̂ − λnode changes sign), interpolated between the two.
+        // First each surface's small-slip trail τ0 (bilinear over the corners) and the trail
+        // drop 1 − τ/τ0 the reading shows on it: the estimate's drop lies between two of
+        // these (it is one surface's, or interpolated between two), so a reading whose drop is
+        // short of `trail_drop_min` on every surface is not identifiable whatever the curves
+        // say — decided here, before any curve is searched. (The margin covers the rounding of
+        // that interpolation: no reading the full test would accept is turned away.)
+        let mut tau0s = [F::ZERO; table::LAMBDA_NODES.len()];
+        // (From 0: with a `trail_drop_min` ≤ 0 nothing is decided here.)
+        let mut most = F::ZERO;
+        for (si, slot) in tau0s.iter_mut().enumerate() {
+            let mut tau0 = F::ZERO;
+            for &(cs, wt) in reading.active() {
+                tau0 += wt * cs.get(si)?.tau0();
+            }
+            *slot = tau0;
+            if tau0 > F::ZERO {
+                most = most.max(F::ONE - tau / tau0);
+            }
+        }
+        if most < cfg.trail_drop_min * F::from_f64(1.0 - 1e-4) {
+            return None;
+        }
         let mut ests: [Option<NodeEst<F>>; table::LAMBDA_NODES.len()] =
             [None; table::LAMBDA_NODES.len()];
         let mut seg = usize::from(self.seg.get());
         for (si, slot) in ests.iter_mut().enumerate() {
-            *slot = self.node(si, &reading, &mut seg);
+            *slot = self.node(si, &reading, *tau0s.get(si)?, &mut seg);
             if si == 0 {
                 self.seg.set(seg as u8);
             }
@@ -588,8 +607,10 @@ impl<'t, F: Float> MuEstimator<'t, F> {
         // standard deviations (measurement noise after the low-pass, residual-torque, Fx-arm,
         // combined-slip and table uncertainty); and none may read the point as grippier than
         // itself (a second crossing).
+        // The outcome does not depend on the order of the checks, only the cost: the cheap
+        // ones first, then the curves' trails from the grippiest surface down (the one most
+        // likely to hold a small-slip point: an ambiguous reading is rejected after one).
         if let Some(e) = pick {
-            let f_m = force / s.fz;
             for (si, est) in ests.iter().enumerate() {
                 let lam_k = *self.table.lam.get(si)?;
                 if lam_k <= e.lambda {
@@ -599,7 +620,12 @@ impl<'t, F: Float> MuEstimator<'t, F> {
                 if k.lambda >= lam_k {
                     return None;
                 }
-                if lam_k - e.lambda <= cfg.ambiguity_margin {
+            }
+            let f_m = force / s.fz;
+            for (si, est) in ests.iter().enumerate().rev() {
+                let lam_k = *self.table.lam.get(si)?;
+                let Some(k) = est else { continue };
+                if lam_k <= e.lambda || lam_k - e.lambda <= cfg.ambiguity_margin {
                     continue;
                 }
                 // The grippier curve's trail at the measured force (interpolated like the

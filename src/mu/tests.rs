@@ -660,3 +660,71 @@ fn invert_is_independent_of_the_hint() {
         "only {checked} interior inversions checked"
     );
 }
+
+/// The early exit on the trail drop (taken before any curve is searched) turns away exactly the
+/// readings the full test would: over steady-state points on every surface, at loads, slips
+/// (side, braked) and cambers between the table's nodes, the estimator with the default
+/// `trail_drop_min` reads a point iff the one with no drop threshold reads it with a drop of at
+/// least that, and then gives the same bits.
+#[test]
+fn early_exit_on_the_trail_drop_changes_nothing() {
+    let p = tyre();
+    let table = GoughTable::for_tyre::<Libm>(&p).unwrap();
+    let cfg = Config::default();
+    let full = MuEstimator::for_tyre(&table, &p, cfg);
+    let open = MuEstimator::for_tyre(
+        &table,
+        &p,
+        Config {
+            trail_drop_min: 0.0,
+            ..cfg
+        },
+    );
+    let mu0 = full.mu0();
+    let (mut read, mut short) = (0, 0);
+    for &mu in &[1.0, 0.6, 0.3, 0.12] {
+        for &load in &[0.45, 0.9, 1.25] {
+            for &gamma in &[-0.02, 0.0, 0.037] {
+                for &kappa in &[0.0, -0.03] {
+                    for i in 1..120 {
+                        let alpha = i as f64 * 0.0015 * mu;
+                        let mut q = p.clone();
+                        q.lmux = mu / mu0;
+                        q.lmuy = mu / mu0;
+                        let o = mf::eval::<f64, Libm>(
+                            &q,
+                            &Input {
+                                fz: load * p.fnomin,
+                                alpha,
+                                kappa,
+                                gamma,
+                                vx: 20.0,
+                                ..Input::default()
+                            },
+                            &Options {
+                                limits: false,
+                                ..Options::default()
+                            },
+                        )
+                        .unwrap();
+                        let s = Sample {
+                            gamma: Some(gamma),
+                            ..sample(&o, 0.0, kappa != 0.0)
+                        };
+                        let a = full.raw::<Libm>(&s);
+                        let b = open
+                            .raw::<Libm>(&s)
+                            .filter(|r| r.drop >= cfg.trail_drop_min);
+                        assert_eq!(a, b, "μ {mu} load {load} γ {gamma} κ {kappa} α {alpha}");
+                        read += usize::from(a.is_some());
+                        short += usize::from(open.raw::<Libm>(&s).is_some() && a.is_none());
+                    }
+                }
+            }
+        }
+    }
+    assert!(
+        read > 300 && short > 10,
+        "{read} read, {short} short of the drop"
+    );
+}
