@@ -38,7 +38,7 @@
 //! ## What it leaves out
 //! Turn slip's contribution (the −a·φ term), the contact-patch mass of MF-Swift, and the
 //! slip-dependent relaxation length inside the step (offered between steps by
-//! [`decayed_sigma`], paper ref. [8]).
+//! [`decayed_sigma`], paper ref. \[8\]).
 
 use crate::math::{Backend, Float};
 use crate::mf::{self, EvalError, Input, Options, Output, Params};
@@ -264,7 +264,7 @@ impl<F: Float> Transient<F> {
     }
 }
 
-/// Slip-dependent decay of a relaxation length (paper, ref. [8]): σ is adapted so that the
+/// Slip-dependent decay of a relaxation length (paper, ref. \[8\]): σ is adapted so that the
 /// deflection stays equal to the force over the carcass stiffness, i.e. σ = σ0·|F|/|K·s| where s
 /// is the transient slip (tan α' or κ') and F the force it produced, K the slip stiffness at zero
 /// slip. Equals σ0 at small slip and decays as the force saturates; never above σ0, never
@@ -288,7 +288,7 @@ pub struct TransientTyre<F> {
     pub state: Transient<F>,
     /// Configuration.
     pub config: Config<F>,
-    /// Apply [`decayed_sigma`] (paper ref. [8]) between steps.
+    /// Apply [`decayed_sigma`] (paper ref. \[8\]) between steps.
     pub slip_decay: bool,
     last: Option<Output<F>>,
     last_slips: Slips<F>,
