@@ -1,9 +1,9 @@
 //! The Gough-plot road-friction estimator: μ from measured Fy, Mz and Fz, without the slip angle.
 //!
-//! The paper: "When such a collection of curves [the Gough plot: Fy against Mz, which spread in
-//! radial direction with the friction coefficient] is available ..., the friction coefficient may
+//! The paper: "When such a collection of curves \[the Gough plot: Fy against Mz, which spread in
+//! radial direction with the friction coefficient\] is available ..., the friction coefficient may
 //! be estimated when on the road the side force and the aligning torque are measured and the
-//! value of the vertical load is available as well" (ref. [2], Pasterkamp & Pacejka 1994). The
+//! value of the vertical load is available as well" (ref. \[2\], Pasterkamp & Pacejka 1994). The
 //! pneumatic trail collapses long before the side force saturates, so the point's place on its
 //! curve — and with it μ — is known early, at moderate utilisation.
 //!
@@ -240,7 +240,7 @@ impl core::fmt::Display for BuildError {
 impl core::error::Error for BuildError {}
 
 /// One wheel's estimator: a few words of state and a reference to the tyre's shared
-/// [`GoughTable`] (about 98 KB in f32, built once per tyre and side). No allocation.
+/// [`GoughTable`] (about 102 KB in f32, built once per tyre and side). No allocation.
 ///
 /// ```
 /// use gough::{math::Libm, mu::{Config, GoughTable, MuEstimator, Sample, State}};
@@ -308,7 +308,7 @@ impl<F: Float> GoughTable<F> {
         GoughTable::build::<M>(Model::Mf(tyre), mounted).ok_or(BuildError::NoGoughCurve)
     }
 
-    /// [`GoughTable::for_wheel`] in place (no 98 KB temporary on the stack).
+    /// [`GoughTable::for_wheel`] in place (no 102 KB temporary on the stack).
     pub fn for_wheel_into<M: Backend<F>>(
         &mut self,
         tyre: &Params<F>,

@@ -126,7 +126,7 @@ pub enum Model<'a, F> {
 }
 
 /// The tabulated Gough curves: 7 cambers × 4 surfaces × 7 loads × 2 sides × 20 points × (τ, f),
-/// plus each curve's rising branch: about 98 KB in f32. Built once per tyre (and mounting side) and shared by the estimators of
+/// plus each curve's rising branch: about 102 KB in f32. Built once per tyre (and mounting side) and shared by the estimators of
 /// the wheels on that side.
 #[derive(Debug, Clone)]
 pub struct GoughTable<F> {
@@ -198,7 +198,7 @@ impl<F: Float> GoughTable<F> {
         }
     }
 
-    /// [`GoughTable::build`] into an existing table, in place: no 98 KB temporary on the stack
+    /// [`GoughTable::build`] into an existing table, in place: no 102 KB temporary on the stack
     /// (what a device needs). On `None` the slot holds a partial table: rebuild or zero it.
     pub fn build_into<M: Backend<F>>(
         slot: &mut Self,

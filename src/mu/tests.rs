@@ -553,7 +553,7 @@ fn an_outlier_run_does_not_span_a_hold() {
 /// The estimator in Q31.32 fixed point (issue 7: `fixed::Fix`, `FixMath`, the same code): its
 /// table and its readings agree with f64 on a surface sweep (μ 1.0 … 0.1, loads 0.5 … 1.5·Fz0,
 /// slip up to the peak, braking in the turn). Identifiability is decided alike except within
-/// rounding of a gate, and μ agrees within 1e-4. (Its 198 KB table does not fit the M0 boards
+/// rounding of a gate, and μ agrees within 1e-4. (Its 204 KB table does not fit the M0 boards
 /// here; this checks the arithmetic, not a device build.)
 #[cfg(feature = "fixed")]
 #[test]
