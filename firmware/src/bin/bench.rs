@@ -21,7 +21,7 @@ use cortex_m_rt::{entry, exception};
 use cortex_m_semihosting::hprintln;
 use gough::math::{Backend, Float, Libm};
 use gough::mf::{self, Input, Options, Params};
-use gough::mu::{GoughTable, MuEstimator, Sample, State};
+use gough::mu::{GoughTable, MuEstimator, State};
 use gough::proto::{Measurement, Settings};
 use gough_firmware::app::{self, App, TableJob};
 use gough_firmware::marks::{bench_start, bench_stop};
@@ -231,15 +231,7 @@ fn estimator_figures<M: Backend<f32>>(
         stream,
         || MuEstimator::for_tyre(t, p, cfg),
         |est, m| {
-            let s = Sample {
-                t: m.t_us as f32 / 1.0e6,
-                fz: m.fz,
-                fy: m.fy,
-                mz: m.mz,
-                fx: m.fx,
-                vx: m.vx,
-                gamma: m.gamma,
-            };
+            let s = gough_firmware::wheel::sample(m, m.t_us as f32 / 1.0e6);
             est.update::<M>(&s).state
         },
     );

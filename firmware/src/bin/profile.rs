@@ -26,7 +26,7 @@ use core::ptr::addr_of_mut;
 use cortex_m_rt::entry;
 use gough::math::Fast;
 use gough::mf::{self, Input, Options};
-use gough::mu::{GoughTable, MuEstimator, Sample};
+use gough::mu::{GoughTable, MuEstimator};
 use gough::proto::{Measurement, Settings};
 use gough_firmware::app::{self, TableJob};
 use gough_firmware::marks::{bench_start, bench_stop};
@@ -100,15 +100,7 @@ fn estimator_stream(mut est: MuEstimator<'_, f32>, stream: &[Measurement]) -> u3
     let mut seen = 0u32;
     bench_start(2);
     for m in stream {
-        let s = Sample {
-            t: m.t_us as f32 / 1.0e6,
-            fz: m.fz,
-            fy: m.fy,
-            mz: m.mz,
-            fx: m.fx,
-            vx: m.vx,
-            gamma: m.gamma,
-        };
+        let s = gough_firmware::wheel::sample(m, m.t_us as f32 / 1.0e6);
         let e = est.update::<Fast>(core::hint::black_box(&s));
         seen += u32::from(e.state == gough::mu::State::Identifiable);
     }
