@@ -276,9 +276,9 @@ pub struct MuEstimator<'t, F> {
     side_since: F,
     // rms of the low-passed noise relative to the raw noise (1 until a sample interval is known)
     noise_scale: F,
-    // table segment where the last reading's search along the curves started: the next
-    // reading's start (consecutive readings lie close on their curves; any start gives the
-    // same result, a near one is cheaper)
+    // table segment the last reading's search found on its first surface: where the next
+    // reading's search starts (consecutive readings lie close on their curves; any start
+    // gives the same result, a near one is cheaper)
     seg: core::cell::Cell<u8>,
 }
 

@@ -723,6 +723,7 @@ fn early_exit_on_the_trail_drop_changes_nothing() {
             }
         }
     }
+    std::println!("early exit: {read} points read, {short} read only without the drop threshold");
     assert!(
         read > 300 && short > 10,
         "{read} read, {short} short of the drop"
