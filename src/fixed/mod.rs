@@ -258,6 +258,19 @@ impl Float for Fix {
         self.to_f64_exact()
     }
     #[inline]
+    fn floor_index(self, max: usize) -> usize {
+        let k = self.floor_int();
+        if k <= 0 {
+            0
+        } else {
+            usize::try_from(k).map_or(max, |k| k.min(max))
+        }
+    }
+    #[inline]
+    fn from_index(i: u16) -> Fix {
+        Fix::from_int(i32::from(i))
+    }
+    #[inline]
     fn abs(self) -> Fix {
         Fix(self.0.saturating_abs())
     }

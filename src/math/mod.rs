@@ -88,6 +88,12 @@ pub trait Float:
     fn abs(self) -> Self;
     /// `true` unless NaN or ±∞ (for `fixed::Fix`: unless saturated).
     fn is_finite(self) -> bool;
+    /// ⌊x⌋ as an index, clamped to `0..=max` (NaN and negative values give 0): a table cell
+    /// from a position along a uniform grid, with no conversion through `f64`.
+    fn floor_index(self, max: usize) -> usize;
+    /// A small index as a value (exact for `i` < 2¹⁶): a grid position, with no conversion
+    /// through `f64`.
+    fn from_index(i: u16) -> Self;
     /// The larger of two values; NaN-free inputs assumed (callers check finiteness first).
     #[inline]
     fn max(self, other: Self) -> Self {
@@ -170,6 +176,16 @@ macro_rules! impl_float {
             #[inline]
             fn is_finite(self) -> bool {
                 <$t>::is_finite(self)
+            }
+            #[inline]
+            fn floor_index(self, max: usize) -> usize {
+                // `as` truncates towards zero (⌊x⌋ for x ≥ 0) and saturates: NaN and x < 0
+                // give 0.
+                (self as usize).min(max)
+            }
+            #[inline]
+            fn from_index(i: u16) -> Self {
+                <$t>::from(i)
             }
         }
     };
