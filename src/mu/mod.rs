@@ -240,7 +240,7 @@ impl core::fmt::Display for BuildError {
 impl core::error::Error for BuildError {}
 
 /// One wheel's estimator: a few words of state and a reference to the tyre's shared
-/// [`GoughTable`] (about 102 KB in f32, built once per tyre and side). No allocation.
+/// [`GoughTable`] (about 93 KB in f32, built once per tyre and side). No allocation.
 ///
 /// ```
 /// use gough::{math::Libm, mu::{Config, GoughTable, MuEstimator, Sample, State}};
@@ -276,10 +276,6 @@ pub struct MuEstimator<'t, F> {
     side_since: F,
     // rms of the low-passed noise relative to the raw noise (1 until a sample interval is known)
     noise_scale: F,
-    // table segment the last reading's search found on its first surface: where the next
-    // reading's search starts (consecutive readings lie close on their curves; any start
-    // gives the same result, a near one is cheaper)
-    seg: core::cell::Cell<u8>,
 }
 
 /// A per-sample λμ with its variance (before filtering).
@@ -308,7 +304,7 @@ impl<F: Float> GoughTable<F> {
         GoughTable::build::<M>(Model::Mf(tyre), mounted).ok_or(BuildError::NoGoughCurve)
     }
 
-    /// [`GoughTable::for_wheel`] in place (no 102 KB temporary on the stack).
+    /// [`GoughTable::for_wheel`] in place (no 93 KB temporary on the stack).
     pub fn for_wheel_into<M: Backend<F>>(
         &mut self,
         tyre: &Params<F>,
@@ -391,7 +387,6 @@ impl<'t, F: Float> MuEstimator<'t, F> {
             fy_side: 0,
             side_since: F::ZERO,
             noise_scale: F::ONE,
-            seg: core::cell::Cell::new((table::POINTS / 2) as u8),
         }
     }
 
@@ -416,31 +411,25 @@ impl<'t, F: Float> MuEstimator<'t, F> {
     }
 
     /// The radial estimate on surface node `si` (small-slip trail `tau0`) for the reading `q`.
-    /// `seg` is where the search along the curves starts (see [`table::Curve::invert`]); it is
-    /// set to the segment found.
-    fn node(&self, si: usize, q: &Reading<F>, tau0: F, seg: &mut usize) -> Option<NodeEst<F>> {
+    fn node(&self, si: usize, q: &Reading<F>, tau0: F) -> Option<NodeEst<F>> {
         let Reading { tau, force, fz, .. } = *q;
         // Bilinear in (load, camber) over the bracketing curves; `tau0` is this surface's τ0
         // interpolated so.
         let corners = q.active();
         // The trail's length scales with load (Dt ∝ Fz·(qDz1 + qDz2·dfz)): compare curves at
-        // the same fraction of their own small-slip trail τ0, not at the same τ.
+        // the same fraction ρ of their own small-slip trail τ0, not at the same τ. One place on
+        // the grid serves every corner.
         if tau0 <= F::ZERO {
             return None;
         }
-        let rho = tau / tau0;
-        let (mut f, mut f_spread, mut dfdtau) = (F::ZERO, F::ZERO, F::ZERO);
-        let mut hint = *seg;
+        let at = table::RhoAt::new(tau / tau0);
+        let (mut f, mut f_spread, mut dfdrho) = (F::ZERO, F::ZERO, F::ZERO);
         for &(cs, wt) in corners {
-            let c = cs.get(si)?;
-            let t0 = c.tau0();
-            let inv = c.invert(rho * t0, &mut hint)?;
+            let inv = cs.get(si)?.read(&at)?;
             f += wt * inv.f;
             f_spread += wt * inv.f_spread;
-            // ∂f/∂τ through ρ: ∂f_k/∂τ = f_k'·τ0_k/τ0.
-            dfdtau += wt * inv.df_dtau * t0 / tau0;
+            dfdrho += wt * inv.df_drho;
         }
-        *seg = hint;
         if f <= F::ZERO {
             return None;
         }
@@ -448,9 +437,10 @@ impl<'t, F: Float> MuEstimator<'t, F> {
         let lambda = lam_node * force / (fz * f); // radial scaling about the node
         Some(NodeEst {
             lambda,
-            dl_dtau: -lambda * dfdtau / f,
+            // ∂f/∂τ = (∂f/∂ρ)/τ0.
+            dl_dtau: -lambda * dfdrho / (tau0 * f),
             tau0,
-            drop: F::ONE - rho,
+            drop: F::ONE - at.rho,
             spread: f_spread / f,
         })
     }
@@ -546,12 +536,12 @@ impl<'t, F: Float> MuEstimator<'t, F> {
         let mut tau0s = [F::ZERO; table::LAMBDA_NODES.len()];
         // (From 0: with a `trail_drop_min` ≤ 0 nothing is decided here.)
         let mut most = F::ZERO;
-        for (si, slot) in tau0s.iter_mut().enumerate() {
-            let mut tau0 = F::ZERO;
-            for &(cs, wt) in reading.active() {
-                tau0 += wt * cs.get(si)?.tau0();
+        for &(cs, wt) in reading.active() {
+            for (slot, c) in tau0s.iter_mut().zip(cs) {
+                *slot += wt * c.tau0;
             }
-            *slot = tau0;
+        }
+        for &tau0 in &tau0s {
             if tau0 > F::ZERO {
                 most = most.max(F::ONE - tau / tau0);
             }
@@ -561,12 +551,8 @@ impl<'t, F: Float> MuEstimator<'t, F> {
         }
         let mut ests: [Option<NodeEst<F>>; table::LAMBDA_NODES.len()] =
             [None; table::LAMBDA_NODES.len()];
-        let mut seg = usize::from(self.seg.get());
-        for (si, slot) in ests.iter_mut().enumerate() {
-            *slot = self.node(si, &reading, *tau0s.get(si)?, &mut seg);
-            if si == 0 {
-                self.seg.set(seg as u8);
-            }
+        for (si, (slot, &tau0)) in ests.iter_mut().zip(&tau0s).enumerate() {
+            *slot = self.node(si, &reading, tau0);
         }
         let mut prev: Option<(F, NodeEst<F>)> = None;
         let mut pick: Option<NodeEst<F>> = None;
@@ -631,8 +617,9 @@ impl<'t, F: Float> MuEstimator<'t, F> {
                 // The grippier curve's trail at the measured force (interpolated like the
                 // table); a curve that never reaches this force cannot hold the point.
                 let (mut tk, mut wsum) = (F::ZERO, F::ZERO);
+                let mut hint = 0;
                 for &(cs, wt) in reading.active() {
-                    if let Some(x) = cs.get(si).and_then(|c| c.tau_at(f_m)) {
+                    if let Some(x) = cs.get(si).and_then(|c| c.tau_at_from(f_m, &mut hint)) {
                         tk += wt * x;
                         wsum += wt;
                     }

@@ -8,6 +8,10 @@
 //! small horizontal/vertical shifts for the Magic Formula). The ratio τ = −Mz/Fy is therefore
 //! independent of λμ and tells how far along the curve the tyre is — without the slip angle —
 //! and λμ = |F|/(Fz·f) at that point. The host tests measure the error this leaves.
+//!
+//! Each curve is evaluated at 20 slip angles and then held as f against the trail ratio
+//! ρ = τ/τ0 on a uniform grid (linear between the slip-angle points), so that a reading finds its
+//! place on every curve by one multiplication instead of a search.
 
 use crate::brush::Brush;
 use crate::math::{Backend, Float};
@@ -38,78 +42,89 @@ pub type PerCurve<T> = [[[[T; NS]; 2]; NL]; NG];
 /// One tabulated curve of the Gough plot (one camber, surface, load and side): everything the
 /// per-sample path reads of it, in one record so that one index reaches it all.
 /// τ in m, f = |Fy|/Fz dimensionless (ISO-W forces, as in the `.tir` file).
+///
+/// The usable (monotone) part is held as f against the trail ratio ρ = τ/τ0 on a uniform
+/// grid, ρᵢ = 1 − i/[`RHO_CELLS`]: a reading finds its cell by one multiplication, with no
+/// search, and the same cell serves every curve it is read on (the corners of its load and
+/// camber, on one surface).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Curve<F> {
-    /// The points (f, τ): f = |Fy|/Fz \[-\] (absolute, on that surface), τ \[m\]. From index
-    /// [`RISE`] the usable (monotone) part, τ strictly decreasing over `len` points
-    /// ([`Curve::usable`]); right before it, ending at [`RISE`], the `rise_len` points of the
-    /// rising branch ([`Curve::rise`]), so that the two read on as one array.
-    pub points: [(F, F); RISE + POINTS],
+    /// f = |Fy|/Fz \[-\] (absolute, on that surface) at ρᵢ, for i < `len`: linear between the
+    /// slip-angle nodes the model was evaluated at; the last node is the first at or beyond
+    /// the usable part's end, on its last segment's line (so that the grid reads that segment
+    /// exactly); the nodes past it continue that line.
+    pub f: [F; RHO_POINTS],
+    /// The rising branch (f, τ): the trail before its peak, the last `rise_len` entries. At
+    /// small slip the residual torque and the shifts make the trail grow first, so a reading
+    /// there can look like a slippery surface at large slip; kept to recognise that ambiguity.
+    pub rise: [(F, F); RISE],
+    /// τ0: the trail at the smallest usable slip, the largest of the curve \[m\] (> 0; 0 for
+    /// an empty curve).
+    pub tau0: F,
     /// What a reading past the aligning torque's sign change can mean (near and beyond the
     /// force peak, out into deep sliding where τ rises again and no longer tells the slip): the
     /// middle of the range of f seen there and its half-width (the range of f once the trail
     /// has turned negative, with the last usable point's f; that point's f alone when the curve
     /// has no negative trail).
     pub sat: [F; 2],
-    /// A trail at or below this \[m\] is past the sign change (the last usable point's trail;
-    /// 0 if higher and the curve has a negative trail).
-    pub tau_sat: F,
-    /// A trail below this \[m\] is no point of this curve at all: far below the most negative
+    /// A trail ratio at or below this is past the sign change (the last usable point's ratio;
+    /// 0 if lower and the curve has a negative trail).
+    pub rho_sat: F,
+    /// A trail ratio below this is no point of this curve at all: far below the most negative
     /// trail the curve ever shows, e.g. a lateral force near zero from the shifts with the
-    /// residual torque still acting (the last usable point's trail less a quarter of |τ0|).
-    pub tau_floor: F,
-    /// Number of usable (monotone) points.
+    /// residual torque still acting (the last usable point's ratio less a quarter).
+    pub rho_floor: F,
+    /// Number of grid nodes of `f` (≥ 2; 0 for an empty curve).
     pub len: u8,
-    /// Number of points of the rising branch: the trail before its peak. At small slip the
-    /// residual torque and the shifts make the trail grow first, so a reading there can look
-    /// like a slippery surface at large slip; kept to recognise that ambiguity.
+    /// Number of points of the rising branch.
     pub rise_len: u8,
-    /// Number of leading points of the rising branch followed by the monotone part over which
-    /// f strictly increases: the points before the curve's force peak, where [`Curve::tau_at`]
-    /// searches.
+    /// Number of leading points of the rising branch followed by the grid
+    /// ([`Curve::point`]) over which f strictly increases: the points before the curve's force
+    /// peak, where [`Curve::tau_at`] searches.
     pub peak: u8,
 }
+
+/// Cells of the trail-ratio grid of a [`Curve`]: ρ from 1 down to 0 in steps of 1/32.
+pub const RHO_CELLS: usize = 32;
+/// Nodes of the trail-ratio grid.
+pub const RHO_POINTS: usize = RHO_CELLS + 1;
 
 impl<F: Float> Curve<F> {
     /// A curve with no usable point.
     pub const fn empty() -> Self {
         Curve {
-            points: [(F::ZERO, F::ZERO); RISE + POINTS],
+            f: [F::ZERO; RHO_POINTS],
+            rise: [(F::ZERO, F::ZERO); RISE],
+            tau0: F::ZERO,
             sat: [F::ZERO; 2],
-            tau_sat: F::ZERO,
-            tau_floor: F::ZERO,
+            rho_sat: F::ZERO,
+            rho_floor: F::ZERO,
             len: 0,
             rise_len: 0,
             peak: 0,
         }
     }
 
-    /// The usable (monotone) part: τ strictly decreases.
-    pub fn usable(&self) -> &[(F, F)] {
-        self.points
-            .get(RISE..RISE + self.len as usize)
-            .unwrap_or(&[])
-    }
-
-    /// The rising branch (before the trail's peak).
+    /// The rising branch (before the trail's peak), as (f, τ).
     pub fn rise(&self) -> &[(F, F)] {
-        self.points
-            .get(RISE.saturating_sub(self.rise_len as usize)..RISE)
+        self.rise
+            .get(RISE.saturating_sub(self.rise_len as usize)..)
             .unwrap_or(&[])
     }
 
-    /// The rising branch followed by the monotone part up to the force peak (`peak` points),
-    /// where f strictly increases.
-    fn before_peak(&self) -> &[(F, F)] {
-        let from = RISE.saturating_sub(self.rise_len as usize);
-        self.points
-            .get(from..from + self.peak as usize)
-            .unwrap_or(&[])
-    }
-
-    /// τ0: the trail at the smallest usable slip \[m\] (0 for an empty curve).
-    pub fn tau0(&self) -> F {
-        self.points[RISE].1
+    /// The `k`-th point (f, τ) of the rising branch followed by the grid (grid node i at
+    /// τ = τ0·ρᵢ); `None` past the grid's end.
+    #[inline]
+    pub fn point(&self, k: usize) -> Option<(F, F)> {
+        let nr = self.rise_len as usize;
+        match k.checked_sub(nr) {
+            None => self.rise.get(RISE - nr + k).copied(),
+            Some(i) if i < self.len as usize => {
+                let rho = F::ONE - F::from_index(i as u16) * F::from_f64(1.0 / RHO_CELLS as f64);
+                Some((*self.f.get(i)?, self.tau0 * rho))
+            }
+            Some(_) => None,
+        }
     }
 }
 
@@ -125,9 +140,9 @@ pub enum Model<'a, F> {
     Brush(Brush<F>),
 }
 
-/// The tabulated Gough curves: 7 cambers × 4 surfaces × 7 loads × 2 sides × 20 points × (τ, f),
-/// plus each curve's rising branch: about 102 KB in f32. Built once per tyre (and mounting side) and shared by the estimators of
-/// the wheels on that side.
+/// The tabulated Gough curves: 7 cambers × 4 surfaces × 7 loads × 2 sides, each f at 33 trail
+/// ratios plus its rising branch: about 93 KB in f32. Built once per tyre (and mounting side) and
+/// shared by the estimators of the wheels on that side.
 #[derive(Debug, Clone)]
 pub struct GoughTable<F> {
     /// Loads of the nodes \[N\].
@@ -155,10 +170,8 @@ pub struct GoughTable<F> {
 pub struct Inversion<F> {
     /// f at the point \[-\].
     pub f: F,
-    /// ∂f/∂τ along the table \[1/m\] (for the error propagation).
-    pub df_dtau: F,
-    /// Trail drop 1 − τ/τ0, 0 at the smallest tabulated slip, → 1 at full sliding.
-    pub drop: F,
+    /// ∂f/∂ρ along the table \[-\] (for the error propagation; ρ = τ/τ0).
+    pub df_drho: F,
     /// The point was beyond the table's end (full sliding).
     pub saturated: bool,
     /// Half-width of the f range a saturated point can mean (0 when not saturated).
@@ -198,7 +211,7 @@ impl<F: Float> GoughTable<F> {
         }
     }
 
-    /// [`GoughTable::build`] into an existing table, in place: no 102 KB temporary on the stack
+    /// [`GoughTable::build`] into an existing table, in place: no 93 KB temporary on the stack
     /// (what a device needs). On `None` the slot holds a partial table: rebuild or zero it.
     pub fn build_into<M: Backend<F>>(
         slot: &mut Self,
@@ -277,103 +290,141 @@ impl<F: Float> GoughTable<F> {
     }
 }
 
+/// A trail ratio ρ = τ/τ0 placed on the grid of the [`Curve`]s: its cell and where in it.
+/// Computed once per reading and surface, and read on every curve bracketing the reading.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RhoAt<F> {
+    /// ρ \[-\].
+    pub rho: F,
+    /// ⌊x⌋ for the position x = (1 − ρ)·[`RHO_CELLS`] along the grid, clamped to its cells.
+    cell: usize,
+    /// x − cell.
+    frac: F,
+}
+
+impl<F: Float> RhoAt<F> {
+    /// Places ρ on the grid (any value: NaN and values outside the grid are placed at its
+    /// ends, and [`Curve::read`] turns them away).
+    pub fn new(rho: F) -> Self {
+        let x = (F::ONE - rho) * F::from_index(RHO_CELLS as u16);
+        let cell = x.floor_index(RHO_CELLS - 1);
+        RhoAt {
+            rho,
+            cell,
+            frac: x - F::from_index(cell as u16),
+        }
+    }
+}
+
 impl<F: Float> Curve<F> {
     /// The trail where the curve's force is `f`: along the rising branch and then the
-    /// monotone part, up to the curve's force peak (linear in f between table points; below the
-    /// first point, that point's trail). `None` when f lies beyond the curve's peak force — no
-    /// point of this curve has that force — or the curve is empty.
+    /// grid, up to the curve's force peak (linear in f between points; below the first point,
+    /// that point's trail). `None` when f lies beyond the curve's peak force — no point of
+    /// this curve has that force — or the curve is empty.
     pub fn tau_at(&self, f: F) -> Option<F> {
-        let pts = self.before_peak();
-        let (f0, t0) = *pts.first()?;
+        self.tau_at_from(f, &mut 0)
+    }
+
+    /// [`Curve::tau_at`], searching the grid from node `hint` (0: no hint) and setting it to
+    /// the node found. Any hint gives the same result; a near one is cheaper (the curves of
+    /// neighbouring loads and cambers cross a force at nearly the same node).
+    pub fn tau_at_from(&self, f: F, hint: &mut usize) -> Option<F> {
+        // The points before the peak: the rising branch's, then the grid's.
+        let n = self.peak as usize;
+        let nr = (self.rise_len as usize).min(RISE);
+        let rise = self.rise.get(RISE - nr..)?;
+        let (rise, grid) = match n.checked_sub(nr) {
+            None => (rise.get(..n)?, &[][..]),
+            Some(ng) => (rise, self.f.get(..ng)?),
+        };
+        let (f0, t0) = match rise.first() {
+            Some(&p) => p,
+            None => (*grid.first()?, self.tau0),
+        };
         if f <= f0 {
             return Some(t0);
         }
-        // Smallest k with f ≤ f_k (f strictly increases here): bisection.
-        let (mut lo, mut hi) = (0, pts.len() - 1);
-        if f > pts.get(hi)?.0 {
+        let lerp = |(f0, t0): (F, F), (f1, t1): (F, F)| t0 + (f - f0) / (f1 - f0) * (t1 - t0);
+        if let Some(&last) = rise.last() {
+            if f <= last.0 {
+                // On the rising branch: the segment ending at the first point with f_k ≥ f.
+                let k = rise.partition_point(|p| p.0 < f);
+                return Some(lerp(*rise.get(k.checked_sub(1)?)?, *rise.get(k)?));
+            }
+            // Between the rising branch and the grid (or beyond the peak: no grid).
+            let g0 = (*grid.first()?, self.tau0);
+            if f <= g0.0 {
+                return Some(lerp(last, g0));
+            }
+        }
+        if f > *grid.last()? {
             return None; // beyond the force peak
         }
-        while hi - lo > 1 {
-            let mid = (lo + hi) / 2;
-            if f <= pts.get(mid)?.0 {
-                hi = mid;
-            } else {
-                lo = mid;
+        // On the grid: the cell ending at the first node i with f_i ≥ f (i ≥ 1: f > f_0;
+        // unique, as f strictly increases there).
+        let i = if (1..grid.len()).contains(hint) {
+            // Walk from the hint: down while the node below also has f_i−1 ≥ f (i − 1 ≥ 1
+            // there), up while f_i < f (i + 1 < len there, as f ≤ the last f).
+            let mut i = *hint;
+            while i > 1 && grid.get(i - 1).is_some_and(|&x| x >= f) {
+                i -= 1;
             }
-        }
-        let ((f0, t0), (f1, t1)) = (*pts.get(lo)?, *pts.get(hi)?);
-        Some(t0 + (f - f0) / (f1 - f0) * (t1 - t0))
+            while grid.get(i).is_some_and(|&x| x < f) {
+                i += 1;
+            }
+            i
+        } else {
+            grid.partition_point(|&x| x < f)
+        };
+        *hint = i;
+        let (fa, fb) = (*grid.get(i.checked_sub(1)?)?, *grid.get(i)?);
+        let cells = F::from_index(i as u16 - 1) + (f - fa) / (fb - fa);
+        Some(self.tau0 * (F::ONE - cells * F::from_f64(1.0 / RHO_CELLS as f64)))
     }
 
-    /// Inverts τ → f. `None` when τ is above the usable range (the trail has not dropped: the
-    /// point is not identifiable).
-    ///
-    /// `hint` is the table segment to start the search from; it is set to the segment found.
-    /// Any start gives the same result; a near one is cheaper. The curves of neighbouring loads,
-    /// cambers and surfaces are sampled at the same fractions of their slip range, so the
-    /// segment found on one is a good start on the next.
-    pub fn invert(&self, tau: F, hint: &mut usize) -> Option<Inversion<F>> {
-        let pts = self.points.get(RISE..)?;
-        // Usable points 0..=last, last ≥ 1 (an empty curve has none).
-        let last = (self.len as usize)
-            .min(POINTS)
-            .checked_sub(1)
-            .filter(|&l| l > 0)?;
-        let tau0 = pts.first()?.1;
-        // Not below τ0, NaN included (one comparison where `>=` plus a finiteness test took
-        // two); −∞ is caught by the floor below.
+    /// Inverts ρ = τ/τ0 → f (`at` from [`RhoAt::new`]). `None` when ρ is not below 1 (the trail
+    /// has not dropped: the point is not identifiable), below the curve's floor, NaN, or the
+    /// curve is empty.
+    pub fn read(&self, at: &RhoAt<F>) -> Option<Inversion<F>> {
+        let rho = at.rho;
+        if self.len < 2 {
+            return None; // an empty curve
+        }
+        // Below 1, NaN excluded (one comparison); −∞ is caught by the floor below.
         #[allow(clippy::neg_cmp_op_on_partial_ord)]
-        if !(tau < tau0) {
+        if !(rho < F::ONE) {
             return None;
         }
-        if tau < self.tau_floor {
+        if rho < self.rho_floor {
             return None;
         }
-        let drop = |tau: F| {
-            if tau0 > F::ZERO {
-                F::ONE - tau / tau0
-            } else {
-                F::ONE
-            }
-        };
-        if tau <= self.tau_sat {
+        if rho <= self.rho_sat {
             // Past the aligning torque's sign change: near the force peak or in deep sliding,
             // where the trail no longer tells where on the (falling) force curve the tyre is.
             // The middle of the f range seen there, and how wide it is.
             let [f, f_spread] = self.sat;
             return Some(Inversion {
                 f,
-                df_dtau: F::ZERO,
-                drop: drop(tau.max(pts.get(last)?.1)),
+                df_drho: F::ZERO,
                 saturated: true,
                 f_spread,
             });
         }
-        // The k with τ_k > τ ≥ τ_k+1 (unique: τ strictly decreases over the usable points,
-        // τ_0 > τ > τ_last), walking from the hint: down while τ_k ≤ τ (k > 0 there, as
-        // τ_0 > τ), up while τ_k+1 > τ (k + 1 < last there, as τ_last < τ). At most `POINTS`
-        // steps.
-        let mut k = (*hint).min(last - 1);
-        for _ in 0..POINTS {
-            let (a, b) = (pts.get(k)?.1, pts.get(k + 1)?.1);
-            if a <= tau {
-                k = k.saturating_sub(1);
-            } else if b > tau {
-                k += 1;
-            } else {
-                break;
-            }
-        }
-        *hint = k;
-        let ((f0, t0), (f1, t1)) = (*pts.get(k)?, *pts.get(k + 1)?);
-        let slope = (f1 - f0) / (t1 - t0); // t1 < t0 strictly
+        // ρ > ρ_sat ≥ ρ of the grid's last node: the cell lies on the grid (a cell past it,
+        // from rounding, reads the same line: the nodes past the grid continue it).
+        let (f0, f1) = (*self.f.get(at.cell)?, *self.f.get(at.cell + 1)?);
+        let df = f1 - f0;
         Some(Inversion {
-            f: f0 + (tau - t0) * slope,
-            df_dtau: slope,
-            drop: drop(tau),
+            f: f0 + at.frac * df,
+            df_drho: -df * F::from_index(RHO_CELLS as u16),
             saturated: false,
             f_spread: F::ZERO,
         })
+    }
+
+    /// [`Curve::read`] at ρ placed on the grid here.
+    pub fn invert(&self, rho: F) -> Option<Inversion<F>> {
+        self.read(&RhoAt::new(rho))
     }
 }
 
@@ -540,14 +591,11 @@ fn curve<F: Float, M: Backend<F>>(
             nr += 1;
         }
     }
-    // One array: the rising branch right-aligned before `RISE`, the usable part from it.
-    let mut points = [(F::ZERO, F::ZERO); RISE + POINTS];
-    points
-        .get_mut(RISE - nr..RISE)?
+    // The rising branch right-aligned, as the curve holds it.
+    let mut rise_r = [(F::ZERO, F::ZERO); RISE];
+    rise_r
+        .get_mut(RISE - nr..)?
         .copy_from_slice(rise.get(..nr)?);
-    points
-        .get_mut(RISE..RISE + n)?
-        .copy_from_slice(kept.get(..n)?);
     let [neg_lo, neg_hi] = neg;
     let (f_end, tau_end) = *kept.get(n - 1)?;
     let (lo, hi) = if neg_hi > F::ZERO {
@@ -555,23 +603,45 @@ fn curve<F: Float, M: Backend<F>>(
     } else {
         (f_end, f_end)
     };
-    let tau0 = kept[0].1;
+    let tau0 = kept.first()?.1; // > 0: the largest trail, `best`
+                                // The usable part on the ρ grid: linear between the slip-angle nodes (the segment k with
+                                // τ_k ≥ τ0·ρᵢ ≥ τ_k+1), up to the first node at or beyond its end, which lies on the last
+                                // segment's line.
+    let mut f = [F::ZERO; RHO_POINTS];
+    let mut len = 0;
+    let mut k = 0;
+    for (i, slot) in f.iter_mut().enumerate() {
+        let tau_i = tau0 * (F::ONE - F::from_index(i as u16) * F::from_f64(1.0 / RHO_CELLS as f64));
+        while k + 2 < n && kept.get(k + 1)?.1 > tau_i {
+            k += 1;
+        }
+        let ((f0, t0), (f1, t1)) = (*kept.get(k)?, *kept.get(k + 1)?);
+        *slot = f0 + (tau_i - t0) * ((f1 - f0) / (t1 - t0));
+        if len == 0 && tau_i <= tau_end {
+            len = i + 1; // the grid's last node; the ones past it continue the last segment
+        }
+    }
+    if len == 0 {
+        len = RHO_POINTS; // the usable part reaches below ρ = 0
+    }
+    let tau_sat = if neg_hi > F::ZERO {
+        tau_end.max(F::ZERO)
+    } else {
+        tau_end
+    };
     let mut c = Curve {
-        points,
-        len: n as u8,
+        f,
+        rise: rise_r,
+        tau0,
         sat: [F::HALF * (hi + lo), F::HALF * (hi - lo)],
-        tau_sat: if neg_hi > F::ZERO {
-            tau_end.max(F::ZERO)
-        } else {
-            tau_end
-        },
-        tau_floor: tau_end - F::from_f64(0.25) * tau0.abs(),
+        rho_sat: tau_sat / tau0,
+        rho_floor: tau_end / tau0 - F::from_f64(0.25),
+        len: len as u8,
         rise_len: nr as u8,
         peak: 0,
     };
-    let both = c.points.get(RISE - nr..RISE + n)?;
     let mut peak = 1;
-    while peak < nr + n && both.get(peak)?.0 > both.get(peak - 1)?.0 {
+    while peak < nr + len && c.point(peak)?.0 > c.point(peak - 1)?.0 {
         peak += 1;
     }
     c.peak = peak as u8;

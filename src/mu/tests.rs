@@ -412,8 +412,9 @@ fn building_in_place_equals_building_by_value() {
     );
 }
 
-/// `tau_at` walks a curve by force: at each tabulated point it returns that point's trail,
-/// below the first point the first trail, and beyond the curve's force peak nothing.
+/// `tau_at` walks a curve by force: at each point (rising branch, then the ρ grid) it returns
+/// that point's trail, below the first point the first trail, and beyond the curve's force
+/// peak nothing; `tau_at_from` gives the same from any search hint.
 #[test]
 fn tau_at_walks_the_curve_by_force() {
     let p = tyre();
@@ -423,13 +424,8 @@ fn tau_at_walks_the_curve_by_force() {
     for si in 0..LAMBDA_NODES.len() {
         for side in 0..2 {
             let cv = &t.surfaces(flat, nominal, side).unwrap()[si];
-            let rise = cv.rise();
-            let monotone = cv.usable();
-            let pts: Vec<(f64, f64)> = rise
-                .iter()
-                .copied()
-                .chain(monotone.iter().copied())
-                .collect();
+            let pts: Vec<(f64, f64)> = (0..).map_while(|k| cv.point(k)).collect();
+            assert_eq!(pts.len(), cv.rise().len() + cv.len as usize);
             assert_eq!(cv.tau_at(0.0), Some(pts[0].1));
             let mut f_max = 0.0;
             for &(f, tau) in &pts {
@@ -441,6 +437,15 @@ fn tau_at_walks_the_curve_by_force() {
                 assert!((got - tau).abs() < 1e-12, "λ node {si} side {side} f {f}");
             }
             assert_eq!(cv.tau_at(f_max * 1.01), None, "beyond the peak force");
+            // A search hint changes nothing but the cost, between the points too.
+            for k in 0..400 {
+                let f = f_max * 1.02 * k as f64 / 400.0;
+                let want = cv.tau_at(f);
+                for start in 0..table::RHO_POINTS + 2 {
+                    let mut h = start;
+                    assert_eq!(cv.tau_at_from(f, &mut h), want, "f {f} from {start}");
+                }
+            }
         }
     }
 }
@@ -604,10 +609,11 @@ fn fixed_point_estimator_reads_what_f64_reads() {
     assert!(worst < 1e-4, "{worst}");
 }
 
-/// `Curve::invert` gives the same inversion from every starting segment (the hint only saves
-/// work), the one a plain scan of the curve gives, and nothing for τ that is NaN or infinite.
+/// `Curve::read` interpolates the grid node pair around ρ (ρᵢ ≥ ρ > ρᵢ₊₁) linearly, as a plain
+/// scan of the grid finds it; gives the saturated reading at and below `rho_sat`; and nothing
+/// for ρ ≥ 1, below the floor, NaN or infinite.
 #[test]
-fn invert_is_independent_of_the_hint() {
+fn read_interpolates_the_grid() {
     let p = tyre();
     let t = GoughTable::for_tyre::<Libm>(&p).unwrap();
     let mut checked = 0;
@@ -615,50 +621,41 @@ fn invert_is_independent_of_the_hint() {
         for j in 0..LOAD_NODES.len() {
             for side in 0..2 {
                 for (si, c) in t.surfaces(g, j, side).unwrap().iter().enumerate() {
-                    for x in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
-                        assert_eq!(c.invert(x, &mut 3), None, "τ = {x}");
+                    let at = |i: usize| 1.0 - i as f64 / table::RHO_CELLS as f64;
+                    for x in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY, 1.0, 1.5] {
+                        assert_eq!(c.invert(x), None, "ρ = {x}");
                     }
                     let n = c.len as usize;
                     if n < 2 {
+                        assert_eq!(c.invert(0.5), None, "empty curve");
                         continue;
                     }
-                    let pts = c.usable();
-                    let (hi, lo) = (pts[0].1, pts[n - 1].1);
-                    for k in 1..40 {
-                        let tau = lo + (hi - lo) * k as f64 / 40.0;
-                        let mut h0 = 0;
-                        let want = c.invert(tau, &mut h0);
-                        for start in 0..table::POINTS + 2 {
-                            let mut h = start;
-                            assert_eq!(
-                                c.invert(tau, &mut h),
-                                want,
-                                "γ {g} load {j} side {side} λ {si}"
-                            );
-                            if want.is_some_and(|i| !i.saturated) {
-                                assert_eq!(h, h0, "segment found from {start}");
-                            }
-                        }
-                        // Against a plain scan from the curve's start: the segment with
-                        // τ_k > τ ≥ τ_k+1, interpolated linearly.
-                        if let Some(i) = want.filter(|i| !i.saturated) {
-                            let k = (0..n - 1)
-                                .find(|&k| pts[k].1 > tau && tau >= pts[k + 1].1)
-                                .expect("an interior τ lies on a segment");
-                            assert_eq!(h0, k);
-                            let ((f0, t0), (f1, t1)) = (pts[k], pts[k + 1]);
-                            assert_eq!(i.f, f0 + (tau - t0) * ((f1 - f0) / (t1 - t0)));
-                        }
-                        checked += usize::from(want.is_some_and(|i| !i.saturated));
+                    assert_eq!(c.invert(c.rho_floor - 1e-9), None);
+                    let sat = c.invert(c.rho_sat).unwrap();
+                    assert!(sat.saturated && sat.f == c.sat[0] && sat.f_spread == c.sat[1]);
+                    // The grid's last node lies at or beyond the usable part's end.
+                    assert!(at(n - 1) <= c.rho_sat + 1e-12, "γ {g} load {j} λ {si}");
+                    for k in 1..200 {
+                        let rho = c.rho_sat + (1.0 - c.rho_sat) * k as f64 / 200.0;
+                        let i = (0..n - 1)
+                            .find(|&i| at(i) >= rho && rho > at(i + 1))
+                            .expect("an interior ρ lies in a cell");
+                        let (f0, f1) = (c.f[i], c.f[i + 1]);
+                        let w = (at(i) - rho) * table::RHO_CELLS as f64;
+                        let r = c.invert(rho).unwrap();
+                        assert!(!r.saturated);
+                        assert!(
+                            (r.f - (f0 + w * (f1 - f0))).abs() < 1e-12,
+                            "γ {g} load {j} side {side} λ {si} ρ {rho}"
+                        );
+                        assert_eq!(r.df_drho, -(f1 - f0) * table::RHO_CELLS as f64);
+                        checked += 1;
                     }
                 }
             }
         }
     }
-    assert!(
-        checked > 5_000,
-        "only {checked} interior inversions checked"
-    );
+    assert!(checked > 50_000, "only {checked} interior readings checked");
 }
 
 /// The early exit on the trail drop (taken before any curve is searched) turns away exactly the
