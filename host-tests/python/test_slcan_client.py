@@ -211,7 +211,9 @@ def main():
             send(ID_MEASUREMENT, measurement(w, 1000 * (k + 1), fz, -1000.0, 10.0, vx, al, ka))
             while True:
                 t, body = rx.recv()
-                if t == T_FORCES:
+                # Skip a late answer to a readiness probe (wheel 0, t_us 0): the device may
+                # answer the status request before the measurement sent just ahead of it.
+                if t == T_FORCES and decode_forces(body)[:2] != (0, 0):
                     break
             wheel, t_us, fx, fy, mz, flags = decode_forces(body)
             ex = expected[k]
