@@ -531,7 +531,7 @@ impl<'t, F: Float> MuEstimator<'t, F> {
         // drop 1 − τ/τ0 the reading shows on it: the estimate's drop lies between two of
         // these (it is one surface's, or interpolated between two), so a reading whose drop is
         // short of `trail_drop_min` on every surface is not identifiable whatever the curves
-        // say — decided here, before any curve is searched. (The margin covers the rounding of
+        // say — decided here, before any curve is read. (The margin covers the rounding of
         // that interpolation: no reading the full test would accept is turned away.)
         let mut tau0s = [F::ZERO; table::LAMBDA_NODES.len()];
         // (From 0: with a `trail_drop_min` ≤ 0 nothing is decided here.)

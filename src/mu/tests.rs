@@ -658,7 +658,7 @@ fn read_interpolates_the_grid() {
     assert!(checked > 50_000, "only {checked} interior readings checked");
 }
 
-/// The early exit on the trail drop (taken before any curve is searched) turns away exactly the
+/// The early exit on the trail drop (taken before any curve is read) turns away exactly the
 /// readings the full test would: over steady-state points on every surface, at loads, slips
 /// (side, braked) and cambers between the table's nodes, the estimator with the default
 /// `trail_drop_min` reads a point iff the one with no drop threshold reads it with a drop of at
