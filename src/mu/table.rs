@@ -89,6 +89,13 @@ pub const RHO_CELLS: usize = 32;
 /// Nodes of the trail-ratio grid.
 pub const RHO_POINTS: usize = RHO_CELLS + 1;
 
+/// ρ at position `x` along the grid (node i at x = i): 1 − x/[`RHO_CELLS`]; the inverse of
+/// [`RhoAt::new`]'s position.
+#[inline]
+fn grid_rho<F: Float>(x: F) -> F {
+    F::ONE - x * F::from_f64(1.0 / RHO_CELLS as f64)
+}
+
 impl<F: Float> Curve<F> {
     /// A curve with no usable point.
     pub const fn empty() -> Self {
@@ -119,10 +126,10 @@ impl<F: Float> Curve<F> {
         let nr = self.rise_len as usize;
         match k.checked_sub(nr) {
             None => self.rise.get(RISE - nr + k).copied(),
-            Some(i) if i < self.len as usize => {
-                let rho = F::ONE - F::from_index(i as u16) * F::from_f64(1.0 / RHO_CELLS as f64);
-                Some((*self.f.get(i)?, self.tau0 * rho))
-            }
+            Some(i) if i < self.len as usize => Some((
+                *self.f.get(i)?,
+                self.tau0 * grid_rho(F::from_index(i as u16)),
+            )),
             Some(_) => None,
         }
     }
@@ -379,7 +386,7 @@ impl<F: Float> Curve<F> {
         *hint = i;
         let (fa, fb) = (*grid.get(i.checked_sub(1)?)?, *grid.get(i)?);
         let cells = F::from_index(i as u16 - 1) + (f - fa) / (fb - fa);
-        Some(self.tau0 * (F::ONE - cells * F::from_f64(1.0 / RHO_CELLS as f64)))
+        Some(self.tau0 * grid_rho(cells))
     }
 
     /// Inverts ρ = τ/τ0 → f (`at` from [`RhoAt::new`]). `None` when ρ is not below 1 (the trail
@@ -611,7 +618,7 @@ fn curve<F: Float, M: Backend<F>>(
     let mut len = 0;
     let mut k = 0;
     for (i, slot) in f.iter_mut().enumerate() {
-        let tau_i = tau0 * (F::ONE - F::from_index(i as u16) * F::from_f64(1.0 / RHO_CELLS as f64));
+        let tau_i = tau0 * grid_rho(F::from_index(i as u16));
         while k + 2 < n && kept.get(k + 1)?.1 > tau_i {
             k += 1;
         }
