@@ -21,12 +21,16 @@ pub const EMPTY: Measurement = Measurement {
     gamma: None,
 };
 
-/// A slalom at 20 m/s sampled at 1 kHz (`out.len()` samples; the bench takes 1 s): α = 0.1 rad·sin(2π·1 Hz·t), Fz = Fz0·(1 + 0.15·sin), light
+/// A slalom at 20 m/s sampled at 1 kHz (`out.len()` samples; the bench takes 1 s) on a road of
+/// friction `mu` (λμx = λμy = `mu`: 1 is the tyre's own test surface): α = 0.1 rad·sin(2π·1 Hz·t), Fz = Fz0·(1 + 0.15·sin), light
 /// braking κ = −0.02·sin², roll camber γ = `camber`·sin, sent when `camber` ≠ 0 (then γ lies
 /// between the table's camber nodes: the estimator interpolates over twice the curves; without
 /// γ the estimator takes its static camber 0, a node); "measured" Fx, Fy, Mz = the f32 Magic
 /// Formula plus noise (uniform: Mz ±3.5 N·m ≈ 2 N·m rms, Fy ±1.7 % Fz ≈ 1 % rms).
-pub fn slalom(p: &Params<f32>, camber: f32, out: &mut [Measurement]) {
+pub fn slalom(p: &Params<f32>, mu: f32, camber: f32, out: &mut [Measurement]) {
+    let mut road = p.clone();
+    road.lmuy = p.lmuy * mu;
+    road.lmux = p.lmux * mu;
     let mut x = 0x2545_f491u32;
     let mut rnd = || {
         x ^= x << 13;
@@ -48,7 +52,7 @@ pub fn slalom(p: &Params<f32>, camber: f32, out: &mut [Measurement]) {
             vx: 20.0,
             p: None,
         };
-        let (fx, fy, mz) = match mf::eval::<f32, Libm>(p, &input, &Options::default()) {
+        let (fx, fy, mz) = match mf::eval::<f32, Libm>(&road, &input, &Options::default()) {
             Ok(o) => (o.fx, o.fy, o.mz),
             Err(_) => (0.0, 0.0, 0.0),
         };

@@ -296,7 +296,7 @@ pub fn test_all(passed: &mut u64) -> Result<(), String> {
     ]))?;
     report_size("stm32f405 stm32f4", &elf("stm32f4"))?;
     *passed += 1;
-    step("bench: instructions on the M4F (QEMU -icount shift=0): combined MF evaluation; estimator and per-wheel pipeline per sample; table build");
+    step("bench: instructions on the M4F (QEMU -icount shift=6): combined MF evaluation; estimator and per-wheel pipeline per sample (dry, wet, icy road); table build");
     run(fw_cargo().args([
         "build",
         "--release",
@@ -307,7 +307,7 @@ pub fn test_all(passed: &mut u64) -> Result<(), String> {
     ]))?;
     let (code, out) = qemu(
         &elf("bench"),
-        &["-icount", "shift=0"],
+        &["-icount", "shift=6"],
         Duration::from_secs(300),
     )?;
     print!("{out}");

@@ -1,15 +1,16 @@
 //! Instruction counts of the combined-slip Magic Formula on the Cortex-M4F, under QEMU with
-//! `-icount shift=0` (one instruction = 1 ns of virtual time; SysTick counts the 25 MHz core
-//! clock, i.e. one count per 40 instructions, calibrated below on a loop of known length).
+//! `-icount shift=6` (one instruction = 64 ns of virtual time; SysTick counts the 25 MHz core
+//! clock, i.e. 1.6 counts per instruction, calibrated below on a loop of known length: a sample
+//! timed alone is counted to the instruction; with `shift=0` a count is 40 instructions).
 //!
 //! Each workload is bracketed by `bench_start`/`bench_stop`: exported, never inlined, with
 //! distinct bodies, so an outside instruction counter (a QEMU plugin, a debugger) can check
 //! the figures. Printed: instructions per evaluation, and the largest error against the f64
 //! path over the same inputs; then, per wheel per sample, the friction estimator alone and the
 //! firmware's whole per-wheel pipeline (transient filter + Magic Formula + estimator), each with
-//! `Fast` and `Libm`, on a 1 kHz slalom with sensor noise: the mean over the stream (one
-//! bracket) and the worst sample (each sample timed alone: ±40 instructions); the cost of
-//! building the estimator's table, and the RAM.
+//! `Fast` and `Libm`, on 1 kHz slaloms with sensor noise on a dry, a wet and an icy road: the
+//! mean over the stream (one bracket) and the worst sample (each sample timed alone); the cost
+//! of building the estimator's table, and the RAM.
 #![no_std]
 #![no_main]
 
@@ -107,7 +108,7 @@ fn run<M: Backend<f32>>(
 
 /// Instructions per call of each kernel of backend `M` (mean over 256 arguments spread over the
 /// ranges the Magic Formula uses), less the loop's own cost.
-fn kernels<M: Backend<f32>>(name: &str) {
+fn kernels<M: Backend<f32>>(name: &str, per_count: f64) {
     const K: usize = 256;
     let mut xs = [0f32; K];
     for (i, x) in xs.iter_mut().enumerate() {
@@ -123,7 +124,7 @@ fn kernels<M: Backend<f32>>(name: &str) {
         now() - t0
     };
     let base = time(&|x| x) as f64;
-    let per = |c: u64| ((c as f64 - base) * 40.0 / K as f64) as u32;
+    let per = |c: u64| ((c as f64 - base) * per_count / K as f64 + 0.5) as u32;
     hprintln!(
         "kernels, {}: instructions per call: sin {} cos {} tan {} atan {} exp {} ln {} sqrt {}",
         name,
@@ -343,7 +344,7 @@ fn main() -> ! {
         line("fast", run::<gough::math::Fast>(id + 2, &p32, &p64, &opts));
     }
     #[cfg(feature = "fast")]
-    kernels::<gough::math::Fast>("fast");
+    kernels::<gough::math::Fast>("fast", per_count);
     #[cfg(not(feature = "micromath"))]
     hprintln!(
         "micromath: not built (firmware feature `micromath` needs gough's `micromath` backend)"
@@ -418,17 +419,27 @@ fn main() -> ! {
     } else {
         None
     };
-    for (k, (camber, what)) in [
+    // Streams: the slalom on the tyre's own surface (λμ 1) with and without camber; then on a
+    // wet and an icy road, where the estimate sits on the lower surfaces of the table and the
+    // ambiguity guard checks the grippier ones (the estimator's costliest path).
+    for (k, (camber, mu, what)) in [
         (
             0.02,
-            "camber measured (roll, ±0.02 rad: between table nodes)",
+            1.0,
+            "λμ 1 (dry), camber measured (roll, ±0.02 rad: between table nodes)",
         ),
-        (0.0, "no camber in the message (static 0: a table node)"),
+        (
+            0.0,
+            1.0,
+            "λμ 1 (dry), no camber in the message (static 0: a table node)",
+        ),
+        (0.02, 0.5, "λμ 0.5 (wet), camber measured"),
+        (0.02, 0.2, "λμ 0.2 (ice), camber measured"),
     ]
     .into_iter()
     .enumerate()
     {
-        workload::slalom(&p32, camber, stream);
+        workload::slalom(&p32, mu, camber, stream);
         hprintln!("stream: 1 s slalom at 1 kHz, noise; {}", what);
         let id = 30 + 10 * k as u32;
         estimator_figures::<app::Math>(

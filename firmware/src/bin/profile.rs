@@ -87,7 +87,7 @@ fn main() -> ! {
     let Ok(t) = app::build_table(&job, slot) else {
         mps2::exit(false)
     };
-    workload::slalom(&p32, 0.02, stream);
+    workload::slalom(&p32, 1.0, 0.02, stream);
     let cfg = gough_firmware::wheel::estimator_config(&Settings::default());
     let seen = estimator_stream(MuEstimator::for_tyre(t, p, cfg), stream);
     mps2::exit(failed == 0 && acc.is_finite() && seen > 0)
