@@ -4,7 +4,8 @@
 //! 1. One combined Fx, Fy, Mz evaluation (`Options::moments` off): the 256 evaluations of the
 //!    bench's grid in the first `bench_start`/`bench_stop` bracket.
 //! 2. The friction estimator per wheel per sample (`MuEstimator::update`): the bench's 1 s
-//!    slalom with measured camber (1,000 samples) in the second bracket.
+//!    slalom with measured camber (1,000 samples) in the second bracket, on the dry road (λμ 1);
+//!    the same on the icy road (λμ 0.2) in the third, where the ambiguity test costs most.
 //!
 //! The profiler counts the instructions QEMU executes in a bracket (`-d exec,in_asm`), then maps
 //! them to source lines with the debug info. Everything else (parsing the `.tir`, building the
@@ -15,6 +16,8 @@
 //! $ python3 ../tools/qemu_profile.py target/thumbv7em-none-eabihf/release/profile --per 256
 //! $ python3 ../tools/qemu_profile.py target/thumbv7em-none-eabihf/release/profile \
 //!     --bracket 2 --only 'gough::mu::' --per 1000
+//! $ python3 ../tools/qemu_profile.py target/thumbv7em-none-eabihf/release/profile \
+//!     --bracket 3 --only 'gough::mu::' --per 1000
 //! ```
 //! (`--only` keeps the log to the estimator's functions: the table build before the bracket
 //! would otherwise log about 1.5 GB.)
@@ -87,23 +90,26 @@ fn main() -> ! {
     let Ok(t) = app::build_table(&job, slot) else {
         mps2::exit(false)
     };
-    workload::slalom(&p32, 1.0, 0.02, stream);
     let cfg = gough_firmware::wheel::estimator_config(&Settings::default());
-    let seen = estimator_stream(MuEstimator::for_tyre(t, p, cfg), stream);
-    mps2::exit(failed == 0 && acc.is_finite() && seen > 0)
+    let mut seen = [0u32; 2];
+    for (k, mu) in [1.0, 0.2].into_iter().enumerate() {
+        workload::slalom(&p32, mu, 0.02, stream);
+        seen[k] = estimator_stream(2 + k as u32, MuEstimator::for_tyre(t, p, cfg), stream);
+    }
+    mps2::exit(failed == 0 && acc.is_finite() && seen.iter().all(|&n| n > 0))
 }
 
-/// The second bracket: `MuEstimator::update` over the stream, in a function of its own so that
+/// Bracket `id`: `MuEstimator::update` over the stream, in a function of its own so that
 /// `qemu_profile.py --only` can keep the log to it. Returns the identifiable samples.
 #[inline(never)]
-fn estimator_stream(mut est: MuEstimator<'_, f32>, stream: &[Measurement]) -> u32 {
+fn estimator_stream(id: u32, mut est: MuEstimator<'_, f32>, stream: &[Measurement]) -> u32 {
     let mut seen = 0u32;
-    bench_start(2);
+    bench_start(id);
     for m in stream {
         let s = gough_firmware::wheel::sample(m, m.t_us as f32 / 1.0e6);
         let e = est.update::<Fast>(core::hint::black_box(&s));
         seen += u32::from(e.state == gough::mu::State::Identifiable);
     }
-    bench_stop(2);
+    bench_stop(id);
     seen
 }
