@@ -323,7 +323,7 @@ pub fn test_all(passed: &mut u64) -> Result<(), String> {
 /// The Cortex-M0 bench (`firmware-m0/`, QEMU microbit): flash of each configuration, then both
 /// workloads in one run.
 fn bench_m0() -> Result<(), String> {
-    step("bench: instructions on the M0 (QEMU microbit, -icount shift=0): combined MF evaluation, soft-float f32 (math::Fast) vs Q31.32 fixed point; flash of each");
+    step("bench: instructions on the M0 (QEMU microbit, -icount shift=0): combined MF evaluation and transient-filter step, soft-float f32 (math::Fast) vs Q31.32 fixed point; flash of each");
     let dir = root().join("firmware-m0");
     let elf = dir.join("target/thumbv6m-none-eabi/release/bench");
     let m0_cargo = || {

@@ -1,5 +1,6 @@
-//! Instruction counts of the combined-slip Magic Formula on a Cortex-M0 without FPU (QEMU's
-//! `microbit`, an nRF51822), soft-float f32 with `math::Fast` against Q31.32 fixed point
+//! Instruction counts of the combined-slip Magic Formula and of one transient-filter step on a
+//! Cortex-M0 without FPU (QEMU's `microbit`, an nRF51822), soft-float f32 with `math::Fast`
+//! against Q31.32 fixed point
 //! (`fixed::Fix` + `fixed::FixMath`), under QEMU with `-icount shift=0`: one instruction = 1 ns
 //! of virtual time, SysTick counts the 16 MHz core clock (about 62.5 instructions per count),
 //! calibrated below on a loop of known length, as in `firmware/src/bin/bench.rs`.
@@ -171,6 +172,55 @@ fn run<F: Float, M: Backend<F>>(id: u32, p: &Params<F>, overhead: u64) -> (u64, 
     (counts, ef, em, failed)
 }
 
+/// Workload `id`: the transient-slip filter alone (`relax::Transient::step`, eq. 20 exact over
+/// the step, eq. 21), one 1 ms step per point as one wheel's 1 kHz stream: kinematics Vsx = κ·Vx,
+/// Vsy = tan α·Vx and the relaxation lengths the Magic Formula gives at the point, all computed
+/// before the clock starts. Returns (SysTick counts less the timer's cost, failed steps, the last
+/// tan α' as a check).
+#[inline(never)]
+fn filter<F: Float, M: Backend<F>>(id: u32, p: &Params<F>, overhead: u64) -> (u64, usize, f64) {
+    use gough::relax::{Config, Kinematics, Sigma, Transient};
+    let cfg = Config::from_params(p);
+    let dt = F::from_f64(1e-3);
+    let opts = Options {
+        moments: false,
+        ..Options::default()
+    };
+    let mut state = Transient::new(F::ZERO);
+    let (mut counts, mut failed, mut last) = (0u64, 0usize, 0f64);
+    bench_start(id);
+    for base in (0..N).step_by(B) {
+        let ins: [(Kinematics<F>, Sigma<F>); B] = core::array::from_fn(|j| {
+            let x = input::<F>(base + j);
+            let sigma = mf::eval::<F, M>(p, &x, &opts).map_or(Sigma::default(), |o| Sigma {
+                sigma_kappa: o.sigma_x,
+                sigma_alpha: o.sigma_y,
+            });
+            let kin = Kinematics {
+                vx: x.vx,
+                vsx: x.kappa * x.vx,
+                vsy: M::tan(x.alpha) * x.vx,
+            };
+            (kin, sigma)
+        });
+        let mut out = [None; B];
+        let t0 = now();
+        for ((k, s), o) in ins.iter().zip(out.iter_mut()) {
+            *o = state.step::<M>(&cfg, dt, core::hint::black_box(k), s).ok();
+        }
+        let t1 = now();
+        counts += (t1 - t0).saturating_sub(overhead);
+        for o in out.iter() {
+            match o {
+                Some(sl) if sl.alpha.to_f64().is_finite() => last = sl.alpha.to_f64(),
+                _ => failed += 1,
+            }
+        }
+    }
+    bench_stop(id);
+    (counts, failed, last)
+}
+
 fn report(name: &str, per_count: f64, (c, ef, em, failed): (u64, f64, f64, usize)) -> bool {
     hprintln!(
         "{}: {} instructions per combined Fx, Fy, Mz evaluation (mean over {} points); max error vs f64: forces {:.3e} N, Mz {:.3e} N m; failed {}",
@@ -196,11 +246,22 @@ fn params<F: Float>() -> Params<F> {
     p
 }
 
-/// One workload in a frame of its own (main's stays small: 16 KiB of RAM): parameters, run.
+/// One workload in a frame of its own (main's stays small: 16 KiB of RAM): parameters, the
+/// Magic Formula, then the filter.
 #[inline(never)]
 fn workload<F: Float, M: Backend<F>>(id: u32, name: &str, per_count: f64, overhead: u64) -> bool {
     let p = params::<F>();
-    report(name, per_count, run::<F, M>(id, &p, overhead))
+    let ok = report(name, per_count, run::<F, M>(id, &p, overhead));
+    let (c, failed, last) = filter::<F, M>(id + 10, &p, overhead);
+    hprintln!(
+        "{}: {} instructions per transient-filter step (relax::Transient::step, mean over {} steps); failed {}; last α' {:.4} rad",
+        name,
+        (c as f64 * per_count / N as f64) as u32,
+        N,
+        failed,
+        last
+    );
+    ok && failed == 0
 }
 
 #[entry]
