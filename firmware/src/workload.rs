@@ -22,7 +22,8 @@ pub const EMPTY: Measurement = Measurement {
 };
 
 /// A slalom at 20 m/s sampled at 1 kHz (`out.len()` samples; the bench takes 1 s) on a road of
-/// friction `mu` (λμx = λμy = `mu`: 1 is the tyre's own test surface): α = 0.1 rad·sin(2π·1 Hz·t), Fz = Fz0·(1 + 0.15·sin), light
+/// friction `mu` (λμx = λμy = `mu` times the file's: 1 is the tyre's own test surface):
+/// α = 0.1 rad·sin(2π·1 Hz·t), Fz = Fz0·(1 + 0.15·sin), light
 /// braking κ = −0.02·sin², roll camber γ = `camber`·sin, sent when `camber` ≠ 0 (then γ lies
 /// between the table's camber nodes: the estimator interpolates over twice the curves; without
 /// γ the estimator takes its static camber 0, a node); "measured" Fx, Fy, Mz = the f32 Magic

@@ -176,7 +176,7 @@ fn run<F: Float, M: Backend<F>>(id: u32, p: &Params<F>, overhead: u64) -> (u64, 
 /// the step, eq. 21), one 1 ms step per point as one wheel's 1 kHz stream: kinematics Vsx = κ·Vx,
 /// Vsy = tan α·Vx and the relaxation lengths the Magic Formula gives at the point, all computed
 /// before the clock starts. Returns (SysTick counts less the timer's cost, failed steps, the last
-/// tan α' as a check).
+/// α' \[rad\] as a check).
 #[inline(never)]
 fn filter<F: Float, M: Backend<F>>(id: u32, p: &Params<F>, overhead: u64) -> (u64, usize, f64) {
     use gough::relax::{Config, Kinematics, Sigma, Transient};
