@@ -240,7 +240,7 @@ impl core::fmt::Display for BuildError {
 impl core::error::Error for BuildError {}
 
 /// One wheel's estimator: a few words of state and a reference to the tyre's shared
-/// [`GoughTable`] (about 93 KB in f32, built once per tyre and side). No allocation.
+/// [`GoughTable`] (about 121 KB in f32, built once per tyre and side). No allocation.
 ///
 /// ```
 /// use gough::{math::Libm, mu::{Config, GoughTable, MuEstimator, Sample, State}};
@@ -304,7 +304,7 @@ impl<F: Float> GoughTable<F> {
         GoughTable::build::<M>(Model::Mf(tyre), mounted).ok_or(BuildError::NoGoughCurve)
     }
 
-    /// [`GoughTable::for_wheel`] in place (no 93 KB temporary on the stack).
+    /// [`GoughTable::for_wheel`] in place (no 121 KB temporary on the stack).
     pub fn for_wheel_into<M: Backend<F>>(
         &mut self,
         tyre: &Params<F>,
@@ -607,29 +607,9 @@ impl<'t, F: Float> MuEstimator<'t, F> {
                     return None;
                 }
             }
-            let f_m = force / s.fz;
-            for (si, est) in ests.iter().enumerate().rev() {
-                let lam_k = *self.table.lam.get(si)?;
-                let Some(k) = est else { continue };
-                if lam_k <= e.lambda || lam_k - e.lambda <= cfg.ambiguity_margin {
-                    continue;
-                }
-                // The grippier curve's trail at the measured force (interpolated like the
-                // table); a curve that never reaches this force cannot hold the point.
-                let (mut tk, mut wsum) = (F::ZERO, F::ZERO);
-                let mut hint = 0;
-                for &(cs, wt) in reading.active() {
-                    if let Some(x) = cs.get(si).and_then(|c| c.tau_at_from(f_m, &mut hint)) {
-                        tk += wt * x;
-                        wsum += wt;
-                    }
-                }
-                if wsum > F::HALF {
-                    let var_k = var_tau + var_tau_model(k.tau0);
-                    if (tau - tk / wsum).sq() <= cfg.ambiguity_sigmas.sq() * var_k {
-                        return None;
-                    }
-                }
+            let var_k = |tau0: F| var_tau + var_tau_model(tau0);
+            if self.held_by_grippier(&reading, &ests, e.lambda, var_k) {
+                return None;
             }
         }
         let e = pick?;
@@ -659,6 +639,65 @@ impl<'t, F: Float> MuEstimator<'t, F> {
             var: var_meas + var_model,
             drop: e.drop,
         })
+    }
+
+    /// The ambiguity guard's trail test (see [`MuEstimator::raw`]): whether a surface grippier
+    /// than the estimate `lambda` by more than `ambiguity_margin` holds the reading within
+    /// `ambiguity_sigmas` standard deviations (`var_k`: the trail's variance on a curve whose
+    /// small-slip trail is τ0). Out of line: the dry road, where nothing is grippier, does not
+    /// pay for it.
+    #[inline(never)]
+    fn held_by_grippier(
+        &self,
+        reading: &Reading<'_, F>,
+        ests: &[Option<NodeEst<F>>; table::LAMBDA_NODES.len()],
+        lambda: F,
+        var_k: impl Fn(F) -> F,
+    ) -> bool {
+        let cfg = &self.cfg;
+        let (tau, f_m) = (reading.tau, reading.force / reading.fz);
+        for (si, (est, &lam_k)) in ests.iter().zip(&self.table.lam).enumerate().rev() {
+            let Some(k) = est else { continue };
+            if lam_k <= lambda || lam_k - lambda <= cfg.ambiguity_margin {
+                continue;
+            }
+            // The grippier curve's trail at the measured force (interpolated like the
+            // table); a curve that never reaches this force cannot hold the point. First
+            // its bounds, from each curve's force cell (no search): they decide the test
+            // unless the measured trail lies near them; only then are the curves searched
+            // (same outcome either way: the bounds enclose the look-up with a margin).
+            let (mut lo, mut hi, mut wsum) = (F::ZERO, F::ZERO, F::ZERO);
+            for &(cs, wt) in reading.active() {
+                if let Some((l, h)) = cs.get(si).and_then(|c| c.tau_band(f_m)) {
+                    lo += wt * l;
+                    hi += wt * h;
+                    wsum += wt;
+                }
+            }
+            if wsum <= F::HALF {
+                continue;
+            }
+            let tol_sq = cfg.ambiguity_sigmas.sq() * var_k(k.tau0);
+            let (lo, hi) = (lo / wsum, hi / wsum);
+            if (tau > hi && (tau - hi).sq() > tol_sq) || (tau < lo && (lo - tau).sq() > tol_sq) {
+                continue; // apart from every trail the curve can have here
+            }
+            if (tau - lo).sq() <= tol_sq && (hi - tau).sq() <= tol_sq {
+                return true; // within the tolerance of all of them
+            }
+            let (mut tk, mut wsum) = (F::ZERO, F::ZERO);
+            let mut hint = 0;
+            for &(cs, wt) in reading.active() {
+                if let Some(x) = cs.get(si).and_then(|c| c.tau_at_from(f_m, &mut hint)) {
+                    tk += wt * x;
+                    wsum += wt;
+                }
+            }
+            if wsum > F::HALF && (tau - tk / wsum).sq() <= tol_sq {
+                return true;
+            }
+        }
+        false
     }
 
     /// Processes one sample and returns the current estimate. Non-finite or out-of-order samples

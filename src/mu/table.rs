@@ -11,7 +11,9 @@
 //!
 //! Each curve is evaluated at 20 slip angles and then held as f against the trail ratio
 //! ρ = τ/τ0 on a uniform grid (linear between the slip-angle points), so that a reading finds its
-//! place on every curve by one multiplication instead of a search.
+//! place on every curve by one multiplication instead of a search. The ambiguity test's look-up
+//! the other way, τ at a force, is first bounded from 8 force cells per curve, also without a
+//! search ([`Curve::tau_band`]).
 
 use crate::brush::Brush;
 use crate::math::{Backend, Float};
@@ -82,7 +84,20 @@ pub struct Curve<F> {
     /// ([`Curve::point`]) over which f strictly increases: the points before the curve's force
     /// peak, where [`Curve::tau_at`] searches.
     pub peak: u8,
+    /// f at the curve's force peak (the last point of [`Curve::tau_at`]'s range; 0 for an
+    /// empty curve) \[-\].
+    pub f_top: F,
+    /// [`BAND_CELLS`]/`f_top`: a force's cell of `band` (0 for an empty curve).
+    pub band_scale: F,
+    /// Bounds \[m\] of [`Curve::tau_at`] over each of [`BAND_CELLS`] equal cells of f from 0
+    /// to `f_top` (cell i: f·`band_scale` in \[i, i + 1\], padded by 1/1024 of a cell), widened
+    /// by a margin far above the rounding of the look-up: the ambiguity test decides most readings from these alone,
+    /// without a search (see [`Curve::tau_band`]).
+    pub band: [[F; 2]; BAND_CELLS],
 }
+
+/// Cells of a [`Curve`]'s trail bounds against force.
+pub const BAND_CELLS: usize = 8;
 
 /// Cells of the trail-ratio grid of a [`Curve`]: ρ from 1 down to 0 in steps of 1/32.
 pub const RHO_CELLS: usize = 32;
@@ -109,6 +124,9 @@ impl<F: Float> Curve<F> {
             len: 0,
             rise_len: 0,
             peak: 0,
+            f_top: F::ZERO,
+            band_scale: F::ZERO,
+            band: [[F::ZERO; 2]; BAND_CELLS],
         }
     }
 
@@ -148,7 +166,7 @@ pub enum Model<'a, F> {
 }
 
 /// The tabulated Gough curves: 7 cambers × 4 surfaces × 7 loads × 2 sides, each f at 33 trail
-/// ratios plus its rising branch: about 93 KB in f32. Built once per tyre (and mounting side) and
+/// ratios plus its rising branch and its trail bounds over 8 force cells: about 121 KB in f32. Built once per tyre (and mounting side) and
 /// shared by the estimators of the wheels on that side.
 #[derive(Debug, Clone)]
 pub struct GoughTable<F> {
@@ -218,7 +236,7 @@ impl<F: Float> GoughTable<F> {
         }
     }
 
-    /// [`GoughTable::build`] into an existing table, in place: no 93 KB temporary on the stack
+    /// [`GoughTable::build`] into an existing table, in place: no 121 KB temporary on the stack
     /// (what a device needs). On `None` the slot holds a partial table: rebuild or zero it.
     pub fn build_into<M: Backend<F>>(
         slot: &mut Self,
@@ -324,6 +342,23 @@ impl<F: Float> RhoAt<F> {
 }
 
 impl<F: Float> Curve<F> {
+    /// Bounds (lo, hi) of [`Curve::tau_at`]`(f)` from the cell of `band` holding `f`, with no
+    /// search: `None` exactly where `tau_at` gives `None` (f beyond the force peak or NaN, an
+    /// empty curve).
+    #[inline]
+    pub fn tau_band(&self, f: F) -> Option<(F, F)> {
+        // f ≤ f_top, NaN excluded; f < 0 reads cell 0, where the trail is the first point's,
+        // as in `tau_at`. (An empty curve has no peak.)
+        #[allow(clippy::neg_cmp_op_on_partial_ord)]
+        if !(f <= self.f_top) || self.peak == 0 {
+            return None;
+        }
+        let [lo, hi] = *self
+            .band
+            .get((f * self.band_scale).floor_index(BAND_CELLS - 1))?;
+        Some((lo, hi))
+    }
+
     /// The trail where the curve's force is `f`: along the rising branch and then the
     /// grid, up to the curve's force peak (linear in f between points; below the first point,
     /// that point's trail). `None` when f lies beyond the curve's peak force — no point of
@@ -646,11 +681,45 @@ fn curve<F: Float, M: Backend<F>>(
         len: len as u8,
         rise_len: nr as u8,
         peak: 0,
+        f_top: F::ZERO,
+        band_scale: F::ZERO,
+        band: [[F::ZERO; 2]; BAND_CELLS],
     };
     let mut peak = 1;
     while peak < nr + len && c.point(peak)?.0 > c.point(peak - 1)?.0 {
         peak += 1;
     }
     c.peak = peak as u8;
+    // The trail's bounds per force cell: `tau_at` is linear between the points before the
+    // peak (constant below the first), so its extremes over a cell lie at the cell's ends or
+    // at a point inside it.
+    let f_top = c.point(peak - 1)?.0;
+    if f_top > F::ZERO {
+        let width = f_top * F::from_f64(1.0 / BAND_CELLS as f64);
+        let mut band = [[F::ZERO; 2]; BAND_CELLS];
+        for (i, slot) in band.iter_mut().enumerate() {
+            // The cell, widened by 1/1024 of its width on either side: a force the look-up
+            // places in it by a rounded product lies within.
+            let pad = width * F::from_f64(1.0 / 1024.0);
+            let fa = (width * F::from_index(i as u16) - pad).max(F::ZERO);
+            let fb = (width * F::from_index(i as u16 + 1) + pad).min(f_top);
+            let (ta, tb) = (c.tau_at(fa)?, c.tau_at(fb)?);
+            let (mut lo, mut hi) = (ta.min(tb), ta.max(tb));
+            for k in 0..peak {
+                let (fk, tk) = c.point(k)?;
+                if fk > fa && fk < fb {
+                    lo = lo.min(tk);
+                    hi = hi.max(tk);
+                }
+            }
+            // The margin: far above the look-up's rounding (and the weighted sums' in the
+            // test), far below the test's tolerance (≥ 2 % of τ0).
+            let eps = F::from_f64(1e-4);
+            *slot = [lo - eps * (lo.abs() + tau0), hi + eps * (hi.abs() + tau0)];
+        }
+        c.f_top = f_top;
+        c.band_scale = F::from_index(BAND_CELLS as u16) / f_top;
+        c.band = band;
+    }
     Some(c)
 }

@@ -450,6 +450,43 @@ fn tau_at_walks_the_curve_by_force() {
     }
 }
 
+/// `tau_band` bounds `tau_at` on every curve of the table, in f64 and f32, at forces across
+/// each cell and at its edges (where a rounded product picks the cell), and is `None` exactly
+/// where `tau_at` is: so the ambiguity test's decisions from the bounds are the look-up's.
+#[test]
+fn tau_band_encloses_tau_at() {
+    fn check<F: Float + core::fmt::Debug>(t: &GoughTable<F>) -> usize {
+        let mut n = 0;
+        for cv in t.curves.iter().flatten().flatten().flatten() {
+            let top = cv.f_top.to_f64();
+            let mut fs: Vec<f64> = (0..=1100).map(|k| top * k as f64 / 1000.0 - 0.01).collect();
+            for i in 0..=table::BAND_CELLS {
+                let edge = top * i as f64 / table::BAND_CELLS as f64;
+                fs.extend([edge * (1.0 - 1e-7), edge, edge * (1.0 + 1e-7)]);
+            }
+            fs.extend([f64::NAN, f64::INFINITY, 2.0]);
+            for f in fs {
+                let f = F::from_f64(f);
+                let (band, at) = (cv.tau_band(f), cv.tau_at(f));
+                assert_eq!(band.is_some(), at.is_some(), "f {f:?} top {top}");
+                if let (Some((lo, hi)), Some(x)) = (band, at) {
+                    assert!(
+                        lo <= x && x <= hi,
+                        "f {f:?}: {x:?} outside [{lo:?}, {hi:?}]"
+                    );
+                    n += 1;
+                }
+            }
+        }
+        n
+    }
+    let p = tyre();
+    let n64 = check(&GoughTable::for_tyre::<Libm>(&p).unwrap());
+    let p32 = p.cast::<f32>();
+    let n32 = check(&GoughTable::<f32>::for_tyre::<Libm>(&p32).unwrap());
+    assert!(n64 > 300_000 && n32 > 300_000, "{n64} {n32} points bounded");
+}
+
 /// A sensor 10× better than the default noise: each reading's own σ is small, so readings from
 /// another surface are outliers rather than informative.
 fn confident() -> Config<f64> {
