@@ -31,7 +31,7 @@
 //! holds). The prior is `Settings::fallback_mu`.
 use gough::math::Backend;
 use gough::mf::{self, Input, Options, Output, Params};
-use gough::mu::{self, GoughTable, MuEstimator, Sample};
+use gough::mu::{self, GoughTable, MuEstimator};
 use gough::proto::{AckCode, Estimate, EstimateState, Forces, Measurement, Settings};
 use gough::relax::{self, DampingSpeed, Kinematics, Sigma, Transient};
 
@@ -313,7 +313,7 @@ impl<'t> Wheel<'t> {
         self.est.as_ref()?;
         let t = self.time(m.t_us);
         let est = self.est.as_mut()?;
-        let e = est.update::<M>(&sample(m, t));
+        let e = est.update::<M>(&m.sample(t));
         let state = match e.state {
             mu::State::Identifiable => EstimateState::Identifiable,
             mu::State::NotIdentifiable => EstimateState::NotIdentifiable,
@@ -329,19 +329,5 @@ impl<'t> Wheel<'t> {
             },
             e.change,
         ))
-    }
-}
-
-/// What the estimator reads of a measurement frame taken at `t` \[s\] on the wheel's clock (the
-/// frame's forces, speed and camber; ISO-W, SI).
-pub fn sample(m: &Measurement, t: f32) -> Sample<f32> {
-    Sample {
-        t,
-        fz: m.fz,
-        fy: m.fy,
-        mz: m.mz,
-        fx: m.fx,
-        vx: m.vx,
-        gamma: m.gamma,
     }
 }

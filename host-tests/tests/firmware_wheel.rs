@@ -5,7 +5,7 @@ use gough::math::Fast;
 use gough::mf::{self, Input, Options, Params};
 use gough::mu::{self, GoughTable, MuEstimator};
 use gough::proto::{AckCode, EstimateState, Measurement, Settings, Wheel as WheelId};
-use gough_host::replay::wheel::{effective_radius, estimator_config, sample, Wheel};
+use gough_host::replay::wheel::{effective_radius, estimator_config, Wheel};
 
 fn tyre() -> Params<f32> {
     let text = include_str!("../data/tyres/MagicFormula61_Parameters.tir");
@@ -195,7 +195,7 @@ fn the_estimate_is_the_core_estimator_on_the_measured_forces() {
     let mut identifiable = 0;
     for m in &log {
         let (e, _) = w.estimate::<Fast>(m).unwrap();
-        let d = direct.update::<Fast>(&sample(m, m.t_us as f32 / 1e6));
+        let d = direct.update::<Fast>(&m.sample(m.t_us as f32 / 1e6));
         assert_eq!((e.mu, e.sigma), (d.mu, d.sigma), "t_us {}", m.t_us);
         assert_eq!(
             e.state == EstimateState::Identifiable,

@@ -9,6 +9,7 @@
 use super::crc::crc32;
 use super::{Error, PROTO_VERSION};
 use crate::mf::{Input, Params};
+use crate::mu::Sample;
 use core::fmt;
 use postcard::experimental::max_size::MaxSize;
 use serde::de::DeserializeOwned;
@@ -167,6 +168,21 @@ impl Measurement {
             vx: self.vx.unwrap_or(p.longvl),
             p: None,
         })
+    }
+
+    /// What the friction estimator reads of this sample, taken at `t` \[s\] on the wheel's
+    /// clock: the forces, speed and camber (ISO-W, SI; never α or κ). Device and host both use
+    /// this.
+    pub fn sample(&self, t: f32) -> Sample<f32> {
+        Sample {
+            t,
+            fz: self.fz,
+            fy: self.fy,
+            mz: self.mz,
+            fx: self.fx,
+            vx: self.vx,
+            gamma: self.gamma,
+        }
     }
 }
 

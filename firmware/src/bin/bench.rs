@@ -232,7 +232,7 @@ fn estimator_figures<M: Backend<f32>>(
         stream,
         || MuEstimator::for_tyre(t, p, cfg),
         |est, m| {
-            let s = gough_firmware::wheel::sample(m, m.t_us as f32 / 1.0e6);
+            let s = m.sample(m.t_us as f32 / 1.0e6);
             est.update::<M>(&s).state
         },
     );

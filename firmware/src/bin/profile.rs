@@ -106,7 +106,7 @@ fn estimator_stream(id: u32, mut est: MuEstimator<'_, f32>, stream: &[Measuremen
     let mut seen = 0u32;
     bench_start(id);
     for m in stream {
-        let s = gough_firmware::wheel::sample(m, m.t_us as f32 / 1.0e6);
+        let s = m.sample(m.t_us as f32 / 1.0e6);
         let e = est.update::<Fast>(core::hint::black_box(&s));
         seen += u32::from(e.state == gough::mu::State::Identifiable);
     }
