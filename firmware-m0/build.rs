@@ -1,12 +1,94 @@
 //! Puts `memory.x` (nRF51822) where cortex-m-rt's `link.x` finds it, and computes the f64
 //! reference outputs (Fx, Fy, Mz) of the bench's points on the host: `mf::eval::<f64, Libm>` on
 //! the bundled MF 6.1 tyre, written to `$OUT_DIR/reference.rs` with the tyre's parameters as
-//! `gough::tir::parse` reads them (f64; the bench casts them at boot).
-use gough::math::Libm;
+//! `gough::tir::parse` reads them (f64; the bench casts them at boot); and the friction
+//! estimator's f32 table for that tyre as a `static` (`$OUT_DIR/estimator.rs`, in flash), with
+//! the outcome the estimator must reproduce on the M0 for each bench stream.
+use gough::math::{Fast, Libm};
 use gough::mf::{self, Input, Options};
+use gough::mu::{table::Curve, Config, GoughTable, MuEstimator};
 use std::{env, fmt::Write as _, fs, path::PathBuf};
 
 include!("src/points.rs");
+include!("src/streams.rs");
+
+/// The firmware's bench workloads (the slalom streams), shared with `firmware/`.
+#[allow(dead_code)]
+#[path = "../firmware/src/workload.rs"]
+mod workload;
+
+/// An f32 as a literal of its bits (exact, NaN and infinities included).
+fn b(x: f32) -> String {
+    format!("b(0x{:08x})", x.to_bits())
+}
+
+fn list(xs: impl IntoIterator<Item = String>) -> String {
+    format!("[{}]", xs.into_iter().collect::<Vec<_>>().join(", "))
+}
+
+fn curve(c: &Curve<f32>) -> String {
+    format!(
+        "gough::mu::table::Curve {{ f: {}, rise: {}, tau0: {}, sat: {}, rho_sat: {}, rho_floor: {}, len: {}, rise_len: {}, peak: {}, f_top: {}, band_scale: {}, band: {} }}",
+        list(c.f.iter().map(|&x| b(x))),
+        list(c.rise.iter().map(|&(f, t)| format!("({}, {})", b(f), b(t)))),
+        b(c.tau0),
+        list(c.sat.iter().map(|&x| b(x))),
+        b(c.rho_sat),
+        b(c.rho_floor),
+        c.len,
+        c.rise_len,
+        c.peak,
+        b(c.f_top),
+        b(c.band_scale),
+        list(c.band.iter().map(|x| list(x.iter().map(|&v| b(v))))),
+    )
+}
+
+/// The estimator's f32 table as a `static` (Rust source), and the expected outcome of each
+/// stream: a hash of every estimate (μ, σ, state) the estimator gives on the host, which the
+/// device must reproduce bit for bit (IEEE f32 on both, no FMA contraction).
+fn estimator(p: &gough::mf::Params<f64>) -> String {
+    let p32 = p.cast::<f32>();
+    let t = GoughTable::<f32>::for_tyre::<Fast>(&p32).expect("a usable Gough table");
+    let mut s = String::from(
+        "/// The friction estimator's table for the bundled tyre, built on the host by build.rs\n\
+         /// (`GoughTable::<f32>::for_tyre::<math::Fast>`), in flash.\n\
+         pub static TABLE: gough::mu::GoughTable<f32> = gough::mu::GoughTable {\n",
+    );
+    let curves = list(t.curves.iter().map(|g| {
+        list(
+            g.iter()
+                .map(|j| list(j.iter().map(|side| list(side.iter().map(curve))))),
+        )
+    }));
+    writeln!(
+        s,
+        "    fz: {},\n    lam: {},\n    cam: {},\n    curves: {},\n    fy_sign: {},\n    mu0: {},\n    mu_ratio: {},\n    mirrored: {},\n}};",
+        list(t.fz.iter().map(|&x| b(x))),
+        list(t.lam.iter().map(|&x| b(x))),
+        list(t.cam.iter().map(|&x| b(x))),
+        curves,
+        b(t.fy_sign),
+        b(t.mu0),
+        b(t.mu_ratio),
+        t.mirrored
+    )
+    .expect("write");
+    s.push_str("/// Expected (hash, identifiable samples, last μ bits) per stream of [`STREAMS`].\npub static EXPECT: [(u32, u32, u32); STREAMS.len()] = [\n");
+    for &(mu, camber, _) in STREAMS.iter() {
+        let mut est = MuEstimator::for_tyre(&t, &p32, Config::default());
+        let (mut h, mut seen, mut last) = (HASH0, 0u32, 0u32);
+        for m in workload::Slalom::new(&p32, mu, camber).take(SAMPLES) {
+            let e = est.update::<Fast>(&m.sample(m.t_us as f32 / 1.0e6));
+            h = hash(h, &e);
+            seen += u32::from(e.state == gough::mu::State::Identifiable);
+            last = e.mu.to_bits();
+        }
+        writeln!(s, "    (0x{h:08x}, {seen}, 0x{last:08x}),").expect("write");
+    }
+    s.push_str("];\n");
+    s
+}
 
 fn lit(x: f64) -> String {
     if x.is_finite() {
@@ -64,8 +146,19 @@ fn main() {
     }
     s.push_str("];\n");
     fs::write(out.join("reference.rs"), s).expect("write reference.rs");
+    fs::write(
+        out.join("estimator.rs"),
+        format!(
+            "#[allow(clippy::all)]\nconst fn b(x: u32) -> f32 {{\n    f32::from_bits(x)\n}}\n{}",
+            estimator(&p)
+        ),
+    )
+    .expect("write estimator.rs");
     println!("cargo:rerun-if-changed={}", tir_path.display());
     println!("cargo:rerun-if-changed=memory.x");
     println!("cargo:rerun-if-changed=src/points.rs");
+    println!("cargo:rerun-if-changed=src/streams.rs");
+    println!("cargo:rerun-if-changed=../firmware/src/workload.rs");
+    println!("cargo:rerun-if-changed=../src");
     println!("cargo:rerun-if-changed=build.rs");
 }

@@ -25,6 +25,16 @@ use gough::mf::{self, Input, Options, Params};
 
 include!("../points.rs");
 include!(concat!(env!("OUT_DIR"), "/reference.rs"));
+#[cfg(feature = "mu")]
+include!("../streams.rs");
+#[cfg(feature = "mu")]
+include!(concat!(env!("OUT_DIR"), "/estimator.rs"));
+
+/// The firmware's bench workloads (the slalom streams), shared with `firmware/`.
+#[cfg(feature = "mu")]
+#[allow(dead_code)]
+#[path = "../../../firmware/src/workload.rs"]
+mod workload;
 
 static WRAPS: AtomicU32 = AtomicU32::new(0);
 const RELOAD: u32 = 0x00FF_FFFF;
@@ -221,6 +231,53 @@ fn filter<F: Float, M: Backend<F>>(id: u32, p: &Params<F>, overhead: u64) -> (u6
     (counts, failed, last)
 }
 
+/// Workload `id`: the friction estimator (`MuEstimator::update`, soft-float f32, `math::Fast`)
+/// over each of [`STREAMS`], on the table build.rs placed in flash, each sample timed alone
+/// (SysTick at ~62.5 instructions per count: ±62 per sample, exact on the mean); the stream is
+/// generated between the samples, outside the clock. Every estimate is hashed and compared with
+/// the host's: the M0 must reproduce them bit for bit. Returns whether all streams matched.
+#[cfg(feature = "mu")]
+#[inline(never)]
+fn estimator(id: u32, per_count: f64, overhead: u64) -> bool {
+    use gough::math::Fast;
+    use gough::mu::{Config, MuEstimator, State};
+    let p = params::<f32>();
+    let mut ok = true;
+    for (k, (&(mu, camber, name), &(want, want_seen, want_last))) in
+        STREAMS.iter().zip(EXPECT.iter()).enumerate()
+    {
+        let mut est = MuEstimator::for_tyre(&TABLE, &p, Config::default());
+        let (mut sum, mut worst, mut h, mut seen, mut last) = (0u64, 0u64, HASH0, 0u32, 0u32);
+        bench_start(id + k as u32);
+        for m in workload::Slalom::new(&p, mu, camber).take(SAMPLES) {
+            let s = m.sample(m.t_us as f32 / 1.0e6);
+            let t0 = now();
+            let e = est.update::<Fast>(core::hint::black_box(&s));
+            let t1 = now();
+            let c = (t1 - t0).saturating_sub(overhead);
+            sum += c;
+            worst = worst.max(c);
+            h = hash(h, &e);
+            seen += u32::from(e.state == State::Identifiable);
+            last = e.mu.to_bits();
+        }
+        bench_stop(id + k as u32);
+        let same = (h, seen, last) == (want, want_seen, want_last);
+        hprintln!(
+            "M0 soft-float f32, math::Fast: estimator (MuEstimator::update), {}: {} instructions per wheel per sample (mean over {} samples; worst sample {}, ±62); {} identifiable; last μ {:.4}; estimates {} the host's",
+            name,
+            (sum as f64 * per_count / SAMPLES as f64) as u32,
+            SAMPLES,
+            (worst as f64 * per_count) as u32,
+            seen,
+            f32::from_bits(last),
+            if same { "identical to" } else { "DIFFER from" }
+        );
+        ok &= same && seen > 0;
+    }
+    ok
+}
+
 fn report(name: &str, per_count: f64, (c, ef, em, failed): (u64, f64, f64, usize)) -> bool {
     hprintln!(
         "{}: {} instructions per combined Fx, Fy, Mz evaluation (mean over {} points); max error vs f64: forces {:.3e} N, Mz {:.3e} N m; failed {}",
@@ -311,15 +368,20 @@ fn main() -> ! {
             overhead,
         );
     }
+    #[cfg(feature = "mu")]
+    {
+        ok &= estimator(30, per_count, overhead);
+    }
     #[cfg(feature = "fix")]
     {
         use gough::fixed::{Fix, FixMath};
         ok &= workload::<Fix, FixMath>(2, "M0 Q31.32 fixed::Fix + FixMath", per_count, overhead);
     }
     hprintln!(
-        "stack peak {} bytes of 16384 RAM; Params<f32> {} bytes",
+        "stack peak {} bytes of 16384 RAM; Params<f32> {} bytes; MuEstimator<f32> {} bytes (its table in flash)",
         stack_peak(),
-        core::mem::size_of::<Params<f32>>()
+        core::mem::size_of::<Params<f32>>(),
+        core::mem::size_of::<gough::mu::MuEstimator<'static, f32>>()
     );
     exit(ok)
 }
