@@ -15,7 +15,6 @@ use crate::csvio::{self, CsvError};
 use crate::device::Device;
 use gough::math::{Backend, Fast, Libm};
 use gough::mf::Params;
-use gough::mu::GoughTable;
 use gough::proto::{
     AckCode, Command, Estimate, EstimateState, Forces, Measurement, Msg, MsgType, Settings, Wheel,
 };
@@ -202,7 +201,7 @@ pub fn host_f32(p: &Params<f32>, log: &[Measurement], backend: Backend32) -> Vec
 
 fn run<M: Backend<f32>>(p: &Params<f32>, log: &[Measurement]) -> Vec<Reply> {
     let settings = Settings::default();
-    let table = GoughTable::for_tyre::<M>(p).ok().map(Box::new);
+    let table = crate::mu::table::<f32, M>(p, None).ok();
     let mut wheels: [wheel::Wheel<'_>; 4] = Default::default();
     if let Some(t) = table.as_deref() {
         for w in &mut wheels {

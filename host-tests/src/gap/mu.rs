@@ -30,7 +30,7 @@ use super::sim::{Mods, Out, Sim};
 use super::stats;
 use gough::math::Libm;
 use gough::mf::Params;
-use gough::mu::{Config, GoughTable, MuEstimator, Sample, State};
+use gough::mu::{Config, MuEstimator, Sample, State};
 use serde::Serialize;
 
 /// The μ verdict needs a shrink of at least this.
@@ -115,8 +115,8 @@ pub fn run_estimator(
     scale: Option<&[f64]>,
 ) -> Result<Vec<(f64, bool)>, String> {
     let gamma = stats::median(&log.gamma);
-    let table =
-        GoughTable::for_tyre::<Libm>(params).map_err(|e| format!("friction estimator: {e}"))?;
+    let table = crate::mu::table::<f64, Libm>(params, None)
+        .map_err(|e| format!("friction estimator: {e}"))?;
     let cfg = Config {
         gamma,
         ..Config::default()

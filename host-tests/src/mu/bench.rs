@@ -166,8 +166,8 @@ pub const METHODS: [&str; 3] = ["gough", "hsu-gerdes", "slip-slope"];
 /// The Gough tables of the left and right wheels: the simulation mounts the tyre on both sides
 /// (mirrored where the side differs from the file's TYRESIDE), so does the estimator.
 pub struct Tables {
-    left: GoughTable<f64>,
-    right: GoughTable<f64>,
+    left: Box<GoughTable<f64>>,
+    right: Box<GoughTable<f64>>,
 }
 
 impl Tables {
@@ -175,9 +175,8 @@ impl Tables {
     pub fn new(p: &Params<f64>) -> Result<Tables, String> {
         use gough::mf::Side;
         Ok(Tables {
-            left: GoughTable::for_wheel::<Libm>(p, Some(Side::Left)).map_err(|e| e.to_string())?,
-            right: GoughTable::for_wheel::<Libm>(p, Some(Side::Right))
-                .map_err(|e| e.to_string())?,
+            left: super::table::<f64, Libm>(p, Some(Side::Left))?,
+            right: super::table::<f64, Libm>(p, Some(Side::Right))?,
         })
     }
     /// Table of wheel `w` (fl, fr, rl, rr).

@@ -6,11 +6,24 @@ pub mod cli;
 pub mod peers;
 
 use crate::csvio;
-use gough::math::Libm;
-use gough::mf::Params;
+use gough::math::{Backend, Float, Libm};
+use gough::mf::{Params, Side};
 use gough::mu::{Config, Estimate, GoughTable, MuEstimator, Sample};
 use peers::{HsuGerdes, Row, SlipSlope};
 use std::path::Path;
+
+/// The Gough table of `p` mounted on `mounted` (`GoughTable::for_wheel_into`), built in place on
+/// the heap: an f64 table is 242 KB, and a debug build copies a value that size several times
+/// on its way out of `GoughTable::for_wheel` — enough to overflow a test thread's stack.
+pub fn table<F: Float, M: Backend<F>>(
+    p: &Params<F>,
+    mounted: Option<Side>,
+) -> Result<Box<GoughTable<F>>, String> {
+    let mut t = Box::new(GoughTable::zeroed());
+    t.for_wheel_into::<M>(p, mounted)
+        .map_err(|e| e.to_string())?;
+    Ok(t)
+}
 
 /// Which estimator.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
@@ -93,7 +106,7 @@ pub fn estimate(
     match method {
         Method::Gough => match prec {
             Precision::F64 => {
-                let table = GoughTable::for_tyre::<Libm>(p).map_err(|e| e.to_string())?;
+                let table = table::<f64, Libm>(p, None)?;
                 let mut est = MuEstimator::for_tyre(&table, p, cfg);
                 Ok(rows
                     .iter()
@@ -113,7 +126,7 @@ pub fn estimate(
             }
             Precision::F32 => {
                 let p32 = p.cast::<f32>();
-                let table = GoughTable::for_tyre::<Libm>(&p32).map_err(|e| e.to_string())?;
+                let table = table::<f32, Libm>(&p32, None)?;
                 let cfg32 = Config::<f32>::default();
                 let mut est = MuEstimator::for_tyre(&table, &p32, cfg32);
                 Ok(rows
