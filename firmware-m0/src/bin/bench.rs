@@ -1,6 +1,7 @@
 //! Instruction counts of the combined-slip Magic Formula and of one transient-filter step on a
 //! Cortex-M0 without FPU (QEMU's `microbit`, an nRF51822), soft-float f32 with `math::Fast`
-//! against Q31.32 fixed point
+//! against Q31.32 fixed point, and (feature `mu`) of the friction estimator in f32 on a table in
+//! flash
 //! (`fixed::Fix` + `fixed::FixMath`), under QEMU with `-icount shift=0`: one instruction = 1 ns
 //! of virtual time, SysTick counts the 16 MHz core clock (about 62.5 instructions per count),
 //! calibrated below on a loop of known length, as in `firmware/src/bin/bench.rs`.
