@@ -91,8 +91,8 @@ pub struct Curve<F> {
     pub band_scale: F,
     /// Bounds \[m\] of [`Curve::tau_at`] over each of [`BAND_CELLS`] equal cells of f from 0
     /// to `f_top` (cell i: f·`band_scale` in \[i, i + 1\], padded by 1/1024 of a cell), widened
-    /// by a margin far above the rounding of the look-up: the ambiguity test decides most readings from these alone,
-    /// without a search (see [`Curve::tau_band`]).
+    /// by a margin far above the rounding of the look-up: the ambiguity test decides most
+    /// readings from these alone, without a search (see [`Curve::tau_band`]).
     pub band: [[F; 2]; BAND_CELLS],
 }
 
@@ -166,8 +166,9 @@ pub enum Model<'a, F> {
 }
 
 /// The tabulated Gough curves: 7 cambers × 4 surfaces × 7 loads × 2 sides, each f at 33 trail
-/// ratios plus its rising branch and its trail bounds over 8 force cells: about 121 KB in f32. Built once per tyre (and mounting side) and
-/// shared by the estimators of the wheels on that side.
+/// ratios plus its rising branch and its trail bounds over 8 force cells: about 121 KB in f32.
+/// Built once per tyre (and mounting side) and shared by the estimators of the wheels on that
+/// side.
 #[derive(Debug, Clone)]
 pub struct GoughTable<F> {
     /// Loads of the nodes \[N\].
