@@ -90,6 +90,50 @@ fn estimator(p: &gough::mf::Params<f64>) -> String {
     s
 }
 
+/// The f64 reference of the bench's transient-filter stream (`relax::Transient::step`, one 1 ms
+/// step per point, the relaxation lengths of `mf::eval` at the point, Vsx = κ·Vx,
+/// Vsy = tan α·Vx), as the device runs it in `F`: (κ', α') per step.
+fn filter_reference(p: &gough::mf::Params<f64>) -> String {
+    use gough::relax::{Config, Kinematics, Sigma, Transient};
+    let cfg = Config::from_params(p);
+    let opts = Options {
+        moments: false,
+        ..Options::default()
+    };
+    let mut state = Transient::new(0.0);
+    let mut s = String::from(
+        "/// f64 reference (κ', α') per transient-filter step of the bench's stream, from build.rs.\npub static FILTER_REF: [[f64; 2]; N] = [\n",
+    );
+    for i in 0..N {
+        let (fz, kappa, alpha) = inputs(i);
+        let x = Input {
+            fz,
+            kappa,
+            alpha,
+            gamma: 0.0,
+            phit: 0.0,
+            vx: 16.6,
+            p: None,
+        };
+        let sigma = mf::eval::<f64, Libm>(p, &x, &opts).map_or(Sigma::default(), |o| Sigma {
+            sigma_kappa: o.sigma_x,
+            sigma_alpha: o.sigma_y,
+        });
+        let kin = Kinematics {
+            vx: x.vx,
+            vsx: x.kappa * x.vx,
+            vsy: alpha.tan() * x.vx,
+        };
+        let (k, a) = match state.step::<Libm>(&cfg, 1e-3, &kin, &sigma) {
+            Ok(sl) => (sl.kappa, sl.alpha),
+            Err(_) => (f64::NAN, f64::NAN),
+        };
+        writeln!(s, "    [{}, {}],", lit(k), lit(a)).expect("write");
+    }
+    s.push_str("];\n");
+    s
+}
+
 fn lit(x: f64) -> String {
     if x.is_finite() {
         format!("{x:?}")
@@ -128,6 +172,7 @@ fn main() {
         writeln!(s, "    [{}, {}, {}],", lit(fx), lit(fy), lit(mz)).expect("write");
     }
     s.push_str("];\n");
+    s.push_str(&filter_reference(&p));
     // The parameter set, parsed here (tir::parse needs ~8 KB of stack on thumbv6m: with the
     // Params<f64> it returns and the casts, more than the nRF51822's 16 KiB), cast at boot.
     writeln!(s, "/// The bundled tyre's version (host-parsed).\npub const VERSION: gough::mf::Version = gough::mf::Version::{:?};", p.version).expect("write");

@@ -324,7 +324,7 @@ pub fn test_all(passed: &mut u64) -> Result<(), String> {
 /// number formats in one run, then f32 with the friction estimator (table in flash; its estimates
 /// must equal the host's bit for bit).
 fn bench_m0() -> Result<(), String> {
-    step("bench: instructions on the M0 (QEMU microbit, -icount shift=0): combined MF evaluation and transient-filter step, soft-float f32 (math::Fast) vs Q31.32 fixed point; the friction estimator in f32 (table in flash); flash of each");
+    step("bench: instructions on the M0 (QEMU microbit, -icount shift=0): combined MF evaluation and transient-filter step (each checked against the f64 reference), soft-float f32 (math::Fast) vs Q31.32 fixed point; the friction estimator in f32 (table in flash); flash of each");
     let dir = root().join("firmware-m0");
     let elf = dir.join("target/thumbv6m-none-eabi/release/bench");
     let m0_cargo = || {
