@@ -1,10 +1,13 @@
-//! Puts `memory.x` (nRF51822) where cortex-m-rt's `link.x` finds it, and computes the f64
+//! Puts the memory map (`memory-microbit.x`, nRF51822; `memory-an385.x` for thumbv7m) where cortex-m-rt's `link.x` finds it as `memory.x`, and computes the f64
 //! reference outputs (Fx, Fy, Mz) of the bench's points on the host: `mf::eval::<f64, Libm>` on
 //! the bundled MF 6.1 tyre, written to `$OUT_DIR/reference.rs` with the tyre's parameters as
 //! `gough::tir::parse` reads them (f64; the bench casts them at boot); and the friction
 //! estimator's f32 table for that tyre as a `static` (`$OUT_DIR/estimator.rs`, in flash), with
 //! the outcome the estimator must reproduce on the M0 for each bench stream.
-use gough::math::{Fast, Libm};
+use gough::fixed::Fix;
+#[cfg(feature = "mu-fix")]
+use gough::fixed::FixMath;
+use gough::math::{Backend, Fast, Float, Libm};
 use gough::mf::{self, Input, Options};
 use gough::mu::{table::Curve, Config, GoughTable, MuEstimator};
 use std::{env, fmt::Write as _, fs, path::PathBuf};
@@ -17,43 +20,65 @@ include!("src/streams.rs");
 #[path = "../firmware/src/workload.rs"]
 mod workload;
 
-/// An f32 as a literal of its bits (exact, NaN and infinities included).
-fn b(x: f32) -> String {
-    format!("b(0x{:08x})", x.to_bits())
+/// A table value as a Rust literal of its bits (exact, NaN and infinities included).
+trait Lit: Copy {
+    fn lit(self) -> String;
+}
+
+impl Lit for f32 {
+    fn lit(self) -> String {
+        format!("b(0x{:08x})", self.to_bits())
+    }
+}
+
+impl Lit for Fix {
+    fn lit(self) -> String {
+        format!("x({})", self.to_bits())
+    }
 }
 
 fn list(xs: impl IntoIterator<Item = String>) -> String {
     format!("[{}]", xs.into_iter().collect::<Vec<_>>().join(", "))
 }
 
-fn curve(c: &Curve<f32>) -> String {
+fn curve<F: Lit>(c: &Curve<F>) -> String {
     format!(
         "gough::mu::table::Curve {{ f: {}, rise: {}, tau0: {}, sat: {}, rho_sat: {}, rho_floor: {}, len: {}, rise_len: {}, peak: {}, f_top: {}, band_scale: {}, band: {} }}",
-        list(c.f.iter().map(|&x| b(x))),
-        list(c.rise.iter().map(|&(f, t)| format!("({}, {})", b(f), b(t)))),
-        b(c.tau0),
-        list(c.sat.iter().map(|&x| b(x))),
-        b(c.rho_sat),
-        b(c.rho_floor),
+        list(c.f.iter().map(|&x| x.lit())),
+        list(c.rise.iter().map(|&(f, t)| format!("({}, {})", f.lit(), t.lit()))),
+        c.tau0.lit(),
+        list(c.sat.iter().map(|&x| x.lit())),
+        c.rho_sat.lit(),
+        c.rho_floor.lit(),
         c.len,
         c.rise_len,
         c.peak,
-        b(c.f_top),
-        b(c.band_scale),
-        list(c.band.iter().map(|x| list(x.iter().map(|&v| b(v))))),
+        c.f_top.lit(),
+        c.band_scale.lit(),
+        list(c.band.iter().map(|x| list(x.iter().map(|&v| v.lit())))),
     )
 }
 
-/// The estimator's f32 table as a `static` (Rust source), and the expected outcome of each
-/// stream: a hash of every estimate (μ, σ, state) the estimator gives on the host, which the
-/// device must reproduce bit for bit (IEEE f32 on both, no FMA contraction).
-fn estimator(p: &gough::mf::Params<f64>) -> String {
-    let p32 = p.cast::<f32>();
-    let t = GoughTable::<f32>::for_tyre::<Fast>(&p32).expect("a usable Gough table");
-    let mut s = String::from(
+/// The estimator's table in `F` as a `static` named `name` (Rust source), and the expected
+/// outcome of each stream (`expect`): a hash of every estimate (μ, σ, state) the estimator
+/// gives on the host, which the device must reproduce bit for bit (IEEE f32 on both with no FMA
+/// contraction; Q31.32 is integer arithmetic).
+fn estimator<F: Float + Lit + Feed, M: Backend<F>>(
+    p: &gough::mf::Params<f64>,
+    name: &str,
+    expect: &str,
+    how: &str,
+) -> String {
+    let pf = p.cast::<F>();
+    // On the heap: the Q31.32 table is 242 KB.
+    let mut t = Box::new(GoughTable::<F>::zeroed());
+    t.for_wheel_into::<M>(&pf, None)
+        .expect("a usable Gough table");
+    let ty = core::any::type_name::<F>();
+    let mut s = format!(
         "/// The friction estimator's table for the bundled tyre, built on the host by build.rs\n\
-         /// (`GoughTable::<f32>::for_tyre::<math::Fast>`), in flash.\n\
-         pub static TABLE: gough::mu::GoughTable<f32> = gough::mu::GoughTable {\n",
+         /// (`{how}`), in flash.\n\
+         pub static {name}: gough::mu::GoughTable<{ty}> = gough::mu::GoughTable {{\n",
     );
     let curves = list(t.curves.iter().map(|g| {
         list(
@@ -64,25 +89,26 @@ fn estimator(p: &gough::mf::Params<f64>) -> String {
     writeln!(
         s,
         "    fz: {},\n    lam: {},\n    cam: {},\n    curves: {},\n    fy_sign: {},\n    mu0: {},\n    mu_ratio: {},\n    mirrored: {},\n}};",
-        list(t.fz.iter().map(|&x| b(x))),
-        list(t.lam.iter().map(|&x| b(x))),
-        list(t.cam.iter().map(|&x| b(x))),
+        list(t.fz.iter().map(|&x| x.lit())),
+        list(t.lam.iter().map(|&x| x.lit())),
+        list(t.cam.iter().map(|&x| x.lit())),
         curves,
-        b(t.fy_sign),
-        b(t.mu0),
-        b(t.mu_ratio),
+        t.fy_sign.lit(),
+        t.mu0.lit(),
+        t.mu_ratio.lit(),
         t.mirrored
     )
     .expect("write");
-    s.push_str("/// Expected (hash, identifiable samples, last μ bits) per stream of [`STREAMS`].\npub static EXPECT: [(u32, u32, u32); STREAMS.len()] = [\n");
+    writeln!(s, "/// Expected (hash, identifiable samples, last μ hash) per stream of [`STREAMS`].\npub static {expect}: [(u32, u32, u32); STREAMS.len()] = [").expect("write");
+    let p32 = p.cast::<f32>();
     for &(mu, camber, _) in STREAMS.iter() {
-        let mut est = MuEstimator::for_tyre(&t, &p32, Config::default());
+        let mut est = MuEstimator::for_tyre(&t, &pf, Config::default());
         let (mut h, mut seen, mut last) = (HASH0, 0u32, 0u32);
         for m in workload::Slalom::new(&p32, mu, camber).take(SAMPLES) {
-            let e = est.update::<Fast>(&m.sample(m.t_us as f32 / 1.0e6));
+            let e = est.update::<M>(&cast_sample(&m.sample(m.t_us as f32 / 1.0e6)));
             h = hash(h, &e);
             seen += u32::from(e.state == gough::mu::State::Identifiable);
-            last = e.mu.to_bits();
+            last = e.mu.feed(HASH0);
         }
         writeln!(s, "    (0x{h:08x}, {seen}, 0x{last:08x}),").expect("write");
     }
@@ -145,7 +171,19 @@ fn lit(x: f64) -> String {
 fn main() {
     let out = PathBuf::from(env::var_os("OUT_DIR").expect("OUT_DIR"));
     let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
-    fs::copy(dir.join("memory.x"), out.join("memory.x")).expect("copy memory.x");
+    // The memory map of the machine the target runs on: the nRF51822 (QEMU `microbit`,
+    // Cortex-M0) for thumbv6m, the MPS2 AN385 (QEMU `mps2-an385`, Cortex-M3) for thumbv7m.
+    let map = match env::var("TARGET").as_deref() {
+        Ok("thumbv7m-none-eabi") => "memory-an385.x",
+        _ => "memory-microbit.x",
+    };
+    fs::copy(dir.join(map), out.join("memory.x")).expect("copy memory.x");
+    let core = if map == "memory-microbit.x" {
+        "M0"
+    } else {
+        "M3"
+    };
+    println!("cargo:rustc-env=GOUGH_CORE={core}");
     println!("cargo:rustc-link-search={}", out.display());
 
     let tir_path = dir.join("../host-tests/data/tyres/MagicFormula61_Parameters.tir");
@@ -191,16 +229,35 @@ fn main() {
     }
     s.push_str("];\n");
     fs::write(out.join("reference.rs"), s).expect("write reference.rs");
-    fs::write(
-        out.join("estimator.rs"),
-        format!(
-            "#[allow(clippy::all)]\nconst fn b(x: u32) -> f32 {{\n    f32::from_bits(x)\n}}\n{}",
-            estimator(&p)
-        ),
-    )
-    .expect("write estimator.rs");
+    // The estimator's tables, for the builds that run it: f32 (feature `mu`) and Q31.32
+    // (feature `mu-fix`: 242 KB, a Cortex-M3 with 4 MB, not the nRF51822).
+    let mut est = String::from(
+        "#[allow(dead_code)]\nconst fn b(x: u32) -> f32 {\n    f32::from_bits(x)\n}\n",
+    );
+    if cfg!(feature = "mu") {
+        est.push_str(&estimator::<f32, Fast>(
+            &p,
+            "TABLE",
+            "EXPECT",
+            "GoughTable::<f32>::for_tyre::<math::Fast>",
+        ));
+    }
+    #[cfg(feature = "mu-fix")]
+    {
+        est.push_str(
+            "#[allow(dead_code)]\nconst fn x(v: i64) -> gough::fixed::Fix {\n    gough::fixed::Fix::from_bits(v)\n}\n",
+        );
+        est.push_str(&estimator::<Fix, FixMath>(
+            &p,
+            "TABLE_FIX",
+            "EXPECT_FIX",
+            "GoughTable::<Fix>::for_tyre::<FixMath>",
+        ));
+    }
+    fs::write(out.join("estimator.rs"), est).expect("write estimator.rs");
     println!("cargo:rerun-if-changed={}", tir_path.display());
-    println!("cargo:rerun-if-changed=memory.x");
+    println!("cargo:rerun-if-changed=memory-microbit.x");
+    println!("cargo:rerun-if-changed=memory-an385.x");
     println!("cargo:rerun-if-changed=src/points.rs");
     println!("cargo:rerun-if-changed=src/streams.rs");
     println!("cargo:rerun-if-changed=../firmware/src/workload.rs");

@@ -324,7 +324,7 @@ pub fn test_all(passed: &mut u64) -> Result<(), String> {
 /// number formats in one run, then f32 with the friction estimator (table in flash; its estimates
 /// must equal the host's bit for bit).
 fn bench_m0() -> Result<(), String> {
-    step("bench: instructions on the M0 (QEMU microbit, -icount shift=0): combined MF evaluation and transient-filter step (each checked against the f64 reference), soft-float f32 (math::Fast) vs Q31.32 fixed point; the friction estimator in f32 (table in flash); flash of each");
+    step("bench: instructions on the M0 (QEMU microbit, -icount shift=0): combined MF evaluation and transient-filter step (each checked against the f64 reference), soft-float f32 (math::Fast) vs Q31.32 fixed point; the friction estimator in f32 (table in flash); flash of each; then all of them, the Q31.32 estimator too, on a Cortex-M3 (QEMU mps2-an385)");
     let dir = root().join("firmware-m0");
     let elf = dir.join("target/thumbv6m-none-eabi/release/bench");
     let m0_cargo = || {
@@ -367,6 +367,30 @@ fn bench_m0() -> Result<(), String> {
         if code != 0 {
             return Err(format!("M0 bench ({what}) exited with {code}"));
         }
+    }
+    // The same bench on a Cortex-M3 without FPU (QEMU mps2-an385, 4 MB): every workload, the
+    // Q31.32 estimator too (its 242 KB table does not fit the nRF51822).
+    run(m0_cargo().args([
+        "build",
+        "--release",
+        "--bin",
+        "bench",
+        "--target",
+        "thumbv7m-none-eabi",
+        "--features",
+        "mu,mu-fix",
+    ]))?;
+    let elf_m3 = dir.join("target/thumbv7m-none-eabi/release/bench");
+    report_size("mps2-an385 (Cortex-M3) bench, all workloads", &elf_m3)?;
+    let (code, out) = qemu_on(
+        &["-cpu", "cortex-m3", "-machine", "mps2-an385"],
+        &elf_m3,
+        &["-icount", "shift=0"],
+        Duration::from_secs(300),
+    )?;
+    print!("{out}");
+    if code != 0 {
+        return Err(format!("M3 bench exited with {code}"));
     }
     Ok(())
 }

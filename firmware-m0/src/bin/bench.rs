@@ -26,13 +26,12 @@ use gough::mf::{self, Input, Options, Params};
 
 include!("../points.rs");
 include!(concat!(env!("OUT_DIR"), "/reference.rs"));
-#[cfg(feature = "mu")]
+#[cfg(any(feature = "mu", feature = "mu-fix"))]
 include!("../streams.rs");
-#[cfg(feature = "mu")]
 include!(concat!(env!("OUT_DIR"), "/estimator.rs"));
 
 /// The firmware's bench workloads (the slalom streams), shared with `firmware/`.
-#[cfg(feature = "mu")]
+#[cfg(any(feature = "mu", feature = "mu-fix"))]
 #[allow(dead_code)]
 #[path = "../../../firmware/src/workload.rs"]
 mod workload;
@@ -262,46 +261,57 @@ impl Errors {
     }
 }
 
-/// Workload `id`: the friction estimator (`MuEstimator::update`, soft-float f32, `math::Fast`)
-/// over each of [`STREAMS`], on the table build.rs placed in flash, each sample timed alone
-/// (SysTick at ~62.5 instructions per count: ±62 per sample, exact on the mean); the stream is
-/// generated between the samples, outside the clock. Every estimate is hashed and compared with
-/// the host's: the M0 must reproduce them bit for bit. Returns whether all streams matched.
-#[cfg(feature = "mu")]
+/// Workload `id`: the friction estimator (`MuEstimator::update` in `F` with backend `M`) over
+/// each of [`STREAMS`], on a table build.rs placed in flash, each sample timed alone (SysTick:
+/// ±1 count per sample, exact on the mean); the stream is generated between the samples, outside
+/// the clock. Every estimate is hashed and compared with the host's (`expect`): the device must
+/// reproduce them bit for bit. Returns whether all streams matched.
+#[cfg(any(feature = "mu", feature = "mu-fix"))]
 #[inline(never)]
-fn estimator(id: u32, per_count: f64, overhead: u64) -> bool {
-    use gough::math::Fast;
+fn estimator<F: Float + Feed, M: Backend<F>>(
+    id: u32,
+    what: &str,
+    table: &gough::mu::GoughTable<F>,
+    expect: &[(u32, u32, u32)],
+    per_count: f64,
+    overhead: u64,
+) -> bool {
     use gough::mu::{Config, MuEstimator, State};
-    let p = params::<f32>();
+    let p = params::<F>();
+    let p32 = params::<f32>();
     let mut ok = true;
     for (k, (&(mu, camber, name), &(want, want_seen, want_last))) in
-        STREAMS.iter().zip(EXPECT.iter()).enumerate()
+        STREAMS.iter().zip(expect.iter()).enumerate()
     {
-        let mut est = MuEstimator::for_tyre(&TABLE, &p, Config::default());
-        let (mut sum, mut worst, mut h, mut seen, mut last) = (0u64, 0u64, HASH0, 0u32, 0u32);
+        let mut est = MuEstimator::for_tyre(table, &p, Config::default());
+        let (mut sum, mut worst, mut h, mut seen) = (0u64, 0u64, HASH0, 0u32);
+        let (mut last, mut last_mu) = (0u32, 0f64);
         bench_start(id + k as u32);
-        for m in workload::Slalom::new(&p, mu, camber).take(SAMPLES) {
-            let s = m.sample(m.t_us as f32 / 1.0e6);
+        for m in workload::Slalom::new(&p32, mu, camber).take(SAMPLES) {
+            let s = cast_sample::<F>(&m.sample(m.t_us as f32 / 1.0e6));
             let t0 = now();
-            let e = est.update::<Fast>(core::hint::black_box(&s));
+            let e = est.update::<M>(core::hint::black_box(&s));
             let t1 = now();
             let c = (t1 - t0).saturating_sub(overhead);
             sum += c;
             worst = worst.max(c);
             h = hash(h, &e);
             seen += u32::from(e.state == State::Identifiable);
-            last = e.mu.to_bits();
+            last = e.mu.feed(HASH0);
+            last_mu = e.mu.to_f64();
         }
         bench_stop(id + k as u32);
         let same = (h, seen, last) == (want, want_seen, want_last);
         hprintln!(
-            "M0 soft-float f32, math::Fast: estimator (MuEstimator::update), {}: {} instructions per wheel per sample (mean over {} samples; worst sample {}, ±62); {} identifiable; last μ {:.4}; estimates {} the host's",
+            "{}: estimator (MuEstimator::update), {}: {} instructions per wheel per sample (mean over {} samples; worst sample {}, ±{}); {} identifiable; last μ {:.4}; estimates {} the host's",
+            what,
             name,
             (sum as f64 * per_count / SAMPLES as f64) as u32,
             SAMPLES,
             (worst as f64 * per_count) as u32,
+            (per_count + 0.5) as u32,
             seen,
-            f32::from_bits(last),
+            last_mu,
             if same { "identical to" } else { "DIFFER from" }
         );
         ok &= same && seen > 0;
@@ -399,22 +409,46 @@ fn main() -> ! {
     {
         ok &= workload::<f32, gough::math::Fast>(
             1,
-            "M0 soft-float f32, math::Fast",
+            concat!(env!("GOUGH_CORE"), " soft-float f32, math::Fast"),
             per_count,
             overhead,
         );
     }
     #[cfg(feature = "mu")]
     {
-        ok &= estimator(30, per_count, overhead);
+        ok &= estimator::<f32, gough::math::Fast>(
+            30,
+            concat!(env!("GOUGH_CORE"), " soft-float f32, math::Fast"),
+            &TABLE,
+            &EXPECT,
+            per_count,
+            overhead,
+        );
     }
     #[cfg(feature = "fix")]
     {
         use gough::fixed::{Fix, FixMath};
-        ok &= workload::<Fix, FixMath>(2, "M0 Q31.32 fixed::Fix + FixMath", per_count, overhead);
+        ok &= workload::<Fix, FixMath>(
+            2,
+            concat!(env!("GOUGH_CORE"), " Q31.32 fixed::Fix + FixMath"),
+            per_count,
+            overhead,
+        );
+    }
+    #[cfg(feature = "mu-fix")]
+    {
+        use gough::fixed::{Fix, FixMath};
+        ok &= estimator::<Fix, FixMath>(
+            40,
+            concat!(env!("GOUGH_CORE"), " Q31.32 fixed::Fix + FixMath"),
+            &TABLE_FIX,
+            &EXPECT_FIX,
+            per_count,
+            overhead,
+        );
     }
     hprintln!(
-        "stack peak {} bytes of 16384 RAM; Params<f32> {} bytes; MuEstimator<f32> {} bytes (its table in flash)",
+        "stack peak {} bytes; Params<f32> {} bytes; MuEstimator<f32> {} bytes (its table in flash)",
         stack_peak(),
         core::mem::size_of::<Params<f32>>(),
         core::mem::size_of::<gough::mu::MuEstimator<'static, f32>>()
