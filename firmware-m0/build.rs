@@ -1,9 +1,12 @@
-//! Puts the memory map (`memory-microbit.x`, nRF51822; `memory-an385.x` for thumbv7m) where cortex-m-rt's `link.x` finds it as `memory.x`, and computes the f64
-//! reference outputs (Fx, Fy, Mz) of the bench's points on the host: `mf::eval::<f64, Libm>` on
-//! the bundled MF 6.1 tyre, written to `$OUT_DIR/reference.rs` with the tyre's parameters as
-//! `gough::tir::parse` reads them (f64; the bench casts them at boot); and the friction
-//! estimator's f32 table for that tyre as a `static` (`$OUT_DIR/estimator.rs`, in flash), with
-//! the outcome the estimator must reproduce on the M0 for each bench stream.
+//! Puts the memory map where cortex-m-rt's `link.x` finds it as `memory.x`
+//! (`memory-microbit.x`, the nRF51822, for thumbv6m; `memory-an385.x`, the MPS2 AN385, for
+//! thumbv7m), and computes on the host what the bench checks on the device: the f64 reference
+//! outputs (Fx, Fy, Mz) of the bench's points (`mf::eval::<f64, Libm>` on the bundled MF 6.1
+//! tyre) and of its transient-filter stream (κ', α'), written to `$OUT_DIR/reference.rs` with the
+//! tyre's parameters as `gough::tir::parse` reads them (f64; the bench casts them at boot); and
+//! the friction estimator's table for that tyre as a `static` in flash (`$OUT_DIR/estimator.rs`:
+//! f32 with feature `mu`, Q31.32 with `mu-fix`), with the outcome the estimator must reproduce on
+//! the device for each bench stream.
 use gough::fixed::Fix;
 #[cfg(feature = "mu-fix")]
 use gough::fixed::FixMath;
