@@ -11,7 +11,7 @@ use gough::fixed::Fix;
 #[cfg(feature = "mu-fix")]
 use gough::fixed::FixMath;
 use gough::math::{Backend, Fast, Float, Libm};
-use gough::mf::{self, Input, Options};
+use gough::mf::{self, Options};
 use gough::mu::{table::Curve, Config, GoughTable, MuEstimator};
 use std::{env, fmt::Write as _, fs, path::PathBuf};
 
@@ -134,16 +134,7 @@ fn filter_reference(p: &gough::mf::Params<f64>) -> String {
         "/// f64 reference (κ', α') per transient-filter step of the bench's stream, from build.rs.\npub static FILTER_REF: [[f64; 2]; N] = [\n",
     );
     for i in 0..N {
-        let (fz, kappa, alpha) = inputs(i);
-        let x = Input {
-            fz,
-            kappa,
-            alpha,
-            gamma: 0.0,
-            phit: 0.0,
-            vx: 16.6,
-            p: None,
-        };
+        let x = input::<f64>(i);
         let sigma = mf::eval::<f64, Libm>(p, &x, &opts).map_or(Sigma::default(), |o| Sigma {
             sigma_kappa: o.sigma_x,
             sigma_alpha: o.sigma_y,
@@ -151,7 +142,7 @@ fn filter_reference(p: &gough::mf::Params<f64>) -> String {
         let kin = Kinematics {
             vx: x.vx,
             vsx: x.kappa * x.vx,
-            vsy: alpha.tan() * x.vx,
+            vsy: x.alpha.tan() * x.vx,
         };
         let (k, a) = match state.step::<Libm>(&cfg, 1e-3, &kin, &sigma) {
             Ok(sl) => (sl.kappa, sl.alpha),
@@ -196,17 +187,7 @@ fn main() {
         .params;
     let mut s = String::from("/// f64 reference (Fx, Fy, Mz) per point, from build.rs.\npub static REF: [[f64; 3]; N] = [\n");
     for i in 0..N {
-        let (fz, kappa, alpha) = inputs(i);
-        let input = Input {
-            fz,
-            kappa,
-            alpha,
-            gamma: 0.0,
-            phit: 0.0,
-            vx: 16.6,
-            p: None,
-        };
-        let (fx, fy, mz) = match mf::eval::<f64, Libm>(&p, &input, &Options::default()) {
+        let (fx, fy, mz) = match mf::eval::<f64, Libm>(&p, &input::<f64>(i), &Options::default()) {
             Ok(o) => (o.fx, o.fy, o.mz),
             Err(_) => (f64::NAN, f64::NAN, f64::NAN),
         };

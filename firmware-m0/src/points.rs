@@ -15,3 +15,17 @@ pub fn inputs(i: usize) -> (f64, f64, f64) {
         -0.15 + 0.3 * ((i * 7 % 16) as f64 / 15.0),
     )
 }
+
+/// Point `i` as the Magic Formula's input in `F` (γ 0, Vx 16.6 m/s).
+pub fn input<F: gough::math::Float>(i: usize) -> gough::mf::Input<F> {
+    let (fz, k, a) = inputs(i);
+    gough::mf::Input {
+        fz: F::from_f64(fz),
+        kappa: F::from_f64(k),
+        alpha: F::from_f64(a),
+        gamma: F::ZERO,
+        phit: F::ZERO,
+        vx: F::from_f64(16.6),
+        p: None,
+    }
+}

@@ -131,19 +131,6 @@ fn stack_peak() -> usize {
     top - p
 }
 
-fn input<F: Float>(i: usize) -> Input<F> {
-    let (fz, k, a) = inputs(i);
-    Input {
-        fz: F::from_f64(fz),
-        kappa: F::from_f64(k),
-        alpha: F::from_f64(a),
-        gamma: F::ZERO,
-        phit: F::ZERO,
-        vx: F::from_f64(16.6),
-        p: None,
-    }
-}
-
 /// Workload `id`: the N points with scalar `F` and backend `M`. Returns (SysTick counts less the
 /// timer's cost, max |ΔFx|,|ΔFy| \[N\], max |ΔMz| \[N m\], failed evaluations).
 #[inline(never)]
