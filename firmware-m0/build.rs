@@ -15,7 +15,7 @@ use gough::mf::{self, Options};
 use gough::mu::{table::Curve, Config, GoughTable, MuEstimator};
 use std::{env, fmt::Write as _, fs, path::PathBuf};
 
-include!("src/points.rs");
+include!("../firmware/src/points.rs");
 include!("src/streams.rs");
 
 /// The firmware's bench workloads (the slalom streams), shared with `firmware/`.
@@ -242,7 +242,7 @@ fn main() {
     println!("cargo:rerun-if-changed={}", tir_path.display());
     println!("cargo:rerun-if-changed=memory-microbit.x");
     println!("cargo:rerun-if-changed=memory-an385.x");
-    println!("cargo:rerun-if-changed=src/points.rs");
+    println!("cargo:rerun-if-changed=../firmware/src/points.rs");
     println!("cargo:rerun-if-changed=src/streams.rs");
     println!("cargo:rerun-if-changed=../firmware/src/workload.rs");
     println!("cargo:rerun-if-changed=../src");

@@ -25,7 +25,7 @@ use cortex_m_semihosting::{debug, hprintln};
 use gough::math::{Backend, Float};
 use gough::mf::{self, Input, Options, Params};
 
-include!("../points.rs");
+include!("../../../firmware/src/points.rs");
 include!(concat!(env!("OUT_DIR"), "/reference.rs"));
 #[cfg(any(feature = "mu", feature = "mu-fix"))]
 include!("../streams.rs");

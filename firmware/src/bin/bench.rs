@@ -20,7 +20,7 @@ use core::sync::atomic::{AtomicU32, Ordering};
 use cortex_m::peripheral::{syst::SystClkSource, SYST};
 use cortex_m_rt::{entry, exception};
 use cortex_m_semihosting::hprintln;
-use gough::math::{Backend, Float, Libm};
+use gough::math::{Backend, Libm};
 use gough::mf::{self, Input, Options, Params};
 use gough::mu::{GoughTable, MuEstimator, State};
 use gough::proto::{Measurement, Settings};
@@ -31,8 +31,8 @@ use gough_firmware::{mps2, stack, workload};
 
 static WRAPS: AtomicU32 = AtomicU32::new(0);
 const RELOAD: u32 = 0x00FF_FFFF;
-/// Evaluations per workload.
-const N: usize = 256;
+// N, `inputs`, `input`: the grid the M0 bench measures too.
+include!("../points.rs");
 
 fn now() -> u64 {
     loop {
@@ -47,30 +47,6 @@ fn now() -> u64 {
 #[exception]
 fn SysTick() {
     WRAPS.fetch_add(1, Ordering::SeqCst);
-}
-
-fn inputs(i: usize) -> (f64, f64, f64) {
-    // A grid over the operating range: Fz 0.5..1.5 FNOMIN, kappa -0.2..0.2, alpha -0.15..0.15.
-    let a = (i % 16) as f64 / 15.0;
-    let b = ((i / 16) % 16) as f64 / 15.0;
-    (
-        6752.0 * (0.5 + a),
-        -0.2 + 0.4 * b,
-        -0.15 + 0.3 * ((i * 7 % 16) as f64 / 15.0),
-    )
-}
-
-fn input<F: Float>(i: usize) -> Input<F> {
-    let (fz, k, a) = inputs(i);
-    Input {
-        fz: F::from_f64(fz),
-        kappa: F::from_f64(k),
-        alpha: F::from_f64(a),
-        gamma: F::ZERO,
-        phit: F::ZERO,
-        vx: F::from_f64(16.6),
-        p: None,
-    }
 }
 
 /// Runs workload `id`: N f32 evaluations with backend `M`; returns (counts, max |ΔFx|,|ΔFy|, max |ΔMz|).

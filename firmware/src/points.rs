@@ -1,6 +1,6 @@
-// The measured inputs, shared by the bench (`include!`) and build.rs (the f64 reference): the
-// M4F bench's grid over the operating range, Fz 0.5..1.5 FNOMIN, kappa -0.2..0.2,
-// alpha -0.15..0.15 (gamma 0, vx 16.6 m/s).
+// The measured inputs of the Magic Formula benches, shared (`include!`) by the M4F bench, the
+// no-FPU bench (`firmware-m0/`) and its build.rs (the f64 reference): a grid over the operating
+// range, Fz 0.5..1.5 FNOMIN, kappa -0.2..0.2, alpha -0.15..0.15 (gamma 0, vx 16.6 m/s).
 
 /// Evaluations per workload.
 pub const N: usize = 256;
