@@ -240,7 +240,7 @@ impl core::fmt::Display for BuildError {
 impl core::error::Error for BuildError {}
 
 /// One wheel's estimator: a few words of state and a reference to the tyre's shared
-/// [`GoughTable`] (about 121 KB in f32, built once per tyre and side). No allocation.
+/// [`GoughTable`] (about 124 KB in f32, built once per tyre and side). No allocation.
 ///
 /// ```
 /// use gough::{math::Libm, mu::{Config, GoughTable, MuEstimator, Sample, State}};
@@ -304,7 +304,7 @@ impl<F: Float> GoughTable<F> {
         GoughTable::build::<M>(Model::Mf(tyre), mounted).ok_or(BuildError::NoGoughCurve)
     }
 
-    /// [`GoughTable::for_wheel`] in place (no 121 KB temporary on the stack).
+    /// [`GoughTable::for_wheel`] in place (no 124 KB temporary on the stack).
     pub fn for_wheel_into<M: Backend<F>>(
         &mut self,
         tyre: &Params<F>,
@@ -663,9 +663,10 @@ impl<'t, F: Float> MuEstimator<'t, F> {
             }
             // The grippier curve's trail at the measured force (interpolated like the
             // table); a curve that never reaches this force cannot hold the point. First
-            // its bounds, from each curve's force cell (no search): they decide the test
-            // unless the measured trail lies near them; only then are the curves searched
-            // (same outcome either way: the bounds enclose the look-up with a margin).
+            // its bounds, from each curve's force cell (the chord across the cell, and how far
+            // the curve strays from it; no search): they decide the test unless the measured
+            // trail lies near them; only then are the curves searched (same outcome either
+            // way: the bounds enclose the look-up with a margin).
             let (mut lo, mut hi, mut wsum) = (F::ZERO, F::ZERO, F::ZERO);
             for &(cs, wt) in reading.active() {
                 if let Some((l, h)) = cs.get(si).and_then(|c| c.tau_band(f_m)) {

@@ -12,8 +12,8 @@
 //! Each curve is evaluated at 20 slip angles and then held as f against the trail ratio
 //! ρ = τ/τ0 on a uniform grid (linear between the slip-angle points), so that a reading finds its
 //! place on every curve by one multiplication instead of a search. The ambiguity test's look-up
-//! the other way, τ at a force, is first bounded from 8 force cells per curve, also without a
-//! search ([`Curve::tau_band`]).
+//! the other way, τ at a force, is first bounded from 8 force cells per curve (the chord across
+//! a cell, and how far the curve strays from it), also without a search ([`Curve::tau_band`]).
 
 use crate::brush::Brush;
 use crate::math::{Backend, Float};
@@ -87,13 +87,16 @@ pub struct Curve<F> {
     /// f at the curve's force peak (the last point of [`Curve::tau_at`]'s range; 0 for an
     /// empty curve) \[-\].
     pub f_top: F,
-    /// [`BAND_CELLS`]/`f_top`: a force's cell of `band` (0 for an empty curve).
+    /// [`BAND_CELLS`]/`f_top`: a force's cell of the bounds (0 for an empty curve).
     pub band_scale: F,
-    /// Bounds \[m\] of [`Curve::tau_at`] over each of [`BAND_CELLS`] equal cells of f from 0
-    /// to `f_top` (cell i: f·`band_scale` in \[i, i + 1\], padded by 1/1024 of a cell), widened
-    /// by a margin far above the rounding of the look-up: the ambiguity test decides most
-    /// readings from these alone, without a search (see [`Curve::tau_band`]).
-    pub band: [[F; 2]; BAND_CELLS],
+    /// Per edge i of [`BAND_CELLS`] equal cells of f from 0 to `f_top` (edge i at
+    /// f·`band_scale` = i): \[[`Curve::tau_at`] there, how far `tau_at` strays from the chord
+    /// to the next edge over cell i\] \[m\] (the last edge's second entry is 0). The stray is
+    /// the largest over the cell padded by 1/1024 of its width, widened by a margin far above
+    /// the rounding of the look-up: chord ± stray bounds the trail at a force, and the
+    /// ambiguity test decides most readings from these alone, without a search (see
+    /// [`Curve::tau_band`]).
+    pub band: [[F; 2]; BAND_CELLS + 1],
 }
 
 /// Cells of a [`Curve`]'s trail bounds against force.
@@ -126,7 +129,7 @@ impl<F: Float> Curve<F> {
             peak: 0,
             f_top: F::ZERO,
             band_scale: F::ZERO,
-            band: [[F::ZERO; 2]; BAND_CELLS],
+            band: [[F::ZERO; 2]; BAND_CELLS + 1],
         }
     }
 
@@ -166,7 +169,7 @@ pub enum Model<'a, F> {
 }
 
 /// The tabulated Gough curves: 7 cambers × 4 surfaces × 7 loads × 2 sides, each f at 33 trail
-/// ratios plus its rising branch and its trail bounds over 8 force cells: about 121 KB in f32.
+/// ratios plus its rising branch and its trail bounds over 8 force cells: about 124 KB in f32.
 /// Built once per tyre (and mounting side) and shared by the estimators of the wheels on that
 /// side.
 #[derive(Debug, Clone)]
@@ -237,7 +240,7 @@ impl<F: Float> GoughTable<F> {
         }
     }
 
-    /// [`GoughTable::build`] into an existing table, in place: no 121 KB temporary on the stack
+    /// [`GoughTable::build`] into an existing table, in place: no 124 KB temporary on the stack
     /// (what a device needs). On `None` the slot holds a partial table: rebuild or zero it.
     pub fn build_into<M: Backend<F>>(
         slot: &mut Self,
@@ -354,10 +357,14 @@ impl<F: Float> Curve<F> {
         if !(f <= self.f_top) || self.peak == 0 {
             return None;
         }
-        let [lo, hi] = *self
-            .band
-            .get((f * self.band_scale).floor_index(BAND_CELLS - 1))?;
-        Some((lo, hi))
+        let x = f * self.band_scale;
+        let i = x.floor_index(BAND_CELLS - 1);
+        let [[a, dev], [b, _]] = *self.band.get(i..i + 2)? else {
+            return None;
+        };
+        // The chord at f (below 0, its start: `tau_at` is constant there).
+        let mid = a + (x - F::from_index(i as u16)).max(F::ZERO) * (b - a);
+        Some((mid - dev, mid + dev))
     }
 
     /// The trail where the curve's force is `f`: along the rising branch and then the
@@ -684,7 +691,7 @@ fn curve<F: Float, M: Backend<F>>(
         peak: 0,
         f_top: F::ZERO,
         band_scale: F::ZERO,
-        band: [[F::ZERO; 2]; BAND_CELLS],
+        band: [[F::ZERO; 2]; BAND_CELLS + 1],
     };
     let mut peak = 1;
     while peak < nr + len && c.point(peak)?.0 > c.point(peak - 1)?.0 {
@@ -692,35 +699,55 @@ fn curve<F: Float, M: Backend<F>>(
     }
     c.peak = peak as u8;
     // The trail's bounds per force cell: `tau_at` is linear between the points before the
-    // peak (constant below the first), so its extremes over a cell lie at the cell's ends or
-    // at a point inside it.
+    // peak (constant below the first), and so is its difference from the cell's chord; the
+    // difference's extremes over a cell lie at the cell's ends or at a point inside it.
     let f_top = c.point(peak - 1)?.0;
     if f_top > F::ZERO {
-        let width = f_top * F::from_f64(1.0 / BAND_CELLS as f64);
-        let mut band = [[F::ZERO; 2]; BAND_CELLS];
-        for (i, slot) in band.iter_mut().enumerate() {
+        let n = F::from_index(BAND_CELLS as u16);
+        let width = f_top / n;
+        let scale = n / f_top;
+        let mut edge = [F::ZERO; BAND_CELLS + 1];
+        for (i, slot) in edge.iter_mut().enumerate() {
+            *slot = c.tau_at((width * F::from_index(i as u16)).min(f_top))?;
+        }
+        let mut dev = [F::ZERO; BAND_CELLS];
+        for (i, slot) in dev.iter_mut().enumerate() {
+            let (a, b) = (*edge.get(i)?, *edge.get(i + 1)?);
+            let x0 = F::from_index(i as u16);
+            // The chord as `tau_band` evaluates it.
+            let chord = |f: F| a + (f * scale - x0).max(F::ZERO) * (b - a);
             // The cell, widened by 1/1024 of its width on either side: a force the look-up
             // places in it by a rounded product lies within.
             let pad = width * F::from_f64(1.0 / 1024.0);
-            let fa = (width * F::from_index(i as u16) - pad).max(F::ZERO);
-            let fb = (width * F::from_index(i as u16 + 1) + pad).min(f_top);
-            let (ta, tb) = (c.tau_at(fa)?, c.tau_at(fb)?);
-            let (mut lo, mut hi) = (ta.min(tb), ta.max(tb));
+            let fa = (width * x0 - pad).max(F::ZERO);
+            let fb = (width * (x0 + F::ONE) + pad).min(f_top);
+            let mut worst = F::ZERO;
+            let mut far = a.abs().max(b.abs());
+            for f in [fa, fb] {
+                let t = c.tau_at(f)?;
+                worst = worst.max((t - chord(f)).abs());
+                far = far.max(t.abs());
+            }
             for k in 0..peak {
                 let (fk, tk) = c.point(k)?;
                 if fk > fa && fk < fb {
-                    lo = lo.min(tk);
-                    hi = hi.max(tk);
+                    worst = worst.max((tk - chord(fk)).abs());
+                    far = far.max(tk.abs());
                 }
             }
             // The margin: far above the look-up's rounding (and the weighted sums' in the
             // test), far below the test's tolerance (≥ 2 % of τ0).
-            let eps = F::from_f64(1e-4);
-            *slot = [lo - eps * (lo.abs() + tau0), hi + eps * (hi.abs() + tau0)];
+            *slot = worst + F::from_f64(1e-4) * (far + tau0);
         }
         c.f_top = f_top;
-        c.band_scale = F::from_index(BAND_CELLS as u16) / f_top;
-        c.band = band;
+        c.band_scale = scale;
+        for (slot, (&t, &d)) in c
+            .band
+            .iter_mut()
+            .zip(edge.iter().zip(dev.iter().chain([&F::ZERO])))
+        {
+            *slot = [t, d];
+        }
     }
     Some(c)
 }

@@ -450,9 +450,10 @@ fn tau_at_walks_the_curve_by_force() {
     }
 }
 
-/// `tau_band` bounds `tau_at` on every curve of the table, in f64 and f32, at forces across
-/// each cell and at its edges (where a rounded product picks the cell), and is `None` exactly
-/// where `tau_at` is: so the ambiguity test's decisions from the bounds are the look-up's.
+/// `tau_band` bounds `tau_at` on every curve of the table, in f64, f32 and (with `fixed`)
+/// Q31.32, at forces across each cell and at its edges (where a rounded product picks the
+/// cell), and is `None` exactly where `tau_at` is: so the ambiguity test's decisions from the
+/// bounds are the look-up's.
 #[test]
 fn tau_band_encloses_tau_at() {
     fn check<F: Float + core::fmt::Debug>(t: &GoughTable<F>) -> usize {
@@ -480,11 +481,26 @@ fn tau_band_encloses_tau_at() {
         }
         n
     }
+    // Built in place on the heap: a debug build would copy each table (up to 248 KB) on the
+    // test thread's stack several times.
+    fn table<F: Float, M: crate::math::Backend<F>>(
+        p: &crate::mf::Params<F>,
+    ) -> std::boxed::Box<GoughTable<F>> {
+        let mut t = std::boxed::Box::new(GoughTable::zeroed());
+        t.for_wheel_into::<M>(p, None).unwrap();
+        t
+    }
     let p = tyre();
-    let n64 = check(&GoughTable::for_tyre::<Libm>(&p).unwrap());
-    let p32 = p.cast::<f32>();
-    let n32 = check(&GoughTable::<f32>::for_tyre::<Libm>(&p32).unwrap());
+    let n64 = check(&table::<f64, Libm>(&p));
+    let n32 = check(&table::<f32, Libm>(&p.cast::<f32>()));
     assert!(n64 > 300_000 && n32 > 300_000, "{n64} {n32} points bounded");
+    // Q31.32, whose products truncate: the margin covers them too.
+    #[cfg(feature = "fixed")]
+    {
+        use crate::fixed::{Fix, FixMath};
+        let nfx = check(&table::<Fix, FixMath>(&tyre().cast::<Fix>()));
+        assert!(nfx > 300_000, "{nfx} points bounded in Q31.32");
+    }
 }
 
 /// A sensor 10× better than the default noise: each reading's own σ is small, so readings from
@@ -595,8 +611,8 @@ fn an_outlier_run_does_not_span_a_hold() {
 /// The estimator in Q31.32 fixed point (issue 7: `fixed::Fix`, `FixMath`, the same code): its
 /// table and its readings agree with f64 on a surface sweep (μ 1.0 … 0.1, loads 0.5 … 1.5·Fz0,
 /// slip up to the peak, braking in the turn). Identifiability is decided alike except within
-/// rounding of a gate, and μ agrees within 1e-4. (Its 204 KB table does not fit the M0 boards
-/// here; this checks the arithmetic, not a device build.)
+/// rounding of a gate, and μ agrees within 1e-4. (This checks the arithmetic; the no-FPU bench
+/// in `firmware-m0` runs the same estimator on a Cortex-M3 and compares it with the host's.)
 #[cfg(feature = "fixed")]
 #[test]
 fn fixed_point_estimator_reads_what_f64_reads() {

@@ -1,7 +1,7 @@
 //! Instruction counts of the combined-slip Magic Formula and of one transient-filter step on a
 //! Cortex-M0 without FPU (QEMU's `microbit`, an nRF51822), soft-float f32 with `math::Fast`
 //! against Q31.32 fixed point (`fixed::Fix` + `fixed::FixMath`), and of the friction estimator
-//! on a table in flash: in f32 (feature `mu`) and in Q31.32 (feature `mu-fix`, whose 242 KB
+//! on a table in flash: in f32 (feature `mu`) and in Q31.32 (feature `mu-fix`, whose 248 KB
 //! table needs the Cortex-M3 build: `--target thumbv7m-none-eabi`, QEMU's `mps2-an385`). Under
 //! QEMU with `-icount shift=0`: one instruction = 1 ns of virtual time, SysTick counts the core
 //! clock (16 MHz on the M0: 62.5 instructions per count; 25 MHz on the M3: 40), calibrated below

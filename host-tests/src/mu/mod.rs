@@ -13,7 +13,7 @@ use peers::{HsuGerdes, Row, SlipSlope};
 use std::path::Path;
 
 /// The Gough table of `p` mounted on `mounted` (`GoughTable::for_wheel_into`), built in place on
-/// the heap: an f64 table is 242 KB, and a debug build copies a value that size several times
+/// the heap: an f64 table is 248 KB, and a debug build copies a value that size several times
 /// on its way out of `GoughTable::for_wheel` — enough to overflow a test thread's stack.
 pub fn table<F: Float, M: Backend<F>>(
     p: &Params<F>,
