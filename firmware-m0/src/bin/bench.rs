@@ -37,28 +37,16 @@ include!(concat!(env!("OUT_DIR"), "/estimator.rs"));
 #[path = "../../../firmware/src/workload.rs"]
 mod workload;
 
+/// The M4F firmware's workload markers, `bench_start`/`bench_stop` (one definition for both).
+#[path = "../../../firmware/src/marks.rs"]
+mod marks;
+use marks::{bench_start, bench_stop};
+
 static WRAPS: AtomicU32 = AtomicU32::new(0);
 const RELOAD: u32 = 0x00FF_FFFF;
 /// Points per timed block.
 const B: usize = 16;
 const PAINT: u32 = 0xDEAD_BEEF;
-
-/// Marks the start of a measured workload (its id in r0).
-#[no_mangle]
-#[inline(never)]
-pub extern "C" fn bench_start(id: u32) {
-    core::hint::black_box(id);
-    cortex_m::asm::nop();
-}
-
-/// Marks the end of a measured workload (its id in r0).
-#[no_mangle]
-#[inline(never)]
-pub extern "C" fn bench_stop(id: u32) {
-    core::hint::black_box(id.wrapping_add(0x5700));
-    cortex_m::asm::nop();
-    cortex_m::asm::nop();
-}
 
 fn exit(ok: bool) -> ! {
     debug::exit(if ok {
