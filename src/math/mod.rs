@@ -88,6 +88,13 @@ pub trait Float:
     fn abs(self) -> Self;
     /// `true` unless NaN or ±∞ (for `fixed::Fix`: unless saturated).
     fn is_finite(self) -> bool;
+    /// `true` when every value [`is_finite`](Float::is_finite). The floats override it with
+    /// one comparison for the whole slice (x − x is 0 for every finite x and NaN otherwise, so
+    /// their sum is 0 exactly when all are finite) instead of one test and branch per value.
+    #[inline]
+    fn all_finite(xs: &[Self]) -> bool {
+        xs.iter().all(|x| x.is_finite())
+    }
     /// ⌊x⌋ as an index, clamped to `0..=max` (NaN and negative values give 0): a table cell
     /// from a position along a uniform grid, with no conversion through `f64`.
     fn floor_index(self, max: usize) -> usize;
@@ -176,6 +183,14 @@ macro_rules! impl_float {
             #[inline]
             fn is_finite(self) -> bool {
                 <$t>::is_finite(self)
+            }
+            #[inline]
+            fn all_finite(xs: &[Self]) -> bool {
+                let mut acc: $t = 0.0;
+                for &x in xs {
+                    acc += x - x;
+                }
+                acc == 0.0
             }
             #[inline]
             fn floor_index(self, max: usize) -> usize {
@@ -333,6 +348,46 @@ mod tests {
         assert_eq!(3.0f64.clamp_flag(0.0, 1.0), (1.0, true));
         assert_eq!(0.5f64.clamp_flag(0.0, 1.0), (0.5, false));
         assert_eq!((-1.0f32).clamp_flag(0.0, 1.0), (0.0, true));
+    }
+
+    /// The one-comparison override agrees with a test per value, at the extremes of the range
+    /// too (x − x = 0 for ±MAX: no overflow), for f32 and f64.
+    #[test]
+    fn all_finite_is_every_is_finite() {
+        fn check<F: Float>(vals: &[F]) {
+            for a in vals {
+                for b in vals {
+                    let xs = [*a, F::ONE, *b];
+                    assert_eq!(
+                        F::all_finite(&xs),
+                        xs.iter().all(|x| x.is_finite()),
+                        "{xs:?}"
+                    );
+                }
+            }
+            assert!(F::all_finite(&[]));
+        }
+        check(&[
+            0.0f32,
+            -0.0,
+            f32::MAX,
+            f32::MIN,
+            f32::MIN_POSITIVE,
+            f32::from_bits(1),
+            1e30,
+            f32::NAN,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+        ]);
+        check(&[
+            0.0f64,
+            f64::MAX,
+            f64::MIN,
+            f64::from_bits(1),
+            f64::NAN,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+        ]);
     }
 
     #[test]

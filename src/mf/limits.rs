@@ -98,16 +98,36 @@ pub fn condition<F: Float, M: Backend<F>>(
     input: &Input<F>,
     opts: &Options,
 ) -> Result<Conditioned<F>, EvalError> {
-    let mut fz = check(input.fz, InputField::Fz)?;
-    let mut kappa = check(input.kappa, InputField::Kappa)?;
-    let mut alpha = check(input.alpha, InputField::Alpha)?;
-    let mut gamma = check(input.gamma, InputField::Gamma)?;
-    let mut phit = check(input.phit, InputField::Phit)?;
-    let vx = check(input.vx, InputField::Vx)?;
-    let mut pres = match input.p {
-        Some(x) => check(x, InputField::P)?,
-        None => p.inflpres,
-    };
+    let all = [
+        input.fz,
+        input.kappa,
+        input.alpha,
+        input.gamma,
+        input.phit,
+        input.vx,
+        input.p.unwrap_or(F::ZERO),
+    ];
+    if !F::all_finite(&all) {
+        // Which one: the first, in the order of `Input`'s fields.
+        check(input.fz, InputField::Fz)?;
+        check(input.kappa, InputField::Kappa)?;
+        check(input.alpha, InputField::Alpha)?;
+        check(input.gamma, InputField::Gamma)?;
+        check(input.phit, InputField::Phit)?;
+        check(input.vx, InputField::Vx)?;
+        if let Some(x) = input.p {
+            check(x, InputField::P)?;
+        }
+    }
+    let mut pres = input.p.unwrap_or(p.inflpres);
+    let (mut fz, mut kappa, mut alpha, mut gamma, mut phit, vx) = (
+        input.fz,
+        input.kappa,
+        input.alpha,
+        input.gamma,
+        input.phit,
+        input.vx,
+    );
     let mf6 = p.version.is_mf6();
     if mf6 && pres <= F::ZERO {
         return Err(EvalError::NonPositivePressure);

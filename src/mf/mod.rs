@@ -402,7 +402,7 @@ fn eval_unmirrored<F: Float, M: Backend<F>>(
         out.sigma_x,
         out.sigma_y,
     ];
-    if all.iter().all(|v| v.is_finite()) {
+    if F::all_finite(&all) {
         Ok(out)
     } else {
         Err(EvalError::Overflow)

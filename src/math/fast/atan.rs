@@ -12,20 +12,16 @@ use core::f32::consts::{FRAC_PI_2, FRAC_PI_4};
 const TAN_3PI_8: f32 = f32::from_bits(0x401a827a); // 2.414_213_6
 /// tan π/8 = √2 − 1.
 const TAN_PI_8: f32 = f32::from_bits(0x3ed413cd); // 0.414_213_57
-/// Below this |x|, atan x = x in f32 (x²/3 < 2⁻²⁵).
-const TINY: f32 = 1.0 / 4096.0; // 2⁻¹²
 
 /// atan x \[rad\], in [−π/2, π/2] (±π/2 is f32's nearest to the limit, as `libm::atanf`); max
 /// error 2.1e-7 relative for every finite x (see tests); odd; NaN → NaN; ±0 → ±0; ±∞ → ±π/2.
+///
+/// No early returns: NaN fails both comparisons and runs through the polynomial as NaN; a tiny
+/// |x| (below 2⁻¹², where x²/3 < 2⁻²⁵) gives t + t·z·P = t after rounding, ±0 and subnormals
+/// included (z underflows to 0), and `copysign` restores the sign of −0.
 #[inline]
 pub fn atan(x: f32) -> f32 {
-    if x.is_nan() {
-        return x;
-    }
     let ax = x.abs();
-    if ax < TINY {
-        return x; // keeps ±0 and subnormals
-    }
     let (base, t) = if ax > TAN_3PI_8 {
         (FRAC_PI_2, -1.0 / ax) // ±∞ gives t = −0: exactly π/2
     } else if ax > TAN_PI_8 {

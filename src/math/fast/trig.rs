@@ -5,7 +5,7 @@
 //! (`tools/minimax.py`, which also prints the π/2 split below with its bit patterns).
 //! For sin and cos of |x| ≤ 8 (every Magic Formula argument) the reduction takes two parts of
 //! π/2 (a 20-bit head, exact times |k| ≤ 5, and the rest), which leaves r accurate to its own
-//! rounding there (`reduce_sc`). Otherwise, and always for tan (next to its poles tan = −1/r
+//! rounding there (`reduce_short`). Otherwise, and always for tan (next to its poles tan = −1/r
 //! needs r to 1e-13 of π/2), the reduction splits π/2 into four parts; the first three have 8 significant
 //! bits, so k·PIO2_1, k·PIO2_2 and k·PIO2_3 are exact for |k| < 2¹⁶ and the subtractions that
 //! cancel are exact (Sterbenz); what is left is |k|·5e-17 from the truncated π/2 and the
@@ -30,9 +30,6 @@ const PIO2_4: f32 = f32::from_bits(0x30885a31); // 9.920_936e-10
 /// Largest |x| whose reduction is exact to |k|·5e-17 (|k| < 2¹⁶ keeps k·PIO2_1..3 exact).
 pub const REDUCE_MAX: f32 = 1.0e5;
 
-/// Below this |x|, sin x = x and cos x = 1 in f32 (x²/6 and x²/2 < 2⁻²⁵).
-const TINY: f32 = 1.0 / 4096.0; // 2⁻¹²
-
 /// π/2 truncated to 20 significant bits, ⌊π/2·2¹⁹⌋/2¹⁹, for the short reduction: k·PIO2_HI is
 /// exact for |k| < 16.
 const PIO2_HI: f32 = f32::from_bits(0x3fc90fd0); // 1.570_795_059_204_101_6
@@ -43,21 +40,18 @@ const SHORT: f32 = 8.0;
 /// 1.5·2²³: (y + ROUND) − ROUND rounds |y| < 2²² to the nearest integer (ties to even).
 const ROUND: f32 = 12_582_912.0;
 
-/// x = k·π/2 + r for sin and cos; returns (r, k mod 4). Callers handle NaN and ±∞ before.
+/// x = k·π/2 + r for sin and cos with |x| ≤ [`SHORT`]; returns (r, k mod 4).
 ///
-/// For |x| ≤ [`SHORT`], two parts of π/2: x − k·PIO2_HI is exact (k·PIO2_HI has at most 23
-/// bits; Sterbenz), and k·PIO2_LO is off by |k|·5.2e-14 plus its rounding (4e-13), far below
-/// the 2⁻¹⁰·2e-7 that sin and cos need where their relative error is promised; k comes from the
-/// rounding constant, without a conversion to an integer and back. Beyond, [`reduce`]. (tan
-/// always takes [`reduce`]: next to its poles, tan = −1/r needs r to 1e-13 relative to π/2.)
+/// Two parts of π/2: x − k·PIO2_HI is exact (k·PIO2_HI has at most 23 bits; Sterbenz), and
+/// k·PIO2_LO is off by |k|·5.2e-14 plus its rounding (4e-13), far below the 2⁻¹⁰·2e-7 that sin
+/// and cos need where their relative error is promised; k comes from the rounding constant,
+/// without a conversion to an integer and back. Beyond, [`reduce`]. (tan always takes
+/// [`reduce`]: next to its poles, tan = −1/r needs r to 1e-13 relative to π/2.)
 #[inline]
-fn reduce_sc(x: f32) -> (f32, u32) {
-    if x.abs() <= SHORT {
-        let kf = (x * FRAC_2_PI + ROUND) - ROUND;
-        let r = (x - kf * PIO2_HI) - kf * PIO2_LO;
-        return (r, (kf as i32 & 3) as u32);
-    }
-    reduce(x)
+fn reduce_short(x: f32) -> (f32, u32) {
+    let kf = (x * FRAC_2_PI + ROUND) - ROUND;
+    let r = (x - kf * PIO2_HI) - kf * PIO2_LO;
+    (r, (kf as i32 & 3) as u32)
 }
 
 /// x = k·π/2 + r, four parts of π/2; returns (r, k mod 4). Callers handle NaN and ±∞ before.
@@ -75,6 +69,12 @@ fn reduce(x: f32) -> (f32, u32) {
 }
 
 #[inline]
+fn tan_poly(r: f32) -> f32 {
+    let z = r * r;
+    r + r * z * (T0 + z * (T1 + z * (T2 + z * (T3 + z * T4))))
+}
+
+#[inline]
 fn sin_poly(r: f32) -> f32 {
     let z = r * r;
     r + r * z * (S0 + z * (S1 + z * S2))
@@ -89,15 +89,23 @@ fn cos_poly(r: f32) -> f32 {
 /// sin x \[x in rad\]; max error 2.1e-7 relative for |x| ≤ 1e5 where |sin x| ≥ 2⁻¹⁰, 5.5e-11
 /// absolute below (see tests); odd; NaN and ±∞ → NaN; ±0 → ±0; in [−1, 1] for every finite x
 /// (not accurate beyond |x| = 1e5, see the module doc).
+///
+/// Every argument of the Magic Formula is within |x| ≤ [`SHORT`], so that path comes first:
+/// there a tiny x (|x| < 2⁻¹²) gives k = 0, r = x and r + r³·P rounds to x, subnormals kept,
+/// the result an early return would give; only −0 needs its own test (−0 + 0 is +0). NaN and
+/// ±∞ fail `|x| ≤ SHORT` and are caught on the long path.
 #[inline]
 pub fn sin(x: f32) -> f32 {
-    if x.is_nan() || x.is_infinite() {
+    let (r, q) = if x.abs() <= SHORT {
+        if x == 0.0 {
+            return x; // keeps the sign of ±0
+        }
+        reduce_short(x)
+    } else if x.is_nan() || x.is_infinite() {
         return f32::NAN; // sin ±∞ is undefined
-    }
-    if x.abs() < TINY {
-        return x; // sin x = x − x³/6 rounds to x; keeps ±0 and subnormals
-    }
-    let (r, q) = reduce_sc(x);
+    } else {
+        reduce(x)
+    };
     match q {
         0 => sin_poly(r),
         1 => cos_poly(r),
@@ -109,15 +117,17 @@ pub fn sin(x: f32) -> f32 {
 /// cos x \[x in rad\]; max error 2.1e-7 relative for |x| ≤ 2π (2.3e-7 up to 1e5) where
 /// |cos x| ≥ 2⁻¹⁰, 5.3e-11 absolute below (see tests); even; NaN and ±∞ → NaN; cos ±0 = 1; in [−1, 1] for every finite
 /// x (not accurate beyond |x| = 1e5, see the module doc).
+///
+/// As [`sin`]: the short path first; a tiny x gives r = x and (1 − r²/2) + r⁴·Q rounds to 1.
 #[inline]
 pub fn cos(x: f32) -> f32 {
-    if x.is_nan() || x.is_infinite() {
+    let (r, q) = if x.abs() <= SHORT {
+        reduce_short(x)
+    } else if x.is_nan() || x.is_infinite() {
         return f32::NAN; // cos ±∞ is undefined
-    }
-    if x.abs() < TINY {
-        return 1.0; // cos x = 1 − x²/2 rounds to 1
-    }
-    let (r, q) = reduce_sc(x);
+    } else {
+        reduce(x)
+    };
     match q {
         0 => cos_poly(r),
         1 => -sin_poly(r),
@@ -129,17 +139,21 @@ pub fn cos(x: f32) -> f32 {
 /// tan x \[x in rad\]; max error 4.0e-7 relative for |x| ≤ 2π, next to the poles too (see
 /// tests); odd; NaN and ±∞ → NaN; ±0 → ±0; finite for every finite x (±f32::MAX if the reduced argument is exactly 0 at a
 /// pole; not accurate beyond |x| = 1e5).
+///
+/// Below |x| = π/4 (where [`reduce`] rounds k to 0 and returns r = x: the same test) the
+/// polynomial is all: every slip angle of the Magic Formula takes that path, with no other
+/// test (a tiny x gives r + r³·T = x after rounding, ±0 and subnormals kept). NaN and ±∞ fail
+/// it and are caught on the long path.
 #[inline]
 pub fn tan(x: f32) -> f32 {
+    if x.abs() * FRAC_2_PI + 0.5 < 1.0 {
+        return tan_poly(x);
+    }
     if x.is_nan() || x.is_infinite() {
         return f32::NAN; // tan ±∞ is undefined
     }
-    if x.abs() < TINY {
-        return x; // tan x = x + x³/3 rounds to x
-    }
     let (r, q) = reduce(x);
-    let z = r * r;
-    let t = r + r * z * (T0 + z * (T1 + z * (T2 + z * (T3 + z * T4))));
+    let t = tan_poly(r);
     if q & 1 == 0 {
         t
     } else if t == 0.0 {
