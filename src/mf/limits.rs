@@ -84,13 +84,24 @@ pub struct Conditioned<F> {
     pub flags: Flags,
 }
 
-fn check<F: Float>(x: F, field: InputField) -> Result<F, EvalError> {
+fn check<F: Float>(x: F, field: InputField) -> Result<(), EvalError> {
     if x.is_finite() {
-        Ok(x)
+        Ok(())
     } else {
         Err(EvalError::NonFinite(field))
     }
 }
+
+/// The inputs' fields in the order `condition` checks them (`Input`'s order).
+const FIELDS: [InputField; 7] = [
+    InputField::Fz,
+    InputField::Kappa,
+    InputField::Alpha,
+    InputField::Gamma,
+    InputField::Phit,
+    InputField::Vx,
+    InputField::P,
+];
 
 /// Validates and conditions one input (see the module doc).
 pub fn condition<F: Float, M: Backend<F>>(
@@ -98,6 +109,7 @@ pub fn condition<F: Float, M: Backend<F>>(
     input: &Input<F>,
     opts: &Options,
 ) -> Result<Conditioned<F>, EvalError> {
+    // An absent p is 0 here: finite, and not used below.
     let all = [
         input.fz,
         input.kappa,
@@ -109,25 +121,12 @@ pub fn condition<F: Float, M: Backend<F>>(
     ];
     if !F::all_finite(&all) {
         // Which one: the first, in the order of `Input`'s fields.
-        check(input.fz, InputField::Fz)?;
-        check(input.kappa, InputField::Kappa)?;
-        check(input.alpha, InputField::Alpha)?;
-        check(input.gamma, InputField::Gamma)?;
-        check(input.phit, InputField::Phit)?;
-        check(input.vx, InputField::Vx)?;
-        if let Some(x) = input.p {
-            check(x, InputField::P)?;
+        for (&x, field) in all.iter().zip(FIELDS) {
+            check(x, field)?;
         }
     }
+    let [mut fz, mut kappa, mut alpha, mut gamma, mut phit, vx, _] = all;
     let mut pres = input.p.unwrap_or(p.inflpres);
-    let (mut fz, mut kappa, mut alpha, mut gamma, mut phit, vx) = (
-        input.fz,
-        input.kappa,
-        input.alpha,
-        input.gamma,
-        input.phit,
-        input.vx,
-    );
     let mf6 = p.version.is_mf6();
     if mf6 && pres <= F::ZERO {
         return Err(EvalError::NonPositivePressure);
