@@ -320,6 +320,18 @@ mod tests {
             linspace(-TWO_PI, TWO_PI, 1_000_001),
         );
         assert!(e.rel < 5e-7, "{e:?}");
+        // Across π/4, where tan leaves its polynomial-only path for the reduction: every f32.
+        let q = core::f32::consts::FRAC_PI_4;
+        let e = sweep(
+            "tan across pi/4",
+            tan,
+            f64::tan,
+            ulp_walk(q * 0.999, q * 1.001, 1),
+        );
+        assert!(e.rel < 5e-7 && e.rel > 0.0, "{e:?}");
+        let neg = ulp_walk(q * 0.999, q * 1.001, 1).map(|x| -x);
+        let e = sweep("tan across -pi/4", tan, f64::tan, neg);
+        assert!(e.rel < 5e-7 && e.rel > 0.0, "{e:?}");
         // The f32 next to π/2: tan is −2.3e7 / +2.3e7 on either side; r ≈ 4e-8 there.
         let h = core::f32::consts::FRAC_PI_2;
         let e = sweep("tan next to pi/2", tan, f64::tan, ulp_walk(h - 1e-4, h, 1));
