@@ -92,41 +92,36 @@ fn check<F: Float>(x: F, field: InputField) -> Result<(), EvalError> {
     }
 }
 
-/// The inputs' fields in the order `condition` checks them (`Input`'s order).
-const FIELDS: [InputField; 7] = [
-    InputField::Fz,
-    InputField::Kappa,
-    InputField::Alpha,
-    InputField::Gamma,
-    InputField::Phit,
-    InputField::Vx,
-    InputField::P,
-];
-
 /// Validates and conditions one input (see the module doc).
 pub fn condition<F: Float, M: Backend<F>>(
     p: &Params<F>,
     input: &Input<F>,
     opts: &Options,
 ) -> Result<Conditioned<F>, EvalError> {
-    // An absent p is 0 here: finite, and not used below.
-    let all = [
-        input.fz,
-        input.kappa,
-        input.alpha,
-        input.gamma,
-        input.phit,
-        input.vx,
-        input.p.unwrap_or(F::ZERO),
-    ];
-    if !F::all_finite(&all) {
+    let Input {
+        mut fz,
+        mut kappa,
+        mut alpha,
+        mut gamma,
+        mut phit,
+        vx,
+        p: p_in,
+    } = *input;
+    // An absent p is 0 here: finite.
+    let finite = F::all_finite(&[fz, kappa, alpha, gamma, phit, vx, p_in.unwrap_or(F::ZERO)]);
+    if !finite {
         // Which one: the first, in the order of `Input`'s fields.
-        for (&x, field) in all.iter().zip(FIELDS) {
-            check(x, field)?;
+        check(fz, InputField::Fz)?;
+        check(kappa, InputField::Kappa)?;
+        check(alpha, InputField::Alpha)?;
+        check(gamma, InputField::Gamma)?;
+        check(phit, InputField::Phit)?;
+        check(vx, InputField::Vx)?;
+        if let Some(x) = p_in {
+            check(x, InputField::P)?;
         }
     }
-    let [mut fz, mut kappa, mut alpha, mut gamma, mut phit, vx, _] = all;
-    let mut pres = input.p.unwrap_or(p.inflpres);
+    let mut pres = p_in.unwrap_or(p.inflpres);
     let mf6 = p.version.is_mf6();
     if mf6 && pres <= F::ZERO {
         return Err(EvalError::NonPositivePressure);
