@@ -10,7 +10,9 @@
 //! and atan take the Magic Formula's arguments (|x| ≤ 8, |α| < π/4, any atan) on a path with one
 //! comparison (sin: two, for −0): there the special cases either cannot occur or come out right
 //! through the polynomial, and the others are caught on the long path — the same results, bit for
-//! bit, as testing them first (compared on all 2³² inputs when the paths were reordered).
+//! bit, as testing them first (compared once on all 2³² inputs when the paths were reordered,
+//! with a scratch program outside the repository; the tests here check accuracy and the special
+//! cases).
 //!
 //! | kernel | reduction | polynomial | max error (measured by the tests in each file) |
 //! |---|---|---|---|
