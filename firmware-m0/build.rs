@@ -17,6 +17,7 @@ use std::{env, fmt::Write as _, fs, path::PathBuf};
 
 include!("../firmware/src/points.rs");
 include!("src/streams.rs");
+include!("src/filter_point.rs");
 
 /// The firmware's bench workloads (the slalom streams), shared with `firmware/`.
 #[allow(dead_code)]
@@ -123,27 +124,14 @@ fn estimator<F: Float + Lit + Feed, M: Backend<F>>(
 /// step per point, the relaxation lengths of `mf::eval` at the point, Vsx = κ·Vx,
 /// Vsy = tan α·Vx), as the device runs it in `F`: (κ', α') per step.
 fn filter_reference(p: &gough::mf::Params<f64>) -> String {
-    use gough::relax::{Config, Kinematics, Sigma, Transient};
+    use gough::relax::{Config, Transient};
     let cfg = Config::from_params(p);
-    let opts = Options {
-        moments: false,
-        ..Options::default()
-    };
     let mut state = Transient::new(0.0);
     let mut s = String::from(
         "/// f64 reference (κ', α') per transient-filter step of the bench's stream, from build.rs.\npub static FILTER_REF: [[f64; 2]; N] = [\n",
     );
     for i in 0..N {
-        let x = input::<f64>(i);
-        let sigma = mf::eval::<f64, Libm>(p, &x, &opts).map_or(Sigma::default(), |o| Sigma {
-            sigma_kappa: o.sigma_x,
-            sigma_alpha: o.sigma_y,
-        });
-        let kin = Kinematics {
-            vx: x.vx,
-            vsx: x.kappa * x.vx,
-            vsy: x.alpha.tan() * x.vx,
-        };
+        let (kin, sigma) = filter_point::<f64, Libm>(p, i);
         let (k, a) = match state.step::<Libm>(&cfg, 1e-3, &kin, &sigma) {
             Ok(sl) => (sl.kappa, sl.alpha),
             Err(_) => (f64::NAN, f64::NAN),
@@ -244,6 +232,7 @@ fn main() {
     println!("cargo:rerun-if-changed=memory-an385.x");
     println!("cargo:rerun-if-changed=../firmware/src/points.rs");
     println!("cargo:rerun-if-changed=src/streams.rs");
+    println!("cargo:rerun-if-changed=src/filter_point.rs");
     println!("cargo:rerun-if-changed=../firmware/src/workload.rs");
     println!("cargo:rerun-if-changed=../src");
     println!("cargo:rerun-if-changed=build.rs");

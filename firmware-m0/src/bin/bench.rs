@@ -27,6 +27,7 @@ use gough::mf::{self, Input, Options, Params};
 
 include!("../../../firmware/src/points.rs");
 include!(concat!(env!("OUT_DIR"), "/reference.rs"));
+include!("../filter_point.rs");
 #[cfg(any(feature = "mu", feature = "mu-fix"))]
 include!("../streams.rs");
 include!(concat!(env!("OUT_DIR"), "/estimator.rs"));
@@ -170,27 +171,12 @@ fn filter<F: Float, M: Backend<F>>(id: u32, p: &Params<F>, overhead: u64) -> (u6
     use gough::relax::{Config, Kinematics, Sigma, Transient};
     let cfg = Config::from_params(p);
     let dt = F::from_f64(1e-3);
-    let opts = Options {
-        moments: false,
-        ..Options::default()
-    };
     let mut state = Transient::new(F::ZERO);
     let (mut counts, mut failed, mut err) = (0u64, 0usize, Errors::default());
     bench_start(id);
     for base in (0..N).step_by(B) {
-        let ins: [(Kinematics<F>, Sigma<F>); B] = core::array::from_fn(|j| {
-            let x = input::<F>(base + j);
-            let sigma = mf::eval::<F, M>(p, &x, &opts).map_or(Sigma::default(), |o| Sigma {
-                sigma_kappa: o.sigma_x,
-                sigma_alpha: o.sigma_y,
-            });
-            let kin = Kinematics {
-                vx: x.vx,
-                vsx: x.kappa * x.vx,
-                vsy: M::tan(x.alpha) * x.vx,
-            };
-            (kin, sigma)
-        });
+        let ins: [(Kinematics<F>, Sigma<F>); B] =
+            core::array::from_fn(|j| filter_point::<F, M>(p, base + j));
         let mut out = [None; B];
         let t0 = now();
         for ((k, s), o) in ins.iter().zip(out.iter_mut()) {
