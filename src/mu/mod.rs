@@ -22,11 +22,16 @@
 //!    The sample is *identifiable* when the trail has dropped by ≥ `trail_drop_min` and the
 //!    model-induced σ of μ is ≤ `sigma_max` (measurement noise is left to the filter); otherwise the estimator says so instead of
 //!    guessing ([`State::NotIdentifiable`]) and holds its last estimate with a growing σ.
-//! 5. A scalar Kalman filter (random walk, intensity `q`) fuses identifiable samples; innovations
+//! 5. A scalar Kalman filter (random walk, intensity `q`) fuses identifiable readings; innovations
 //!    beyond `gate` σ are outliers and rejected, and `change_count` consecutive outliers of one
 //!    sign, none more than `run_gap` after the previous one, declare a change of surface
 //!    (dry → ice): the filter restarts from the new evidence.
 //!    Isolated outliers (noise) never move the estimate.
+//!
+//! Steps 1–4 and the ambiguity test's cheap checks run on the sample that takes a reading; the
+//! ambiguity test's trail look-ups and step 5 on the next sample, which takes no reading of its
+//! own (see [`MuEstimator::update`]): a reading's work is spread over two samples, so that no
+//! sample pays for all of it.
 //!
 //! ## Leaves out
 //! Pure longitudinal excitation (straight braking, no Fy): the trail carries no information
@@ -100,14 +105,16 @@ pub struct Config<F> {
     /// Smallest step of μ reported as a change of surface \[-\] (smaller re-alignments after
     /// `change_count` outliers move the estimate without the flag).
     pub change_min: F,
-    /// Consecutive one-sided outliers that declare a change of surface.
+    /// Consecutive one-sided outliers (readings) that declare a change of surface. A reading
+    /// takes two samples ([`MuEstimator::update`]): the default 30 is about 60 ms at 1 kHz.
     pub change_count: u16,
     /// Longest time \[s\] between two outliers of one run: a run interrupted by a longer stretch
     /// of uninformative samples (straight running, a hold) starts again, so readings from
     /// before and after it never add up to a change.
     pub run_gap: F,
-    /// Mutually consistent identifiable samples needed before the first estimate is reported
-    /// (a short burst of readings in a transient never becomes an estimate).
+    /// Mutually consistent identifiable readings needed before the first estimate is reported
+    /// (a short burst of readings in a transient never becomes an estimate). The default 13
+    /// is about 26 ms at 1 kHz (a reading takes two samples).
     pub init_count: u16,
     /// Prior μ reported before any identifiable sample, and when the estimate has aged out.
     pub mu_prior: F,
@@ -151,9 +158,9 @@ impl<F: Float> Default for Config<F> {
             gate: c(4.0),
             gate_sigma_max: c(0.03),
             change_min: c(0.1),
-            change_count: 60,
+            change_count: 30,
             run_gap: c(0.1),
-            init_count: 25,
+            init_count: 13,
             mu_prior: c(0.8),
             sigma_prior: c(0.4),
             lowpass_tau: c(0.01),
@@ -189,9 +196,11 @@ pub struct Sample<F> {
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum State {
-    /// This sample was informative and updated the estimate.
+    /// The latest reading was informative and updated the estimate. (A reading takes two
+    /// samples, see [`MuEstimator::update`]: the sample that takes one repeats the state the
+    /// previous reading left, the next reports its outcome.)
     Identifiable,
-    /// This sample carried no usable information (the trail has not dropped, or a gate
+    /// The latest reading carried no usable information (the trail has not dropped, or a gate
     /// failed); the last estimate is held with a growing σ.
     NotIdentifiable,
     /// No usable estimate (none yet, or it aged out): the prior is reported.
@@ -276,6 +285,10 @@ pub struct MuEstimator<'t, F> {
     side_since: F,
     // rms of the low-passed noise relative to the raw noise (1 until a sample interval is known)
     noise_scale: F,
+    // the reading taken by the last sample, its ambiguity test left for this one (see `update`)
+    pending: Option<Pending<'t, F>>,
+    // the state reported for the latest sample that took or finished a reading
+    last_state: State,
 }
 
 /// A per-sample λμ with its variance (before filtering).
@@ -321,7 +334,7 @@ impl<F: Float> GoughTable<F> {
 
 /// A sample reduced to what the table needs: the curves bracketing its load and camber on its
 /// side, with their weights; trail, force, load.
-#[derive(Clone, Copy)]
+#[derive(Debug, Clone, Copy)]
 struct Reading<'a, F> {
     /// The curves bracketing the reading's load and camber, every surface of each, with their
     /// bilinear weights: the first `n` of the four are those of nonzero weight (a reading on a
@@ -338,6 +351,23 @@ impl<F> Reading<'_, F> {
     fn active(&self) -> &[(&[table::Curve<F>; table::LAMBDA_NODES.len()], F)] {
         self.corners.get(..self.n).unwrap_or(&[])
     }
+}
+
+/// A reading that passed every check but the ambiguity test: what that test needs, and the
+/// λμ, variance and time it fuses with when the test lets it through.
+#[derive(Debug, Clone, Copy)]
+struct Pending<'a, F> {
+    reading: Reading<'a, F>,
+    /// Each surface's small-slip trail τ0 where the surface gave an estimate (> 0), 0 where
+    /// it did not.
+    tau0: [F; table::LAMBDA_NODES.len()],
+    /// The trail's variance from the low-passed measurement noise \[m²\].
+    var_tau: F,
+    /// The model's variance of the trail (see `take`): τ0²·`trail_rel_sq` + `var_tau_arm`.
+    trail_rel_sq: F,
+    var_tau_arm: F,
+    raw: Raw<F>,
+    t: F,
 }
 
 /// One surface's radial estimate.
@@ -387,6 +417,8 @@ impl<'t, F: Float> MuEstimator<'t, F> {
             fy_side: 0,
             side_since: F::ZERO,
             noise_scale: F::ONE,
+            pending: None,
+            last_state: State::Fallback,
         }
     }
 
@@ -408,6 +440,8 @@ impl<'t, F: Float> MuEstimator<'t, F> {
         self.cand = (F::ZERO, F::ZERO, 0);
         self.lp = None;
         self.last_t = None;
+        self.pending = None;
+        self.last_state = State::Fallback;
     }
 
     /// The radial estimate on surface node `si` (small-slip trail `tau0`) for the reading `q`.
@@ -447,7 +481,15 @@ impl<'t, F: Float> MuEstimator<'t, F> {
 
     /// λμ and its variance from one (filtered) sample, or `None` when the sample is not
     /// identifiable. Pure function of the sample; exposed for tests and diagnosis.
+    /// [`MuEstimator::update`] spreads the same work over two samples.
     pub fn raw<M: Backend<F>>(&self, s: &Sample<F>) -> Option<Raw<F>> {
+        let p = self.take::<M>(s)?;
+        (!self.held_by_grippier(&p)).then_some(p.raw)
+    }
+
+    /// The first stage of [`MuEstimator::raw`]: every check but the ambiguity test's trail
+    /// look-ups ([`MuEstimator::held_by_grippier`]).
+    fn take<M: Backend<F>>(&self, s: &Sample<F>) -> Option<Pending<'t, F>> {
         let cfg = &self.cfg;
         if s.fz < cfg.fz_min_rel * self.fz0 {
             return None;
@@ -585,6 +627,7 @@ impl<'t, F: Float> MuEstimator<'t, F> {
         let s_m = cfg.sigma_mz * self.noise_scale;
         let s_f = cfg.sigma_fy_rel * s.fz * self.noise_scale;
         let var_tau = (s_m / fy).sq() + (tau * s_f / fy).sq();
+        let e = pick?;
         // Ambiguity guard: the same (τ, |F|) can be a slippery surface at moderate slip or a
         // grippy one at small slip, where the trail has not dropped (or is still rising, with
         // the residual torque). An estimate is believed only if no surface grippier than it by
@@ -594,25 +637,18 @@ impl<'t, F: Float> MuEstimator<'t, F> {
         // combined-slip and table uncertainty); and none may read the point as grippier than
         // itself (a second crossing).
         // The outcome does not depend on the order of the checks, only the cost: the cheap
-        // ones first, then the curves' trails from the grippiest surface down (the one most
-        // likely to hold a small-slip point: an ambiguous reading is rejected after one).
-        if let Some(e) = pick {
-            for (si, est) in ests.iter().enumerate() {
-                let lam_k = *self.table.lam.get(si)?;
-                if lam_k <= e.lambda {
-                    continue;
-                }
-                let Some(k) = est else { return None };
-                if k.lambda >= lam_k {
-                    return None;
-                }
+        // ones here, the curves' trails last (`held_by_grippier`, from the grippiest surface
+        // down: the one most likely to hold a small-slip point).
+        for (si, est) in ests.iter().enumerate() {
+            let lam_k = *self.table.lam.get(si)?;
+            if lam_k <= e.lambda {
+                continue;
             }
-            let var_k = |tau0: F| var_tau + var_tau_model(tau0);
-            if self.held_by_grippier(&reading, &ests, e.lambda, var_k) {
+            let Some(k) = est else { return None };
+            if k.lambda >= lam_k {
                 return None;
             }
         }
-        let e = pick?;
         let lambda = e.lambda;
         // Error propagation: λ = |F|/(Fz·f(τ)), τ = −M/Fy.
         //   ∂λ/∂τ = −λ·f'/f;  ∂τ/∂M = −1/Fy;  ∂τ/∂Fy = −τ/Fy;  ∂λ/∂|F| = λ/|F|.
@@ -634,31 +670,35 @@ impl<'t, F: Float> MuEstimator<'t, F> {
         {
             return None;
         }
-        Some(Raw {
-            lambda,
-            var: var_meas + var_model,
-            drop: e.drop,
+        Some(Pending {
+            reading,
+            tau0: ests.map(|k| k.map_or(F::ZERO, |k| k.tau0)),
+            var_tau,
+            trail_rel_sq,
+            var_tau_arm,
+            raw: Raw {
+                lambda,
+                var: var_meas + var_model,
+                drop: e.drop,
+            },
+            t: s.t,
         })
     }
 
     /// The ambiguity guard's trail test (see [`MuEstimator::raw`]): whether a surface grippier
-    /// than the estimate `lambda` by more than `ambiguity_margin` holds the reading within
-    /// `ambiguity_sigmas` standard deviations (`var_k`: the trail's variance on a curve whose
-    /// small-slip trail is τ0). Out of line: the dry road, where nothing is grippier, does not
-    /// pay for it.
+    /// than the reading's estimate by more than `ambiguity_margin` holds the reading within
+    /// `ambiguity_sigmas` standard deviations (of the trail on that surface's curves: `var_tau`
+    /// and the model's part). Out of line: the dry road, where nothing is
+    /// grippier, does not pay for it.
     #[inline(never)]
-    fn held_by_grippier(
-        &self,
-        reading: &Reading<'_, F>,
-        ests: &[Option<NodeEst<F>>; table::LAMBDA_NODES.len()],
-        lambda: F,
-        var_k: impl Fn(F) -> F,
-    ) -> bool {
+    fn held_by_grippier(&self, p: &Pending<'_, F>) -> bool {
         let cfg = &self.cfg;
+        let reading = &p.reading;
+        let lambda = p.raw.lambda;
         let (tau, f_m) = (reading.tau, reading.force / reading.fz);
-        for (si, (est, &lam_k)) in ests.iter().zip(&self.table.lam).enumerate().rev() {
-            let Some(k) = est else { continue };
-            if lam_k <= lambda || lam_k - lambda <= cfg.ambiguity_margin {
+        for (si, (tau0, &lam_k)) in p.tau0.iter().zip(&self.table.lam).enumerate().rev() {
+            let tau0 = *tau0;
+            if tau0 <= F::ZERO || lam_k <= lambda || lam_k - lambda <= cfg.ambiguity_margin {
                 continue;
             }
             // The grippier curve's trail at the measured force (interpolated like the
@@ -678,7 +718,8 @@ impl<'t, F: Float> MuEstimator<'t, F> {
             if wsum <= F::HALF {
                 continue;
             }
-            let tol_sq = cfg.ambiguity_sigmas.sq() * var_k(k.tau0);
+            let tol_sq = cfg.ambiguity_sigmas.sq()
+                * (p.var_tau + (tau0.sq() * p.trail_rel_sq + p.var_tau_arm));
             let (lo, hi) = (lo / wsum, hi / wsum);
             if (tau > hi && (tau - hi).sq() > tol_sq) || (tau < lo && (lo - tau).sq() > tol_sq) {
                 continue; // apart from every trail the curve can have here
@@ -703,6 +744,15 @@ impl<'t, F: Float> MuEstimator<'t, F> {
 
     /// Processes one sample and returns the current estimate. Non-finite or out-of-order samples
     /// are not identifiable (the estimate is held); nothing earlier is lost.
+    ///
+    /// Every sample is low-passed. A reading ([`MuEstimator::raw`]) is spread over two
+    /// samples so that no sample pays for all of it: a sample takes a reading (the gates, the
+    /// table reads, the crossing, the cheap ambiguity checks) and, if the reading survives
+    /// them, the next sample finishes it (the ambiguity test's trail look-ups on the grippier
+    /// surfaces, then the fusion) and takes none of its own. The sample that takes a reading
+    /// reports the estimate as the previous reading left it; the outcome comes one sample
+    /// later. Readings therefore come at most every other sample (`init_count` and
+    /// `change_count` count readings).
     pub fn update<M: Backend<F>>(&mut self, s: &Sample<F>) -> Estimate<F> {
         let finite = s.t.is_finite()
             && s.fz.is_finite()
@@ -772,12 +822,44 @@ impl<'t, F: Float> MuEstimator<'t, F> {
                 self.side_since = filt.t;
             }
         }
-        if !clear || filt.t - self.side_since < self.cfg.settle {
-            return self.hold::<M>();
-        }
-        match self.raw::<M>(&filt) {
-            None => self.hold::<M>(),
-            Some(r) => self.fuse::<M>(r, filt.t),
+        // A reading's work is spread over two samples, so that no sample pays for all of it:
+        // this one finishes the reading the previous sample took (the ambiguity test's trail
+        // look-ups, then the fusion) and takes none of its own.
+        let e = if let Some(p) = self.pending.take() {
+            if self.held_by_grippier(&p) {
+                self.hold::<M>()
+            } else {
+                self.fuse::<M>(p.raw, p.t)
+            }
+        } else if !clear || filt.t - self.side_since < self.cfg.settle {
+            self.hold::<M>()
+        } else {
+            match self.take::<M>(&filt) {
+                None => self.hold::<M>(),
+                Some(p) => {
+                    // Taken; the next sample finishes it. Meanwhile the estimate stands as the
+                    // latest reading left it.
+                    self.pending = Some(p);
+                    return self.latest::<M>();
+                }
+            }
+        };
+        self.last_state = e.state;
+        e
+    }
+
+    /// The estimate as the latest finished reading left it (with the σ grown since).
+    fn latest<M: Backend<F>>(&self) -> Estimate<F> {
+        if self.have && self.last_state == State::Identifiable {
+            let mu0 = self.table.mu0;
+            Estimate {
+                mu: self.lambda * mu0,
+                sigma: M::sqrt(self.p) * mu0,
+                state: State::Identifiable,
+                change: false,
+            }
+        } else {
+            self.hold::<M>()
         }
     }
 

@@ -566,14 +566,14 @@ fn a_burst_after_a_hold_is_an_outlier_a_run_is_a_change() {
 }
 
 /// Outliers of one sign separated by stretches of straight running (no information) are not one
-/// run: bursts of 40 readings on ice, 0.5 s apart, never add up to the 60 of a change; the same
-/// readings back to back do.
+/// run: bursts of 40 samples on ice (20 readings: each takes two samples), 0.5 s apart, never
+/// add up to the 30 of a change; the same readings back to back do.
 #[test]
 fn an_outlier_run_does_not_span_a_hold() {
     let p = tyre();
     let table = GoughTable::for_tyre::<Libm>(&p).unwrap();
     let cfg = confident();
-    assert!(cfg.change_count <= 80 && cfg.change_count > 40);
+    assert!(cfg.change_count <= 80 && cfg.change_count > 20);
     let mu0 = MuEstimator::for_tyre(&table, &p, cfg).mu0();
     let corner = truth(&p, 0.5, mu0, p.fnomin, 0.04, 0.0);
     let straight = truth(&p, 0.5, mu0, p.fnomin, 0.0, 0.0);
@@ -778,4 +778,57 @@ fn early_exit_on_the_trail_drop_changes_nothing() {
         read > 300 && short > 10,
         "{read} read, {short} short of the drop"
     );
+}
+
+/// A reading's work is spread over two samples (`update`): the sample that takes a reading
+/// reports the estimate as the previous reading left it, the next one finishes it (ambiguity
+/// test, fusion) and takes none of its own. On a steady point the first estimate therefore
+/// comes `2·init_count − 1` samples after the first reading, μ moves only on finishing samples,
+/// the state does not flicker between them, and each finished reading is `raw`'s (a constant
+/// input passes the low-pass unchanged). `reset` drops a reading in flight.
+#[test]
+fn a_reading_takes_two_samples() {
+    let p = tyre();
+    let table = GoughTable::for_tyre::<Libm>(&p).unwrap();
+    let cfg = Config::default();
+    let mu0 = MuEstimator::for_tyre(&table, &p, cfg).mu0();
+    let ice = sample(&truth(&p, 0.2, mu0, p.fnomin, 0.05, 0.0), 0.0, false);
+    let mut est = MuEstimator::for_tyre(&table, &p, cfg);
+    let r = est.raw::<Libm>(&ice).expect("the point is identifiable");
+    // Readings start once the force has stood on its side for `settle`.
+    let first = (0..).find(|&k| k as f64 * 1e-3 >= cfg.settle).unwrap();
+    let out: Vec<Estimate<f64>> = (0..first + 200)
+        .map(|k| {
+            est.update::<Libm>(&Sample {
+                t: k as f64 * 1e-3,
+                ..ice
+            })
+        })
+        .collect();
+    let k0 = out
+        .iter()
+        .position(|e| e.state == State::Identifiable)
+        .unwrap();
+    assert_eq!(k0, first + 2 * usize::from(cfg.init_count) - 1);
+    for (k, e) in out.iter().enumerate().skip(k0) {
+        assert_eq!(e.state, State::Identifiable, "sample {k}");
+        assert!(!e.change);
+        if (k - k0) % 2 == 1 {
+            // A taking sample: μ as the last finished reading left it, σ grown since.
+            assert_eq!(e.mu, out[k - 1].mu, "sample {k}");
+            assert!(e.sigma >= out[k - 1].sigma);
+        }
+    }
+    // Every finished reading was `raw`'s: with equal readings the mean is that reading.
+    assert!((out.last().unwrap().mu - r.lambda * mu0).abs() < 1e-12);
+    // A reading in flight does not survive a reset: afterwards the first estimate takes as
+    // long as it did from new (a surviving reading would count towards it).
+    let e = est.update::<Libm>(&Sample { t: 0.5, ..ice });
+    assert_eq!(e.mu, out.last().unwrap().mu, "a taking sample");
+    est.reset();
+    let t = |k: usize| 1.0 + k as f64 * 1e-3;
+    let first = (0..).find(|&k| t(k) - t(0) >= cfg.settle).unwrap();
+    let k1 = (0..first + 100)
+        .position(|k| est.update::<Libm>(&Sample { t: t(k), ..ice }).state == State::Identifiable);
+    assert_eq!(k1, Some(first + 2 * usize::from(cfg.init_count) - 1));
 }
