@@ -489,6 +489,7 @@ impl<'t, F: Float> MuEstimator<'t, F> {
 
     /// The first stage of [`MuEstimator::raw`]: every check but the ambiguity test's trail
     /// look-ups ([`MuEstimator::held_by_grippier`]).
+    #[inline(always)]
     fn take<M: Backend<F>>(&self, s: &Sample<F>) -> Option<Pending<'t, F>> {
         let cfg = &self.cfg;
         if s.fz < cfg.fz_min_rel * self.fz0 {
@@ -825,11 +826,15 @@ impl<'t, F: Float> MuEstimator<'t, F> {
         // A reading's work is spread over two samples, so that no sample pays for all of it:
         // this one finishes the reading the previous sample took (the ambiguity test's trail
         // look-ups, then the fusion) and takes none of its own.
-        let e = if let Some(p) = self.pending.take() {
-            if self.held_by_grippier(&p) {
+        let e = if let Some(p) = &self.pending {
+            // (By reference: the pending reading is not copied out.)
+            let held = self.held_by_grippier(p);
+            let (raw, t) = (p.raw, p.t);
+            self.pending = None;
+            if held {
                 self.hold::<M>()
             } else {
-                self.fuse::<M>(p.raw, p.t)
+                self.fuse::<M>(raw, t)
             }
         } else if !clear || filt.t - self.side_since < self.cfg.settle {
             self.hold::<M>()
