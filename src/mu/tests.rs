@@ -785,7 +785,8 @@ fn early_exit_on_the_trail_drop_changes_nothing() {
 /// test, fusion) and takes none of its own. On a steady point the first estimate therefore
 /// comes `2·init_count − 1` samples after the first reading, μ moves only on finishing samples,
 /// the state does not flicker between them, and each finished reading is `raw`'s (a constant
-/// input passes the low-pass unchanged). `reset` drops a reading in flight.
+/// input passes the low-pass unchanged). A non-finite sample in between loses nothing; `reset`
+/// drops a reading in flight.
 #[test]
 fn a_reading_takes_two_samples() {
     let p = tyre();
@@ -821,10 +822,32 @@ fn a_reading_takes_two_samples() {
     }
     // Every finished reading was `raw`'s: with equal readings the mean is that reading.
     assert!((out.last().unwrap().mu - r.lambda * mu0).abs() < 1e-12);
+    // A non-finite sample between taking and finishing loses nothing: the reading in flight is
+    // finished by the next good sample exactly as without it.
+    let n = out.len();
+    let next = |k: usize| Sample {
+        t: k as f64 * 1e-3,
+        ..ice
+    };
+    let taken = est.update::<Libm>(&next(n));
+    assert!(est.pending.is_some(), "sample {n} took a reading");
+    assert_eq!(taken.mu, out[n - 1].mu);
+    let mut clean = est.clone();
+    let bad = est.update::<Libm>(&Sample {
+        fy: f64::NAN,
+        ..next(n + 1)
+    });
+    assert_eq!(bad.state, State::NotIdentifiable);
+    assert!(est.pending.is_some());
+    assert_eq!(
+        est.update::<Libm>(&next(n + 1)),
+        clean.update::<Libm>(&next(n + 1))
+    );
+    assert!(est.pending.is_none());
     // A reading in flight does not survive a reset: afterwards the first estimate takes as
     // long as it did from new (a surviving reading would count towards it).
-    let e = est.update::<Libm>(&Sample { t: 0.5, ..ice });
-    assert_eq!(e.mu, out.last().unwrap().mu, "a taking sample");
+    est.update::<Libm>(&next(n + 2));
+    assert!(est.pending.is_some());
     est.reset();
     let t = |k: usize| 1.0 + k as f64 * 1e-3;
     let first = (0..).find(|&k| t(k) - t(0) >= cfg.settle).unwrap();
