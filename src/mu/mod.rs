@@ -365,6 +365,7 @@ struct Pending<'a, F> {
     var_tau: F,
     /// The model's variance of the trail (see `take`): τ0²·`trail_rel_sq` + `var_tau_arm`.
     trail_rel_sq: F,
+    /// Its part from the Fx moment arm and the residual torque \[m²\].
     var_tau_arm: F,
     raw: Raw<F>,
     t: F,
@@ -856,15 +857,20 @@ impl<'t, F: Float> MuEstimator<'t, F> {
     /// The estimate as the latest finished reading left it (with the σ grown since).
     fn latest<M: Backend<F>>(&self) -> Estimate<F> {
         if self.have && self.last_state == State::Identifiable {
-            let mu0 = self.table.mu0;
-            Estimate {
-                mu: self.lambda * mu0,
-                sigma: M::sqrt(self.p) * mu0,
-                state: State::Identifiable,
-                change: false,
-            }
+            self.identifiable::<M>(false)
         } else {
             self.hold::<M>()
+        }
+    }
+
+    /// The filter's estimate, as a reading that updated it reports it.
+    fn identifiable<M: Backend<F>>(&self, change: bool) -> Estimate<F> {
+        let mu0 = self.table.mu0;
+        Estimate {
+            mu: self.lambda * mu0,
+            sigma: M::sqrt(self.p) * mu0,
+            state: State::Identifiable,
+            change,
         }
     }
 
@@ -956,12 +962,7 @@ impl<'t, F: Float> MuEstimator<'t, F> {
                 self.run = 0;
             }
         }
-        Estimate {
-            mu: self.lambda * mu0,
-            sigma: M::sqrt(self.p) * mu0,
-            state: State::Identifiable,
-            change,
-        }
+        self.identifiable::<M>(change)
     }
 }
 
