@@ -780,6 +780,59 @@ fn early_exit_on_the_trail_drop_changes_nothing() {
     );
 }
 
+/// The first sample (from 0) at which a wheel rolling at `vx` \[m/s\] (`None`: unknown) with
+/// samples at times `t(k)` has settled after the force took its side at sample 0.
+fn first_settled(cfg: &Config<f64>, vx: impl Into<Option<f64>>, t: impl Fn(usize) -> f64) -> usize {
+    match vx.into() {
+        Some(vx) => {
+            let mut rolled = 0.0;
+            (0..)
+                .find(|&k| {
+                    if k > 0 {
+                        rolled += vx * (t(k) - t(k - 1));
+                    }
+                    rolled >= cfg.settle_distance
+                })
+                .unwrap()
+        }
+        None => (0..).find(|&k| t(k) - t(0) >= cfg.settle).unwrap(),
+    }
+}
+
+/// After the lateral force takes a side, readings wait until the wheel has rolled
+/// `settle_distance` (the deflection rebuilds over a distance, the relaxation length), so the
+/// wait is shorter at speed; without Vx they wait `settle` seconds.
+#[test]
+fn settling_is_a_distance_with_vx_and_a_time_without() {
+    let p = tyre();
+    let table = GoughTable::for_tyre::<Libm>(&p).unwrap();
+    let cfg = Config::default();
+    let mu0 = MuEstimator::for_tyre(&table, &p, cfg).mu0();
+    let ice = sample(&truth(&p, 0.2, mu0, p.fnomin, 0.05, 0.0), 0.0, false);
+    let t = |k: usize| k as f64 * 1e-3;
+    let mut firsts = std::vec::Vec::new();
+    for vx in [Some(10.0), Some(30.0), Some(-30.0), None] {
+        let mut est = MuEstimator::for_tyre(&table, &p, cfg);
+        let k0 = (0..400)
+            .position(|k| {
+                let s = Sample { t: t(k), vx, ..ice };
+                est.update::<Libm>(&s).state == State::Identifiable
+            })
+            .expect("identifiable");
+        // The first estimate comes 2·init_count − 1 samples after the first reading.
+        let first = k0 + 1 - 2 * usize::from(cfg.init_count);
+        assert_eq!(first, first_settled(&cfg, vx.map(f64::abs), t), "vx {vx:?}");
+        firsts.push(first);
+    }
+    // 10 m/s waits three times as long as 30 m/s; reversing counts as rolling.
+    assert!(
+        firsts[0] >= 3 * firsts[1] - 2 && firsts[0] <= 3 * firsts[1] + 2,
+        "{firsts:?}"
+    );
+    assert_eq!(firsts[1], firsts[2]);
+    assert!(t(firsts[3]) >= cfg.settle && t(firsts[3]) < cfg.settle + 2e-3);
+}
+
 /// A reading's work is spread over two samples (`update`): the sample that takes a reading
 /// reports the estimate as the previous reading left it, the next one finishes it (ambiguity
 /// test, fusion) and takes none of its own. On a steady point the first estimate therefore
@@ -796,8 +849,8 @@ fn a_reading_takes_two_samples() {
     let ice = sample(&truth(&p, 0.2, mu0, p.fnomin, 0.05, 0.0), 0.0, false);
     let mut est = MuEstimator::for_tyre(&table, &p, cfg);
     let r = est.raw::<Libm>(&ice).expect("the point is identifiable");
-    // Readings start once the force has stood on its side for `settle`.
-    let first = (0..).find(|&k| k as f64 * 1e-3 >= cfg.settle).unwrap();
+    // Readings start once the wheel has rolled `settle_distance` with the force on its side.
+    let first = first_settled(&cfg, 20.0, |k| k as f64 * 1e-3);
     let out: Vec<Estimate<f64>> = (0..first + 200)
         .map(|k| {
             est.update::<Libm>(&Sample {
@@ -850,7 +903,7 @@ fn a_reading_takes_two_samples() {
     assert!(est.pending.is_some());
     est.reset();
     let t = |k: usize| 1.0 + k as f64 * 1e-3;
-    let first = (0..).find(|&k| t(k) - t(0) >= cfg.settle).unwrap();
+    let first = first_settled(&cfg, 20.0, t);
     let k1 = (0..first + 100)
         .position(|k| est.update::<Libm>(&Sample { t: t(k), ..ice }).state == State::Identifiable);
     assert_eq!(k1, Some(first + 2 * usize::from(cfg.init_count) - 1));
