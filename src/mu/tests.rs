@@ -799,6 +799,15 @@ fn first_settled(cfg: &Config<f64>, vx: impl Into<Option<f64>>, t: impl Fn(usize
     }
 }
 
+/// The default settings, μy0 and a steady, identifiable point on ice (λμ 0.2, Fz0, α 0.05) at
+/// t = 0 and 20 m/s.
+fn steady_ice(p: &mf::Params<f64>, table: &GoughTable<f64>) -> (Config<f64>, f64, Sample<f64>) {
+    let cfg = Config::default();
+    let mu0 = MuEstimator::for_tyre(table, p, cfg).mu0();
+    let ice = sample(&truth(p, 0.2, mu0, p.fnomin, 0.05, 0.0), 0.0, false);
+    (cfg, mu0, ice)
+}
+
 /// After the lateral force takes a side, readings wait until the wheel has rolled
 /// `settle_distance` (the deflection rebuilds over a distance, the relaxation length), so the
 /// wait is shorter at speed; without Vx they wait `settle` seconds.
@@ -806,9 +815,7 @@ fn first_settled(cfg: &Config<f64>, vx: impl Into<Option<f64>>, t: impl Fn(usize
 fn settling_is_a_distance_with_vx_and_a_time_without() {
     let p = tyre();
     let table = GoughTable::for_tyre::<Libm>(&p).unwrap();
-    let cfg = Config::default();
-    let mu0 = MuEstimator::for_tyre(&table, &p, cfg).mu0();
-    let ice = sample(&truth(&p, 0.2, mu0, p.fnomin, 0.05, 0.0), 0.0, false);
+    let (cfg, _, ice) = steady_ice(&p, &table);
     let t = |k: usize| k as f64 * 1e-3;
     let mut firsts = std::vec::Vec::new();
     for vx in [Some(10.0), Some(30.0), Some(-30.0), None] {
@@ -844,9 +851,7 @@ fn settling_is_a_distance_with_vx_and_a_time_without() {
 fn a_reading_takes_two_samples() {
     let p = tyre();
     let table = GoughTable::for_tyre::<Libm>(&p).unwrap();
-    let cfg = Config::default();
-    let mu0 = MuEstimator::for_tyre(&table, &p, cfg).mu0();
-    let ice = sample(&truth(&p, 0.2, mu0, p.fnomin, 0.05, 0.0), 0.0, false);
+    let (cfg, mu0, ice) = steady_ice(&p, &table);
     let mut est = MuEstimator::for_tyre(&table, &p, cfg);
     let r = est.raw::<Libm>(&ice).expect("the point is identifiable");
     // Readings start once the wheel has rolled `settle_distance` with the force on its side.
