@@ -19,6 +19,21 @@ pub enum MuCmd {
     /// The main job: a simulated manoeuvre on a road whose friction changes, the estimator at
     /// every wheel, a table on the terminal, plots and estimates written.
     Demo(super::bench::DemoArgs),
+    /// From which utilisation the estimator reads μ on a tyre: steady, noise-free points of its
+    /// own Magic Formula on surfaces μ 1.0 … 0.1 at 0.5, 1 and 1.5·Fz0, and the trail gap
+    /// between neighbouring surfaces that decides it.
+    Map(MapArgs),
+}
+
+/// Arguments of `gough mu map`.
+#[derive(Args)]
+pub struct MapArgs {
+    /// Tyre property file (.tir).
+    #[arg(long)]
+    pub tir: PathBuf,
+    /// Also write the map as CSV here.
+    #[arg(long)]
+    pub out: Option<PathBuf>,
 }
 
 /// Arguments of `gough mu estimate`.
@@ -78,5 +93,23 @@ pub fn run(cmd: MuCmd) -> Result<(), String> {
         }
         MuCmd::Bench(b) => super::bench::run(b),
         MuCmd::Demo(d) => super::bench::demo(d),
+        MuCmd::Map(a) => {
+            let t = tyre::load(&a.tir)?;
+            let cells = super::map::map(&t.params)?;
+            let name = a.tir.file_name().map_or_else(
+                || a.tir.display().to_string(),
+                |n| n.to_string_lossy().into_owned(),
+            );
+            print!("{}", super::map::render(&cells, &name, t.params.fnomin));
+            if let Some(out) = &a.out {
+                if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
+                    std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+                }
+                std::fs::write(out, super::map::csv(&cells))
+                    .map_err(|e| format!("{}: cannot write: {e}", out.display()))?;
+                eprintln!("-> {}", out.display());
+            }
+            Ok(())
+        }
     }
 }

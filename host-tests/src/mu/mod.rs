@@ -3,6 +3,7 @@
 //! simulation ([`bench`]). Nothing here re-implements the estimator.
 pub mod bench;
 pub mod cli;
+pub mod map;
 pub mod peers;
 
 use crate::csvio;

@@ -48,8 +48,9 @@ fn prior() -> Estimate<f64> {
     }
 }
 
-/// μ of a surface λμ on the file's scale, and the MF at pure slip with that λμ.
-fn eval_at(
+/// μ of a surface λμ on the file's scale, and the MF at pure slip with that λμ (speed: the
+/// file's LONGVL; limits off).
+pub(super) fn eval_at(
     p: &Params<f64>,
     lambda: f64,
     fz: f64,

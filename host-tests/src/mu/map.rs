@@ -1,0 +1,221 @@
+//! `gough mu map`: from which utilisation the core's estimator reads μ on a given tyre.
+//!
+//! For each surface μ and load, the tyre's own Magic Formula (λμx = λμy = μ/μy0, pure side
+//! slip, γ = 0, at the file's reference speed LONGVL) gives steady, noise-free Fy, Mz, Fz along
+//! a slip-angle sweep up to the peak. At each point a fresh [`MuEstimator`] with the default
+//! [`Config`] runs over 150 ms of that constant sample at 1 kHz, rolling at 20 m/s (settling,
+//! low-pass, two-sample readings, `init_count`: all of it, as on a wheel); the point counts as
+//! identifiable when the estimator ends `Identifiable`. The map reports the lowest utilisation
+//! |F|/(μ·Fz) at which that happens, and the estimate there. The estimator's gates still budget
+//! for the configured sensor noise and model uncertainty, so this is the best case a wheel can
+//! do: real manoeuvres add noise and transients.
+//!
+//! Beside it, the physics that decides the map, independent of the estimator: at utilisation
+//! 0.5, the pneumatic trail τ = −Mz/Fy on the surface's curve and how far the curve of a
+//! surface 0.1 grippier lies from it at the same force. Where that gap is smaller than the
+//! model's own uncertainty of the trail (`Config::trail_model_rel` of the largest trail, plus
+//! the residual torque's share), no amount of averaging can tell the two surfaces apart.
+use gough::math::Libm;
+use gough::mf::{self, Params};
+use gough::mu::{Config, GoughTable, MuEstimator, Sample, State};
+
+/// Surfaces of the map (μ).
+pub const MUS: [f64; 10] = [1.0, 0.9, 0.8, 0.7, 0.6, 0.5, 0.4, 0.3, 0.2, 0.1];
+/// Loads of the map (× Fz0).
+pub const LOADS: [f64; 3] = [0.5, 1.0, 1.5];
+
+/// One surface at one load.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Cell {
+    /// Surface μ (λμ·μy0).
+    pub mu: f64,
+    /// Load / Fz0.
+    pub load: f64,
+    /// Lowest utilisation at which the steady point is identifiable (`None`: not up to the peak).
+    pub first_util: Option<f64>,
+    /// The estimate there, μ̂ − μ.
+    pub err: Option<f64>,
+    /// The estimate's σ there.
+    pub sigma: Option<f64>,
+    /// Trail at utilisation 0.5 \[m\] (`None`: the curve never reaches it).
+    pub trail: Option<f64>,
+    /// Trail at the same force on the surface 0.1 grippier, minus `trail` \[m\].
+    pub gap: Option<f64>,
+}
+
+/// Samples of 1 ms the estimator runs on each point (settling 30, first estimate ≈ 25 more).
+const STEPS: usize = 150;
+
+fn eval(p: &Params<f64>, lam: f64, fz: f64, alpha: f64) -> Option<mf::Output<f64>> {
+    super::peers::eval_at(p, lam, fz, alpha, 0.0)
+}
+
+/// The slip angle on the rising branch where |Fy| reaches `force` on surface λμ `lam`
+/// (bisection), with the output there; `None` if the curve's peak is below it.
+fn at_force(p: &Params<f64>, lam: f64, fz: f64, force: f64) -> Option<mf::Output<f64>> {
+    let (mut lo, mut hi) = (0.0, None);
+    let mut a = 1e-3;
+    while a < 0.5 {
+        if eval(p, lam, fz, a)?.fy.abs() >= force {
+            hi = Some(a);
+            break;
+        }
+        lo = a;
+        a += 1e-3;
+    }
+    let mut hi = hi?;
+    for _ in 0..50 {
+        let mid = 0.5 * (lo + hi);
+        if eval(p, lam, fz, mid)?.fy.abs() >= force {
+            hi = mid;
+        } else {
+            lo = mid;
+        }
+    }
+    eval(p, lam, fz, hi)
+}
+
+/// The map of tyre `p` (see the module's doc).
+pub fn map(p: &Params<f64>) -> Result<Vec<Cell>, String> {
+    let table = super::table::<f64, Libm>(p, None)?;
+    let cfg = Config::default();
+    let mu0 = MuEstimator::for_tyre(&table, p, cfg).mu0();
+    let mut cells = Vec::new();
+    for &mu in &MUS {
+        for &load in &LOADS {
+            let fz = load * p.fnomin;
+            cells.push(cell(p, &table, cfg, mu0, mu, fz, load));
+        }
+    }
+    Ok(cells)
+}
+
+fn cell(
+    p: &Params<f64>,
+    table: &GoughTable<f64>,
+    cfg: Config<f64>,
+    mu0: f64,
+    mu: f64,
+    fz: f64,
+    load: f64,
+) -> Cell {
+    let lam = mu / mu0;
+    let mut out = Cell {
+        mu,
+        load,
+        first_util: None,
+        err: None,
+        sigma: None,
+        trail: None,
+        gap: None,
+    };
+    // The sweep: up to the peak of |Fy|, in steps of 1 % of the slip angle at the peak's scale.
+    let da = 2e-4 * mu.max(0.1);
+    let mut peak: f64 = 0.0;
+    for i in 1..2000 {
+        let alpha = i as f64 * da;
+        let Some(o) = eval(p, lam, fz, alpha) else {
+            break;
+        };
+        let f = o.fy.abs();
+        if f < peak {
+            break; // past the peak
+        }
+        peak = f;
+        let util = o.fx.hypot(o.fy) / (mu * fz);
+        if util < 0.2 || i % 5 != 0 {
+            continue;
+        }
+        let mut est = MuEstimator::for_tyre(table, p, cfg);
+        let mut last = None;
+        for k in 0..STEPS {
+            last = Some(est.update::<Libm>(&Sample {
+                t: k as f64 * 1e-3,
+                fz: o.fz,
+                fy: o.fy,
+                mz: o.mz,
+                fx: None,
+                vx: Some(20.0),
+                gamma: None,
+            }));
+        }
+        if let Some(e) = last.filter(|e| e.state == State::Identifiable) {
+            out.first_util = Some(util);
+            out.err = Some(e.mu - mu);
+            out.sigma = Some(e.sigma);
+            break;
+        }
+    }
+    // The trail at utilisation 0.5, and on the surface 0.1 grippier at the same force.
+    let force = 0.5 * mu * fz;
+    if let Some(o) = at_force(p, lam, fz, force) {
+        let tau = -o.mz / o.fy;
+        out.trail = Some(tau);
+        out.gap = at_force(p, (mu + 0.1) / mu0, fz, force).map(|g| -g.mz / g.fy - tau);
+    }
+    out
+}
+
+/// The map as a terminal table (markdown).
+pub fn render(cells: &[Cell], name: &str, fz0: f64) -> String {
+    use std::fmt::Write;
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "identifiability map of {name}: steady pure side slip (γ 0, at LONGVL), noise-free, the \
+         estimator's defaults at 1 kHz for 150 ms per point"
+    );
+    let _ = writeln!(
+        s,
+        "lowest utilisation at which μ is identifiable (estimate − μ there); trail at utilisation \
+         0.5 and the gap to the curve of μ + 0.1 at that force, at Fz0 = {fz0:.0} N"
+    );
+    let _ = write!(s, "| μ |");
+    for l in LOADS {
+        let _ = write!(s, " {l}·Fz0 |");
+    }
+    let _ = writeln!(s, " trail at util 0.5 [mm] | gap to μ + 0.1 [mm] |");
+    let _ = writeln!(s, "|---|{}---|---|", "---|".repeat(LOADS.len()));
+    for mu in MUS {
+        let _ = write!(s, "| {mu:.1} |");
+        let row: Vec<&Cell> = cells.iter().filter(|c| c.mu == mu).collect();
+        for c in &row {
+            match (c.first_util, c.err) {
+                (Some(u), Some(e)) => {
+                    let _ = write!(s, " {u:.2} ({e:+.3}) |");
+                }
+                _ => {
+                    let _ = write!(s, " not identifiable |");
+                }
+            }
+        }
+        let at_fz0 = row.iter().find(|c| c.load == 1.0);
+        let mm = |x: Option<f64>| x.map_or("–".to_string(), |x| format!("{:.1}", x * 1e3));
+        let _ = writeln!(
+            s,
+            " {} | {} |",
+            mm(at_fz0.and_then(|c| c.trail)),
+            mm(at_fz0.and_then(|c| c.gap))
+        );
+    }
+    s
+}
+
+/// The map as CSV.
+pub fn csv(cells: &[Cell]) -> String {
+    let f = |x: Option<f64>| x.map_or(String::new(), |x| format!("{x:.6}"));
+    let mut s = String::from("mu,load_rel,first_util,err,sigma,trail_u05_m,gap_m\n");
+    for c in cells {
+        s += &format!(
+            "{},{},{},{},{},{},{}\n",
+            c.mu,
+            c.load,
+            f(c.first_util),
+            f(c.err),
+            f(c.sigma),
+            f(c.trail),
+            f(c.gap)
+        );
+    }
+    s
+}
