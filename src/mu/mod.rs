@@ -133,10 +133,10 @@ pub struct Config<F> {
     pub settle: F,
     /// Distance \[m\] the wheel rolls after the lateral force changes side before readings
     /// count again, when every sample since carries Vx. While the force passes through zero
-    /// the point sweeps the Gough plot's sharpest bend, where the low-passed (and sensor-lagged)
-    /// Fy and Mz average points off the curve, and the contact patch's deflection rebuilds
-    /// over the relaxation length σy (eqs. 19–20): both are over after a distance rolled, not
-    /// a time. The default 0.6 m is σy of the benchmark's tyre at Fz0 (0.28–0.88 m from 0.5
+    /// the point sweeps the Gough plot's sharpest bend, where the low-passed Fy and Mz average
+    /// points off the curve, and on a real tyre the contact patch's deflection rebuilds over
+    /// the relaxation length σy (eqs. 19–20): both are over after a distance rolled, not a
+    /// time. The default 0.6 m is σy of the benchmark's tyre at Fz0 (0.28–0.88 m from 0.5
     /// to 1.5·Fz0); `gough mu bench` raises no false alarm from 0.25 m to 2 m with the 3 ms
     /// low-pass (with a 10 ms one, 1 m already raised two).
     pub settle_distance: F,
