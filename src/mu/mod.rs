@@ -124,8 +124,8 @@ pub struct Config<F> {
     /// for in each reading's variance; what it costs is smear: where the point moves fast
     /// along a bent Gough curve, the averaged Fy and Mz lie off it. The default 3 ms (was
     /// 10 ms) let readings start sooner after a reversal (`settle_distance`) with no false
-    /// alarm and a lower worst p95 error in `gough mu bench`; without any low-pass, noise
-    /// raised false alarms there.
+    /// alarm and a lower worst p95 error in `gough mu bench`; without any low-pass (a scratch
+    /// run with this default changed), noise raised false alarms there.
     pub lowpass_tau: F,
     /// Time after the lateral force changes side before readings count again \[s\], for
     /// samples without Vx (with Vx, `settle_distance` decides). The default 0.05 s is
@@ -137,8 +137,9 @@ pub struct Config<F> {
     /// points off the curve, and on a real tyre the contact patch's deflection rebuilds over
     /// the relaxation length σy (eqs. 19–20): both are over after a distance rolled, not a
     /// time. The default 0.6 m is σy of the benchmark's tyre at Fz0 (0.28–0.88 m from 0.5
-    /// to 1.5·Fz0); `gough mu bench` raises no false alarm from 0.25 m to 2 m with the 3 ms
-    /// low-pass (with a 10 ms one, 1 m already raised two).
+    /// to 1.5·Fz0). In `gough mu bench` runs with this default changed (scratch, not a command
+    /// of the repository) no false alarm came from 0.25 m to 2 m with the 3 ms low-pass; with a
+    /// 10 ms one, 1 m already raised two.
     pub settle_distance: F,
     /// A reading is not identifiable when a surface grippier than the estimate by more than
     /// `ambiguity_margin` (in λμ) could hold the point: its curve's trail at the measured force
