@@ -200,7 +200,9 @@ pub struct Sample<F> {
     pub fy: F,
     /// Aligning torque Mz \[N·m\].
     pub mz: F,
-    /// Longitudinal force Fx \[N\], when measured.
+    /// Longitudinal force Fx \[N\], when measured. Without it Fx counts as 0, although a
+    /// free-rolling tyre's is not (the shifts SHx, SVx): its moment s·Fx (eq. 17) then stays
+    /// in the trail, and the first estimates lean to the grippier side (`gough mu map --no-fx`).
     pub fx: Option<F>,
     /// Forward speed Vx \[m/s\], when measured (the speed gate is skipped without it).
     pub vx: Option<F>,

@@ -34,6 +34,10 @@ pub struct MapArgs {
     /// Also write the map as CSV here.
     #[arg(long)]
     pub out: Option<PathBuf>,
+    /// The samples carry no Fx (by default they carry the free-rolling Fx of the model, as a
+    /// wheel with an Fx measurement would).
+    #[arg(long)]
+    pub no_fx: bool,
 }
 
 /// Arguments of `gough mu estimate`.
@@ -95,12 +99,15 @@ pub fn run(cmd: MuCmd) -> Result<(), String> {
         MuCmd::Demo(d) => super::bench::demo(d),
         MuCmd::Map(a) => {
             let t = tyre::load(&a.tir)?;
-            let cells = super::map::map(&t.params)?;
+            let cells = super::map::map(&t.params, !a.no_fx)?;
             let name = a.tir.file_name().map_or_else(
                 || a.tir.display().to_string(),
                 |n| n.to_string_lossy().into_owned(),
             );
-            print!("{}", super::map::render(&cells, &name, t.params.fnomin));
+            print!(
+                "{}",
+                super::map::render(&cells, &name, t.params.fnomin, !a.no_fx)
+            );
             if let Some(out) = &a.out {
                 if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
                     std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;

@@ -75,95 +75,114 @@ fn at_force(p: &Params<f64>, lam: f64, fz: f64, force: f64) -> Option<mf::Output
     eval(p, lam, fz, hi)
 }
 
-/// The map of tyre `p` (see the module's doc).
-pub fn map(p: &Params<f64>) -> Result<Vec<Cell>, String> {
+/// The map of tyre `p` (see the module's doc). `with_fx`: the samples carry the measured Fx
+/// (at pure side slip, the free-rolling Fx of the model), as the benchmark's do; without it the
+/// estimator takes Fx as 0 and cannot remove its moment s·Fx (eq. 17) from Mz.
+pub fn map(p: &Params<f64>, with_fx: bool) -> Result<Vec<Cell>, String> {
     let table = super::table::<f64, Libm>(p, None)?;
     let cfg = Config::default();
-    let mu0 = MuEstimator::for_tyre(&table, p, cfg).mu0();
+    let probe = Probe {
+        p,
+        table: &table,
+        cfg,
+        mu0: MuEstimator::for_tyre(&table, p, cfg).mu0(),
+        with_fx,
+    };
     let mut cells = Vec::new();
     for &mu in &MUS {
         for &load in &LOADS {
-            let fz = load * p.fnomin;
-            cells.push(cell(p, &table, cfg, mu0, mu, fz, load));
+            cells.push(probe.cell(mu, load));
         }
     }
     Ok(cells)
 }
 
-fn cell(
-    p: &Params<f64>,
-    table: &GoughTable<f64>,
+/// What every cell is measured with.
+struct Probe<'a> {
+    p: &'a Params<f64>,
+    table: &'a GoughTable<f64>,
     cfg: Config<f64>,
     mu0: f64,
-    mu: f64,
-    fz: f64,
-    load: f64,
-) -> Cell {
-    let lam = mu / mu0;
-    let mut out = Cell {
-        mu,
-        load,
-        first_util: None,
-        err: None,
-        sigma: None,
-        trail: None,
-        gap: None,
-    };
-    // The sweep: up to the peak of |Fy|, in steps of 1 % of the slip angle at the peak's scale.
-    let da = 2e-4 * mu.max(0.1);
-    let mut peak: f64 = 0.0;
-    for i in 1..2000 {
-        let alpha = i as f64 * da;
-        let Some(o) = eval(p, lam, fz, alpha) else {
-            break;
+    with_fx: bool,
+}
+
+impl Probe<'_> {
+    fn cell(&self, mu: f64, load: f64) -> Cell {
+        let Probe {
+            p,
+            table,
+            cfg,
+            mu0,
+            with_fx,
+        } = *self;
+        let fz = load * p.fnomin;
+        let lam = mu / mu0;
+        let mut out = Cell {
+            mu,
+            load,
+            first_util: None,
+            err: None,
+            sigma: None,
+            trail: None,
+            gap: None,
         };
-        let f = o.fy.abs();
-        if f < peak {
-            break; // past the peak
+        // The sweep: up to the peak of |Fy|, in steps of 1 % of the slip angle at the peak's scale.
+        let da = 2e-4 * mu.max(0.1);
+        let mut peak: f64 = 0.0;
+        for i in 1..2000 {
+            let alpha = i as f64 * da;
+            let Some(o) = eval(p, lam, fz, alpha) else {
+                break;
+            };
+            let f = o.fy.abs();
+            if f < peak {
+                break; // past the peak
+            }
+            peak = f;
+            let util = o.fx.hypot(o.fy) / (mu * fz);
+            if util < 0.2 || i % 5 != 0 {
+                continue;
+            }
+            let mut est = MuEstimator::for_tyre(table, p, cfg);
+            let mut last = None;
+            for k in 0..STEPS {
+                last = Some(est.update::<Libm>(&Sample {
+                    t: k as f64 * 1e-3,
+                    fz: o.fz,
+                    fy: o.fy,
+                    mz: o.mz,
+                    fx: with_fx.then_some(o.fx),
+                    vx: Some(20.0),
+                    gamma: None,
+                }));
+            }
+            if let Some(e) = last.filter(|e| e.state == State::Identifiable) {
+                out.first_util = Some(util);
+                out.err = Some(e.mu - mu);
+                out.sigma = Some(e.sigma);
+                break;
+            }
         }
-        peak = f;
-        let util = o.fx.hypot(o.fy) / (mu * fz);
-        if util < 0.2 || i % 5 != 0 {
-            continue;
+        // The trail at utilisation 0.5, and on the surface 0.1 grippier at the same force.
+        let force = 0.5 * mu * fz;
+        if let Some(o) = at_force(p, lam, fz, force) {
+            let tau = -o.mz / o.fy;
+            out.trail = Some(tau);
+            out.gap = at_force(p, (mu + 0.1) / mu0, fz, force).map(|g| -g.mz / g.fy - tau);
         }
-        let mut est = MuEstimator::for_tyre(table, p, cfg);
-        let mut last = None;
-        for k in 0..STEPS {
-            last = Some(est.update::<Libm>(&Sample {
-                t: k as f64 * 1e-3,
-                fz: o.fz,
-                fy: o.fy,
-                mz: o.mz,
-                fx: None,
-                vx: Some(20.0),
-                gamma: None,
-            }));
-        }
-        if let Some(e) = last.filter(|e| e.state == State::Identifiable) {
-            out.first_util = Some(util);
-            out.err = Some(e.mu - mu);
-            out.sigma = Some(e.sigma);
-            break;
-        }
+        out
     }
-    // The trail at utilisation 0.5, and on the surface 0.1 grippier at the same force.
-    let force = 0.5 * mu * fz;
-    if let Some(o) = at_force(p, lam, fz, force) {
-        let tau = -o.mz / o.fy;
-        out.trail = Some(tau);
-        out.gap = at_force(p, (mu + 0.1) / mu0, fz, force).map(|g| -g.mz / g.fy - tau);
-    }
-    out
 }
 
 /// The map as a terminal table (markdown).
-pub fn render(cells: &[Cell], name: &str, fz0: f64) -> String {
+pub fn render(cells: &[Cell], name: &str, fz0: f64, with_fx: bool) -> String {
     use std::fmt::Write;
     let mut s = String::new();
+    let fx = if with_fx { "measured" } else { "not measured" };
     let _ = writeln!(
         s,
-        "identifiability map of {name}: steady pure side slip (γ 0, at LONGVL), noise-free, the \
-         estimator's defaults at 1 kHz for 150 ms per point"
+        "identifiability map of {name}: steady pure side slip (γ 0, at LONGVL), noise-free, Fx \
+         {fx}, the estimator's defaults at 1 kHz for 150 ms per point"
     );
     let _ = writeln!(
         s,
