@@ -47,7 +47,7 @@ fn list(xs: impl IntoIterator<Item = String>) -> String {
 
 fn curve<F: Lit>(c: &Curve<F>) -> String {
     format!(
-        "gough::mu::table::Curve {{ f: {}, rise: {}, tau0: {}, sat: {}, rho_sat: {}, rho_floor: {}, len: {}, rise_len: {}, peak: {}, f_top: {}, band_scale: {}, band: {} }}",
+        "gough::mu::table::Curve {{ f: {}, rise: {}, tau0: {}, sat: {}, rho_sat: {}, rho_floor: {}, len: {}, rise_len: {}, peak: {}, f_top: {}, band_scale: {}, fx_free: {}, band: {} }}",
         list(c.f.iter().map(|&x| x.lit())),
         list(c.rise.iter().map(|&(f, t)| format!("({}, {})", f.lit(), t.lit()))),
         c.tau0.lit(),
@@ -59,6 +59,7 @@ fn curve<F: Lit>(c: &Curve<F>) -> String {
         c.peak,
         c.f_top.lit(),
         c.band_scale.lit(),
+        list(c.fx_free.iter().map(|&x| x.lit())),
         list(c.band.iter().map(|x| list(x.iter().map(|&v| v.lit())))),
     )
 }

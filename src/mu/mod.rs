@@ -200,9 +200,9 @@ pub struct Sample<F> {
     pub fy: F,
     /// Aligning torque Mz \[N·m\].
     pub mz: F,
-    /// Longitudinal force Fx \[N\], when measured. Without it Fx counts as 0, although a
-    /// free-rolling tyre's is not (the shifts SHx, SVx): its moment s·Fx (eq. 17) then stays
-    /// in the trail, and the first estimates lean to the grippier side (`gough mu map --no-fx`).
+    /// Longitudinal force Fx \[N\], when measured. Without it the wheel is taken to roll free:
+    /// its Fx is the free-rolling tyre's on each surface of the table (not 0: the shifts SHx,
+    /// SVx), whose moment s·Fx (eq. 17) comes out of the trail as a measured Fx's would.
     pub fx: Option<F>,
     /// Forward speed Vx \[m/s\], when measured (the speed gate is skipped without it).
     pub vx: Option<F>,
@@ -364,7 +364,9 @@ struct Reading<'a, F> {
     /// camber or load node needs fewer), in the order (γ, Fz), (γ, Fz⁺), (γ⁺, Fz), (γ⁺, Fz⁺).
     corners: [(&'a [table::Curve<F>; table::LAMBDA_NODES.len()], F); 4],
     n: usize,
-    tau: F,
+    /// The trail −(Mz − s·Fx)/Fy on each surface: the same on all when the sample carries Fx;
+    /// without it, each surface's free-rolling Fx ([`table::Curve::fx_free`]).
+    tau: [F; table::LAMBDA_NODES.len()],
     force: F,
     fz: F,
 }
@@ -472,7 +474,8 @@ impl<'t, F: Float> MuEstimator<'t, F> {
 
     /// The radial estimate on surface node `si` (small-slip trail `tau0`) for the reading `q`.
     fn node(&self, si: usize, q: &Reading<F>, tau0: F) -> Option<NodeEst<F>> {
-        let Reading { tau, force, fz, .. } = *q;
+        let Reading { force, fz, .. } = *q;
+        let tau = *q.tau.get(si)?;
         // Bilinear in (load, camber) over the bracketing curves; `tau0` is this surface's τ0
         // interpolated so.
         let corners = q.active();
@@ -530,6 +533,8 @@ impl<'t, F: Float> MuEstimator<'t, F> {
         if fy.abs() < cfg.fy_min_rel * s.fz {
             return None;
         }
+        // Without Fx the wheel is taken to roll free: its Fx, per surface, comes with the
+        // corners below; here it counts as 0.
         let fx = s.fx.unwrap_or(F::ZERO);
         let dfz = (s.fz - self.fz0) / self.fz0;
         let gamma = s.gamma.filter(|g| g.is_finite()).unwrap_or(cfg.gamma);
@@ -537,7 +542,7 @@ impl<'t, F: Float> MuEstimator<'t, F> {
         let arm = self.arm.s_mounted(self.table.mirrored, fy, dfz, gamma);
         let mz = s.mz - arm * fx;
         // Trail variance of the model's Fx moment.
-        let var_tau_arm = (cfg.arm_model_rel * arm * fx / fy).sq()
+        let mut var_tau_arm = (cfg.arm_model_rel * arm * fx / fy).sq()
             + (cfg.mzr_model_rel * s.fz * self.arm.r0 / fy).sq();
         let tau = -mz / fy;
         // Side: Fy along the model's α > 0 direction → side 0.
@@ -556,7 +561,6 @@ impl<'t, F: Float> MuEstimator<'t, F> {
         // The model's uncertainty of the trail on a curve whose small-slip trail is τ0: the
         // table, the Fx moment and residual torque (`var_tau_arm`), combined slip.
         let trail_rel_sq = cfg.trail_model_rel.sq() + (cfg.combined_model_rel * fx_share).sq();
-        let var_tau_model = |tau0: F| tau0.sq() * trail_rel_sq + var_tau_arm;
         // Load nodes bracketing Fz (clamped at the ends).
         let nodes = &self.table.fz;
         let n = nodes.len();
@@ -584,7 +588,7 @@ impl<'t, F: Float> MuEstimator<'t, F> {
         let mut reading = Reading {
             corners: all,
             n: 0,
-            tau,
+            tau: [tau; table::LAMBDA_NODES.len()],
             force,
             fz: s.fz,
         };
@@ -594,6 +598,28 @@ impl<'t, F: Float> MuEstimator<'t, F> {
                 reading.n += 1;
             }
         }
+        if s.fx.is_none() && arm != F::ZERO {
+            // The free-rolling Fx of each surface at this force (bilinear over the corners, as
+            // the curves), and its moment s·Fx (eq. (17)) out of the trail: τ += s·Fx/Fy.
+            let f_sq = (force / s.fz).sq();
+            let k = arm * s.fz / fy;
+            let mut taus = reading.tau;
+            for &(cs, wt) in reading.active() {
+                for (slot, c) in taus.iter_mut().zip(cs) {
+                    let [c0, c2] = c.fx_free;
+                    *slot += wt * k * (c0 + c2 * f_sq);
+                }
+            }
+            reading.tau = taus;
+            // That moment is the model's too (`arm_model_rel`, as for a measured Fx): its
+            // largest share over the surfaces.
+            let mut moment = F::ZERO;
+            for &t in &taus {
+                moment = moment.max((t - tau).abs());
+            }
+            var_tau_arm += (cfg.arm_model_rel * moment).sq();
+        }
+        let var_tau_model = |tau0: F| tau0.sq() * trail_rel_sq + var_tau_arm;
         // Radial estimates about each surface node; the consistent one is where the estimate
         // crosses its own node (d = λ̂ − λnode changes sign), interpolated between the two.
         // First each surface's small-slip trail τ0 (bilinear over the corners) and the trail
@@ -610,7 +636,7 @@ impl<'t, F: Float> MuEstimator<'t, F> {
                 *slot += wt * c.tau0;
             }
         }
-        for &tau0 in &tau0s {
+        for (&tau0, &tau) in tau0s.iter().zip(&reading.tau) {
             if tau0 > F::ZERO {
                 most = most.max(F::ONE - tau / tau0);
             }
@@ -722,9 +748,12 @@ impl<'t, F: Float> MuEstimator<'t, F> {
         let cfg = &self.cfg;
         let reading = &p.reading;
         let lambda = p.raw.lambda;
-        let (tau, f_m) = (reading.tau, reading.force / reading.fz);
+        let f_m = reading.force / reading.fz;
         for (si, (tau0, &lam_k)) in p.tau0.iter().zip(&self.table.lam).enumerate().rev() {
             let tau0 = *tau0;
+            let Some(&tau) = reading.tau.get(si) else {
+                continue;
+            };
             if tau0 <= F::ZERO || lam_k <= lambda || lam_k - lambda <= cfg.ambiguity_margin {
                 continue;
             }

@@ -89,6 +89,12 @@ pub struct Curve<F> {
     pub f_top: F,
     /// [`BAND_CELLS`]/`f_top`: a force's cell of the bounds (0 for an empty curve).
     pub band_scale: F,
+    /// The free-rolling tyre's Fx/Fz against f = |Fy|/Fz: \[c0, c2\] of Fx/Fz ≈ c0 + c2·f²
+    /// (the shifts SHx, SVx make Fx nonzero at κ = 0, and the weight Gxα shrinks it as the
+    /// slip angle grows), through the smallest slip angle's point and the force peak's \[-\].
+    /// The table holds the torque with this Fx's moment s·Fx removed (eq. 17); a sample that
+    /// carries no Fx is taken to roll free, and this is its Fx. Zero for the brush model.
+    pub fx_free: [F; 2],
     /// Per edge i of [`BAND_CELLS`] equal cells of f from 0 to `f_top` (edge i at
     /// f·`band_scale` = i): \[[`Curve::tau_at`] there, how far `tau_at` strays from the chord
     /// to the next edge over cell i\] \[m\] (the last edge's second entry is 0). The stray is
@@ -129,6 +135,7 @@ impl<F: Float> Curve<F> {
             peak: 0,
             f_top: F::ZERO,
             band_scale: F::ZERO,
+            fx_free: [F::ZERO; 2],
             band: [[F::ZERO; 2]; BAND_CELLS + 1],
         }
     }
@@ -258,7 +265,7 @@ impl<F: Float> GoughTable<F> {
         src.set_lambda(F::ONE);
         let (fz_ref, mu0, mu_ratio) = match &src {
             Src::Mf(q, m) => {
-                let (_, _, mu0, mux0) = mf_fy_mz::<F, M>(q, *m, F::ZERO, q.fnomin, F::ZERO)?;
+                let (_, _, _, mu0, mux0) = mf_fy_mz::<F, M>(q, *m, F::ZERO, q.fnomin, F::ZERO)?;
                 if mux0 <= F::ZERO || mu0 <= F::ZERO {
                     return None;
                 }
@@ -478,14 +485,15 @@ impl<F: Float> Curve<F> {
     }
 }
 
-/// (Fy, Mz, μy, μx) of the Magic Formula at pure side slip, limits off, nominal pressure.
+/// (Fy, Mz, Fx, μy, μx) of the Magic Formula at pure side slip, limits off, nominal pressure;
+/// Mz without the moment s·Fx of that (free-rolling) Fx.
 fn mf_fy_mz<F: Float, M: Backend<F>>(
     q: &Params<F>,
     mounted: Option<Side>,
     alpha: F,
     fz: F,
     gamma: F,
-) -> Option<(F, F, F, F)> {
+) -> Option<(F, F, F, F, F)> {
     let opts = Options {
         limits: false,
         mounted,
@@ -505,7 +513,7 @@ fn mf_fy_mz<F: Float, M: Backend<F>>(
     // removes from each sample, mirrored like the tyre (eq. (17), (A56)).
     let dfz = (fz - q.fnomin) / q.fnomin;
     let s = Arm::from_params(q).s_mounted(q.mirrored_on(mounted), o.fy, dfz, gamma);
-    Some((o.fy, o.mz - s * o.fx, o.mu_y, o.mu_x))
+    Some((o.fy, o.mz - s * o.fx, o.fx, o.mu_y, o.mu_x))
 }
 
 /// The model behind the table, on a settable surface λμ.
@@ -528,11 +536,20 @@ impl<F: Float> Src<F> {
     /// (Fy, Mz) at the current surface; the brush model's surface is scaled here (its curves
     /// are exactly radial).
     fn eval<M: Backend<F>>(&self, alpha: F, fz: F, gamma: F) -> Option<(F, F)> {
+        self.eval_fx::<M>(alpha, fz, gamma)
+            .map(|(fy, mz, _)| (fy, mz))
+    }
+
+    /// (Fy, Mz, Fx): [`Src::eval`] with the free-rolling Fx (0 for the brush model).
+    fn eval_fx<M: Backend<F>>(&self, alpha: F, fz: F, gamma: F) -> Option<(F, F, F)> {
         match self {
             Src::Mf(q, m) => {
-                mf_fy_mz::<F, M>(q, *m, alpha, fz, gamma).map(|(fy, mz, _, _)| (fy, mz))
+                mf_fy_mz::<F, M>(q, *m, alpha, fz, gamma).map(|(fy, mz, fx, _, _)| (fy, mz, fx))
             }
-            Src::Brush(b) => Some(b.fy_mz::<M>(alpha, fz)),
+            Src::Brush(b) => {
+                let (fy, mz) = b.fy_mz::<M>(alpha, fz);
+                Some((fy, mz, F::ZERO))
+            }
         }
     }
 }
@@ -555,6 +572,7 @@ fn curve<F: Float, M: Backend<F>>(
     };
     let mut taus = [F::ZERO; POINTS];
     let mut fs = [F::ZERO; POINTS];
+    let mut fxs = [F::ZERO; POINTS];
     for k in 0..POINTS {
         let alpha = sgn * scale * F::from_f64(alpha_node(k));
         // Brush: evaluate at λ = 1 on the stretched axis and scale radially (exact).
@@ -562,8 +580,9 @@ fn curve<F: Float, M: Backend<F>>(
             Src::Brush(_) => M::atan(M::tan(alpha) / scale),
             Src::Mf(..) => alpha,
         };
-        let (fy, mz) = src.eval::<M>(alpha_eval, fz, gamma)?;
+        let (fy, mz, fx) = src.eval_fx::<M>(alpha_eval, fz, gamma)?;
         let (fy, mz) = (fy * lam_f, mz * lam_f);
+        *fxs.get_mut(k)? = fx / fz;
         let fy_dir = fy * fy_sign * sgn; // > 0 on the expected side
         *taus.get_mut(k)? = if fy_dir > F::ZERO {
             -mz / fy
@@ -679,6 +698,22 @@ fn curve<F: Float, M: Backend<F>>(
     } else {
         tau_end
     };
+    // The free-rolling Fx/Fz as c0 + c2·f², through the smallest slip angle's point and the
+    // force peak's (the weight Gxα falls off with α², and f grows about linearly with α there).
+    let (mut k_top, mut f_hi) = (0, F::ZERO);
+    for (k, &fk) in fs.iter().enumerate() {
+        if fk > f_hi {
+            (k_top, f_hi) = (k, fk);
+        }
+    }
+    let (f_lo, fx_lo, fx_hi) = (fs.first()?.max(F::ZERO), *fxs.first()?, *fxs.get(k_top)?);
+    let den = f_hi.sq() - f_lo.sq();
+    let c2 = if den > F::from_f64(1e-6) {
+        (fx_hi - fx_lo) / den
+    } else {
+        F::ZERO
+    };
+    let fx_free = [fx_lo - c2 * f_lo.sq(), c2];
     let mut c = Curve {
         f,
         rise: rise_r,
@@ -691,6 +726,7 @@ fn curve<F: Float, M: Backend<F>>(
         peak: 0,
         f_top: F::ZERO,
         band_scale: F::ZERO,
+        fx_free,
         band: [[F::ZERO; 2]; BAND_CELLS + 1],
     };
     let mut peak = 1;

@@ -34,8 +34,8 @@ pub struct MapArgs {
     /// Also write the map as CSV here.
     #[arg(long)]
     pub out: Option<PathBuf>,
-    /// The samples carry no Fx (by default they carry the free-rolling Fx of the model, as a
-    /// wheel with an Fx measurement would).
+    /// The samples carry no Fx, and the estimator takes the free-rolling Fx from its table (by
+    /// default they carry the model's free-rolling Fx, as a wheel that measures Fx would).
     #[arg(long)]
     pub no_fx: bool,
 }

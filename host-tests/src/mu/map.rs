@@ -77,7 +77,7 @@ fn at_force(p: &Params<f64>, lam: f64, fz: f64, force: f64) -> Option<mf::Output
 
 /// The map of tyre `p` (see the module's doc). `with_fx`: the samples carry the measured Fx
 /// (at pure side slip, the free-rolling Fx of the model), as the benchmark's do; without it the
-/// estimator takes Fx as 0 and cannot remove its moment s·Fx (eq. 17) from Mz.
+/// estimator takes the free-rolling Fx from its table (`Curve::fx_free`).
 pub fn map(p: &Params<f64>, with_fx: bool) -> Result<Vec<Cell>, String> {
     let table = super::table::<f64, Libm>(p, None)?;
     let cfg = Config::default();
