@@ -173,7 +173,8 @@ fn demo_runs_and_writes_its_outputs() {
 /// 0.65 at most and every surface from 0.95; the first estimate is within +0.06 of the truth,
 /// never below it (the first readings lean to the grippier curve). Without an Fx measurement
 /// (the estimator then takes the free-rolling Fx from its table) the same holds, within +0.06
-/// too. A bad file is a one-line error.
+/// too. The σ reported covers that error (it carries the model's own uncertainty, which
+/// fusing readings does not reduce). A bad file is a one-line error.
 #[test]
 fn map_says_from_which_utilisation_mu_is_read() {
     let run = |name: &str, extra: &[&str]| -> Vec<Vec<f64>> {
@@ -202,6 +203,13 @@ fn map_says_from_which_utilisation_mu_is_read() {
     let rows = run("map.csv", &[]);
     let no_fx = run("map_no_fx.csv", &["--no-fx"]);
     assert_eq!((rows.len(), no_fx.len()), (30, 30));
+    for r in rows.iter().chain(&no_fx) {
+        let (mu, load, err, sigma) = (r[0], r[1], r[3], r[4]);
+        assert!(
+            err <= sigma,
+            "μ {mu} load {load}: first estimate off by {err}, σ {sigma}"
+        );
+    }
     for r in &rows {
         let (mu, load, util, err, gap) = (r[0], r[1], r[2], r[3], r[6]);
         assert!(util.is_finite(), "μ {mu} load {load}: never identifiable");

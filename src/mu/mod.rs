@@ -243,7 +243,8 @@ impl State {
 pub struct Estimate<F> {
     /// μ \[-\] on the tyre file's test-surface scale (architecture.md).
     pub mu: F,
-    /// Standard deviation of μ \[-\].
+    /// Standard deviation of μ \[-\]: the filter's, plus the model's own uncertainty at the
+    /// latest reading (which fusing many readings does not reduce: they share the model).
     pub sigma: F,
     /// What it rests on.
     pub state: State,
@@ -308,6 +309,9 @@ pub struct MuEstimator<'t, F> {
     side_vx: bool,
     // rms of the low-passed noise relative to the raw noise (1 until a sample interval is known)
     noise_scale: F,
+    /// The model's variance of λμ at the latest reading fused (`Raw::var_model`): added to the
+    /// filter's `p` in the σ reported, not in the filter.
+    var_model: F,
     // the reading taken by the last sample, its ambiguity test left for this one (see `update`)
     pending: Option<Pending<'t, F>>,
     // the state reported for the latest sample that took or finished a reading
@@ -321,6 +325,9 @@ pub struct Raw<F> {
     pub lambda: F,
     /// Its variance.
     pub var: F,
+    /// The part of `var` from the model's uncertainty (the table, residual torque, Fx arm,
+    /// combined slip): readings at one place share it, so it does not average out.
+    pub var_model: F,
     /// Trail drop 1 − τ/τ0.
     pub drop: F,
 }
@@ -445,6 +452,7 @@ impl<'t, F: Float> MuEstimator<'t, F> {
             side_dist: F::ZERO,
             side_vx: true,
             noise_scale: F::ONE,
+            var_model: F::ZERO,
             pending: None,
             last_state: State::Fallback,
         }
@@ -732,6 +740,7 @@ impl<'t, F: Float> MuEstimator<'t, F> {
             raw: Raw {
                 lambda,
                 var: var_meas + var_model,
+                var_model,
                 drop: e.drop,
             },
             t: s.t,
@@ -936,20 +945,25 @@ impl<'t, F: Float> MuEstimator<'t, F> {
         let mu0 = self.table.mu0;
         Estimate {
             mu: self.lambda * mu0,
-            sigma: M::sqrt(self.p) * mu0,
+            sigma: self.sigma::<M>(),
             state: State::Identifiable,
             change,
         }
     }
 
+    /// σ of μ as reported: the filter's `p` plus the latest reading's model variance.
+    fn sigma<M: Backend<F>>(&self) -> F {
+        M::sqrt(self.p + self.var_model) * self.table.mu0
+    }
+
     fn hold<M: Backend<F>>(&self) -> Estimate<F> {
         let mu0 = self.table.mu0;
         if self.have {
-            let sigma = M::sqrt(self.p) * mu0;
-            if sigma <= self.cfg.sigma_prior {
+            // Aged out by the filter's own σ (the model's part does not age).
+            if M::sqrt(self.p) * mu0 <= self.cfg.sigma_prior {
                 return Estimate {
                     mu: self.lambda * mu0,
-                    sigma,
+                    sigma: self.sigma::<M>(),
                     state: State::NotIdentifiable,
                     change: false,
                 };
@@ -989,6 +1003,7 @@ impl<'t, F: Float> MuEstimator<'t, F> {
                 .cand
                 .1
                 .max(r.var / F::from_f64(f64::from(self.cfg.init_count)));
+            self.var_model = r.var_model;
             self.have = true;
             self.run = 0;
         } else {
@@ -1018,6 +1033,7 @@ impl<'t, F: Float> MuEstimator<'t, F> {
                     change = (m - self.lambda).abs() * mu0 >= self.cfg.change_min;
                     self.lambda = m;
                     self.p = v.max(r.var / F::from_f64(f64::from(self.cfg.change_count)));
+                    self.var_model = r.var_model;
                     self.run = 0;
                 } else {
                     // Not used: the estimate is held, as for any uninformative sample.
@@ -1027,6 +1043,7 @@ impl<'t, F: Float> MuEstimator<'t, F> {
                 let k = self.p / s;
                 self.lambda += k * e;
                 self.p = (F::ONE - k) * self.p;
+                self.var_model = r.var_model;
                 self.run = 0;
             }
         }
@@ -1035,7 +1052,9 @@ impl<'t, F: Float> MuEstimator<'t, F> {
 }
 
 /// Fuses two wheels' estimates (an axle) by inverse variance when they agree within 3σ; `None`
-/// when either has no estimate of its own or they disagree (μ-split: keep them apart).
+/// when either has no estimate of its own or they disagree (μ-split: keep them apart). Each σ
+/// carries its model's uncertainty, which two wheels of one tyre share: the fused σ is then
+/// optimistic, by up to √2.
 pub fn fuse<F: Float, M: Backend<F>>(a: &Estimate<F>, b: &Estimate<F>) -> Option<Estimate<F>> {
     if a.state == State::Fallback || b.state == State::Fallback {
         return None;
