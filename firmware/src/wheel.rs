@@ -9,7 +9,7 @@
 //! - A measurement **with kinematics** (Vx, plus α, κ or ω) goes through the relaxation-length
 //!   filter ([`gough::relax::Transient`], eq. 20 solved exactly over the step between this
 //!   wheel's timestamps): slip speeds Vsy = |Vx|·tan α and Vsx = −|Vx|·κ, or Vsx = Vx − ω·Re when ω
-//!   is given without κ ([`effective_radius`]); the Magic Formula is evaluated at the transient
+//!   is given without κ (`effective_radius` below); the Magic Formula is evaluated at the transient
 //!   α', κ' (`Options::transient`). The relaxation lengths of a step are those of the previous
 //!   evaluation (σ varies with Fz, which changes little over one step), as in
 //!   [`gough::relax::TransientTyre`]. The damping speed is |Vx|
@@ -22,10 +22,10 @@
 //!   steady state of the measured slips (v = σα·tan α, u = σκ·κ) and the forces are the steady-state
 //!   Magic Formula — a stream that starts mid-manoeuvre does not start from an undeflected tyre.
 //! - **Without kinematics** (no Vx, or neither α, κ nor ω): the steady-state Magic Formula at the
-//!   measured α, κ ([`Measurement::mf_input`], Vx = LONGVL), as before the filter existed.
+//!   measured α, κ ([`Measurement::mf_input`](gough::proto::Measurement::mf_input), Vx = LONGVL), as before the filter existed.
 //!
 //! ## Estimate
-//! [`MuEstimator::update`] on the measured Fz, Fy, Mz, and Fx, Vx, γ when given — never on the
+//! [`MuEstimator::update`](gough::mu::MuEstimator::update) on the measured Fz, Fy, Mz, and Fx, Vx, γ when given — never on the
 //! model's forces and never on α. Its time is this wheel's µs since the estimator started,
 //! accumulated from wrapping `u32` differences (an older timestamp is fed as such: the estimator
 //! holds). The prior is `Settings::fallback_mu`.

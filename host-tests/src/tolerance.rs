@@ -9,7 +9,7 @@ pub enum Precision {
     F32,
 }
 
-/// Allowed max |error| for forces [N]: 1e-6·FNOMIN in f64 (the formulas are the same; what is
+/// Allowed max |error| for forces \[N\]: 1e-6·FNOMIN in f64 (the formulas are the same; what is
 /// left is rounding and the order of operations), 1e-4·FNOMIN in f32 (f32 has 6e-8 relative
 /// precision; a dozen chained transcendental steps, and inputs such as dfz computed from
 /// rounded Fz, amplify it near the peak).

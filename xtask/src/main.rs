@@ -183,6 +183,10 @@ fn test_all() -> Result<(), String> {
         "-D",
         "warnings",
     ]))?;
+    step("API docs build without warnings (broken or private intra-doc links)");
+    run(cargo()
+        .args(["doc", "--workspace", "--no-deps"])
+        .env("RUSTDOCFLAGS", "-D warnings"))?;
     step("host tests: core unit + property + doc tests, MFeval oracle, CLI");
     cargo_test(&["--workspace"], &mut passed, &mut failed)?;
     ensure_qemu()?;

@@ -1,6 +1,6 @@
 //! Friction estimation on logs: the core's Gough-plot estimator (`gough::mu`) driven by CSV
 //! rows, the literature baselines ([`peers`]), and the closed-loop benchmark on the vehicle
-//! simulation ([`bench`]). Nothing here re-implements the estimator.
+//! simulation ([`bench`](mod@bench)). Nothing here re-implements the estimator.
 pub mod bench;
 pub mod cli;
 pub mod map;

@@ -90,7 +90,7 @@ fn cos_poly(r: f32) -> f32 {
 /// absolute below (see tests); odd; NaN and ±∞ → NaN; ±0 → ±0; in [−1, 1] for every finite x
 /// (not accurate beyond |x| = 1e5, see the module doc).
 ///
-/// Every argument of the Magic Formula is within |x| ≤ [`SHORT`], so that path comes first:
+/// Every argument of the Magic Formula is within |x| ≤ 8 (`SHORT`), so that path comes first:
 /// there a tiny x (|x| < 2⁻¹²) gives k = 0, r = x and r + r³·P rounds to x, subnormals kept,
 /// the result an early return would give; only −0 needs its own test (−0 + 0 is +0). NaN and
 /// ±∞ fail `|x| ≤ SHORT` and are caught on the long path.
@@ -140,7 +140,7 @@ pub fn cos(x: f32) -> f32 {
 /// tests); odd; NaN and ±∞ → NaN; ±0 → ±0; finite for every finite x (±f32::MAX if the reduced argument is exactly 0 at a
 /// pole; not accurate beyond |x| = 1e5).
 ///
-/// Below |x| = π/4 (where [`reduce`] rounds k to 0 and returns r = x: the same test) the
+/// Below |x| = π/4 (where the reduction rounds k to 0 and returns r = x: the same test) the
 /// polynomial is all: every slip angle of the Magic Formula takes that path, with no other
 /// test (a tiny x gives r + r³·T = x after rounding, ±0 and subnormals kept). NaN and ±∞ fail
 /// it and are caught on the long path.
