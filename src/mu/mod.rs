@@ -959,8 +959,9 @@ impl<'t, F: Float> MuEstimator<'t, F> {
     fn hold<M: Backend<F>>(&self) -> Estimate<F> {
         let mu0 = self.table.mu0;
         if self.have {
-            // Aged out by the filter's own σ (the model's part does not age).
-            if M::sqrt(self.p) * mu0 <= self.cfg.sigma_prior {
+            // Aged out by the filter's own σ (the model's part does not age); compared
+            // squared, so that a held sample takes one square root, not two.
+            if self.p * mu0.sq() <= self.cfg.sigma_prior.sq() {
                 return Estimate {
                     mu: self.lambda * mu0,
                     sigma: self.sigma::<M>(),
