@@ -185,7 +185,7 @@ fn test_all() -> Result<(), String> {
     ]))?;
     step("API docs build without warnings (broken or private intra-doc links)");
     run(cargo()
-        .args(["doc", "--workspace", "--no-deps"])
+        .args(["doc", "--workspace", "--no-deps", "--lib"])
         .env("RUSTDOCFLAGS", "-D warnings"))?;
     step("host tests: core unit + property + doc tests, MFeval oracle, CLI");
     cargo_test(&["--workspace"], &mut passed, &mut failed)?;
