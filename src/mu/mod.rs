@@ -246,6 +246,9 @@ pub struct Estimate<F> {
     /// Standard deviation of μ \[-\]: the filter's, plus the model's own uncertainty at the
     /// latest reading (which fusing many readings does not reduce: they share the model).
     pub sigma: F,
+    /// The model's part of `sigma` \[-\] (σ² = filter's variance + `sigma_model`²): the
+    /// wheels of an axle share it ([`fuse`]). 0 for the prior.
+    pub sigma_model: F,
     /// What it rests on.
     pub state: State,
     /// A change of surface was declared at this sample.
@@ -312,6 +315,8 @@ pub struct MuEstimator<'t, F> {
     /// The model's variance of λμ at the latest reading fused (`Raw::var_model`): added to the
     /// filter's `p` in the σ reported, not in the filter.
     var_model: F,
+    /// √`var_model`·μy0: `Estimate::sigma_model` (taken once per reading fused).
+    sigma_model: F,
     // the reading taken by the last sample, its ambiguity test left for this one (see `update`)
     pending: Option<Pending<'t, F>>,
     // the state reported for the latest sample that took or finished a reading
@@ -453,6 +458,7 @@ impl<'t, F: Float> MuEstimator<'t, F> {
             side_vx: true,
             noise_scale: F::ONE,
             var_model: F::ZERO,
+            sigma_model: F::ZERO,
             pending: None,
             last_state: State::Fallback,
         }
@@ -946,9 +952,16 @@ impl<'t, F: Float> MuEstimator<'t, F> {
         Estimate {
             mu: self.lambda * mu0,
             sigma: self.sigma::<M>(),
+            sigma_model: self.sigma_model,
             state: State::Identifiable,
             change,
         }
+    }
+
+    /// The model's variance of the reading just fused (`Raw::var_model`), kept for σ.
+    fn set_model<M: Backend<F>>(&mut self, var_model: F) {
+        self.var_model = var_model;
+        self.sigma_model = M::sqrt(var_model) * self.table.mu0;
     }
 
     /// σ of μ as reported: the filter's `p` plus the latest reading's model variance.
@@ -965,6 +978,7 @@ impl<'t, F: Float> MuEstimator<'t, F> {
                 return Estimate {
                     mu: self.lambda * mu0,
                     sigma: self.sigma::<M>(),
+                    sigma_model: self.sigma_model,
                     state: State::NotIdentifiable,
                     change: false,
                 };
@@ -973,6 +987,7 @@ impl<'t, F: Float> MuEstimator<'t, F> {
         Estimate {
             mu: self.cfg.mu_prior,
             sigma: self.cfg.sigma_prior,
+            sigma_model: F::ZERO,
             state: State::Fallback,
             change: false,
         }
@@ -1004,7 +1019,7 @@ impl<'t, F: Float> MuEstimator<'t, F> {
                 .cand
                 .1
                 .max(r.var / F::from_f64(f64::from(self.cfg.init_count)));
-            self.var_model = r.var_model;
+            self.set_model::<M>(r.var_model);
             self.have = true;
             self.run = 0;
         } else {
@@ -1034,7 +1049,7 @@ impl<'t, F: Float> MuEstimator<'t, F> {
                     change = (m - self.lambda).abs() * mu0 >= self.cfg.change_min;
                     self.lambda = m;
                     self.p = v.max(r.var / F::from_f64(f64::from(self.cfg.change_count)));
-                    self.var_model = r.var_model;
+                    self.set_model::<M>(r.var_model);
                     self.run = 0;
                 } else {
                     // Not used: the estimate is held, as for any uninformative sample.
@@ -1044,7 +1059,7 @@ impl<'t, F: Float> MuEstimator<'t, F> {
                 let k = self.p / s;
                 self.lambda += k * e;
                 self.p = (F::ONE - k) * self.p;
-                self.var_model = r.var_model;
+                self.set_model::<M>(r.var_model);
                 self.run = 0;
             }
         }
@@ -1053,9 +1068,10 @@ impl<'t, F: Float> MuEstimator<'t, F> {
 }
 
 /// Fuses two wheels' estimates (an axle) by inverse variance when they agree within 3σ; `None`
-/// when either has no estimate of its own or they disagree (μ-split: keep them apart). Each σ
-/// carries its model's uncertainty, which two wheels of one tyre share: the fused σ is then
-/// optimistic, by up to √2.
+/// when either has no estimate of its own or they disagree (μ-split: keep them apart). The
+/// filters' parts of σ are independent and shrink as usual; the model's parts
+/// (`Estimate::sigma_model`) come from one tyre model and are taken as fully correlated: they
+/// add linearly, w·σa + (1 − w)·σb, and fusing does not shrink them.
 pub fn fuse<F: Float, M: Backend<F>>(a: &Estimate<F>, b: &Estimate<F>) -> Option<Estimate<F>> {
     if a.state == State::Fallback || b.state == State::Fallback {
         return None;
@@ -1074,9 +1090,15 @@ pub fn fuse<F: Float, M: Backend<F>>(a: &Estimate<F>, b: &Estimate<F>) -> Option
     } else {
         State::NotIdentifiable
     };
+    // The filters' variances (what is left after the model's part).
+    let (ma, mb) = (a.sigma_model.min(a.sigma), b.sigma_model.min(b.sigma));
+    let (na, nb) = (va - ma.sq(), vb - mb.sq());
+    let wb = F::ONE - w;
+    let sigma_model = w * ma + wb * mb;
     Some(Estimate {
-        mu: w * a.mu + (F::ONE - w) * b.mu,
-        sigma: M::sqrt(va * vb / (va + vb)),
+        mu: w * a.mu + wb * b.mu,
+        sigma: M::sqrt(w * w * na + wb * wb * nb + sigma_model.sq()),
+        sigma_model,
         state,
         change: a.change || b.change,
     })

@@ -323,22 +323,55 @@ fn bad_samples_never_corrupt_the_estimate() {
     }
 }
 
+/// Two wheels of an axle: inverse-variance weights; the filters' parts of σ shrink, the
+/// model's parts (one tyre model for both) add linearly and do not.
 #[test]
 fn axle_fusion() {
     let a = Estimate {
         mu: 0.5,
         sigma: 0.02,
+        sigma_model: 0.0,
         state: State::Identifiable,
         change: false,
     };
     let b = Estimate {
         mu: 0.52,
         sigma: 0.04,
+        sigma_model: 0.0,
         state: State::NotIdentifiable,
         change: false,
     };
     let f = fuse::<f64, Libm>(&a, &b).unwrap();
     assert!(f.mu > 0.5 && f.mu < 0.505 && f.sigma < 0.02);
+    assert!((f.sigma - (0.02f64 * 0.04 / 0.02f64.hypot(0.04))).abs() < 1e-12);
+    assert_eq!(f.sigma_model, 0.0);
+    // All of it the model's: weights 0.8 / 0.2, σ = 0.8·0.02 + 0.2·0.04 (no gain).
+    let (am, bm) = (
+        Estimate {
+            sigma_model: 0.02,
+            ..a
+        },
+        Estimate {
+            sigma_model: 0.04,
+            ..b
+        },
+    );
+    let f = fuse::<f64, Libm>(&am, &bm).unwrap();
+    assert!((f.sigma - 0.024).abs() < 1e-12 && (f.sigma_model - 0.024).abs() < 1e-12);
+    // Half the variance the model's: between the two.
+    let (ah, bh) = (
+        Estimate {
+            sigma_model: 0.02 * 0.5f64.sqrt(),
+            ..a
+        },
+        Estimate {
+            sigma_model: 0.04 * 0.5f64.sqrt(),
+            ..b
+        },
+    );
+    let f = fuse::<f64, Libm>(&ah, &bh).unwrap();
+    let want = (0.64f64 * 0.0002 + 0.04 * 0.0008 + 0.0003 * 0.024f64.powi(2) / 0.0006).sqrt();
+    assert!((f.sigma - want).abs() < 1e-12, "{} {want}", f.sigma);
     let split = Estimate { mu: 0.2, ..b };
     assert!(
         fuse::<f64, Libm>(&a, &split).is_none(),
@@ -879,7 +912,11 @@ fn a_reading_takes_two_samples() {
         }
     }
     // Every finished reading was `raw`'s: with equal readings the mean is that reading.
-    assert!((out.last().unwrap().mu - r.lambda * mu0).abs() < 1e-12);
+    let last = out.last().unwrap();
+    assert!((last.mu - r.lambda * mu0).abs() < 1e-12);
+    // σ carries the reading's model part, which fusing equal readings does not shrink.
+    assert!((last.sigma_model - r.var_model.sqrt() * mu0).abs() < 1e-12);
+    assert!(last.sigma > last.sigma_model && last.sigma_model > 0.0);
     // A non-finite sample between taking and finishing loses nothing: the reading in flight is
     // finished by the next good sample exactly as without it.
     let n = out.len();

@@ -537,6 +537,7 @@ pub fn demo(a: DemoArgs) -> Result<(), String> {
         let last = est.last().copied().unwrap_or(Estimate {
             mu: f64::NAN,
             sigma: f64::NAN,
+            sigma_model: f64::NAN,
             state: State::Fallback,
             change: false,
         });

@@ -146,6 +146,7 @@ pub fn estimate(
                         Estimate {
                             mu: e.mu as f64,
                             sigma: e.sigma as f64,
+                            sigma_model: e.sigma_model as f64,
                             state: e.state,
                             change: e.change,
                         }

@@ -43,6 +43,7 @@ fn prior() -> Estimate<f64> {
     Estimate {
         mu: 0.8,
         sigma: 0.4,
+        sigma_model: 0.0,
         state: State::Fallback,
         change: false,
     }
@@ -145,6 +146,7 @@ impl HsuGerdes {
                 Estimate {
                     mu: v,
                     sigma: 0.1,
+                    sigma_model: 0.0,
                     state: State::Identifiable,
                     change: false,
                 }
@@ -153,6 +155,7 @@ impl HsuGerdes {
                 Some(v) => Estimate {
                     mu: v,
                     sigma: 0.2,
+                    sigma_model: 0.0,
                     state: State::NotIdentifiable,
                     change: false,
                 },
@@ -241,6 +244,7 @@ impl SlipSlope {
             return Estimate {
                 mu: self.mu_of(self.k),
                 sigma: 0.1,
+                sigma_model: 0.0,
                 state: State::Identifiable,
                 change: false,
             };
@@ -249,6 +253,7 @@ impl SlipSlope {
             Estimate {
                 mu: self.mu_of(self.k),
                 sigma: 0.2,
+                sigma_model: 0.0,
                 state: State::NotIdentifiable,
                 change: false,
             }
