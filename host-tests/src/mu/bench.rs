@@ -8,7 +8,7 @@
 //!
 //! Metrics per estimator and case, over the four wheels:
 //! - μ error |μ̂ − μ| (mean and 95th percentile) over the samples the estimator calls
-//!   identifiable;
+//!   identifiable, and the share of them within twice the σ reported (whether σ is honest);
 //! - the utilisation |F|/(μ·Fz) (architecture.md) reached when the reported estimate first stays
 //!   within ±0.1 of the truth until the end of its surface (median over wheels);
 //! - latency: time from the utilisation first reaching 0.5 on a surface to the estimate staying
@@ -236,6 +236,8 @@ pub struct Metrics {
     pub err_mean: Option<f64>,
     /// 95th percentile |error| while identifiable.
     pub err_p95: Option<f64>,
+    /// Share of the identifiable samples with |error| ≤ 2σ (σ as reported).
+    pub within_2sigma: Option<f64>,
     /// Median utilisation at which the estimate first stays within ±0.1.
     pub util_within: Option<f64>,
     /// Median latency from utilisation 0.5 to staying within ±0.1 \[s\].
@@ -272,13 +274,16 @@ pub fn metrics(traces: &[WheelTrace], ests: &[Vec<Estimate<f64>>]) -> Metrics {
     let mut errs = Vec::new();
     let (mut utils, mut lats, mut dets) = (Vec::new(), Vec::new(), Vec::new());
     let mut false_alarms = 0;
+    let mut covered = 0;
     for (tr, est) in traces.iter().zip(ests) {
         if est.len() != tr.rows.len() {
             continue;
         }
         for (i, e) in est.iter().enumerate() {
             if e.state == State::Identifiable {
-                errs.push((e.mu - tr.mu_true[i]).abs());
+                let err = (e.mu - tr.mu_true[i]).abs();
+                errs.push(err);
+                covered += usize::from(err <= 2.0 * e.sigma);
             }
         }
         let segs = segments(&tr.mu_true);
@@ -321,6 +326,7 @@ pub fn metrics(traces: &[WheelTrace], ests: &[Vec<Estimate<f64>>]) -> Metrics {
         n_identifiable: n,
         err_mean,
         err_p95,
+        within_2sigma: (n > 0).then(|| covered as f64 / n as f64),
         util_within: median(utils),
         latency: median(lats),
         detect: median(dets),
@@ -397,9 +403,9 @@ pub fn run(a: BenchArgs) -> Result<(), String> {
     }
     std::fs::create_dir_all(&a.out).map_err(|e| format!("{}: {e}", a.out.display()))?;
     let mut md = String::new();
-    let _ = writeln!(md, "| manoeuvre | road | estimator | identifiable samples | mean err | p95 err | util when within ±0.1 | latency from util 0.5 [s] | detect change [s] | false alarms |");
-    let _ = writeln!(md, "|---|---|---|---|---|---|---|---|---|---|");
-    let mut csv = String::from("manoeuvre,road,estimator,n_identifiable,err_mean,err_p95,util_within,latency_s,detect_s,false_alarms\n");
+    let _ = writeln!(md, "| manoeuvre | road | estimator | identifiable samples | mean err | p95 err | within 2σ | util when within ±0.1 | latency from util 0.5 [s] | detect change [s] | false alarms |");
+    let _ = writeln!(md, "|---|---|---|---|---|---|---|---|---|---|---|");
+    let mut csv = String::from("manoeuvre,road,estimator,n_identifiable,err_mean,err_p95,within_2sigma,util_within,latency_s,detect_s,false_alarms\n");
     let bar = indicatif::ProgressBar::new(cases.len() as u64);
     let mut gough_wins = 0;
     let mut comparable = 0;
@@ -417,13 +423,15 @@ pub fn run(a: BenchArgs) -> Result<(), String> {
             let mt = metrics(&traces, &ests);
             let _ = writeln!(
                 md,
-                "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
+                "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
                 c.manoeuvre,
                 c.road,
                 method,
                 mt.n_identifiable,
                 fmt(mt.err_mean, 3),
                 fmt(mt.err_p95, 3),
+                mt.within_2sigma
+                    .map_or("–".into(), |x| format!("{:.1} %", 100.0 * x)),
                 fmt(mt.util_within, 2),
                 fmt(mt.latency, 3),
                 fmt(mt.detect, 3),
@@ -435,13 +443,14 @@ pub fn run(a: BenchArgs) -> Result<(), String> {
             );
             let _ = writeln!(
                 csv,
-                "{},{},{},{},{},{},{},{},{},{}",
+                "{},{},{},{},{},{},{},{},{},{},{}",
                 c.manoeuvre,
                 c.road,
                 method,
                 mt.n_identifiable,
                 fmt(mt.err_mean, 4),
                 fmt(mt.err_p95, 4),
+                fmt(mt.within_2sigma, 4),
                 fmt(mt.util_within, 3),
                 fmt(mt.latency, 4),
                 fmt(mt.detect, 4),
