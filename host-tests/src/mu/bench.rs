@@ -779,3 +779,54 @@ pub fn plot_gough(p: &Params<f64>, log: &Log, w: usize, path: &Path) -> Result<(
     root.present().map_err(|x| e(&x))?;
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The error metrics count identifiable samples only; "within 2σ" is the share of them
+    /// whose error is at most twice the σ they report.
+    #[test]
+    fn metrics_count_errors_and_their_sigma() {
+        let n = 6;
+        let tr = WheelTrace {
+            rows: (0..n)
+                .map(|i| Row {
+                    t: i as f64 * 1e-3,
+                    fz: 4000.0,
+                    fy: 0.0,
+                    mz: 0.0,
+                    fx: 0.0,
+                    vx: 20.0,
+                    alpha: f64::NAN,
+                    kappa: f64::NAN,
+                })
+                .collect(),
+            mu_true: vec![0.5; n],
+            util: vec![0.6; n],
+            gamma: vec![0.0; n],
+        };
+        let e = |mu: f64, sigma: f64, state: State| Estimate {
+            mu,
+            sigma,
+            sigma_model: 0.0,
+            state,
+            change: false,
+        };
+        let est = vec![
+            e(0.8, 0.4, State::Fallback),
+            e(0.55, 0.03, State::Identifiable), // 0.05 ≤ 0.06
+            e(0.6, 0.03, State::Identifiable),  // 0.10 > 0.06
+            e(0.6, 0.03, State::NotIdentifiable),
+            e(0.48, 0.011, State::Identifiable), // 0.02 ≤ 0.022
+            e(0.5, 0.05, State::Identifiable),
+        ];
+        let m = metrics(std::slice::from_ref(&tr), std::slice::from_ref(&est));
+        assert_eq!(m.n_identifiable, 4);
+        assert_eq!(m.within_2sigma, Some(0.75));
+        assert!((m.err_mean.unwrap() - 0.17 / 4.0).abs() < 1e-12);
+        let none = vec![e(0.8, 0.4, State::Fallback); n];
+        let m = metrics(std::slice::from_ref(&tr), std::slice::from_ref(&none));
+        assert_eq!((m.n_identifiable, m.within_2sigma), (0, None));
+    }
+}
