@@ -6,13 +6,13 @@
 //!   Brush model with a pneumatic trail falling linearly with slip,
 //!   `tp = tp0 − sgn(α)·tp0·Cα/(3·μ·Fz)·tan α`, solved for μ given the measured trail
 //!   tp = −Mz/Fy and the slip angle; used only when |α| > 2°, tp < tp0 and Vx > 3 m/s (the
-//!   paper's gates), clamped to 0.05…1.5, and smoothed by a first-order filter. Cα and tp0 are taken from the same
+//!   paper's gates), clamped to 0.05…1.5 ([`MU_RANGE`]), and smoothed by a first-order filter. Cα and tp0 are taken from the same
 //!   `.tir` file at the current load (the paper fits them from data): a fair comparison.
 //! - [`SlipSlope`]: F. Gustafsson, "Slip-based tire-road friction estimation", Automatica 33(6),
 //!   1997. The normalised traction force μn = Fx/Fz is regressed on the longitudinal slip κ at
 //!   low slip (μn = k·κ, recursive least squares with forgetting), and the slope k is mapped to
 //!   μ through a calibration curve — here computed from the same tyre model: the secant slope
-//!   at κ = 0.03 for friction levels 0.1…1.2.
+//!   at κ = 0.03 for friction levels 0.05…1.5 (every 0.05; [`MU_RANGE`]).
 
 use gough::math::Libm;
 use gough::mf::{self, Input, Options, Params};
@@ -38,6 +38,12 @@ pub struct Row {
     /// κ \[-\] (NaN when not logged).
     pub kappa: f64,
 }
+
+/// The range of μ both peers report (a reading outside it saturates): Hsu–Gerdes' clamp, the
+/// slip-slope calibration's span. Wider than every benchmark surface (μ 0.1…1.0), so that no
+/// peer is right on a test surface merely by saturating at its end (with the slip-slope
+/// calibration starting at μ 0.1, as it did, its saturated readings on μ 0.1 had error 0).
+pub const MU_RANGE: (f64, f64) = (0.05, 1.5);
 
 fn prior() -> Estimate<f64> {
     Estimate {
@@ -125,7 +131,7 @@ impl HsuGerdes {
                 // tp = tp0·(1 − Cα·|tan α|/(3·μ·Fz))  →  μ = Cα·|tan α|·tp0 / (3·Fz·(tp0 − tp))
                 let mu = c_alpha * r.alpha.tan().abs() * tp0 / (3.0 * r.fz * (tp0 - tp));
                 // Physically plausible range only (the linear trail model blows up as tp → tp0).
-                let mu = mu.clamp(0.05, 1.5);
+                let mu = mu.clamp(MU_RANGE.0, MU_RANGE.1);
                 (mu.is_finite() && mu > 0.0).then_some(mu)
             })
         } else {
@@ -190,8 +196,8 @@ impl SlipSlope {
     pub fn new(p: &Params<f64>) -> Option<Self> {
         let mu0 = eval_at(p, 1.0, p.fnomin, 0.0, 0.0)?.mu_y;
         let mut calib = Vec::new();
-        for i in 0..23 {
-            let mu = 0.1 + 0.05 * i as f64;
+        for i in 0..30 {
+            let mu = MU_RANGE.0 + 0.05 * i as f64;
             let o = eval_at(p, mu / mu0, p.fnomin, 0.0, -KAPPA_REF)?;
             let k = (o.fx / p.fnomin / -KAPPA_REF).abs();
             calib.push((k, mu));
@@ -260,5 +266,62 @@ impl SlipSlope {
         } else {
             prior()
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn tyre() -> Params<f64> {
+        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+        crate::tyre::load(&dir.join("data/tyres/MagicFormula61_Parameters.tir"))
+            .expect("bundled tyre")
+            .params
+    }
+
+    /// Steady braking at slip `kappa` on surface μ (the file's scale), noise-free, 1 kHz.
+    fn braking(p: &Params<f64>, mu: f64, kappa: f64, n: usize) -> Vec<Row> {
+        let mu0 = eval_at(p, 1.0, p.fnomin, 0.0, 0.0).expect("mu0").mu_y;
+        let o = eval_at(p, mu / mu0, p.fnomin, 0.0, kappa).expect("eval");
+        (0..n)
+            .map(|i| Row {
+                t: i as f64 * 1e-3,
+                fz: p.fnomin,
+                fx: o.fx,
+                vx: 20.0,
+                alpha: 0.0,
+                kappa,
+                ..Row::default()
+            })
+            .collect()
+    }
+
+    /// Inside its calibration the slip-slope peer reads the surface (its curve is the same
+    /// tyre's); a slope below that of every calibrated surface saturates at `MU_RANGE.0`,
+    /// below the lowest benchmark surface, not on it.
+    #[test]
+    fn slip_slope_reads_its_calibration_and_saturates_off_the_bench_surfaces() {
+        let p = tyre();
+        for mu in [0.1, 0.3, 0.7, 1.0] {
+            let mut s = SlipSlope::new(&p).expect("calibration");
+            let e = braking(&p, mu, -KAPPA_REF, 500)
+                .iter()
+                .map(|r| s.update(r))
+                .last()
+                .expect("rows");
+            assert_eq!(e.state, State::Identifiable);
+            assert!((e.mu - mu).abs() < 0.01, "μ {mu}: read {}", e.mu);
+        }
+        // No force at the slip: the flattest slope there is.
+        let mut s = SlipSlope::new(&p).expect("calibration");
+        let rows = braking(&p, 0.3, -KAPPA_REF, 50);
+        let e = rows
+            .iter()
+            .map(|r| s.update(&Row { fx: 0.0, ..*r }))
+            .last()
+            .expect("rows");
+        assert_eq!(e.mu, MU_RANGE.0);
+        assert!(MU_RANGE.0 < 0.1 && MU_RANGE.1 > 1.0);
     }
 }
