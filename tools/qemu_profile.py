@@ -22,6 +22,9 @@ not match are not counted, so name every function the workload calls that is not
     python3 ../tools/qemu_profile.py target/thumbv7em-none-eabihf/release/profile \
         --bracket 2 --only 'profile::estimator_stream|gough::mu::' --per 1000
 
+The no-FPU bench (`firmware-m0/`, brackets in the order of its output) runs on the micro:bit's
+Cortex-M0: `--machine microbit --cpu cortex-m0`.
+
 Needs qemu-system-arm and llvm-addr2line, llvm-nm (Debian: `apt-get install qemu-system-arm llvm`).
 """
 
@@ -133,6 +136,8 @@ def main():
     ap.add_argument("--top", type=int, default=25, help="rows per table")
     ap.add_argument("--bracket", type=int, default=1, help="profile the K-th bracket (from 1)")
     ap.add_argument("--only", help="log only the functions whose demangled names match")
+    ap.add_argument("--machine", default="mps2-an386", help="QEMU machine (M0 bench: microbit)")
+    ap.add_argument("--cpu", default="cortex-m4", help="QEMU CPU (M0 bench: cortex-m0)")
     ap.add_argument("--qemu", default="qemu-system-arm")
     ap.add_argument("--addr2line", default="llvm-addr2line")
     ap.add_argument("--nm", default="llvm-nm")
@@ -155,7 +160,7 @@ def main():
     with tempfile.TemporaryDirectory() as tmp:
         log = os.path.join(tmp, "exec.log")
         run = subprocess.run(
-            [args.qemu, "-cpu", "cortex-m4", "-machine", "mps2-an386", "-nographic",
+            [args.qemu, "-cpu", args.cpu, "-machine", args.machine, "-nographic",
              "-semihosting-config", "enable=on,target=native", "-icount", "shift=0",
              "-d", "exec,nochain,in_asm", "-D", log] + filt + ["-kernel", args.elf],
             stdout=subprocess.DEVNULL, timeout=600,

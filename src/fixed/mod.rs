@@ -35,6 +35,16 @@
 //! makes `mf::eval` return `EvalError::Overflow` (as long as the saturated value reaches an output:
 //! unlike NaN, a saturated value multiplied by 0 is 0).
 //!
+//! The product and the quotient are the `fixed` crate's `saturating_mul`/`saturating_div` bit
+//! for bit (⌊a·b⌋ and a/b rounded towards zero, at 2⁻³²; tests against it on random and edge
+//! bit patterns), computed without its `i128` arithmetic, which a 32-bit core runs as library
+//! calls (`__multi3`, `__divti3`; on the Cortex-M0 over nine tenths of an evaluation): the
+//! product from the 32-bit words' partial products that are not zero (four 16×16-bit `muls` each
+//! on ARMv6-M, which has no 32×32→64 multiply), the quotient by two 3-by-2-word steps with the
+//! divisor's reciprocal (Möller–Granlund; the reciprocal from a 128-entry table and two Newton
+//! steps, no divide instruction). On the Cortex-M0 that took the combined evaluation from 591,863
+//! to 88,506 instructions, on the Cortex-M3 from 120,503 to 35,828 (`cargo xtask test-all`).
+//!
 //! ## Kernels ([`FixMath`])
 //! Polynomials, with the minimax coefficients of the fast `f32` kernels (one table,
 //! `math::minimax`; fits by `tools/minimax.py`) and the same argument reductions done in Q31.32:
@@ -50,16 +60,11 @@
 //! `cargo test -p gough-host --release --test backends -- --nocapture`.
 //!
 //! ## What this module leaves out
-//! - Speed on a core without an FPU: a Q31.32 multiply is a 64×64-bit product and a divide a
-//!   128/64-bit division, library calls on a Cortex-M0 (`__multi3`, `__divti3`), slower than
-//!   soft-float `f32`. Counting instructions under QEMU is issue 7, item 3; reaching its
-//!   ≤ 4 000-instruction target needs narrower `i32` formats per quantity on the hot path, which
-//!   means re-typing the equations (the trade this module declines for now, see above).
-//!   `mul` and `div` are out of line, which keeps `mf::eval::<Fix, _>` at about 14 kB of Thumb
-//!   code instead of 210 kB.
-//! - The relaxation filter and the friction estimator in fixed point (issue 7, item 2): they are
-//!   generic over [`Float`] as well, so `Fix` is their fixed-point scalar too, but they are not
-//!   measured against `f64` yet.
+//! - Issue 7's ≤ 4 000 instructions per combined evaluation on a Cortex-M0: 88,506 (soft-float
+//!   `f32` 97,463). About 450 products and 35 quotients of 64-bit values per evaluation remain;
+//!   fewer needs narrower `i32` formats per quantity on the hot path, which means re-typing the
+//!   equations (the trade this module declines for now, see above). `mul` and `div` are out of
+//!   line, which keeps `mf::eval::<Fix, _>` at about 14 kB of Thumb code instead of 210 kB.
 
 pub mod kernels;
 
@@ -181,13 +186,237 @@ impl Sub for Fix {
     }
 }
 
+/// The full product of two 32-bit words. On ARMv6-M (Cortex-M0/M0+: the only Arm profile without
+/// 32-bit atomics, and without `umull`) from four 16×16-bit products with `muls`: the compiler
+/// would call `__aeabi_lmul`, a 64×64-bit multiply, for it; elsewhere one instruction.
+#[inline(always)]
+fn wide_mul(a: u32, b: u32) -> u64 {
+    #[cfg(all(target_arch = "arm", not(target_has_atomic = "32")))]
+    {
+        wide_mul_halves(a, b)
+    }
+    #[cfg(not(all(target_arch = "arm", not(target_has_atomic = "32"))))]
+    {
+        a as u64 * b as u64
+    }
+}
+
+/// [`wide_mul`] from 16-bit halves (ARMv6-M's; compiled everywhere, so that the host tests it).
+#[inline(always)]
+#[cfg_attr(
+    not(any(test, all(target_arch = "arm", not(target_has_atomic = "32")))),
+    allow(dead_code)
+)]
+fn wide_mul_halves(a: u32, b: u32) -> u64 {
+    let (a0, a1) = (a & 0xffff, a >> 16);
+    let (b0, b1) = (b & 0xffff, b >> 16);
+    // Each 16×16-bit product fits 32 bits; the two middle ones may carry out of their sum.
+    let (mid, carry) = (a1 * b0).overflowing_add(a0 * b1);
+    let (lo, c) = (a0 * b0).overflowing_add(mid << 16);
+    let hi = a1 * b1 + (mid >> 16) + ((carry as u32) << 16) + c as u32;
+    ((hi as u64) << 32) | lo as u64
+}
+
+/// ⌊a·b / 2³²⌋ of two Q31.32 bit patterns, saturated to the `i64` range (to `i64::MIN` when the
+/// operands' signs differ, else `i64::MAX`): bit for bit the `fixed` crate's
+/// `I32F32::saturating_mul`, which forms the product in `i128` — a library call per product on
+/// a core without a 64-bit multiply (`__multi3`). Here: the magnitudes' 32-bit words, the
+/// partial products that are not zero (a value below 1 has no high word), ⌊·⌋ as ⌈·⌉ of the
+/// magnitude when the result is negative.
+#[inline(always)]
+fn mul_bits(a: i64, b: i64) -> i64 {
+    let neg = (a < 0) != (b < 0);
+    let (ua, ub) = (a.unsigned_abs(), b.unsigned_abs());
+    let (ah, al) = ((ua >> 32) as u32, ua as u32);
+    let (bh, bl) = ((ub >> 32) as u32, ub as u32);
+    // ua·ub / 2³² = ah·bh·2³² + ah·bl + al·bh + al·bl / 2³²: its integer part in `acc`, any
+    // part at or above 2⁶⁴ is an overflow (a saturated result).
+    let ll = wide_mul(al, bl);
+    let mut acc = ll >> 32;
+    let mut over = false;
+    if ah != 0 {
+        let (x, c) = acc.overflowing_add(wide_mul(ah, bl));
+        acc = x;
+        over |= c;
+        if bh != 0 {
+            let hh = wide_mul(ah, bh);
+            let (x, c) = acc.overflowing_add(hh << 32);
+            acc = x;
+            over |= c | (hh >> 32 != 0);
+        }
+    }
+    if bh != 0 {
+        let (x, c) = acc.overflowing_add(wide_mul(al, bh));
+        acc = x;
+        over |= c;
+    }
+    if neg {
+        // ⌊−x⌋ = −⌈x⌉: round the magnitude up when the low word is not 0.
+        let (m, c) = acc.overflowing_add(u64::from(ll as u32 != 0));
+        if over || c || m > 1 << 63 {
+            i64::MIN
+        } else {
+            m.wrapping_neg() as i64
+        }
+    } else if over || acc > i64::MAX as u64 {
+        i64::MAX
+    } else {
+        acc as i64
+    }
+}
+
+/// a·2³² / b of two Q31.32 bit patterns, rounded towards zero and saturated as [`mul_bits`];
+/// b ≠ 0: bit for bit `I32F32::saturating_div` (an `i128` division, `__divti3`, on a 32-bit
+/// core). The magnitudes are divided with 32-bit words as the digits: the divisor normalised
+/// (top bit set), its reciprocal computed once, and the two words of the quotient each by one
+/// 3-by-2-word step with that reciprocal (N. Möller, T. Granlund, "Improved division by
+/// invariant integers", IEEE Trans. Computers 60(2), 2011, algorithms 5 and 6): a few 32×32-bit
+/// products ([`wide_mul`]) per word instead of a loop over the quotient's bits.
+#[inline(always)]
+fn div_bits(a: i64, b: i64) -> i64 {
+    let neg = (a < 0) != (b < 0);
+    let (ua, d) = (a.unsigned_abs(), b.unsigned_abs());
+    // The dividend ua·2³² (96 bits); the quotient fits 64 bits iff its part above 2⁶⁴, ua/2³²,
+    // is below d.
+    let q = if (ua >> 32) >= d {
+        None
+    } else {
+        let s = d.leading_zeros();
+        let dn = d << s;
+        let (d1, d0) = ((dn >> 32) as u32, dn as u32);
+        // ua·2³²·2ˢ < 2⁶⁴·dn < 2¹²⁸: nothing shifted out.
+        let n = (ua as u128) << (32 + s);
+        let v = reciprocal_3by2(d1, d0);
+        let (q1, r) = div_3by2((n >> 96) as u32, (n >> 64) as u32, (n >> 32) as u32, dn, v);
+        let (q0, _) = div_3by2((r >> 32) as u32, r as u32, n as u32, dn, v);
+        Some(((q1 as u64) << 32) | q0 as u64)
+    };
+    match q {
+        Some(q) if neg && q <= 1 << 63 => q.wrapping_neg() as i64,
+        Some(q) if !neg && q <= i64::MAX as u64 => q as i64,
+        _ if neg => i64::MIN,
+        _ => i64::MAX,
+    }
+}
+
+/// ⌊(β³ − 1)/d⌋ − β for a normalised two-word divisor d = d1·β + d0 (β = 2³², d1 ≥ 2³¹):
+/// Möller–Granlund algorithm 6, from the one-word reciprocal ⌊(β² − 1)/d1⌋ − β.
+#[inline(always)]
+fn reciprocal_3by2(d1: u32, d0: u32) -> u32 {
+    let mut v = reciprocal_word(d1);
+    let mut p = d1.wrapping_mul(v).wrapping_add(d0);
+    if p < d0 {
+        v = v.wrapping_sub(1);
+        if p >= d1 {
+            v = v.wrapping_sub(1);
+            p = p.wrapping_sub(d1);
+        }
+        p = p.wrapping_sub(d1);
+    }
+    let t = wide_mul(v, d0);
+    let (t1, t0) = ((t >> 32) as u32, t as u32);
+    let (p, carry) = p.overflowing_add(t1);
+    if carry {
+        v = v.wrapping_sub(1);
+        if ((p as u64) << 32 | t0 as u64) >= ((d1 as u64) << 32 | d0 as u64) {
+            v = v.wrapping_sub(1);
+        }
+    }
+    v
+}
+
+/// ⌊(β² − 1)/d⌋ − β for a normalised word d ≥ 2³¹ (β = 2³²; the quotient lies in [β, 2β), so
+/// the result fits a word), without a divide instruction: 8 bits from a table, two Newton steps
+/// X ← X + X·(β² − d·X)/β² on X ≈ β²/d (each 2 products of words), then the exact quotient by
+/// stepping while (β + v)·d overshoots β² − 1 or (β + v + 1)·d does not (the two Newton steps
+/// leave at most 3 to go: a scratch program checked all 2³¹ divisors; the tests check the
+/// table's intervals' ends and random ones). `u64` division here
+/// would be a library call on a core without one (`__aeabi_uldivmod`, about 500 instructions
+/// on the Cortex-M0).
+#[inline(always)]
+fn reciprocal_word(d: u32) -> u32 {
+    // X − β = y: the table gives y/2¹⁶ at the middle of d's interval of 2²⁴.
+    let i = ((d >> 24) & 0x7f) as usize;
+    let mut y = (RECIP_TABLE.get(i).copied().unwrap_or(0) as u64) << 16;
+    for _ in 0..2 {
+        // e = β² − d·X, |e| < 2⁵⁷: d·X = d·y + d·β mod β², read as signed.
+        let e = (0u64)
+            .wrapping_sub(wide_mul(d, y as u32).wrapping_add((d as u64) << 32))
+            .wrapping_sub(if y >> 32 != 0 { (d as u64) << 32 } else { 0 }) as i64;
+        let (neg, ue) = (e < 0, e.unsigned_abs());
+        let eh = (ue >> 32) as u32;
+        // X·|e|/β² = |e|/β + y·|e|/β², to within 2 units.
+        let c = eh as u64
+            + (wide_mul(y.min(u32::MAX as u64) as u32, eh) >> 32)
+            + (((ue as u32) as u64) >> 31);
+        y = if neg {
+            y.saturating_sub(c)
+        } else {
+            (y + c).min(1 << 32)
+        };
+    }
+    let mut v = y.min(u32::MAX as u64) as u32;
+    // P = (β + v)·d, 65 bits: (over β², low 64 bits).
+    let (mut lo, mut over) = ((d as u64) << 32).overflowing_add(wide_mul(v, d));
+    while over {
+        v = v.wrapping_sub(1);
+        let (l, borrow) = lo.overflowing_sub(d as u64);
+        lo = l;
+        over = !borrow;
+    }
+    while let (l, false) = lo.overflowing_add(d as u64) {
+        v = v.wrapping_add(1);
+        lo = l;
+    }
+    v
+}
+
+/// ⌊2²⁴/(k + ½)⌋ − 2¹⁶ for k = 128…255, the top 8 bits of a normalised word d: (β²/d − β)/2¹⁶
+/// at the middle of each interval of d (to within 2⁻⁸ relative).
+// Evaluated at compile time: an index out of range would fail the build, not panic.
+#[allow(clippy::indexing_slicing)]
+const RECIP_TABLE: [u16; 128] = {
+    let mut t = [0u16; 128];
+    let mut i = 0;
+    while i < 128 {
+        let k2 = 2 * (128 + i as u64) + 1; // 2·(k + ½)
+        t[i] = ((1u64 << 25) / k2 - (1 << 16)) as u16;
+        i += 1;
+    }
+    t
+};
+
+/// One quotient word of (u2·β² + u1·β + u0) / d and the remainder, for a normalised two-word d
+/// with reciprocal `v` ([`reciprocal_3by2`]) and u2·β + u1 < d: Möller–Granlund algorithm 5.
+#[inline(always)]
+fn div_3by2(u2: u32, u1: u32, u0: u32, d: u64, v: u32) -> (u32, u64) {
+    let (d1, d0) = ((d >> 32) as u32, d as u32);
+    let q = wide_mul(v, u2).wrapping_add(((u2 as u64) << 32) | u1 as u64);
+    let (mut q1, q0) = ((q >> 32) as u32, q as u32);
+    let r1 = u1.wrapping_sub(q1.wrapping_mul(d1));
+    let mut r = (((r1 as u64) << 32) | u0 as u64)
+        .wrapping_sub(wide_mul(d0, q1))
+        .wrapping_sub(d);
+    q1 = q1.wrapping_add(1);
+    if (r >> 32) as u32 >= q0 {
+        q1 = q1.wrapping_sub(1);
+        r = r.wrapping_add(d);
+    }
+    if r >= d {
+        q1 = q1.wrapping_add(1);
+        r -= d;
+    }
+    (q1, r)
+}
+
 impl Mul for Fix {
     type Output = Fix;
-    /// Out of line on purpose: the 64×64-bit product with its saturation checks is large, and
-    /// inlined at every `*` of the equations it made `mf::eval` 210 kB of Thumb code.
+    /// Saturating, ⌊a·b⌋ to the last bit (as `fixed`'s `saturating_mul`). Out of line on
+    /// purpose: inlined at every `*` of the equations, a 64×64-bit product with its saturation
+    /// checks made `mf::eval` 210 kB of Thumb code.
     #[inline(never)]
     fn mul(self, rhs: Fix) -> Fix {
-        Fix(self.0.saturating_mul(rhs.0))
+        Fix::from_bits(mul_bits(self.to_bits(), rhs.to_bits()))
     }
 }
 
@@ -204,7 +433,7 @@ impl Div for Fix {
                 Fix::MAX
             };
         }
-        Fix(self.0.saturating_div(rhs.0))
+        Fix::from_bits(div_bits(self.to_bits(), rhs.to_bits()))
     }
 }
 
@@ -329,6 +558,65 @@ mod tests {
         assert_eq!(max.sqrt().floor_int(), 46_340);
     }
 
+    /// [`mul_bits`] and [`div_bits`] against the `fixed` crate on the edges: 0, ±1 LSB, ±1,
+    /// powers of two about the saturation limits, `i64::MIN`/`MAX` and their neighbours.
+    #[test]
+    fn mul_div_edges_are_fixed_bit_for_bit() {
+        let mut v = std::vec![
+            0i64,
+            1,
+            -1,
+            2,
+            -2,
+            3,
+            i64::MAX,
+            i64::MIN,
+            i64::MAX - 1,
+            i64::MIN + 1
+        ];
+        for k in 0..63 {
+            for x in [1i64 << k, (1i64 << k) - 1, (1i64 << k) + 1] {
+                v.extend([x, -x]);
+            }
+        }
+        v.extend([
+            0xffff_ffff,
+            0x1_0000_0000,
+            0xffff_0000_ffff,
+            0x7fff_ffff_ffff_0000,
+        ]);
+        for &x in &v {
+            for &y in &v {
+                let (fx, fy) = (I32F32::from_bits(x), I32F32::from_bits(y));
+                assert_eq!(mul_bits(x, y), fx.saturating_mul(fy).to_bits(), "{x} * {y}");
+                if y != 0 {
+                    assert_eq!(div_bits(x, y), fx.saturating_div(fy).to_bits(), "{x} / {y}");
+                }
+            }
+        }
+        // The one-word reciprocal at its ends and at every table interval's ends.
+        let mut ds = std::vec![1u32 << 31, u32::MAX];
+        for k in 128u32..256 {
+            ds.extend([k << 24, (k << 24) | 0xff_ffff, (k << 24) | 0x80_0000]);
+        }
+        for d in ds {
+            assert_eq!(
+                reciprocal_word(d) as u64,
+                u64::MAX / d as u64 - (1 << 32),
+                "{d}"
+            );
+        }
+        // ARMv6-M's product from 16-bit halves, whatever the host: all-ones and carries.
+        for (a, b) in [
+            (u32::MAX, u32::MAX),
+            (0xffff, 0xffff_0000),
+            (0x8000_8000, u32::MAX),
+            (0, 7),
+        ] {
+            assert_eq!(wide_mul_halves(a, b), a as u64 * b as u64, "{a} * {b}");
+        }
+    }
+
     proptest! {
         #[test]
         fn ops_match_f64(a in -4.0e4f64..4.0e4, b in -4.0e4f64..4.0e4) {
@@ -341,6 +629,33 @@ mod tests {
             if b.abs() > 1e-3 {
                 prop_assert!(((fa / fb).to_f64() - a / b).abs() <= 2.0 * lsb + 1e-15 * (a / b).abs());
             }
+        }
+
+        /// The word-wise product and the shift-and-subtract quotient are the `fixed` crate's
+        /// saturating ones bit for bit: random bit patterns, and values of every magnitude
+        /// (a random mantissa at a random scale, so that high words are often zero).
+        #[test]
+        fn mul_div_are_fixed_bit_for_bit(
+            a in any::<i64>(), b in any::<i64>(),
+            sa in 0u32..63, sb in 0u32..63,
+        ) {
+            for (x, y) in [(a, b), (a >> sa, b >> sb), (a >> sa, b), (a, b >> sb)] {
+                let (fx, fy) = (I32F32::from_bits(x), I32F32::from_bits(y));
+                prop_assert_eq!(mul_bits(x, y), fx.saturating_mul(fy).to_bits(), "{} * {}", x, y);
+                if y != 0 {
+                    prop_assert_eq!(div_bits(x, y), fx.saturating_div(fy).to_bits(), "{} / {}", x, y);
+                }
+            }
+        }
+
+        #[test]
+        fn reciprocal_word_is_the_quotient(d in (1u32 << 31)..=u32::MAX) {
+            prop_assert_eq!(reciprocal_word(d) as u64, u64::MAX / d as u64 - (1 << 32));
+        }
+
+        #[test]
+        fn wide_mul_halves_is_the_product(a in any::<u32>(), b in any::<u32>()) {
+            prop_assert_eq!(wide_mul_halves(a, b), a as u64 * b as u64);
         }
 
         #[test]
