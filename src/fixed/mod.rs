@@ -42,15 +42,17 @@
 //! product from the 32-bit words' partial products that are not zero (four 16×16-bit `muls` each
 //! on ARMv6-M, which has no 32×32→64 multiply), the quotient by two 3-by-2-word steps with the
 //! divisor's reciprocal (Möller–Granlund; the reciprocal from a 128-entry table and two Newton
-//! steps, no divide instruction). On the Cortex-M0 that took the combined evaluation from 591,863
-//! to 88,506 instructions, on the Cortex-M3 from 120,503 to 35,828 (`cargo xtask test-all`).
+//! steps, no divide instruction). The square root, also `fixed`'s bit for bit, from a table of
+//! 1/√, two Newton steps, one Heron step with that quotient and an exact check of the square.
+//! On the Cortex-M0 that took the combined evaluation from 591,863 to 84,006 instructions
+//! (`cargo xtask test-all`).
 //!
 //! ## Kernels ([`FixMath`])
 //! Polynomials, with the minimax coefficients of the fast `f32` kernels (one table,
 //! `math::minimax`; fits by `tools/minimax.py`) and the same argument reductions done in Q31.32:
 //! sin, cos, tan by k·π/2; atan by 1/x and (x − 1)/(x + 1); acos through asin and √; eˣ by
-//! k·ln 2 and a shift; ln by the leading-one position and atanh; √ by the `fixed` crate's integer
-//! square root. Errors measured in [`kernels`]' tests: within 3e-7 relative (the polynomial fits)
+//! k·ln 2 and a shift; ln by the leading-one position and atanh; √ exact to the last bit (rounded
+//! down, as the `fixed` crate's: `Fix::sqrt`). Errors measured in [`kernels`]' tests: within 3e-7 relative (the polynomial fits)
 //! plus a few 2⁻³² absolute.
 //!
 //! ## Accuracy of the Magic Formula
@@ -60,7 +62,7 @@
 //! `cargo test -p gough-host --release --test backends -- --nocapture`.
 //!
 //! ## What this module leaves out
-//! - Issue 7's ≤ 4 000 instructions per combined evaluation on a Cortex-M0: 88,506 (soft-float
+//! - Issue 7's ≤ 4 000 instructions per combined evaluation on a Cortex-M0: 84,006 (soft-float
 //!   `f32` 97,463). About 450 products and 35 quotients of 64-bit values per evaluation remain;
 //!   fewer needs narrower `i32` formats per quantity on the hot path, which means re-typing the
 //!   equations (the trade this module declines for now, see above). `mul` and `div` are out of
@@ -73,7 +75,7 @@ pub use kernels::FixMath;
 use crate::math::Float;
 use crate::mf::{self, EvalError, Input, Options, Output, Params};
 use core::ops::{Add, AddAssign, Div, Mul, MulAssign, Neg, Sub, SubAssign};
-use fixed::types::{I32F32, U32F32};
+use fixed::types::I32F32;
 
 /// A Q31.32 fixed-point real (the `fixed` crate's `I32F32`) with saturating arithmetic; the
 /// scalar of the fixed-point Magic Formula (see the [module doc](self) for the format and why).
@@ -146,17 +148,100 @@ impl Fix {
         self.to_bits() >> 32
     }
 
-    /// √x for x ≥ 0 (the `fixed` crate's integer square root, exact to the last bit); x < 0 →
-    /// [`Fix::MIN`].
+    /// √x for x ≥ 0, rounded down to the last bit (⌊√(bits·2³²)⌋, as the `fixed` crate's
+    /// `sqrt`; see [`sqrt_bits`]); x < 0 → [`Fix::MIN`].
     pub fn sqrt(self) -> Fix {
-        if self.to_bits() < 0 {
+        let x = self.to_bits();
+        if x < 0 {
             return Fix::MIN;
         }
-        // Non-negative: reinterpret as unsigned Q32.32; √ of ≤ 2³¹ fits back.
-        let r = U32F32::from_bits(self.to_bits() as u64).sqrt();
-        Fix::from_bits(r.to_bits() as i64)
+        Fix::from_bits(sqrt_bits(x as u64) as i64)
     }
 }
+
+/// ⌊√(x·2³²)⌋ for x < 2⁶³ (the square root of a Q31.32 bit pattern, < 2⁴⁸). The `fixed`
+/// crate's square root finds it a bit at a time with 64-bit operations (about 1,500
+/// instructions on the Cortex-M0); here: 1/√ of the normalised top word from a table and two
+/// Newton steps (products only) to about 27 bits, one Heron step with a quotient
+/// ([`div_bits`]) to within 1, then the exact floor by comparing the square.
+#[inline(never)]
+fn sqrt_bits(x: u64) -> u64 {
+    if x == 0 {
+        return 0;
+    }
+    // N = x·2³² < 2⁹⁵. Normalise by an even shift 2k: M = N·2²ᵏ in [2⁹⁴, 2⁹⁶); its top word
+    // `mt` in [2³⁰, 2³²), t = mt/2³² in [¼, 1).
+    let len = 96 - x.leading_zeros(); // bit length of N
+    let k = (96 - len) / 2;
+    let shift = 2 * k; // of N, < 64 + 32
+    let mt = if shift >= 32 {
+        (x << (shift - 32)) as u32
+    } else {
+        (x >> (32 - shift)) as u32
+    };
+    // r ≈ 1/√t in Q2.30, from the table (t's top 7 bits), then r ← r·(3 − t·r²)/2 twice.
+    let mut r = RSQRT_TABLE
+        .get((mt >> 25) as usize - 32)
+        .copied()
+        .unwrap_or(1 << 30);
+    for _ in 0..2 {
+        let r2 = (wide_mul(r, r) >> 30).min(u32::MAX as u64) as u32; // r², Q2.30
+        let tr2 = (wide_mul(mt, r2) >> 32) as u32; // t·r², Q2.30, ≈ 1
+        let e = (3u32 << 30).saturating_sub(tr2); // 3 − t·r², Q2.30
+        r = (wide_mul(r, e) >> 31).min(u32::MAX as u64) as u32;
+    }
+    // √M ≈ t·r·2⁴⁸ (t·r in Q2.62); √N = √M/2ᵏ.
+    let s0 = ((wide_mul(mt, r) >> 14) >> k).max(1);
+    // Heron: ⌊(s0 + ⌊N/s0⌋)/2⌋ ≥ ⌊√N⌋, and within 1 of it from 27 correct bits.
+    let q = div_bits(x as i64, s0 as i64) as u64;
+    let mut s = (s0 + q) / 2;
+    // The floor: lower s while s² > N (s < 2⁴⁸: s² from its 32-bit words). Once at most, in
+    // 3·10⁷ random x of every magnitude (a scratch run); bounded all the same.
+    for _ in 0..3 {
+        if !square_exceeds(s, x) {
+            break;
+        }
+        s -= 1;
+    }
+    s
+}
+
+/// s² > x·2³² for s < 2⁴⁸.
+#[inline(always)]
+fn square_exceeds(s: u64, x: u64) -> bool {
+    let (sh, sl) = ((s >> 32) as u32, s as u32);
+    let sq = wide_mul(sl, sl) as u128
+        + ((wide_mul(sh, sl) as u128) << 33)
+        + ((wide_mul(sh, sh) as u128) << 64);
+    sq > (x as u128) << 32
+}
+
+/// 1/√t in Q2.30 at the middle of each interval of t = k/128 … (k + 1)/128, k = 32…127 (t's
+/// top 7 bits), rounded to nearest: ⌊2³⁰/√((k + ½)/128) + ½⌋.
+// Evaluated at compile time: an index out of range would fail the build, not panic.
+#[allow(clippy::indexing_slicing)]
+const RSQRT_TABLE: [u32; 96] = {
+    let mut t = [0u32; 96];
+    let mut i = 0;
+    while i < 96 {
+        // 1/√u for u = (2k + 1)/256 by bisection on y² · u = 1 (no floating point in const
+        // context needed: integers, y in Q2.30).
+        let num = 2 * (32 + i as u64) + 1; // u = num/256
+        let (mut lo, mut hi) = (1u64 << 30, 1u64 << 31);
+        while hi - lo > 1 {
+            let mid = (lo + hi) / 2;
+            // mid² · num / 256 ≤ 2⁶⁰ ?
+            if (mid * mid / 256) * num <= 1 << 60 {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        t[i] = lo as u32;
+        i += 1;
+    }
+    t
+};
 
 impl core::fmt::Debug for Fix {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
@@ -522,6 +607,7 @@ pub fn eval(p: &Params<Fix>, input: &Input<Fix>, opts: &Options) -> Result<Outpu
 #[cfg(test)]
 mod tests {
     use super::*;
+    use fixed::types::U32F32;
     use proptest::prelude::*;
 
     #[test]
@@ -594,6 +680,18 @@ mod tests {
                 }
             }
         }
+        // The square root at the ends of the range, of each table interval, and at squares.
+        let mut xs = std::vec![0u64, 1, 2, 3, 4, i64::MAX as u64, (i64::MAX - 1) as u64];
+        for b in 0..63 {
+            xs.extend([1u64 << b, (1u64 << b) - 1, (1u64 << b) + 1]);
+        }
+        for q in [1u64, 2, 3, 65535, 65536, 1 << 20, (1 << 31) - 1] {
+            let sq = q * q; // x·2³² = (q·2¹⁶)² → x = q²
+            xs.extend([sq, sq - 1, sq + 1]);
+        }
+        for x in xs {
+            assert_eq!(sqrt_bits(x), U32F32::from_bits(x).sqrt().to_bits(), "√{x}");
+        }
         // The one-word reciprocal at its ends and at every table interval's ends.
         let mut ds = std::vec![1u32 << 31, u32::MAX];
         for k in 128u32..256 {
@@ -645,6 +743,17 @@ mod tests {
                 if y != 0 {
                     prop_assert_eq!(div_bits(x, y), fx.saturating_div(fy).to_bits(), "{} / {}", x, y);
                 }
+            }
+        }
+
+        /// The square root is `fixed`'s bit for bit, and the floor: s² ≤ x·2³² < (s + 1)².
+        #[test]
+        fn sqrt_is_fixed_bit_for_bit(x in 0i64..i64::MAX, sh in 0u32..63) {
+            for x in [x, x >> sh] {
+                let s = sqrt_bits(x as u64);
+                prop_assert_eq!(s, U32F32::from_bits(x as u64).sqrt().to_bits(), "√{}", x);
+                let n = (x as u128) << 32;
+                prop_assert!((s as u128) * (s as u128) <= n && (s as u128 + 1) * (s as u128 + 1) > n);
             }
         }
 
