@@ -181,7 +181,7 @@ fn sqrt_bits(x: u64) -> u64 {
     };
     // r ≈ 1/√t in Q2.30, from the table (t's top 7 bits), then r ← r·(3 − t·r²)/2 twice.
     let mut r = RSQRT_TABLE
-        .get((mt >> 25) as usize - 32)
+        .get(((mt >> 25) as usize).wrapping_sub(32))
         .copied()
         .unwrap_or(1 << 30);
     for _ in 0..2 {
@@ -217,7 +217,7 @@ fn square_exceeds(s: u64, x: u64) -> bool {
 }
 
 /// 1/√t in Q2.30 at the middle of each interval of t = k/128 … (k + 1)/128, k = 32…127 (t's
-/// top 7 bits), rounded to nearest: ⌊2³⁰/√((k + ½)/128) + ½⌋.
+/// top 7 bits), to within a few units of 2⁻³⁰ (found by bisection in integers).
 // Evaluated at compile time: an index out of range would fail the build, not panic.
 #[allow(clippy::indexing_slicing)]
 const RSQRT_TABLE: [u32; 96] = {
@@ -271,9 +271,11 @@ impl Sub for Fix {
     }
 }
 
-/// The full product of two 32-bit words. On ARMv6-M (Cortex-M0/M0+: the only Arm profile without
-/// 32-bit atomics, and without `umull`) from four 16×16-bit products with `muls`: the compiler
-/// would call `__aeabi_lmul`, a 64×64-bit multiply, for it; elsewhere one instruction.
+/// The full product of two 32-bit words. On ARMv6-M (Cortex-M0/M0+), which has no `umull`, from
+/// four 16×16-bit products with `muls` (the compiler would call `__aeabi_lmul`, a 64×64-bit
+/// multiply); elsewhere one instruction. ARMv6-M is told apart by its lack of 32-bit atomics
+/// (target features are not visible to `cfg` on stable Rust); the older Arm cores that also
+/// lack them take the same path, correct if slower.
 #[inline(always)]
 fn wide_mul(a: u32, b: u32) -> u64 {
     #[cfg(all(target_arch = "arm", not(target_has_atomic = "32")))]
