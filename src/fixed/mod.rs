@@ -149,7 +149,7 @@ impl Fix {
     }
 
     /// √x for x ≥ 0, rounded down to the last bit (⌊√(bits·2³²)⌋, as the `fixed` crate's
-    /// `sqrt`; see [`sqrt_bits`]); x < 0 → [`Fix::MIN`].
+    /// `sqrt`, with a table and Newton steps instead of a bit at a time); x < 0 → [`Fix::MIN`].
     pub fn sqrt(self) -> Fix {
         let x = self.to_bits();
         if x < 0 {

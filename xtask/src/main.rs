@@ -183,9 +183,9 @@ fn test_all() -> Result<(), String> {
         "-D",
         "warnings",
     ]))?;
-    step("API docs build without warnings (broken or private intra-doc links)");
+    step("API docs build without warnings (broken or private intra-doc links; every feature)");
     run(cargo()
-        .args(["doc", "--workspace", "--no-deps", "--lib"])
+        .args(["doc", "--workspace", "--no-deps", "--lib", "--all-features"])
         .env("RUSTDOCFLAGS", "-D warnings"))?;
     step("host tests: core unit + property + doc tests, MFeval oracle, CLI");
     cargo_test(&["--workspace"], &mut passed, &mut failed)?;
