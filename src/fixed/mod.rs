@@ -195,8 +195,8 @@ fn sqrt_bits(x: u64) -> u64 {
     // Heron: ⌊(s0 + ⌊N/s0⌋)/2⌋ ≥ ⌊√N⌋, and within 1 of it from 27 correct bits.
     let q = div_bits(x as i64, s0 as i64) as u64;
     let mut s = (s0 + q) / 2;
-    // The floor: lower s while s² > N (s < 2⁴⁸: s² from its 32-bit words). Once at most, in
-    // 3·10⁷ random x of every magnitude (a scratch run); bounded all the same.
+    // The floor: lower s while s² > N (s < 2⁴⁸: s² from its 32-bit words). Heron from 27 bits
+    // leaves at most 1 to go; bounded all the same (the tests check the floor exactly).
     for _ in 0..3 {
         if !square_exceeds(s, x) {
             break;
@@ -416,8 +416,9 @@ fn reciprocal_3by2(d1: u32, d0: u32) -> u32 {
 /// the result fits a word), without a divide instruction: 8 bits from a table, two Newton steps
 /// X ← X + X·(β² − d·X)/β² on X ≈ β²/d (each 2 products of words), then the exact quotient by
 /// stepping while (β + v)·d overshoots β² − 1 or (β + v + 1)·d does not (the two Newton steps
-/// leave at most 3 to go: a scratch program checked all 2³¹ divisors; the tests check the
-/// table's intervals' ends and random ones). `u64` division here
+/// leave at most 3 to go; every one of the 2³¹ divisors is checked by the ignored test
+/// `reciprocal_word_every_divisor`, about 15 s: `cargo test --release -p gough --features fixed
+/// --lib -- --ignored reciprocal_word`). `u64` division here
 /// would be a library call on a core without one (`__aeabi_uldivmod`, about 500 instructions
 /// on the Cortex-M0).
 #[inline(always)]
@@ -714,6 +715,19 @@ mod tests {
             (0, 7),
         ] {
             assert_eq!(wide_mul_halves(a, b), a as u64 * b as u64, "{a} * {b}");
+        }
+    }
+
+    /// [`reciprocal_word`] for every normalised divisor (2³¹ of them; run with `--ignored`).
+    #[test]
+    #[ignore = "2³¹ divisors: about 15 s in release, minutes in debug"]
+    fn reciprocal_word_every_divisor() {
+        for d in (1u32 << 31)..=u32::MAX {
+            assert_eq!(
+                reciprocal_word(d) as u64,
+                u64::MAX / d as u64 - (1 << 32),
+                "{d}"
+            );
         }
     }
 
