@@ -639,3 +639,54 @@ fn moments_off_changes_only_mx_my() {
         }
     }
 }
+
+/// The fixed-point Magic Formula on any input: every tyre file, every option, values far
+/// outside Q31.32's range and arbitrary bit patterns. Ok with finite outputs (not the saturation
+/// markers), or a clear error; never a panic (the core's promise on a core without an FPU).
+#[cfg(feature = "fixed")]
+mod props_fix {
+    use super::*;
+    use crate::fixed::{Fix, FixMath};
+
+    fn tyres() -> &'static [Params<Fix>] {
+        static FIX: std::sync::OnceLock<Vec<Params<Fix>>> = std::sync::OnceLock::new();
+        FIX.get_or_init(|| all_tyres().iter().map(|p| p.cast::<Fix>()).collect())
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(512))]
+
+        #[test]
+        fn finite_in_finite_out(
+            idx in 0usize..14, fz in -1e5f64..1e6, kappa in -20.0f64..20.0,
+            alpha in -1.6f64..1.6, gamma in -1.0f64..1.0, phit in -1.0f64..1.0,
+            vx in -80.0f64..80.0, limits in any::<bool>(), star in any::<bool>(),
+            turn in any::<bool>(), raw in any::<bool>(), bits in any::<[i64; 6]>(),
+        ) {
+            let ps = tyres();
+            let p = &ps[idx];
+            let f = Fix::from_f64;
+            let i = if raw {
+                let b = |k: usize| Fix::from_bits(bits[k]);
+                Input { fz: b(0), kappa: b(1), alpha: b(2), gamma: b(3), phit: b(4), vx: b(5), p: None }
+            } else {
+                Input { fz: f(fz), kappa: f(kappa), alpha: f(alpha), gamma: f(gamma), phit: f(phit), vx: f(vx), p: None }
+            };
+            let o = Options { limits, alpha_star: star, turn_slip: turn, mounted: None, transient: false, moments: true };
+            match eval::<Fix, FixMath>(p, &i, &o) {
+                Ok(out) => {
+                    for v in [out.fx, out.fy, out.mz, out.mx, out.my, out.t, out.m_zr,
+                              out.mu_x, out.mu_y, out.k_xk, out.k_ya, out.sigma_x, out.sigma_y] {
+                        prop_assert!(v.is_finite(), "{:?}", v);
+                    }
+                }
+                Err(EvalError::TurnSlipUnavailable) => prop_assert!(turn),
+                // Saturated inputs (a raw bit pattern at MIN or MAX) are not finite; only raw
+                // inputs or limits off may overflow.
+                Err(EvalError::NonFinite(_)) => prop_assert!(raw),
+                Err(EvalError::Overflow) => prop_assert!(raw || !limits),
+                Err(e) => prop_assert!(false, "unexpected {e:?}"),
+            }
+        }
+    }
+}
