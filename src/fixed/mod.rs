@@ -288,6 +288,33 @@ fn wide_mul(a: u32, b: u32) -> u64 {
     }
 }
 
+/// h·w for h < 2¹⁶ (a Q31.32 value below 65536 has such a high word): on ARMv6-M two 16×16-bit
+/// `muls` instead of [`wide_mul`]'s four; elsewhere one instruction.
+#[inline(always)]
+fn wide_mul_short(h: u32, w: u32) -> u64 {
+    #[cfg(all(target_arch = "arm", not(target_has_atomic = "32")))]
+    {
+        wide_mul_short_halves(h, w)
+    }
+    #[cfg(not(all(target_arch = "arm", not(target_has_atomic = "32"))))]
+    {
+        h as u64 * w as u64
+    }
+}
+
+/// [`wide_mul_short`] from 16-bit halves (ARMv6-M's; compiled everywhere, so that the host
+/// tests it). h < 2¹⁶: both products fit 32 bits.
+#[inline(always)]
+#[cfg_attr(
+    not(any(test, all(target_arch = "arm", not(target_has_atomic = "32")))),
+    allow(dead_code)
+)]
+fn wide_mul_short_halves(h: u32, w: u32) -> u64 {
+    let lo = h * (w & 0xffff);
+    let hi = h * (w >> 16);
+    ((hi as u64) << 16) + lo as u64
+}
+
 /// [`wide_mul`] from 16-bit halves (ARMv6-M's; compiled everywhere, so that the host tests it).
 #[inline(always)]
 #[cfg_attr(
@@ -318,22 +345,37 @@ fn mul_bits(a: i64, b: i64) -> i64 {
     let (bh, bl) = ((ub >> 32) as u32, ub as u32);
     // ua·ub / 2³² = ah·bh·2³² + ah·bl + al·bh + al·bl / 2³²: its integer part in `acc`, any
     // part at or above 2⁶⁴ is an overflow (a saturated result).
+    // A high word below 2¹⁶ (|value| < 65536, most quantities) takes the cheaper products.
     let ll = wide_mul(al, bl);
     let mut acc = ll >> 32;
     let mut over = false;
     if ah != 0 {
-        let (x, c) = acc.overflowing_add(wide_mul(ah, bl));
+        let t = if ah >> 16 == 0 {
+            wide_mul_short(ah, bl)
+        } else {
+            wide_mul(ah, bl)
+        };
+        let (x, c) = acc.overflowing_add(t);
         acc = x;
         over |= c;
         if bh != 0 {
-            let hh = wide_mul(ah, bh);
+            let hh = if (ah | bh) >> 16 == 0 {
+                (ah * bh) as u64 // both below 2¹⁶: the product fits a word
+            } else {
+                wide_mul(ah, bh)
+            };
             let (x, c) = acc.overflowing_add(hh << 32);
             acc = x;
             over |= c | (hh >> 32 != 0);
         }
     }
     if bh != 0 {
-        let (x, c) = acc.overflowing_add(wide_mul(al, bh));
+        let t = if bh >> 16 == 0 {
+            wide_mul_short(bh, al)
+        } else {
+            wide_mul(al, bh)
+        };
+        let (x, c) = acc.overflowing_add(t);
         acc = x;
         over |= c;
     }
@@ -715,6 +757,12 @@ mod tests {
             (0, 7),
         ] {
             assert_eq!(wide_mul_halves(a, b), a as u64 * b as u64, "{a} * {b}");
+            let h = a >> 16;
+            assert_eq!(
+                wide_mul_short_halves(h, b),
+                h as u64 * b as u64,
+                "{h} * {b}"
+            );
         }
     }
 
@@ -779,8 +827,9 @@ mod tests {
         }
 
         #[test]
-        fn wide_mul_halves_is_the_product(a in any::<u32>(), b in any::<u32>()) {
+        fn wide_mul_halves_is_the_product(a in any::<u32>(), b in any::<u32>(), h in 0u32..1 << 16) {
             prop_assert_eq!(wide_mul_halves(a, b), a as u64 * b as u64);
+            prop_assert_eq!(wide_mul_short_halves(h, b), h as u64 * b as u64);
         }
 
         #[test]
