@@ -288,22 +288,27 @@ fn wide_mul(a: u32, b: u32) -> u64 {
     }
 }
 
-/// h·w for h < 2¹⁶ (a Q31.32 value below 65536 has such a high word): on ARMv6-M two 16×16-bit
-/// `muls` instead of [`wide_mul`]'s four; elsewhere one instruction.
+/// h·w where h is the high word of a Q31.32 magnitude, usually below 2¹⁶ (|value| < 65536):
+/// on ARMv6-M then two 16×16-bit `muls` instead of [`wide_mul`]'s four; elsewhere
+/// [`wide_mul`], one instruction (a test there would only cost).
 #[inline(always)]
-fn wide_mul_short(h: u32, w: u32) -> u64 {
+fn wide_mul_high(h: u32, w: u32) -> u64 {
     #[cfg(all(target_arch = "arm", not(target_has_atomic = "32")))]
     {
-        wide_mul_short_halves(h, w)
+        if h >> 16 == 0 {
+            wide_mul_short_halves(h, w)
+        } else {
+            wide_mul(h, w)
+        }
     }
     #[cfg(not(all(target_arch = "arm", not(target_has_atomic = "32"))))]
     {
-        h as u64 * w as u64
+        wide_mul(h, w)
     }
 }
 
-/// [`wide_mul_short`] from 16-bit halves (ARMv6-M's; compiled everywhere, so that the host
-/// tests it). h < 2¹⁶: both products fit 32 bits.
+/// h·w for h < 2¹⁶ from two 16×16-bit products ([`wide_mul_high`]'s on ARMv6-M; compiled
+/// everywhere, so that the host tests it): both fit 32 bits.
 #[inline(always)]
 #[cfg_attr(
     not(any(test, all(target_arch = "arm", not(target_has_atomic = "32")))),
@@ -345,37 +350,22 @@ fn mul_bits(a: i64, b: i64) -> i64 {
     let (bh, bl) = ((ub >> 32) as u32, ub as u32);
     // ua·ub / 2³² = ah·bh·2³² + ah·bl + al·bh + al·bl / 2³²: its integer part in `acc`, any
     // part at or above 2⁶⁴ is an overflow (a saturated result).
-    // A high word below 2¹⁶ (|value| < 65536, most quantities) takes the cheaper products.
     let ll = wide_mul(al, bl);
     let mut acc = ll >> 32;
     let mut over = false;
     if ah != 0 {
-        let t = if ah >> 16 == 0 {
-            wide_mul_short(ah, bl)
-        } else {
-            wide_mul(ah, bl)
-        };
-        let (x, c) = acc.overflowing_add(t);
+        let (x, c) = acc.overflowing_add(wide_mul_high(ah, bl));
         acc = x;
         over |= c;
         if bh != 0 {
-            let hh = if (ah | bh) >> 16 == 0 {
-                (ah * bh) as u64 // both below 2¹⁶: the product fits a word
-            } else {
-                wide_mul(ah, bh)
-            };
+            let hh = wide_mul_high(ah, bh);
             let (x, c) = acc.overflowing_add(hh << 32);
             acc = x;
             over |= c | (hh >> 32 != 0);
         }
     }
     if bh != 0 {
-        let t = if bh >> 16 == 0 {
-            wide_mul_short(bh, al)
-        } else {
-            wide_mul(al, bh)
-        };
-        let (x, c) = acc.overflowing_add(t);
+        let (x, c) = acc.overflowing_add(wide_mul_high(bh, al));
         acc = x;
         over |= c;
     }
