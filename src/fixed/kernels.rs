@@ -182,7 +182,7 @@ pub fn ln(x: Fix) -> Fix {
         return Fix::MIN;
     }
     // x = 2ᵏ·m with m in [1, 2): the leading one at bit 32 + k.
-    let mut k = 31 - bits.leading_zeros() as i32; // −32..=30
+    let mut k = 31 - super::lz64(bits as u64) as i32; // −32..=30
     let mut m = if k >= 0 {
         Fix::from_bits(bits >> k)
     } else {
