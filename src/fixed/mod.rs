@@ -40,12 +40,13 @@
 //! bit patterns), computed without its `i128` arithmetic, which a 32-bit core runs as library
 //! calls (`__multi3`, `__divti3`; on the Cortex-M0 over nine tenths of an evaluation): the
 //! product from the 32-bit words' partial products that are not zero (four 16×16-bit `muls` each
-//! on ARMv6-M, which has no 32×32→64 multiply; two where a high word is below 2¹⁶), the quotient by two 3-by-2-word steps with the
-//! divisor's reciprocal (Möller–Granlund; the reciprocal from a 128-entry table and two Newton
-//! steps, no divide instruction). The square root, also `fixed`'s bit for bit, from a table of
-//! 1/√, two Newton steps, one Heron step with that quotient and an exact check of the square.
-//! On the Cortex-M0 that took the combined evaluation from 591,863 to 78,708 instructions
-//! (`cargo xtask test-all`).
+//! on ARMv6-M, which has no 32×32→64 multiply; two where a high word is below 2¹⁶), the
+//! quotient by two 3-by-2-word steps with the divisor's reciprocal (Möller–Granlund; the
+//! reciprocal from a 128-entry table and two Newton steps, no divide instruction). The square
+//! root, also `fixed`'s bit for bit, from a table of 1/√, two Newton steps, one Heron step with
+//! that quotient and an exact check of the square. On the Cortex-M0 (no `clz` either: leading
+//! zeros by binary search) that took the combined evaluation from 591,863 to 77,014
+//! instructions (`cargo xtask test-all`).
 //!
 //! ## Kernels ([`FixMath`])
 //! Polynomials, with the minimax coefficients of the fast `f32` kernels (one table,
@@ -62,7 +63,7 @@
 //! `cargo test -p gough-host --release --test backends -- --nocapture`.
 //!
 //! ## What this module leaves out
-//! - Issue 7's ≤ 4 000 instructions per combined evaluation on a Cortex-M0: 78,708 (soft-float
+//! - Issue 7's ≤ 4 000 instructions per combined evaluation on a Cortex-M0: 77,014 (soft-float
 //!   `f32` 97,463). About 450 products and 35 quotients of 64-bit values per evaluation remain;
 //!   fewer needs narrower `i32` formats per quantity on the hot path, which means re-typing the
 //!   equations (the trade this module declines for now, see above). `mul` and `div` are out of
