@@ -196,7 +196,9 @@ impl SlipSlope {
     pub fn new(p: &Params<f64>) -> Option<Self> {
         let mu0 = eval_at(p, 1.0, p.fnomin, 0.0, 0.0)?.mu_y;
         let mut calib = Vec::new();
-        for i in 0..30 {
+        // Every 0.05 over MU_RANGE, both ends included.
+        let n = ((MU_RANGE.1 - MU_RANGE.0) / 0.05).round() as usize + 1;
+        for i in 0..n {
             let mu = MU_RANGE.0 + 0.05 * i as f64;
             let o = eval_at(p, mu / mu0, p.fnomin, 0.0, -KAPPA_REF)?;
             let k = (o.fx / p.fnomin / -KAPPA_REF).abs();
