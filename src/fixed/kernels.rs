@@ -38,33 +38,75 @@ const EXP_MAX: Fix = q(21.487_562_597_358_306);
 /// ln 2⁻³³: below this eˣ rounds to 0.
 const EXP_MIN: Fix = q(-22.873_856_958_478_2);
 
+/// A value |x| < 1 in Q0.31 (x·2³¹ in an `i32`, rounded down; clamped to ±(1 − 2⁻³¹)): the
+/// format of the sin, cos, tan, atan and exp polynomials, whose arguments are reduced below 1 —
+/// one 32×32→64-bit product per step ([`mul31`]) instead of a Q31.32 product, which needs up to
+/// four and tests for saturation. The kernels add the polynomial's leading term (r, 1) in
+/// Q31.32, so that only the smaller rest has to fit Q0.31.
+#[inline(always)]
+fn to_q31(x: Fix) -> i32 {
+    (x.to_bits() >> 1).clamp(-(i32::MAX as i64), i32::MAX as i64) as i32
+}
+
+/// A Q0.31 value as Q31.32 (exact).
+#[inline(always)]
+fn from_q31(y: i32) -> Fix {
+    Fix::from_bits((y as i64) << 1)
+}
+
+/// a·b in Q0.31, rounded to nearest (ties away from zero); |a|, |b| < 1 (neither is −1: see
+/// [`to_q31`]).
+#[inline(always)]
+fn mul31(a: i32, b: i32) -> i32 {
+    let p = super::wide_mul(a.unsigned_abs(), b.unsigned_abs());
+    let m = ((p + (1 << 30)) >> 31) as i32; // p < 2⁶²: m < 2³¹
+    if (a ^ b) < 0 {
+        -m
+    } else {
+        m
+    }
+}
+
+/// A Q0.31 constant from a shared `f32` coefficient (|x| < 1), rounded (compile time).
+const fn c31(x: f32) -> i32 {
+    let v = x as f64 * 2_147_483_648.0;
+    (if v >= 0.0 { v + 0.5 } else { v - 0.5 }) as i32
+}
+
 /// The Q31.32 kernels behind [`Backend<Fix>`]: `mf::eval::<Fix, FixMath>`.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct FixMath;
 
 /// x = k·π/2 + r with |r| ≤ π/4; returns (r, k mod 4). Exact to |k|·2⁻³³ + 2⁻³²; beyond
-/// |x| ≈ 1e9 (k·π/2 saturates) r is clamped, so results stay bounded.
+/// |x| ≈ 1e9 (k·π/2 saturates) r is clamped to ±π/4 wherever it leaves [−1, 1], so results
+/// stay bounded and r always fits the polynomials' Q0.31.
 #[inline]
 fn reduce(x: Fix) -> (Fix, u32) {
     let k = (x * FRAC_2_PI + Fix::HALF).floor_int();
     let kf = Fix::from_bits(k.saturating_mul(1 << 32));
     let mut r = x - kf * FRAC_PI_2;
-    if r > FRAC_PI_4 + FRAC_PI_4 || r < -(FRAC_PI_4 + FRAC_PI_4) {
+    if r >= Fix::ONE || r <= -Fix::ONE {
         r = if r > Fix::ZERO { FRAC_PI_4 } else { -FRAC_PI_4 };
     }
     (r, (k & 3) as u32)
 }
 
+/// sin r for |r| < 1 (reduced: ≤ π/4): r + (the rest in Q0.31).
 #[inline]
 fn sin_poly(r: Fix) -> Fix {
-    let z = r * r;
-    r + r * z * (c(S0) + z * (c(S1) + z * c(S2)))
+    let q = to_q31(r);
+    let z = mul31(q, q);
+    let p = c31(S0) + mul31(z, c31(S1) + mul31(z, c31(S2)));
+    r + from_q31(mul31(q, mul31(z, p)))
 }
 
+/// cos r for |r| < 1 (reduced: ≤ π/4): 1 + (the rest in Q0.31).
 #[inline]
 fn cos_poly(r: Fix) -> Fix {
-    let z = r * r;
-    (Fix::ONE - Fix::HALF * z) + z * z * (c(C0) + z * c(C1))
+    let r = to_q31(r);
+    let z = mul31(r, r);
+    let q = c31(C0) + mul31(z, c31(C1));
+    Fix::ONE + from_q31(mul31(mul31(z, z), q) - ((z + 1) >> 1))
 }
 
 #[inline]
@@ -97,8 +139,15 @@ pub fn cos(x: Fix) -> Fix {
 /// tan x \[rad\]; error ≤ 3e-7 relative + 4e-9 for |x| ≤ 1.5 (see tests); saturates at the poles.
 pub fn tan(x: Fix) -> Fix {
     let (r, k) = reduce(x);
-    let z = r * r;
-    let t = r + r * z * (c(T0) + z * (c(T1) + z * (c(T2) + z * (c(T3) + z * c(T4)))));
+    // r + (the rest in Q0.31: below 0.56 for |r| < 1).
+    let q = to_q31(r);
+    let z = mul31(q, q);
+    let p = c31(T0)
+        + mul31(
+            z,
+            c31(T1) + mul31(z, c31(T2) + mul31(z, c31(T3) + mul31(z, c31(T4)))),
+        );
+    let t = r + from_q31(mul31(q, mul31(z, p)));
     if k & 1 == 0 {
         t
     } else if t == Fix::ZERO {
@@ -118,8 +167,11 @@ pub fn atan(x: Fix) -> Fix {
     } else {
         (Fix::ZERO, ax)
     };
-    let z = t * t;
-    let y = base + (t + t * z * (c(A0) + z * (c(A1) + z * (c(A2) + z * c(A3)))));
+    // |t| ≤ tan π/8: t + (the rest in Q0.31).
+    let q = to_q31(t);
+    let z = mul31(q, q);
+    let p = c31(A0) + mul31(z, c31(A1) + mul31(z, c31(A2) + mul31(z, c31(A3))));
+    let y = base + (t + from_q31(mul31(q, mul31(z, p))));
     if x < Fix::ZERO {
         -y
     } else {
@@ -160,7 +212,10 @@ pub fn exp(x: Fix) -> Fix {
     }
     let k = (x * LOG2_E + Fix::HALF).floor_int(); // −33..=31
     let r = x - Fix::from_int(k as i32) * LN_2;
-    let p = Fix::ONE + (r + r * r * (c(E0) + r * (c(E1) + r * (c(E2) + r * c(E3)))));
+    // |r| ≤ ln 2/2 (and a few 2⁻³²): 1 + r + (the rest in Q0.31).
+    let h = to_q31(r);
+    let q = c31(E0) + mul31(h, c31(E1) + mul31(h, c31(E2) + mul31(h, c31(E3))));
+    let p = Fix::ONE + (r + from_q31(mul31(mul31(h, h), q)));
     let bits = p.to_bits(); // p in (0.7, 1.42)
     if k >= 0 {
         let k = k as u32;
