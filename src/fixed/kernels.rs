@@ -2,7 +2,9 @@
 //!
 //! The polynomials are those of the fast `f32` kernels (coefficients in `math::minimax`, our own
 //! Remez fits, `tools/minimax.py`); the argument reductions are redone in fixed point, where the
-//! constants π/2, ln 2, … carry 32 fraction bits (error ≤ 2⁻³³). Every operation saturates
+//! constants π/2, ln 2, … carry 32 fraction bits (error ≤ 2⁻³³), and the sin, cos, tan, atan
+//! and exp polynomials, whose reduced arguments lie below 1, run in Q0.31 (`to_q31`,
+//! `mul31`). Every operation saturates
 //! (see [`Fix`]); no kernel panics for any input. Errors are measured by the tests below against
 //! `f64` std at the same (Q31.32) input and stated on each function.
 

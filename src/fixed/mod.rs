@@ -46,15 +46,18 @@
 //! root, also `fixed`'s bit for bit, from a table of 1/√, two Newton steps, one Heron step with
 //! that quotient and an exact check of the square. On the Cortex-M0 (no `clz` either: leading
 //! zeros by binary search) that took the combined evaluation from 591,863 to 77,014
-//! instructions (`cargo xtask test-all`).
+//! instructions, and the kernels' polynomials in Q0.31 (below) to 68,137 (`cargo xtask
+//! test-all`).
 //!
 //! ## Kernels ([`FixMath`])
 //! Polynomials, with the minimax coefficients of the fast `f32` kernels (one table,
 //! `math::minimax`; fits by `tools/minimax.py`) and the same argument reductions done in Q31.32:
 //! sin, cos, tan by k·π/2; atan by 1/x and (x − 1)/(x + 1); acos through asin and √; eˣ by
 //! k·ln 2 and a shift; ln by the leading-one position and atanh; √ exact to the last bit (rounded
-//! down, as the `fixed` crate's: `Fix::sqrt`). Errors measured in [`kernels`]' tests: within 3e-7 relative (the polynomial fits)
-//! plus a few 2⁻³² absolute.
+//! down, as the `fixed` crate's: `Fix::sqrt`). The sin, cos, tan, atan and exp polynomials run
+//! in Q0.31 after their reductions (|r| < 1): one 32×32→64-bit product per step instead of a
+//! Q31.32 product, the leading term (r, 1) added in Q31.32. Errors measured in [`kernels`]'
+//! tests: within 3e-7 relative (the polynomial fits) plus a few 2⁻³² absolute.
 //!
 //! ## Accuracy of the Magic Formula
 //! Against the `f64` path over the inputs of all 71 MFeval oracle sweeps (9497 rows, every
@@ -63,8 +66,8 @@
 //! `cargo test -p gough-host --release --test backends -- --nocapture`.
 //!
 //! ## What this module leaves out
-//! - Issue 7's ≤ 4 000 instructions per combined evaluation on a Cortex-M0: 77,014 (soft-float
-//!   `f32` 97,463). About 450 products and 35 quotients of 64-bit values per evaluation remain;
+//! - Issue 7's ≤ 4 000 instructions per combined evaluation on a Cortex-M0: 68,137 (soft-float
+//!   `f32` 97,463). About 260 products and 35 quotients of 64-bit values per evaluation remain;
 //!   fewer needs narrower `i32` formats per quantity on the hot path, which means re-typing the
 //!   equations (the trade this module declines for now, see above). `mul` and `div` are out of
 //!   line, which keeps `mf::eval::<Fix, _>` at about 14 kB of Thumb code instead of 210 kB.
