@@ -9,8 +9,9 @@
 //! independent of λμ and tells how far along the curve the tyre is — without the slip angle —
 //! and λμ = |F|/(Fz·f) at that point. The host tests measure the error this leaves.
 //!
-//! Each curve is evaluated at 20 slip angles and then held as f against the trail ratio
-//! ρ = τ/τ0 on a uniform grid (linear between the slip-angle points), so that a reading finds its
+//! Each curve is evaluated at 20 slip angles (and where its usable part starts, and at two
+//! more points between each pair of its slip angles there) and then held as f against the trail
+//! ratio ρ = τ/τ0 on a uniform grid (linear between those points), so that a reading finds its
 //! place on every curve by one multiplication instead of a search. The ambiguity test's look-up
 //! the other way, τ at a force, is first bounded from 8 force cells per curve (the chord across
 //! a cell, and how far the curve strays from it), also without a search ([`Curve::tau_band`]).
@@ -60,8 +61,9 @@ pub struct Curve<F> {
     /// small slip the residual torque and the shifts make the trail grow first, so a reading
     /// there can look like a slippery surface at large slip; kept to recognise that ambiguity.
     pub rise: [(F, F); RISE],
-    /// τ0: the trail at the smallest usable slip, the largest of the curve \[m\] (> 0; 0 for
-    /// an empty curve).
+    /// τ0: the trail where the usable part starts, the largest of it \[m\] (> 0; 0 for an
+    /// empty curve): where f reaches the cut-off (10 % of the surface's μ) while the trail
+    /// still falls there, else at the trail's peak; both found between the slip-angle nodes.
     pub tau0: F,
     /// What a reading past the aligning torque's sign change can mean (near and beyond the
     /// force peak, out into deep sliding where τ rises again and no longer tells the slip): the
@@ -214,8 +216,9 @@ pub struct Inversion<F> {
     pub f_spread: F,
 }
 
-fn alpha_node(k: usize) -> f64 {
-    let x = (k + 1) as f64 / POINTS as f64;
+/// Slip angle of node `k` at λμ = 1 \[rad\]; between nodes at a fractional `k`.
+fn alpha_node(k: f64) -> f64 {
+    let x = (k + 1.0) / POINTS as f64;
     // Cubic spacing: dense near zero, where the residual torque and the shifts bend the trail
     // (the rising branch must be resolved to recognise readings there), coarse in deep sliding.
     ALPHA_MAX * x * x * x
@@ -570,10 +573,8 @@ fn curve<F: Float, M: Backend<F>>(
         Src::Brush(_) => (F::from_f64(lambda), F::from_f64(lambda)),
         Src::Mf(..) => (F::from_f64(lambda), F::ONE),
     };
-    let mut taus = [F::ZERO; POINTS];
-    let mut fs = [F::ZERO; POINTS];
-    let mut fxs = [F::ZERO; POINTS];
-    for k in 0..POINTS {
+    // (f, τ, Fx/Fz) at node position `k` (fractional between nodes).
+    let at = |k: f64| {
         let alpha = sgn * scale * F::from_f64(alpha_node(k));
         // Brush: evaluate at λ = 1 on the stretched axis and scale radially (exact).
         let alpha_eval = match src {
@@ -582,14 +583,20 @@ fn curve<F: Float, M: Backend<F>>(
         };
         let (fy, mz, fx) = src.eval_fx::<M>(alpha_eval, fz, gamma)?;
         let (fy, mz) = (fy * lam_f, mz * lam_f);
-        *fxs.get_mut(k)? = fx / fz;
         let fy_dir = fy * fy_sign * sgn; // > 0 on the expected side
-        *taus.get_mut(k)? = if fy_dir > F::ZERO {
+        let tau = if fy_dir > F::ZERO {
             -mz / fy
         } else {
             F::from_f64(1e9)
         };
-        *fs.get_mut(k)? = fy_dir / fz;
+        Some((fy_dir / fz, tau, fx / fz))
+    };
+    let mut taus = [F::ZERO; POINTS];
+    let mut fs = [F::ZERO; POINTS];
+    let mut fxs = [F::ZERO; POINTS];
+    for k in 0..POINTS {
+        let (f, tau, fx) = at(k as f64)?;
+        (*fs.get_mut(k)?, *taus.get_mut(k)?, *fxs.get_mut(k)?) = (f, tau, fx);
     }
     // Usable part: from the largest trail among points with a well-defined ratio (|Fy| ≥ 10 %
     // of the surface's peak, so that shifts do not dominate), the points on which τ strictly
@@ -622,6 +629,77 @@ fn curve<F: Float, M: Backend<F>>(
     if n < 4 {
         return None;
     }
+    // τ0 between the nodes. Every curve is read relative to its own τ0, and the load
+    // interpolation compares curves at equal τ/τ0: a τ0 taken at whichever node happens to be
+    // first (its f anywhere from the cut-off to the next node) misplaces the reading between
+    // loads (the first node changes between 1.35 and 1.8·Fz0: the first estimates at 1.5·Fz0
+    // leaned +0.055, now +0.023, `gough mu map`). So the usable part starts where it truly does: where f reaches the cut-off `f_min` when the
+    // trail still falls there (the residual torque makes it largest at the smallest force), or
+    // at the trail's peak (the vertex of the parabola through the nodes about `first`).
+    // `x0`: the node position of the usable part's first point; `shift`: 1 when the node
+    // `first` follows it, 0 when the new point replaces it (the node then joins the rising
+    // branch).
+    let (mut x0, mut shift) = (first as f64, 0);
+    if let (Some(&ta), Some(&tb), Some(&tc), Some(&fa), Some(&fb)) = (
+        first.checked_sub(1).and_then(|k| taus.get(k)),
+        taus.get(first),
+        taus.get(first + 1),
+        first.checked_sub(1).and_then(|k| fs.get(k)),
+        fs.get(first),
+    ) {
+        let den = ta - F::TWO * tb + tc;
+        let d = if fa < f_min && fb > fa && ta > tb {
+            // f crosses the cut-off between the nodes: secant steps in α (f is nearly linear
+            // in α there), kept bracketed, until f is within 0.1 % of it (at most 4 steps).
+            let x_of = |a: f64| POINTS as f64 * libm::cbrt(a / ALPHA_MAX) - 1.0;
+            let base = first as f64;
+            let (mut lo, mut hi) = ((alpha_node(base - 1.0), fa), (alpha_node(base), fb));
+            let mut d = 0.0;
+            for _ in 0..4 {
+                let a = lo.0 + (hi.0 - lo.0) * ((f_min - lo.1) / (hi.1 - lo.1)).to_f64();
+                let x = x_of(a) - base;
+                let (fd, _, _) = at(base + x)?;
+                if fd < f_min {
+                    lo = (a, fd);
+                } else {
+                    hi = (a, fd);
+                    d = x;
+                }
+                if (fd - f_min).abs() <= f_min * F::from_f64(1e-3) {
+                    d = x;
+                    break;
+                }
+            }
+            d
+        } else if ta < F::from_f64(1e8) && den < F::ZERO {
+            (F::HALF * (ta - tc) / den)
+                .max(-F::HALF)
+                .min(F::HALF)
+                .to_f64()
+        } else {
+            0.0
+        };
+        if d != 0.0 && n < POINTS {
+            let (fp, tp, _) = at(first as f64 + d)?;
+            if tp > tb && fp >= f_min * F::from_f64(1.0 - 1e-3) && fp > F::ZERO {
+                if d < 0.0 {
+                    kept.copy_within(0..n, 1);
+                    n += 1;
+                    shift = 1;
+                }
+                *kept.first_mut()? = (fp, tp);
+                x0 = first as f64 + d;
+            }
+        }
+    }
+    // Node position of kept point m.
+    let pos = |m: usize| {
+        if m == 0 {
+            x0
+        } else {
+            (first + m - shift) as f64
+        }
+    };
     // f once τ ≤ 0: from the last positive-trail point on, through the sampled tail.
     let mut neg = [F::ZERO; 2];
     if let Some(k0) = (first..POINTS).find(|&k| taus.get(k).is_some_and(|&x| x <= F::ZERO)) {
@@ -653,7 +731,8 @@ fn curve<F: Float, M: Backend<F>>(
     // The rising branch: points before `first` with a positive force on this side.
     let mut rise = [(F::ZERO, F::ZERO); RISE];
     let mut nr = 0;
-    for k in 0..first.min(RISE) {
+    let rise_end = if x0 > first as f64 { first + 1 } else { first };
+    for k in 0..rise_end.min(RISE) {
         let (tk, fk) = (*taus.get(k)?, *fs.get(k)?);
         if fk > F::ZERO && tk < F::from_f64(1e8) {
             *rise.get_mut(nr)? = (fk, tk);
@@ -672,19 +751,53 @@ fn curve<F: Float, M: Backend<F>>(
     } else {
         (f_end, f_end)
     };
-    let tau0 = kept.first()?.1; // > 0: the largest trail, `best`
-                                // The usable part on the ρ grid: linear between the slip-angle nodes (the segment k with
-                                // τ_k ≥ τ0·ρᵢ ≥ τ_k+1), up to the first node at or beyond its end, which lies on the last
-                                // segment's line.
+    // The usable part on the ρ grid: in the segment k between slip-angle nodes with
+    // τ_k ≥ τ0·ρᵢ ≥ τ_k+1, linear between SUB + 1 points of the model along it (f bends between
+    // the nodes: on the nodes alone, readings on the load nodes erred by up to 0.031 in λμ from
+    // a utilisation of 0.5, now 0.006, `load_interpolation_error`), up to the first grid node
+    // at or beyond the usable part's end, which lies on the last piece's line.
+    let tau0 = kept.first()?.1; // > 0
+    const SUB: usize = 3;
     let mut f = [F::ZERO; RHO_POINTS];
     let mut len = 0;
     let mut k = 0;
+    // The points along segment `k` (computed when the grid first reaches it).
+    let mut seg = [(F::ZERO, F::ZERO); SUB + 1];
+    let mut seg_k = None;
     for (i, slot) in f.iter_mut().enumerate() {
         let tau_i = tau0 * grid_rho(F::from_index(i as u16));
         while k + 2 < n && kept.get(k + 1)?.1 > tau_i {
             k += 1;
         }
-        let ((f0, t0), (f1, t1)) = (*kept.get(k)?, *kept.get(k + 1)?);
+        if seg_k != Some(k) {
+            let (ends, x, dx) = (
+                (*kept.get(k)?, *kept.get(k + 1)?),
+                pos(k),
+                pos(k + 1) - pos(k),
+            );
+            for (m, p) in seg.iter_mut().enumerate() {
+                *p = match m {
+                    0 => ends.0,
+                    SUB => ends.1,
+                    _ => at(x + dx * m as f64 / SUB as f64).map(|(f, t, _)| (f, t))?,
+                };
+            }
+            seg_k = Some(k);
+        }
+        // The piece of the segment holding τᵢ: the first whose far end has τ ≤ τᵢ (the last
+        // beyond the segment's end); the chord of the whole segment if the model's trail is
+        // not monotone along it.
+        let monotone = seg.windows(2).all(|w| matches!(w, [a, b] if b.1 < a.1));
+        let ((f0, t0), (f1, t1)) = if monotone {
+            let m = seg
+                .iter()
+                .skip(1)
+                .position(|p| p.1 <= tau_i)
+                .unwrap_or(SUB - 1);
+            (*seg.get(m)?, *seg.get(m + 1)?)
+        } else {
+            (*kept.get(k)?, *kept.get(k + 1)?)
+        };
         *slot = f0 + (tau_i - t0) * ((f1 - f0) / (t1 - t0));
         if len == 0 && tau_i <= tau_end {
             len = i + 1; // the grid's last node; the ones past it continue the last segment
