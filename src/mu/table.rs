@@ -216,9 +216,8 @@ pub struct Inversion<F> {
     pub f_spread: F,
 }
 
-/// Slip angle of node `k` at λμ = 1 \[rad\]; between nodes at a fractional `k`.
-fn alpha_node(k: f64) -> f64 {
-    let x = (k + 1.0) / POINTS as f64;
+fn alpha_node(k: usize) -> f64 {
+    let x = (k + 1) as f64 / POINTS as f64;
     // Cubic spacing: dense near zero, where the residual torque and the shifts bend the trail
     // (the rising branch must be resolved to recognise readings there), coarse in deep sliding.
     ALPHA_MAX * x * x * x
@@ -573,9 +572,11 @@ fn curve<F: Float, M: Backend<F>>(
         Src::Brush(_) => (F::from_f64(lambda), F::from_f64(lambda)),
         Src::Mf(..) => (F::from_f64(lambda), F::ONE),
     };
-    // (f, τ, Fx/Fz) at node position `k` (fractional between nodes).
-    let at = |k: f64| {
-        let alpha = sgn * scale * F::from_f64(alpha_node(k));
+    // Slip angle of node k at λμ = 1.
+    let node = |k: usize| F::from_f64(alpha_node(k));
+    // (f, τ, Fx/Fz) at slip angle `a` at λμ = 1 (on the stretched axis).
+    let at = |a: F| {
+        let alpha = sgn * scale * a;
         // Brush: evaluate at λ = 1 on the stretched axis and scale radially (exact).
         let alpha_eval = match src {
             Src::Brush(_) => M::atan(M::tan(alpha) / scale),
@@ -595,7 +596,7 @@ fn curve<F: Float, M: Backend<F>>(
     let mut fs = [F::ZERO; POINTS];
     let mut fxs = [F::ZERO; POINTS];
     for k in 0..POINTS {
-        let (f, tau, fx) = at(k as f64)?;
+        let (f, tau, fx) = at(node(k))?;
         (*fs.get_mut(k)?, *taus.get_mut(k)?, *fxs.get_mut(k)?) = (f, tau, fx);
     }
     // Usable part: from the largest trail among points with a well-defined ratio (|Fy| ≥ 10 %
@@ -615,31 +616,17 @@ fn curve<F: Float, M: Backend<F>>(
     if best <= F::ZERO {
         return None; // no positive trail to collapse from: nothing to read
     }
-    let mut kept = [(F::ZERO, F::ZERO); POINTS];
-    let mut n = 0;
-    for k in first..POINTS {
-        let (tk, fk) = (*taus.get(k)?, *fs.get(k)?);
-        let ok = n == 0 || kept.get(n - 1).is_some_and(|&(_, prev)| tk < prev);
-        if !ok || fk <= F::ZERO {
-            break;
-        }
-        *kept.get_mut(n)? = (fk, tk);
-        n += 1;
-    }
-    if n < 4 {
-        return None;
-    }
     // τ0 between the nodes. Every curve is read relative to its own τ0, and the load
     // interpolation compares curves at equal τ/τ0: a τ0 taken at whichever node happens to be
     // first (its f anywhere from the cut-off to the next node) misplaces the reading between
     // loads (the first node changes between 1.35 and 1.8·Fz0: the first estimates at 1.5·Fz0
-    // leaned +0.055, now +0.023, `gough mu map`). So the usable part starts where it truly does: where f reaches the cut-off `f_min` when the
-    // trail still falls there (the residual torque makes it largest at the smallest force), or
-    // at the trail's peak (the vertex of the parabola through the nodes about `first`).
-    // `x0`: the node position of the usable part's first point; `shift`: 1 when the node
-    // `first` follows it, 0 when the new point replaces it (the node then joins the rising
-    // branch).
-    let (mut x0, mut shift) = (first as f64, 0);
+    // leaned +0.055, now +0.023, `gough mu map`). So the usable part starts where it truly does:
+    // where f reaches the cut-off `f_min` when the trail still falls there (the residual torque
+    // makes it largest at the smallest force), or at the trail's peak (the vertex of the
+    // parabola through the nodes about `first`). `start`: that point (slip angle, f, τ) when it
+    // lies before the node `first` (which then follows it) or after it (the node then joins the
+    // rising branch).
+    let mut start = None;
     if let (Some(&ta), Some(&tb), Some(&tc), Some(&fa), Some(&fb)) = (
         first.checked_sub(1).and_then(|k| taus.get(k)),
         taus.get(first),
@@ -648,58 +635,66 @@ fn curve<F: Float, M: Backend<F>>(
         fs.get(first),
     ) {
         let den = ta - F::TWO * tb + tc;
-        let d = if fa < f_min && fb > fa && ta > tb {
+        let a = if fa < f_min && fb > fa && ta > tb {
             // f crosses the cut-off between the nodes: secant steps in α (f is nearly linear
             // in α there), kept bracketed, until f is within 0.1 % of it (at most 4 steps).
-            let x_of = |a: f64| POINTS as f64 * libm::cbrt(a / ALPHA_MAX) - 1.0;
-            let base = first as f64;
-            let (mut lo, mut hi) = ((alpha_node(base - 1.0), fa), (alpha_node(base), fb));
-            let mut d = 0.0;
+            let (mut lo, mut hi) = ((node(first - 1), fa), (node(first), fb));
+            let mut found = None;
             for _ in 0..4 {
-                let a = lo.0 + (hi.0 - lo.0) * ((f_min - lo.1) / (hi.1 - lo.1)).to_f64();
-                let x = x_of(a) - base;
-                let (fd, _, _) = at(base + x)?;
+                let a = lo.0 + (hi.0 - lo.0) * ((f_min - lo.1) / (hi.1 - lo.1));
+                let (fd, _, _) = at(a)?;
                 if fd < f_min {
                     lo = (a, fd);
                 } else {
                     hi = (a, fd);
-                    d = x;
+                    found = Some(a);
                 }
                 if (fd - f_min).abs() <= f_min * F::from_f64(1e-3) {
-                    d = x;
+                    found = Some(a);
                     break;
                 }
             }
-            d
+            found
         } else if ta < F::from_f64(1e8) && den < F::ZERO {
-            (F::HALF * (ta - tc) / den)
-                .max(-F::HALF)
-                .min(F::HALF)
-                .to_f64()
+            // The vertex, in node positions (the nodes' α is cubic in the position).
+            let d = (F::HALF * (ta - tc) / den).max(-F::HALF).min(F::HALF);
+            let x = (F::from_index(first as u16 + 1) + d) * F::from_f64(1.0 / POINTS as f64);
+            Some(F::from_f64(ALPHA_MAX) * x * x * x)
         } else {
-            0.0
+            None
         };
-        if d != 0.0 && n < POINTS {
-            let (fp, tp, _) = at(first as f64 + d)?;
+        if let Some(a) = a.filter(|&a| a != node(first)) {
+            let (fp, tp, _) = at(a)?;
             if tp > tb && fp >= f_min * F::from_f64(1.0 - 1e-3) && fp > F::ZERO {
-                if d < 0.0 {
-                    kept.copy_within(0..n, 1);
-                    n += 1;
-                    shift = 1;
-                }
-                *kept.first_mut()? = (fp, tp);
-                x0 = first as f64 + d;
+                start = Some((a, fp, tp));
             }
         }
     }
-    // Node position of kept point m.
-    let pos = |m: usize| {
-        if m == 0 {
-            x0
-        } else {
-            (first + m - shift) as f64
+    // The usable part, (f, τ) and the slip angle of each point: from `start` (if any), then
+    // the nodes from `first` (after `start`: from the next) on which τ strictly decreases.
+    let mut kept = [(F::ZERO, F::ZERO); POINTS];
+    let mut kept_a = [F::ZERO; POINTS];
+    let mut n = 0;
+    let mut from = first;
+    if let Some((a, f, t)) = start {
+        (*kept.first_mut()?, *kept_a.first_mut()?) = ((f, t), a);
+        n = 1;
+        if a > node(first) {
+            from = first + 1;
         }
-    };
+    }
+    for k in from..POINTS {
+        let (tk, fk) = (*taus.get(k)?, *fs.get(k)?);
+        let ok = n == 0 || kept.get(n - 1).is_some_and(|&(_, prev)| tk < prev);
+        if !ok || fk <= F::ZERO {
+            break;
+        }
+        (*kept.get_mut(n)?, *kept_a.get_mut(n)?) = ((fk, tk), node(k));
+        n += 1;
+    }
+    if n < 4 {
+        return None;
+    }
     // f once τ ≤ 0: from the last positive-trail point on, through the sampled tail.
     let mut neg = [F::ZERO; 2];
     if let Some(k0) = (first..POINTS).find(|&k| taus.get(k).is_some_and(|&x| x <= F::ZERO)) {
@@ -731,7 +726,7 @@ fn curve<F: Float, M: Backend<F>>(
     // The rising branch: points before `first` with a positive force on this side.
     let mut rise = [(F::ZERO, F::ZERO); RISE];
     let mut nr = 0;
-    let rise_end = if x0 > first as f64 { first + 1 } else { first };
+    let rise_end = if from > first { first + 1 } else { first };
     for k in 0..rise_end.min(RISE) {
         let (tk, fk) = (*taus.get(k)?, *fs.get(k)?);
         if fk > F::ZERO && tk < F::from_f64(1e8) {
@@ -754,7 +749,7 @@ fn curve<F: Float, M: Backend<F>>(
     // The usable part on the ρ grid: in the segment k between slip-angle nodes with
     // τ_k ≥ τ0·ρᵢ ≥ τ_k+1, linear between SUB + 1 points of the model along it (f bends between
     // the nodes: on the nodes alone, readings on the load nodes erred by up to 0.031 in λμ from
-    // a utilisation of 0.5, now 0.006, `load_interpolation_error`), up to the first grid node
+    // a utilisation of 0.5, now 0.007, `load_interpolation_error`), up to the first grid node
     // at or beyond the usable part's end, which lies on the last piece's line.
     let tau0 = kept.first()?.1; // > 0
     const SUB: usize = 3;
@@ -770,16 +765,17 @@ fn curve<F: Float, M: Backend<F>>(
             k += 1;
         }
         if seg_k != Some(k) {
-            let (ends, x, dx) = (
+            let (ends, a, da) = (
                 (*kept.get(k)?, *kept.get(k + 1)?),
-                pos(k),
-                pos(k + 1) - pos(k),
+                *kept_a.get(k)?,
+                *kept_a.get(k + 1)? - *kept_a.get(k)?,
             );
             for (m, p) in seg.iter_mut().enumerate() {
                 *p = match m {
                     0 => ends.0,
                     SUB => ends.1,
-                    _ => at(x + dx * m as f64 / SUB as f64).map(|(f, t, _)| (f, t))?,
+                    _ => at(a + da * F::from_index(m as u16) * F::from_f64(1.0 / SUB as f64))
+                        .map(|(f, t, _)| (f, t))?,
                 };
             }
             seg_k = Some(k);

@@ -1004,7 +1004,7 @@ fn a_free_rolling_wheel_without_fx_reads_as_with_it() {
 /// The table's own error, with every gate off (steady, noise-free, Fx measured): λμ read from
 /// the Magic Formula's (Fy, Mz) against the truth, from a utilisation of 0.5, on the load
 /// nodes and between them. It bounds the lean of the first estimates (`gough mu map`).
-/// Measured (this test's output): 0.006 on the nodes, 0.056 between them, 0.092 at 0.3·Fz0,
+/// Measured (this test's output): 0.007 on the nodes, 0.055 between them, 0.092 at 0.3·Fz0,
 /// between the two lightest. Before each curve's τ0 was taken where f reaches the cut-off
 /// and its grid from the model between the slip-angle nodes, it was 0.031, 0.051 and 0.082.
 /// (A quadratic interpolation in load over three nodes measured 0.006, 0.028 and 0.064, but it
