@@ -1007,7 +1007,8 @@ fn a_free_rolling_wheel_without_fx_reads_as_with_it() {
 /// Measured (this test's output): 0.007 on the nodes, 0.055 between them, 0.092 at 0.3·Fz0,
 /// between the two lightest. Before each curve's τ0 was taken where f reaches the cut-off
 /// and its grid from the model between the slip-angle nodes, it was 0.031, 0.051 and 0.082.
-/// (A quadratic interpolation in load over three nodes measured 0.006, 0.028 and 0.064, but it
+/// (A quadratic interpolation in load over three nodes, a scratch build not kept, measured
+/// 0.006, 0.028 and 0.064, but it
 /// reads 50 % more curves per sample: 2,573 instructions at worst on the M4F, over the 2,000
 /// the estimator has. Not adopted; README.)
 #[test]
