@@ -47,13 +47,14 @@ fn list(xs: impl IntoIterator<Item = String>) -> String {
 
 fn curve<F: Lit>(c: &Curve<F>) -> String {
     format!(
-        "gough::mu::table::Curve {{ f: {}, rise: {}, tau0: {}, sat: {}, rho_sat: {}, rho_floor: {}, len: {}, rise_len: {}, peak: {}, f_top: {}, band_scale: {}, fx_free: {}, band: {} }}",
+        "gough::mu::table::Curve {{ f: {}, rise: {}, tau0: {}, sat: {}, anchor: {}, x_sat: {}, x_floor: {}, len: {}, rise_len: {}, peak: {}, f_top: {}, band_scale: {}, fx_free: {}, band: {} }}",
         list(c.f.iter().map(|&x| x.lit())),
         list(c.rise.iter().map(|&(f, t)| format!("({}, {})", f.lit(), t.lit()))),
         c.tau0.lit(),
         list(c.sat.iter().map(|&x| x.lit())),
-        c.rho_sat.lit(),
-        c.rho_floor.lit(),
+        c.anchor.lit(),
+        c.x_sat.lit(),
+        c.x_floor.lit(),
         c.len,
         c.rise_len,
         c.peak,

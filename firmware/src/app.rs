@@ -4,7 +4,7 @@
 //! `embedded_can::nb::Can`) and a millisecond clock.
 //!
 //! ## The estimator's table
-//! The estimators of the four wheels share one [`GoughTable`] (124 KB in f32, ~10 000 Magic
+//! The estimators of the four wheels share one [`GoughTable`] (126 KB in f32, ~10 000 Magic
 //! Formula evaluations to build). The App never builds it inside [`App::poll`] or [`App::tick`]:
 //! after a parameter set is loaded it hands out a [`TableJob`] ([`App::table_job`]); the board
 //! builds it — the mps2 board in thread mode while poll and tick run in the SysTick interrupt;
@@ -63,7 +63,7 @@ pub struct TableJob {
 }
 
 /// Builds the table of `job` into `slot`, in place (~10 000 Magic Formula evaluations with
-/// [`Math`]; no 124 KB temporary on the stack).
+/// [`Math`]; no 126 KB temporary on the stack).
 pub fn build_table(
     job: &TableJob,
     slot: &'static mut core::mem::MaybeUninit<GoughTable<f32>>,

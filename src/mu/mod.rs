@@ -14,10 +14,13 @@
 //! 2. Combined slip: the moment of Fx about the contact centre, s·Fx with the arm s of eq. (17)
 //!    / (73) (`mf::combined::Arm`, the core's own formula), is removed from Mz; the force used
 //!    for μ is the horizontal resultant on the friction ellipse, √((Fx·μy0/μx0)² + Fy²).
-//! 3. The effective trail τ = −Mz/Fy is inverted through the model's tabulated Gough curve
-//!    ([`table::GoughTable`], λμ = 1, at the wheel's static camber) at the two bracketing load
-//!    nodes, giving f = |Fy|/Fz at λμ = 1 on the same point of the curve; λμ = |F|/(Fz·f),
-//!    interpolated linearly in Fz. μ = λμ·μy0 (architecture: μ on the file's surface scale).
+//! 3. The effective trail τ = −Mz/Fy is inverted through the model's tabulated Gough curves
+//!    ([`table::GoughTable`], on four surfaces λμ) at the bracketing load and camber nodes:
+//!    the trail ratio τ/τ0 is placed at one position along the curves' grids, which are
+//!    aligned where each curve's trail collapses ([`table::ANCHOR_SHARE`]), and f = |Fy|/Fz
+//!    read there is interpolated bilinearly; λμ = |F|/(Fz·f) about each surface, the estimate
+//!    where it crosses its own surface. μ = λμ·μy0 (architecture: μ on the file's surface
+//!    scale).
 //! 4. Its variance from the measurement noise (σMz, σFy) through the local slopes of the table.
 //!    The sample is *identifiable* when the trail has dropped by ≥ `trail_drop_min` and the
 //!    model-induced σ of μ is ≤ `sigma_max` (measurement noise is left to the filter); otherwise the estimator says so instead of
@@ -272,7 +275,7 @@ impl core::fmt::Display for BuildError {
 impl core::error::Error for BuildError {}
 
 /// One wheel's estimator: a few words of state and a reference to the tyre's shared
-/// [`GoughTable`] (about 124 KB in f32, built once per tyre and side). No allocation.
+/// [`GoughTable`] (about 126 KB in f32, built once per tyre and side). No allocation.
 ///
 /// ```
 /// use gough::{math::Libm, mu::{Config, GoughTable, MuEstimator, Sample, State}};
@@ -352,7 +355,7 @@ impl<F: Float> GoughTable<F> {
         GoughTable::build::<M>(Model::Mf(tyre), mounted).ok_or(BuildError::NoGoughCurve)
     }
 
-    /// [`GoughTable::for_wheel`] in place (no 124 KB temporary on the stack).
+    /// [`GoughTable::for_wheel`] in place (no 126 KB temporary on the stack).
     pub fn for_wheel_into<M: Backend<F>>(
         &mut self,
         tyre: &Params<F>,
@@ -487,19 +490,20 @@ impl<'t, F: Float> MuEstimator<'t, F> {
     }
 
     /// The radial estimate on surface node `si` (small-slip trail `tau0`) for the reading `q`.
-    fn node(&self, si: usize, q: &Reading<F>, tau0: F) -> Option<NodeEst<F>> {
+    fn node(&self, si: usize, q: &Reading<F>, tau0: F, anchor: F) -> Option<NodeEst<F>> {
         let Reading { force, fz, .. } = *q;
         let tau = *q.tau.get(si)?;
         // Bilinear in (load, camber) over the bracketing curves; `tau0` is this surface's τ0
         // interpolated so.
         let corners = q.active();
         // The trail's length scales with load (Dt ∝ Fz·(qDz1 + qDz2·dfz)): compare curves at
-        // the same fraction ρ of their own small-slip trail τ0, not at the same τ. One place on
-        // the grid serves every corner.
+        // the same fraction ρ of their own small-slip trail τ0, not at the same τ, and at the
+        // same stage of its collapse: the same position on their grids, ρ placed on the grid
+        // of the interpolated anchor (`anchor`). One place on the grid serves every corner.
         if tau0 <= F::ZERO {
             return None;
         }
-        let at = table::RhoAt::new(tau / tau0);
+        let at = table::RhoAt::new(tau / tau0, anchor);
         let (mut f, mut f_spread, mut dfdrho) = (F::ZERO, F::ZERO, F::ZERO);
         for &(cs, wt) in corners {
             let inv = cs.get(si)?.read(&at)?;
@@ -643,11 +647,13 @@ impl<'t, F: Float> MuEstimator<'t, F> {
         // say — decided here, before any curve is read. (The margin covers the rounding of
         // that interpolation: no reading the full test would accept is turned away.)
         let mut tau0s = [F::ZERO; table::LAMBDA_NODES.len()];
+        let mut anchors = [F::ZERO; table::LAMBDA_NODES.len()];
         // (From 0: with a `trail_drop_min` ≤ 0 nothing is decided here.)
         let mut most = F::ZERO;
         for &(cs, wt) in reading.active() {
-            for (slot, c) in tau0s.iter_mut().zip(cs) {
+            for ((slot, anchor), c) in tau0s.iter_mut().zip(anchors.iter_mut()).zip(cs) {
                 *slot += wt * c.tau0;
+                *anchor += wt * c.anchor;
             }
         }
         for (&tau0, &tau) in tau0s.iter().zip(&reading.tau) {
@@ -660,8 +666,10 @@ impl<'t, F: Float> MuEstimator<'t, F> {
         }
         let mut ests: [Option<NodeEst<F>>; table::LAMBDA_NODES.len()] =
             [None; table::LAMBDA_NODES.len()];
-        for (si, (slot, &tau0)) in ests.iter_mut().zip(&tau0s).enumerate() {
-            *slot = self.node(si, &reading, tau0);
+        for (si, (slot, (&tau0, &anchor))) in
+            ests.iter_mut().zip(tau0s.iter().zip(&anchors)).enumerate()
+        {
+            *slot = self.node(si, &reading, tau0, anchor);
         }
         let mut prev: Option<(F, NodeEst<F>)> = None;
         let mut pick: Option<NodeEst<F>> = None;

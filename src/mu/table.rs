@@ -11,8 +11,13 @@
 //!
 //! Each curve is evaluated at 20 slip angles (and where its usable part starts, and at two
 //! more points between each pair of its slip angles there) and then held as f against the trail
-//! ratio ρ = τ/τ0 on a uniform grid (linear between those points), so that a reading finds its
-//! place on every curve by one multiplication instead of a search. The ambiguity test's look-up
+//! ratio ρ = τ/τ0 on a grid (linear between those points) in two halves, each uniform in ρ: from
+//! 1 down to the curve's *anchor* ρa, where f reaches [`ANCHOR_SHARE`] of the curve's peak, and
+//! from ρa down to 0. Along the grid the trail collapses at one pace on every curve, although
+//! it does so at different ρ on curves of different loads (f against ρ is steep there, and the
+//! steep part moves along ρ with load). A reading between load or camber nodes is placed on the
+//! grid of an anchor interpolated like the curves, and then every curve bracketing it is read
+//! at the same grid position, by one multiplication instead of a search. The ambiguity test's look-up
 //! the other way, τ at a force, is first bounded from 8 force cells per curve (the chord across
 //! a cell, and how far the curve strays from it), also without a search ([`Curve::tau_band`]).
 
@@ -46,10 +51,11 @@ pub type PerCurve<T> = [[[[T; NS]; 2]; NL]; NG];
 /// per-sample path reads of it, in one record so that one index reaches it all.
 /// τ in m, f = |Fy|/Fz dimensionless (ISO-W forces, as in the `.tir` file).
 ///
-/// The usable (monotone) part is held as f against the trail ratio ρ = τ/τ0 on a uniform
-/// grid, ρᵢ = 1 − i/[`RHO_CELLS`]: a reading finds its cell by one multiplication, with no
-/// search, and the same cell serves every curve it is read on (the corners of its load and
-/// camber, on one surface).
+/// The usable (monotone) part is held as f against the trail ratio ρ = τ/τ0 on a grid whose
+/// node i lies at ρᵢ = [`grid_rho`]`(i, anchor)`: uniform in ρ from 1 to the anchor (nodes 0 to
+/// [`HALF_CELLS`]) and from the anchor to 0 (nodes [`HALF_CELLS`] to [`RHO_CELLS`]). A reading
+/// finds its cell by one multiplication, with no search, and the same cell serves every curve
+/// it is read on (the corners of its load and camber, on one surface; [`RhoAt`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Curve<F> {
     /// f = |Fy|/Fz \[-\] (absolute, on that surface) at ρᵢ, for i < `len`: linear between the
@@ -71,13 +77,16 @@ pub struct Curve<F> {
     /// has turned negative, with the last usable point's f; that point's f alone when the curve
     /// has no negative trail).
     pub sat: [F; 2],
-    /// A trail ratio at or below this is past the sign change (the last usable point's ratio;
-    /// 0 if lower and the curve has a negative trail).
-    pub rho_sat: F,
-    /// A trail ratio below this is no point of this curve at all: far below the most negative
-    /// trail the curve ever shows, e.g. a lateral force near zero from the shifts with the
-    /// residual torque still acting (the last usable point's ratio less a quarter).
-    pub rho_floor: F,
+    /// The trail ratio ρa where f reaches [`ANCHOR_SHARE`] of the usable part's largest f: the
+    /// grid's middle node \[-\] (in \[1/16, 15/16\]; 0 for an empty curve).
+    pub anchor: F,
+    /// A grid position ([`grid_pos`]) at or beyond this is past the sign change (the last
+    /// usable point's ratio; ρ = 0 if lower and the curve has a negative trail).
+    pub x_sat: F,
+    /// A grid position beyond this is no point of this curve at all: far below the most
+    /// negative trail the curve ever shows, e.g. a lateral force near zero from the shifts with
+    /// the residual torque still acting (the last usable point's ratio less a quarter).
+    pub x_floor: F,
     /// Number of grid nodes of `f` (≥ 2; 0 for an empty curve).
     pub len: u8,
     /// Number of points of the rising branch.
@@ -115,11 +124,45 @@ pub const RHO_CELLS: usize = 32;
 /// Nodes of the trail-ratio grid.
 pub const RHO_POINTS: usize = RHO_CELLS + 1;
 
-/// ρ at position `x` along the grid (node i at x = i): 1 − x/[`RHO_CELLS`]; the inverse of
-/// [`RhoAt::new`]'s position.
+/// Cells of a [`Curve`]'s grid above its anchor, and below it.
+pub const HALF_CELLS: usize = RHO_CELLS / 2;
+
+/// The grid's middle node: where f reaches this share of the usable part's largest f. There
+/// the curves of every load are at the same stage of their trail's collapse, and f rises
+/// steeply against ρ about it. Comparing curves at equal ρ instead misplaced readings between
+/// the load nodes by up to 0.055 in λμ (`mu::tests::load_interpolation_error`).
+pub const ANCHOR_SHARE: f64 = 0.6;
+
+/// Bounds of a curve's anchor: the two halves of the grid keep some width.
+const ANCHOR_RANGE: (f64, f64) = (1.0 / 16.0, 15.0 / 16.0);
+
+/// ρ at position `x` along the grid of anchor `anchor` (node i at x = i): 1 − (x/h)·(1 − ρa)
+/// for x ≤ h = [`HALF_CELLS`], ρa·(2 − x/h) beyond; the inverse of [`grid_pos`].
 #[inline]
-fn grid_rho<F: Float>(x: F) -> F {
-    F::ONE - x * F::from_f64(1.0 / RHO_CELLS as f64)
+pub fn grid_rho<F: Float>(x: F, anchor: F) -> F {
+    let u = x * F::from_f64(1.0 / HALF_CELLS as f64);
+    if u <= F::ONE {
+        F::ONE - u * (F::ONE - anchor)
+    } else {
+        anchor * (F::TWO - u)
+    }
+}
+
+/// The position of ρ along the grid of anchor `anchor` (clamped to its range), and ∂x/∂ρ:
+/// x = h·(1 − ρ)/(1 − ρa) for ρ ≥ ρa, h·(2 − ρ/ρa) below (h = [`HALF_CELLS`]); beyond the
+/// grid's ends the same lines continue.
+#[inline]
+pub fn grid_pos<F: Float>(rho: F, anchor: F) -> (F, F) {
+    let (lo, hi) = ANCHOR_RANGE;
+    let a = anchor.max(F::from_f64(lo)).min(F::from_f64(hi));
+    let h = F::from_index(HALF_CELLS as u16);
+    if rho >= a {
+        let k = h / (F::ONE - a);
+        ((F::ONE - rho) * k, -k)
+    } else {
+        let k = h / a;
+        (h + (a - rho) * k, -k)
+    }
 }
 
 impl<F: Float> Curve<F> {
@@ -130,8 +173,9 @@ impl<F: Float> Curve<F> {
             rise: [(F::ZERO, F::ZERO); RISE],
             tau0: F::ZERO,
             sat: [F::ZERO; 2],
-            rho_sat: F::ZERO,
-            rho_floor: F::ZERO,
+            anchor: F::ZERO,
+            x_sat: F::ZERO,
+            x_floor: F::ZERO,
             len: 0,
             rise_len: 0,
             peak: 0,
@@ -158,7 +202,7 @@ impl<F: Float> Curve<F> {
             None => self.rise.get(RISE - nr + k).copied(),
             Some(i) if i < self.len as usize => Some((
                 *self.f.get(i)?,
-                self.tau0 * grid_rho(F::from_index(i as u16)),
+                self.tau0 * grid_rho(F::from_index(i as u16), self.anchor),
             )),
             Some(_) => None,
         }
@@ -178,7 +222,7 @@ pub enum Model<'a, F> {
 }
 
 /// The tabulated Gough curves: 7 cambers × 4 surfaces × 7 loads × 2 sides, each f at 33 trail
-/// ratios plus its rising branch and its trail bounds over 8 force cells: about 124 KB in f32.
+/// ratios plus its rising branch and its trail bounds over 8 force cells: about 126 KB in f32.
 /// Built once per tyre (and mounting side) and shared by the estimators of the wheels on that
 /// side.
 #[derive(Debug, Clone)]
@@ -249,7 +293,7 @@ impl<F: Float> GoughTable<F> {
         }
     }
 
-    /// [`GoughTable::build`] into an existing table, in place: no 124 KB temporary on the stack
+    /// [`GoughTable::build`] into an existing table, in place: no 126 KB temporary on the stack
     /// (what a device needs). On `None` the slot holds a partial table: rebuild or zero it.
     pub fn build_into<M: Backend<F>>(
         slot: &mut Self,
@@ -328,26 +372,33 @@ impl<F: Float> GoughTable<F> {
     }
 }
 
-/// A trail ratio ρ = τ/τ0 placed on the grid of the [`Curve`]s: its cell and where in it.
-/// Computed once per reading and surface, and read on every curve bracketing the reading.
+/// A trail ratio ρ = τ/τ0 placed on the grid of the [`Curve`]s: its position, cell and where
+/// in it. Computed once per reading and surface, on the grid of the anchor interpolated between
+/// the curves bracketing the reading, and read on each of them at that position.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct RhoAt<F> {
     /// ρ \[-\].
     pub rho: F,
-    /// ⌊x⌋ for the position x = (1 − ρ)·[`RHO_CELLS`] along the grid, clamped to its cells.
+    /// The position x along the grid ([`grid_pos`]).
+    pub x: F,
+    /// ∂x/∂ρ there (< 0).
+    dx_drho: F,
+    /// ⌊x⌋, clamped to the grid's cells.
     cell: usize,
     /// x − cell.
     frac: F,
 }
 
 impl<F: Float> RhoAt<F> {
-    /// Places ρ on the grid (any value: NaN and values outside the grid are placed at its
-    /// ends, and [`Curve::read`] turns them away).
-    pub fn new(rho: F) -> Self {
-        let x = (F::ONE - rho) * F::from_index(RHO_CELLS as u16);
+    /// Places ρ on the grid of anchor `anchor` (any value: NaN and values outside the grid are
+    /// placed at its ends, and [`Curve::read`] turns them away).
+    pub fn new(rho: F, anchor: F) -> Self {
+        let (x, dx_drho) = grid_pos(rho, anchor);
         let cell = x.floor_index(RHO_CELLS - 1);
         RhoAt {
             rho,
+            x,
+            dx_drho,
             cell,
             frac: x - F::from_index(cell as u16),
         }
@@ -438,26 +489,26 @@ impl<F: Float> Curve<F> {
         *hint = i;
         let (fa, fb) = (*grid.get(i.checked_sub(1)?)?, *grid.get(i)?);
         let cells = F::from_index(i as u16 - 1) + (f - fa) / (fb - fa);
-        Some(self.tau0 * grid_rho(cells))
+        Some(self.tau0 * grid_rho(cells, self.anchor))
     }
 
-    /// Inverts ρ = τ/τ0 → f (`at` from [`RhoAt::new`]). `None` when ρ is not below 1 (the trail
-    /// has not dropped: the point is not identifiable), below the curve's floor, NaN, or the
-    /// curve is empty.
+    /// Inverts ρ = τ/τ0 → f at the grid position of `at` ([`RhoAt::new`]). `None` when ρ is
+    /// not below 1 (the trail has not dropped: the point is not identifiable), beyond the
+    /// curve's floor, NaN, or the curve is empty.
     pub fn read(&self, at: &RhoAt<F>) -> Option<Inversion<F>> {
-        let rho = at.rho;
+        let x = at.x;
         if self.len < 2 {
             return None; // an empty curve
         }
-        // Below 1, NaN excluded (one comparison); −∞ is caught by the floor below.
+        // Past 0 (ρ below 1), NaN excluded (one comparison); +∞ is caught by the floor below.
         #[allow(clippy::neg_cmp_op_on_partial_ord)]
-        if !(rho < F::ONE) {
+        if !(x > F::ZERO) {
             return None;
         }
-        if rho < self.rho_floor {
+        if x > self.x_floor {
             return None;
         }
-        if rho <= self.rho_sat {
+        if x >= self.x_sat {
             // Past the aligning torque's sign change: near the force peak or in deep sliding,
             // where the trail no longer tells where on the (falling) force curve the tyre is.
             // The middle of the f range seen there, and how wide it is.
@@ -469,21 +520,21 @@ impl<F: Float> Curve<F> {
                 f_spread,
             });
         }
-        // ρ > ρ_sat ≥ ρ of the grid's last node: the cell lies on the grid (a cell past it,
-        // from rounding, reads the same line: the nodes past the grid continue it).
+        // x < x_sat ≤ the grid's last node: the cell lies on the grid (a cell past it, from
+        // rounding, reads the same line: the nodes past the grid continue it).
         let (f0, f1) = (*self.f.get(at.cell)?, *self.f.get(at.cell + 1)?);
         let df = f1 - f0;
         Some(Inversion {
             f: f0 + at.frac * df,
-            df_drho: -df * F::from_index(RHO_CELLS as u16),
+            df_drho: df * at.dx_drho,
             saturated: false,
             f_spread: F::ZERO,
         })
     }
 
-    /// [`Curve::read`] at ρ placed on the grid here.
+    /// [`Curve::read`] at ρ placed on this curve's own grid.
     pub fn invert(&self, rho: F) -> Option<Inversion<F>> {
-        self.read(&RhoAt::new(rho))
+        self.read(&RhoAt::new(rho, self.anchor))
     }
 }
 
@@ -592,6 +643,28 @@ fn curve<F: Float, M: Backend<F>>(
         };
         Some((fy_dir / fz, tau, fx / fz))
     };
+    // The slip angle between `lo` and `hi`, (α, f) with f(lo) < `target` ≤ f(hi), where f
+    // reaches `target`: secant steps in α (f is nearly linear in α there), kept bracketed, until
+    // f is within 0.1 % of it (at most 4 steps). (α, f, τ) of the last point found at or above
+    // it (or within the 0.1 %); `None` if none.
+    let cross = |mut lo: (F, F), mut hi: (F, F), target: F| {
+        let mut found = None;
+        for _ in 0..4 {
+            let a = lo.0 + (hi.0 - lo.0) * ((target - lo.1) / (hi.1 - lo.1));
+            let (fd, td, _) = at(a)?;
+            if fd < target {
+                lo = (a, fd);
+            } else {
+                hi = (a, fd);
+                found = Some((a, fd, td));
+            }
+            if (fd - target).abs() <= target * F::from_f64(1e-3) {
+                found = Some((a, fd, td));
+                break;
+            }
+        }
+        found
+    };
     let mut taus = [F::ZERO; POINTS];
     let mut fs = [F::ZERO; POINTS];
     let mut fxs = [F::ZERO; POINTS];
@@ -636,25 +709,8 @@ fn curve<F: Float, M: Backend<F>>(
     ) {
         let den = ta - F::TWO * tb + tc;
         let a = if fa < f_min && fb > fa && ta > tb {
-            // f crosses the cut-off between the nodes: secant steps in α (f is nearly linear
-            // in α there), kept bracketed, until f is within 0.1 % of it (at most 4 steps).
-            let (mut lo, mut hi) = ((node(first - 1), fa), (node(first), fb));
-            let mut found = None;
-            for _ in 0..4 {
-                let a = lo.0 + (hi.0 - lo.0) * ((f_min - lo.1) / (hi.1 - lo.1));
-                let (fd, _, _) = at(a)?;
-                if fd < f_min {
-                    lo = (a, fd);
-                } else {
-                    hi = (a, fd);
-                    found = Some(a);
-                }
-                if (fd - f_min).abs() <= f_min * F::from_f64(1e-3) {
-                    found = Some(a);
-                    break;
-                }
-            }
-            found
+            // f crosses the cut-off between the nodes.
+            cross((node(first - 1), fa), (node(first), fb), f_min).map(|(a, _, _)| a)
         } else if ta < F::from_f64(1e8) && den < F::ZERO {
             // The vertex, in node positions (the nodes' α is cubic in the position).
             let d = (F::HALF * (ta - tc) / den).max(-F::HALF).min(F::HALF);
@@ -752,6 +808,28 @@ fn curve<F: Float, M: Backend<F>>(
     // a utilisation of 0.5, now 0.007, `load_interpolation_error`), up to the first grid node
     // at or beyond the usable part's end, which lies on the last piece's line.
     let tau0 = kept.first()?.1; // > 0
+                                // The anchor: ρ where f first reaches ANCHOR_SHARE of the usable part's largest f (between
+                                // the points kept, found in α; on the chord if the secant finds nothing).
+    let kept_n = kept.get(..n)?;
+    let f_big = kept_n.iter().fold(F::ZERO, |m, p| m.max(p.0));
+    let target = F::from_f64(ANCHOR_SHARE) * f_big;
+    let anchor = match kept_n.iter().position(|p| p.0 >= target) {
+        Some(k) if k > 0 => {
+            let ((f0, t0), (f1, t1)) = (*kept.get(k - 1)?, *kept.get(k)?);
+            let lo = (*kept_a.get(k - 1)?, f0);
+            let hi = (*kept_a.get(k)?, f1);
+            let tau_a = match cross(lo, hi, target) {
+                Some((_, _, t)) => t,
+                None => t0 + (target - f0) / (f1 - f0) * (t1 - t0),
+            };
+            tau_a / tau0
+        }
+        // Already there where the usable part starts.
+        _ => F::ONE,
+    };
+    let anchor = anchor
+        .max(F::from_f64(ANCHOR_RANGE.0))
+        .min(F::from_f64(ANCHOR_RANGE.1));
     const SUB: usize = 3;
     let mut f = [F::ZERO; RHO_POINTS];
     let mut len = 0;
@@ -760,7 +838,7 @@ fn curve<F: Float, M: Backend<F>>(
     let mut seg = [(F::ZERO, F::ZERO); SUB + 1];
     let mut seg_k = None;
     for (i, slot) in f.iter_mut().enumerate() {
-        let tau_i = tau0 * grid_rho(F::from_index(i as u16));
+        let tau_i = tau0 * grid_rho(F::from_index(i as u16), anchor);
         while k + 2 < n && kept.get(k + 1)?.1 > tau_i {
             k += 1;
         }
@@ -828,8 +906,9 @@ fn curve<F: Float, M: Backend<F>>(
         rise: rise_r,
         tau0,
         sat: [F::HALF * (hi + lo), F::HALF * (hi - lo)],
-        rho_sat: tau_sat / tau0,
-        rho_floor: tau_end / tau0 - F::from_f64(0.25),
+        anchor,
+        x_sat: grid_pos(tau_sat / tau0, anchor).0,
+        x_floor: grid_pos(tau_end / tau0 - F::from_f64(0.25), anchor).0,
         len: len as u8,
         rise_len: nr as u8,
         peak: 0,

@@ -3,7 +3,7 @@
 //! `embedded_can::nb::Can`. defmt logs over RTT. Built and linked in CI (flash/RAM reported
 //! by `cargo xtask test-all`); not run there (no hardware).
 //!
-//! Memory (`boards/stm32f405.x`): the friction estimator's 124 KB table fills the 128 KiB SRAM;
+//! Memory (`boards/stm32f405.x`): the friction estimator's 126 KB table fills the 128 KiB SRAM;
 //! the App (~36 KiB, mostly the upload buffer) and the stack live in the 64 KiB CCM. The App's
 //! initial value is copied from flash into CCM first thing in `main` (cortex-m-rt initialises
 //! only SRAM).
