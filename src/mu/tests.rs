@@ -37,6 +37,15 @@ fn truth(p: &Params<f64>, mu: f64, mu0: f64, fz: f64, alpha: f64, kappa: f64) ->
     .unwrap()
 }
 
+/// `tyre`'s table on the heap, built in place.
+fn boxed_table<F: crate::math::Float, M: crate::math::Backend<F>>(
+    tyre: &Params<F>,
+) -> std::boxed::Box<GoughTable<F>> {
+    let mut t = std::boxed::Box::new(GoughTable::zeroed());
+    t.for_wheel_into::<M>(tyre, None).unwrap();
+    t
+}
+
 fn sample(o: &mf::Output<f64>, t: f64, with_fx: bool) -> Sample<f64> {
     Sample {
         t,
@@ -653,8 +662,10 @@ fn fixed_point_estimator_reads_what_f64_reads() {
     use crate::math::Float;
     let p = tyre();
     let pfx = p.cast::<Fix>();
-    let t64 = GoughTable::for_tyre::<Libm>(&p).unwrap();
-    let tfx = std::boxed::Box::new(GoughTable::for_tyre::<FixMath>(&pfx).unwrap());
+    // Built in place on the heap: by value, the two tables (f64 and Q31.32, 257 KB each) and
+    // their temporaries overflow a test thread's 2 MiB stack in a debug build.
+    let t64 = boxed_table::<f64, Libm>(&p);
+    let tfx = boxed_table::<Fix, FixMath>(&pfx);
     let e64 = MuEstimator::for_tyre(&t64, &p, Config::default());
     let efx = MuEstimator::for_tyre(&tfx, &pfx, Config::default());
     let mu0 = e64.mu0();
