@@ -370,27 +370,14 @@ impl<F: Float> GoughTable<F> {
     }
 }
 
-/// One of the (up to four) corners of load and camber bracketing a reading: the curves of
-/// every surface there and the corner's weights.
-#[derive(Debug, Clone, Copy)]
-struct Corner<'a, F> {
-    curves: &'a [table::Curve<F>; table::LAMBDA_NODES.len()],
-    /// Bilinear weight in load and camber.
-    wt: F,
-    /// The corner's camber node: 0 the lower, 1 the upper.
-    cam: usize,
-    /// Its weight in load alone (between the two corners of its camber node).
-    wl: F,
-}
-
 /// A sample reduced to what the table needs: the curves bracketing its load and camber on its
 /// side, with their weights; trail, force, load.
 #[derive(Debug, Clone, Copy)]
 struct Reading<'a, F> {
-    /// The corners bracketing the reading's load and camber: the first `n` of the four are
-    /// those of nonzero weight (a reading on a camber or load node needs fewer), in the order
-    /// (γ, Fz), (γ, Fz⁺), (γ⁺, Fz), (γ⁺, Fz⁺).
-    corners: [Corner<'a, F>; 4],
+    /// The curves bracketing the reading's load and camber, every surface of each, with their
+    /// bilinear weights: the first `n` of the four are those of nonzero weight (a reading on a
+    /// camber or load node needs fewer), in the order (γ, Fz), (γ, Fz⁺), (γ⁺, Fz), (γ⁺, Fz⁺).
+    corners: [(&'a [table::Curve<F>; table::LAMBDA_NODES.len()], F); 4],
     n: usize,
     /// The trail −(Mz − s·Fx)/Fy on each surface: the same on all when the sample carries Fx;
     /// without it, each surface's free-rolling Fx ([`table::Curve::fx_free`]).
@@ -401,7 +388,7 @@ struct Reading<'a, F> {
 
 impl<F> Reading<'_, F> {
     /// The corners of nonzero weight.
-    fn active(&self) -> &[Corner<'_, F>] {
+    fn active(&self) -> &[(&[table::Curve<F>; table::LAMBDA_NODES.len()], F)] {
         self.corners.get(..self.n).unwrap_or(&[])
     }
 }
@@ -503,42 +490,23 @@ impl<'t, F: Float> MuEstimator<'t, F> {
     }
 
     /// The radial estimate on surface node `si` (small-slip trail `tau0`) for the reading `q`.
-    fn node(&self, si: usize, q: &Reading<F>, tau0: F) -> Option<NodeEst<F>> {
+    fn node(&self, si: usize, q: &Reading<F>, tau0: F, anchor: F) -> Option<NodeEst<F>> {
         let Reading { force, fz, .. } = *q;
         let tau = *q.tau.get(si)?;
         // Bilinear in (load, camber) over the bracketing curves; `tau0` is this surface's τ0
         // interpolated so.
         let corners = q.active();
         // The trail's length scales with load (Dt ∝ Fz·(qDz1 + qDz2·dfz)): compare curves at
-        // the same fraction ρ of their own small-slip trail τ0, not at the same τ. Between
-        // loads, also at the same stage of its collapse: at one position on their grids, ρ
-        // placed on the grid of their anchor interpolated in load. (Between cambers not: there
-        // equal ρ reads closer, as the camber torque lengthens τ0 without moving the collapse
-        // in proportion; `table::ANCHOR_SHARE`.) One place per camber node serves its corners.
+        // the same fraction ρ of their own small-slip trail τ0, not at the same τ, and at the
+        // same stage of its collapse: the same position on their grids, ρ placed on the grid
+        // of the interpolated anchor (`anchor`). One place on the grid serves every corner.
         if tau0 <= F::ZERO {
             return None;
         }
-        let rho = tau / tau0;
-        let mut anchor = [F::ZERO; 2];
-        for c in corners {
-            let a = anchor.get_mut(c.cam)?;
-            *a += c.wl * c.curves.get(si)?.anchor;
-        }
-        let [a0, a1] = anchor;
-        let at0 = table::RhoAt::new(rho, a0);
-        // (No corner at the upper camber node: a copy, not read.)
-        let at = [
-            at0,
-            if a1 == F::ZERO {
-                at0
-            } else {
-                table::RhoAt::new(rho, a1)
-            },
-        ];
+        let at = table::RhoAt::new(tau / tau0, anchor);
         let (mut f, mut f_spread, mut dfdrho) = (F::ZERO, F::ZERO, F::ZERO);
-        for c in corners {
-            let wt = c.wt;
-            let inv = c.curves.get(si)?.read(at.get(c.cam)?)?;
+        for &(cs, wt) in corners {
+            let inv = cs.get(si)?.read(&at)?;
             f += wt * inv.f;
             f_spread += wt * inv.f_spread;
             dfdrho += wt * inv.df_drho;
@@ -553,7 +521,7 @@ impl<'t, F: Float> MuEstimator<'t, F> {
             // ∂f/∂τ = (∂f/∂ρ)/τ0.
             dl_dtau: -lambda * dfdrho / (tau0 * f),
             tau0,
-            drop: F::ONE - rho,
+            drop: F::ONE - at.rho,
             spread: f_spread / f,
         })
     }
@@ -629,19 +597,11 @@ impl<'t, F: Float> MuEstimator<'t, F> {
         let (ga, gb) = (*cn.get(g)?, *cn.get(g + 1)?);
         let u = ((gamma - ga) / (gb - ga)).max(F::ZERO).min(F::ONE);
         let t = self.table;
-        let corner = |gi: usize, ji: usize, cam: usize, wl: F, wt: F| {
-            Some(Corner {
-                curves: t.surfaces(gi, ji, side)?,
-                wt,
-                cam,
-                wl,
-            })
-        };
         let all = [
-            corner(g, j, 0, F::ONE - w, (F::ONE - u) * (F::ONE - w))?,
-            corner(g, j + 1, 0, w, (F::ONE - u) * w)?,
-            corner(g + 1, j, 1, F::ONE - w, u * (F::ONE - w))?,
-            corner(g + 1, j + 1, 1, w, u * w)?,
+            (t.surfaces(g, j, side)?, (F::ONE - u) * (F::ONE - w)),
+            (t.surfaces(g, j + 1, side)?, (F::ONE - u) * w),
+            (t.surfaces(g + 1, j, side)?, u * (F::ONE - w)),
+            (t.surfaces(g + 1, j + 1, side)?, u * w),
         ];
         let mut reading = Reading {
             corners: all,
@@ -651,7 +611,7 @@ impl<'t, F: Float> MuEstimator<'t, F> {
             fz: s.fz,
         };
         for c in all {
-            if c.wt != F::ZERO {
+            if c.1 != F::ZERO {
                 *reading.corners.get_mut(reading.n)? = c;
                 reading.n += 1;
             }
@@ -662,8 +622,8 @@ impl<'t, F: Float> MuEstimator<'t, F> {
             let f_sq = (force / s.fz).sq();
             let k = arm * s.fz / fy;
             let mut taus = reading.tau;
-            for &Corner { curves, wt, .. } in reading.active() {
-                for (slot, c) in taus.iter_mut().zip(curves) {
+            for &(cs, wt) in reading.active() {
+                for (slot, c) in taus.iter_mut().zip(cs) {
                     let [c0, c2] = c.fx_free;
                     *slot += wt * k * (c0 + c2 * f_sq);
                 }
@@ -687,11 +647,13 @@ impl<'t, F: Float> MuEstimator<'t, F> {
         // say — decided here, before any curve is read. (The margin covers the rounding of
         // that interpolation: no reading the full test would accept is turned away.)
         let mut tau0s = [F::ZERO; table::LAMBDA_NODES.len()];
+        let mut anchors = [F::ZERO; table::LAMBDA_NODES.len()];
         // (From 0: with a `trail_drop_min` ≤ 0 nothing is decided here.)
         let mut most = F::ZERO;
-        for &Corner { curves, wt, .. } in reading.active() {
-            for (slot, c) in tau0s.iter_mut().zip(curves) {
+        for &(cs, wt) in reading.active() {
+            for ((slot, anchor), c) in tau0s.iter_mut().zip(anchors.iter_mut()).zip(cs) {
                 *slot += wt * c.tau0;
+                *anchor += wt * c.anchor;
             }
         }
         for (&tau0, &tau) in tau0s.iter().zip(&reading.tau) {
@@ -704,8 +666,10 @@ impl<'t, F: Float> MuEstimator<'t, F> {
         }
         let mut ests: [Option<NodeEst<F>>; table::LAMBDA_NODES.len()] =
             [None; table::LAMBDA_NODES.len()];
-        for (si, (slot, &tau0)) in ests.iter_mut().zip(&tau0s).enumerate() {
-            *slot = self.node(si, &reading, tau0);
+        for (si, (slot, (&tau0, &anchor))) in
+            ests.iter_mut().zip(tau0s.iter().zip(&anchors)).enumerate()
+        {
+            *slot = self.node(si, &reading, tau0, anchor);
         }
         let mut prev: Option<(F, NodeEst<F>)> = None;
         let mut pick: Option<NodeEst<F>> = None;
@@ -823,7 +787,7 @@ impl<'t, F: Float> MuEstimator<'t, F> {
             // trail lies near them; only then are the curves searched (same outcome either
             // way: the bounds enclose the look-up with a margin).
             let (mut lo, mut hi, mut wsum) = (F::ZERO, F::ZERO, F::ZERO);
-            for &Corner { curves: cs, wt, .. } in reading.active() {
+            for &(cs, wt) in reading.active() {
                 if let Some((l, h)) = cs.get(si).and_then(|c| c.tau_band(f_m)) {
                     lo += wt * l;
                     hi += wt * h;
@@ -844,7 +808,7 @@ impl<'t, F: Float> MuEstimator<'t, F> {
             }
             let (mut tk, mut wsum) = (F::ZERO, F::ZERO);
             let mut hint = 0;
-            for &Corner { curves: cs, wt, .. } in reading.active() {
+            for &(cs, wt) in reading.active() {
                 if let Some(x) = cs.get(si).and_then(|c| c.tau_at_from(f_m, &mut hint)) {
                     tk += wt * x;
                     wsum += wt;

@@ -15,10 +15,9 @@
 //! 1 down to the curve's *anchor* ρa, where f reaches [`ANCHOR_SHARE`] of the curve's peak, and
 //! from ρa down to 0. Along the grid the trail collapses at one pace on every curve, although
 //! it does so at different ρ on curves of different loads (f against ρ is steep there, and the
-//! steep part moves along ρ with load). A reading between load nodes is placed on the grid of
-//! the anchor interpolated in load, and both curves are read at that one grid position, found
-//! by one multiplication instead of a search; between camber nodes the curves are read at equal
-//! ρ (each camber node's pair at its own position). The ambiguity test's look-up
+//! steep part moves along ρ with load). A reading between load or camber nodes is placed on the
+//! grid of an anchor interpolated like the curves, and then every curve bracketing it is read
+//! at the same grid position, by one multiplication instead of a search. The ambiguity test's look-up
 //! the other way, τ at a force, is first bounded from 8 force cells per curve (the chord across
 //! a cell, and how far the curve strays from it), also without a search ([`Curve::tau_band`]).
 
@@ -130,12 +129,10 @@ pub const HALF_CELLS: usize = RHO_CELLS / 2;
 
 /// The grid's middle node: where f reaches this share of the usable part's largest f. There
 /// the curves of every load are at the same stage of their trail's collapse, and f rises
-/// steeply against ρ about it. Comparing curves of two loads at equal ρ instead misplaced
-/// readings between the load nodes by up to 0.055 in λμ (`mu::tests::load_interpolation_error`;
-/// shares of 0.3, 0.4, 0.5, 0.7 and 0.8 gave 0.027, 0.025, 0.023, 0.028 and 0.035 there, 0.6
-/// gives 0.023 and the least on the nodes). Curves of two cambers are compared at equal ρ: at
-/// equal positions their error was 0.354 (`mu::tests::camber_interpolation_error`), as the
-/// camber torque lengthens τ0 without moving the collapse in proportion.
+/// steeply against ρ about it. Comparing curves at equal ρ instead misplaced readings between
+/// the load nodes by up to 0.055 in λμ (`mu::tests::load_interpolation_error`; shares of 0.3,
+/// 0.4, 0.5, 0.7 and 0.8 gave 0.027, 0.025, 0.023, 0.028 and 0.035 there, 0.6 gives 0.023 and
+/// the least on the nodes). Between camber nodes see `mu::tests::camber_interpolation_error`.
 pub const ANCHOR_SHARE: f64 = 0.6;
 
 /// Bounds of a curve's anchor: the two halves of the grid keep some width.
@@ -378,9 +375,8 @@ impl<F: Float> GoughTable<F> {
 }
 
 /// A trail ratio ρ = τ/τ0 placed on the grid of the [`Curve`]s: its position, cell and where
-/// in it. Computed once per reading, surface and camber node, on the grid of the anchor
-/// interpolated between the two loads bracketing the reading, and read on both curves at that
-/// position.
+/// in it. Computed once per reading and surface, on the grid of the anchor interpolated between
+/// the curves bracketing the reading, and read on each of them at that position.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct RhoAt<F> {
     /// ρ \[-\].

@@ -1020,15 +1020,16 @@ fn a_free_rolling_wheel_without_fx_reads_as_with_it() {
 
 /// The table's error between camber nodes, as `load_interpolation_error` measures it between
 /// loads (steady, noise-free, Fx measured, from utilisation 0.5, μ 1.0…0.3, loads 0.4…1.7·Fz0),
-/// at cambers between the nodes (0, ±0.015, ±0.03, ±0.045 rad). The camber torque lengthens the
-/// small-slip trail τ0 without moving the trail's collapse in proportion, so the curves of two
-/// cambers are compared at equal ρ = τ/τ0, not at equal positions along their grids as those
-/// of two loads are. Measured (this test's output), every gate off: 0.127 at worst at γ 0.006,
-/// 0.087 at γ −0.01 (at equal positions, as commit 7d972bb compared them: 0.354 at γ 0.006) — the largest error
-/// the table has left, which the model's uncertainty terms of σ cover. Stronger camber between
-/// nodes can read the small-slip point of a grippy surface as a slippery one (γ 0.0225: off
-/// by up to 0.43 with every gate off); the default gates turn those away: the readings they
-/// accept at γ ±0.0225, ±0.04 are within 0.061, and at the two cambers above within 0.126.
+/// at cambers between the nodes (0, ±0.015, ±0.03, ±0.045 rad). The curves of two cambers are
+/// compared, like those of two loads, at equal positions along their grids (about their
+/// anchors). Measured (this test's output): with the default gates, the readings taken are
+/// within 0.083 at γ 0.006 and −0.01, 0.050 at 0.0225, 0.061 at 0.04, 0.017 and 0.014 at
+/// −0.0225 and −0.04. With the curves compared at equal ρ (commit a630fa3) they were 0.117,
+/// 0.080, 0.050, 0.062, 0.026 and 0.026. With every gate off, though, equal positions err by up
+/// to 0.354 at γ 0.006 (equal ρ: 0.124): the camber torque lengthens τ0 without moving the
+/// collapse in proportion, and the gates turn those readings away. (Equal ρ between cambers
+/// with anchors between loads, tried: 0.127 with the gates off, 0.126 with them at γ 0.006, and
+/// 2,317 instructions at worst on the M4F; not adopted.)
 #[test]
 fn camber_interpolation_error() {
     let p = tyre();
@@ -1083,15 +1084,15 @@ fn camber_interpolation_error() {
         }
         (worst, n)
     };
-    for (gamma, bound) in [(0.006, 0.15), (-0.01, 0.1)] {
+    for gamma in [0.006, -0.01] {
         let (w, n) = worst(off, gamma);
         std::println!("γ {gamma}, every gate off: largest |error| {w:.4} ({n} readings)");
-        assert!(n > 8000 && w < bound, "γ {gamma}: {w} ({n} readings)");
+        assert!(n > 8000, "γ {gamma}: {n} readings");
     }
     for gamma in [0.006, -0.01, 0.0225, -0.0225, 0.04, -0.04] {
         let (w, n) = worst(Config::default(), gamma);
         std::println!("γ {gamma}, default gates: largest |error| {w:.4} ({n} readings)");
-        assert!(n > 1000 && w < 0.13, "γ {gamma}: {w} ({n} readings)");
+        assert!(n > 3000 && w < 0.09, "γ {gamma}: {w} ({n} readings)");
     }
 }
 
