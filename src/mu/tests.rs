@@ -46,6 +46,20 @@ fn boxed_table<F: crate::math::Float, M: crate::math::Backend<F>>(
     t
 }
 
+/// The default settings with every gate that could turn a steady, noise-free reading away off:
+/// what the table itself reads.
+fn gates_off() -> Config<f64> {
+    Config {
+        trail_drop_min: 0.0,
+        trail_drop_abs_min: 0.0,
+        sigma_max: 1e9,
+        ambiguity_sigmas: 0.0,
+        fy_min_rel: 0.0,
+        mzr_model_rel: 0.0,
+        ..Config::default()
+    }
+}
+
 fn sample(o: &mf::Output<f64>, t: f64, with_fx: bool) -> Sample<f64> {
     Sample {
         t,
@@ -1034,15 +1048,7 @@ fn a_free_rolling_wheel_without_fx_reads_as_with_it() {
 fn camber_interpolation_error() {
     let p = tyre();
     let table = GoughTable::for_tyre::<Libm>(&p).unwrap();
-    let off = Config {
-        trail_drop_min: 0.0,
-        trail_drop_abs_min: 0.0,
-        sigma_max: 1e9,
-        ambiguity_sigmas: 0.0,
-        fy_min_rel: 0.0,
-        mzr_model_rel: 0.0,
-        ..Config::default()
-    };
+    let off = gates_off();
     let worst = |cfg: Config<f64>, gamma: f64| {
         let est = MuEstimator::for_tyre(&table, &p, cfg);
         let mu0 = est.mu0();
@@ -1110,15 +1116,7 @@ fn camber_interpolation_error() {
 fn load_interpolation_error() {
     let p = tyre();
     let table = GoughTable::for_tyre::<Libm>(&p).unwrap();
-    let cfg = Config {
-        trail_drop_min: 0.0,
-        trail_drop_abs_min: 0.0,
-        sigma_max: 1e9,
-        ambiguity_sigmas: 0.0,
-        fy_min_rel: 0.0,
-        mzr_model_rel: 0.0,
-        ..Config::default()
-    };
+    let cfg = gates_off();
     let est = MuEstimator::for_tyre(&table, &p, cfg);
     let mu0 = est.mu0();
     // Largest |error| on the nodes, between them, and between the two lightest.
