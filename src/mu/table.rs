@@ -139,7 +139,8 @@ pub const ANCHOR_SHARE: f64 = 0.6;
 const ANCHOR_RANGE: (f64, f64) = (1.0 / 16.0, 15.0 / 16.0);
 
 /// ρ at position `x` along the grid of anchor `anchor` (node i at x = i): 1 − (x/h)·(1 − ρa)
-/// for x ≤ h = [`HALF_CELLS`], ρa·(2 − x/h) beyond; the inverse of [`grid_pos`].
+/// for x ≤ h = [`HALF_CELLS`], ρa·(2 − x/h) beyond; the inverse of [`grid_pos`] for an anchor
+/// within \[1/16, 15/16\], as every curve's is (`grid_pos` clamps the anchor to that range).
 #[inline]
 pub fn grid_rho<F: Float>(x: F, anchor: F) -> F {
     let u = x * F::from_f64(1.0 / HALF_CELLS as f64);
