@@ -1043,7 +1043,10 @@ fn a_free_rolling_wheel_without_fx_reads_as_with_it() {
 /// to 0.354 at γ 0.006 (equal ρ: 0.124): the camber torque lengthens τ0 without moving the
 /// collapse in proportion, and the gates turn those readings away. (Equal ρ between cambers
 /// with anchors between loads, tried in commit 0a67143: 0.127 with the gates off, 0.126 with them at γ 0.006, and
-/// 2,317 instructions at worst on the M4F; not adopted.)
+/// 2,317 instructions at worst on the M4F; not adopted. An equal-force correction, the
+/// reading's trail moved to each camber node by the two nodes' trail difference at the curve's
+/// force, `docs/experiments/camber-equal-force.diff`: 0.092 gate-off at γ 0.006, 0.070 at worst
+/// with the gates, no change in `gough mu bench`, 3,804 at worst on the M4F; not adopted.)
 #[test]
 fn camber_interpolation_error() {
     let p = tyre();
