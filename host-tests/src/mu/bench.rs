@@ -119,6 +119,22 @@ pub struct WheelTrace {
     pub gamma: Vec<f64>,
 }
 
+impl WheelTrace {
+    /// Row `i` as the Gough estimator's sample (Fx, Vx and camber carried; no slip).
+    pub fn sample(&self, i: usize) -> Sample<f64> {
+        let r = &self.rows[i];
+        Sample {
+            t: r.t,
+            fz: r.fz,
+            fy: r.fy,
+            mz: r.mz,
+            fx: Some(r.fx),
+            vx: Some(r.vx),
+            gamma: self.gamma.get(i).copied(),
+        }
+    }
+}
+
 /// Applies the sensor model to wheel `w` of a log.
 pub fn measure(log: &Log, w: usize, s: &Sensors, seed: u64) -> WheelTrace {
     let mut n = Noise(
@@ -200,20 +216,8 @@ pub fn run_method(
     match m {
         0 => {
             let mut e = MuEstimator::for_tyre(tables.wheel(w), p, Config::default());
-            tr.rows
-                .iter()
-                .zip(&tr.gamma)
-                .map(|(r, &g)| {
-                    e.update::<Libm>(&Sample {
-                        t: r.t,
-                        fz: r.fz,
-                        fy: r.fy,
-                        mz: r.mz,
-                        fx: Some(r.fx),
-                        vx: Some(r.vx),
-                        gamma: Some(g),
-                    })
-                })
+            (0..tr.rows.len())
+                .map(|i| e.update::<Libm>(&tr.sample(i)))
                 .collect()
         }
         1 => match HsuGerdes::new(p) {
@@ -859,19 +863,10 @@ mod tests {
                 let tr = measure(&log, w, &Sensors::default(), 1);
                 let est = run_method(0, &p, &tables, w, &tr);
                 let probe = MuEstimator::for_tyre(tables.wheel(w), &p, Config::default());
-                for (i, (r, e)) in tr.rows.iter().zip(&est).enumerate() {
+                for (i, e) in est.iter().enumerate() {
                     let low = tr.util[i] < 0.2;
-                    let s = Sample {
-                        t: r.t,
-                        fz: r.fz,
-                        fy: r.fy,
-                        mz: r.mz,
-                        fx: Some(r.fx),
-                        vx: Some(r.vx),
-                        gamma: Some(tr.gamma[i]),
-                    };
                     // What one reading of the sample (unfiltered) says.
-                    let raw = probe.raw::<Libm>(&s);
+                    let raw = probe.raw::<Libm>(&tr.sample(i));
                     if low && raw.is_some_and(|x| (x.lambda * probe.mu0() - 1.0).abs() > 0.5) {
                         hazards += 1;
                     }
