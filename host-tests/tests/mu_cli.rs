@@ -175,7 +175,11 @@ fn demo_runs_and_writes_its_outputs() {
 /// the table is interpolated linearly in load, at equal positions along the curves; on a node
 /// they are within ±0.01). Without an Fx measurement
 /// (the estimator then takes the free-rolling Fx from its table) the same holds. The σ reported covers that error (it carries the model's own uncertainty, which
-/// fusing readings does not reduce). A bad file is a one-line error.
+/// fusing readings does not reduce). With camber (`--gamma ±0.0225`, 1.3°) the first estimates
+/// are as good, but where the camber thrust adds to the force the curves of μ and μ + 0.1 all
+/// but touch at utilisation 0.5 (the trail no longer tells them apart) and no surface is read
+/// before utilisation 0.7; against it they are further apart than without camber. A bad file
+/// is a one-line error.
 #[test]
 fn map_says_from_which_utilisation_mu_is_read() {
     let run = |name: &str, extra: &[&str]| -> Vec<Vec<f64>> {
@@ -240,6 +244,54 @@ fn map_says_from_which_utilisation_mu_is_read() {
     let dry = rows.iter().find(|r| r[0] == 1.0 && r[1] == 1.0).unwrap();
     assert!(dry[2] > 0.5, "dry at Fz0 read from utilisation {}", dry[2]);
     assert!((0.0006..0.0012).contains(&dry[6]), "trail gap {} m", dry[6]);
+    // Camber (`--gamma`): on this tyre γ > 0 adds camber thrust to the force of the sweep
+    // (α > 0, Fy < 0) and shortens the trail; γ < 0 works against it.
+    let with = run("map_gamma_with.csv", &["--gamma=0.0225"]);
+    let against = run("map_gamma_against.csv", &["--gamma=-0.0225"]);
+    let at_fz0 = |rows: &[Vec<f64>], mu: f64| -> Vec<f64> {
+        rows.iter()
+            .find(|r| r[0] == mu && r[1] == 1.0)
+            .unwrap()
+            .clone()
+    };
+    for r in with.iter().chain(&against) {
+        let (mu, load, err, sigma) = (r[0], r[1], r[3], r[4]);
+        if err.is_finite() {
+            assert!(
+                err.abs() <= sigma && err.abs() < 0.04,
+                "camber: μ {mu} load {load}: first estimate off by {err}, σ {sigma}"
+            );
+        }
+    }
+    for &mu in &[1.0, 0.9, 0.8, 0.7, 0.6, 0.5, 0.4, 0.3, 0.2, 0.1] {
+        let (plain, w, a) = (at_fz0(&rows, mu), at_fz0(&with, mu), at_fz0(&against, mu));
+        // The physics: with the thrust the curve of μ + 0.1 comes no further from μ's at
+        // utilisation 0.5 than without camber, and for μ ≥ 0.6 it all but touches it (under
+        // 0.4 mm of trail apart); against it, the curves are further apart.
+        assert!(
+            w[6] < plain[6],
+            "μ {mu}: gap {} with the thrust vs {}",
+            w[6],
+            plain[6]
+        );
+        if mu >= 0.6 {
+            assert!(w[6].abs() < 4e-4, "μ {mu}: gap {} m with the thrust", w[6]);
+        }
+        assert!(
+            a[6] > plain[6],
+            "μ {mu}: gap {} against the thrust vs {}",
+            a[6],
+            plain[6]
+        );
+        // And the estimator follows it: with the thrust no surface is read before
+        // utilisation 0.7 (or not at all).
+        // (NaN: never read.)
+        assert!(
+            w[2].is_nan() || w[2] >= 0.7,
+            "μ {mu}: read from utilisation {} with the thrust",
+            w[2]
+        );
+    }
     let bad = tmp("bad.tir");
     std::fs::write(&bad, "[MODEL]\nFITTYP = 61\nPDY1 = abc\n").unwrap();
     let o = gough(&["mu", "map", "--tir", bad.to_str().unwrap()]);

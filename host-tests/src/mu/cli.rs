@@ -38,6 +38,11 @@ pub struct MapArgs {
     /// default they carry the model's free-rolling Fx, as a wheel that measures Fx would).
     #[arg(long)]
     pub no_fx: bool,
+    /// Inclination γ of the wheel \[rad\] (ISO-W; the samples carry it). The sweep is α > 0,
+    /// where Fy < 0; whether γ's camber thrust adds to that force or works against it is the
+    /// tyre's (on the bundled MF 6.1 tyre γ > 0 adds to it): compare ±γ.
+    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    pub gamma: f64,
 }
 
 /// Arguments of `gough mu estimate`.
@@ -99,14 +104,14 @@ pub fn run(cmd: MuCmd) -> Result<(), String> {
         MuCmd::Demo(d) => super::bench::demo(d),
         MuCmd::Map(a) => {
             let t = tyre::load(&a.tir)?;
-            let cells = super::map::map(&t.params, !a.no_fx)?;
+            let cells = super::map::map(&t.params, !a.no_fx, a.gamma)?;
             let name = a.tir.file_name().map_or_else(
                 || a.tir.display().to_string(),
                 |n| n.to_string_lossy().into_owned(),
             );
             print!(
                 "{}",
-                super::map::render(&cells, &name, t.params.fnomin, !a.no_fx)
+                super::map::render(&cells, &name, t.params.fnomin, !a.no_fx, a.gamma)
             );
             if let Some(out) = &a.out {
                 if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {

@@ -1,8 +1,9 @@
 //! `gough mu map`: from which utilisation the core's estimator reads μ on a given tyre.
 //!
 //! For each surface μ and load, the tyre's own Magic Formula (λμx = λμy = μ/μy0, pure side
-//! slip, γ = 0, at the file's reference speed LONGVL) gives steady, noise-free Fy, Mz, Fz along
-//! a slip-angle sweep up to the peak. At each point a fresh [`MuEstimator`] with the default
+//! slip, at the file's reference speed LONGVL and the inclination γ asked, 0 by default) gives
+//! steady, noise-free Fy, Mz, Fz along a slip-angle sweep (α > 0, where Fy < 0) up to the peak;
+//! the samples carry γ. At each point a fresh [`MuEstimator`] with the default
 //! [`Config`] runs over 150 ms of that constant sample at 1 kHz, rolling at 20 m/s (settling,
 //! low-pass, two-sample readings, `init_count`: all of it, as on a wheel); the point counts as
 //! identifiable when the estimator ends `Identifiable`. The map reports the lowest utilisation
@@ -46,17 +47,17 @@ pub struct Cell {
 /// Samples of 1 ms the estimator runs on each point (settling 30, first estimate ≈ 25 more).
 const STEPS: usize = 150;
 
-fn eval(p: &Params<f64>, lam: f64, fz: f64, alpha: f64) -> Option<mf::Output<f64>> {
-    super::peers::eval_at(p, lam, fz, alpha, 0.0)
+fn eval(p: &Params<f64>, lam: f64, fz: f64, alpha: f64, gamma: f64) -> Option<mf::Output<f64>> {
+    super::peers::eval_cambered(p, lam, fz, alpha, 0.0, gamma)
 }
 
 /// The slip angle on the rising branch where |Fy| reaches `force` on surface λμ `lam`
 /// (bisection), with the output there; `None` if the curve's peak is below it.
-fn at_force(p: &Params<f64>, lam: f64, fz: f64, force: f64) -> Option<mf::Output<f64>> {
+fn at_force(p: &Params<f64>, lam: f64, fz: f64, gamma: f64, force: f64) -> Option<mf::Output<f64>> {
     let (mut lo, mut hi) = (0.0, None);
     let mut a = 1e-3;
     while a < 0.5 {
-        if eval(p, lam, fz, a)?.fy.abs() >= force {
+        if eval(p, lam, fz, a, gamma)?.fy.abs() >= force {
             hi = Some(a);
             break;
         }
@@ -66,19 +67,19 @@ fn at_force(p: &Params<f64>, lam: f64, fz: f64, force: f64) -> Option<mf::Output
     let mut hi = hi?;
     for _ in 0..50 {
         let mid = 0.5 * (lo + hi);
-        if eval(p, lam, fz, mid)?.fy.abs() >= force {
+        if eval(p, lam, fz, mid, gamma)?.fy.abs() >= force {
             hi = mid;
         } else {
             lo = mid;
         }
     }
-    eval(p, lam, fz, hi)
+    eval(p, lam, fz, hi, gamma)
 }
 
 /// The map of tyre `p` (see the module's doc). `with_fx`: the samples carry the measured Fx
 /// (at pure side slip, the free-rolling Fx of the model), as the benchmark's do; without it the
 /// estimator takes the free-rolling Fx from its table (`Curve::fx_free`).
-pub fn map(p: &Params<f64>, with_fx: bool) -> Result<Vec<Cell>, String> {
+pub fn map(p: &Params<f64>, with_fx: bool, gamma: f64) -> Result<Vec<Cell>, String> {
     let table = super::table::<f64, Libm>(p, None)?;
     let cfg = Config::default();
     let probe = Probe {
@@ -87,6 +88,7 @@ pub fn map(p: &Params<f64>, with_fx: bool) -> Result<Vec<Cell>, String> {
         cfg,
         mu0: MuEstimator::for_tyre(&table, p, cfg).mu0(),
         with_fx,
+        gamma,
     };
     let mut cells = Vec::new();
     for &mu in &MUS {
@@ -104,6 +106,7 @@ struct Probe<'a> {
     cfg: Config<f64>,
     mu0: f64,
     with_fx: bool,
+    gamma: f64,
 }
 
 impl Probe<'_> {
@@ -114,6 +117,7 @@ impl Probe<'_> {
             cfg,
             mu0,
             with_fx,
+            gamma,
         } = *self;
         let fz = load * p.fnomin;
         let lam = mu / mu0;
@@ -131,7 +135,7 @@ impl Probe<'_> {
         let mut peak: f64 = 0.0;
         for i in 1..2000 {
             let alpha = i as f64 * da;
-            let Some(o) = eval(p, lam, fz, alpha) else {
+            let Some(o) = eval(p, lam, fz, alpha, gamma) else {
                 break;
             };
             let f = o.fy.abs();
@@ -153,7 +157,7 @@ impl Probe<'_> {
                     mz: o.mz,
                     fx: with_fx.then_some(o.fx),
                     vx: Some(20.0),
-                    gamma: None,
+                    gamma: Some(gamma),
                 }));
             }
             if let Some(e) = last.filter(|e| e.state == State::Identifiable) {
@@ -165,24 +169,24 @@ impl Probe<'_> {
         }
         // The trail at utilisation 0.5, and on the surface 0.1 grippier at the same force.
         let force = 0.5 * mu * fz;
-        if let Some(o) = at_force(p, lam, fz, force) {
+        if let Some(o) = at_force(p, lam, fz, gamma, force) {
             let tau = -o.mz / o.fy;
             out.trail = Some(tau);
-            out.gap = at_force(p, (mu + 0.1) / mu0, fz, force).map(|g| -g.mz / g.fy - tau);
+            out.gap = at_force(p, (mu + 0.1) / mu0, fz, gamma, force).map(|g| -g.mz / g.fy - tau);
         }
         out
     }
 }
 
 /// The map as a terminal table (markdown).
-pub fn render(cells: &[Cell], name: &str, fz0: f64, with_fx: bool) -> String {
+pub fn render(cells: &[Cell], name: &str, fz0: f64, with_fx: bool, gamma: f64) -> String {
     use std::fmt::Write;
     let mut s = String::new();
     let fx = if with_fx { "measured" } else { "not measured" };
     let _ = writeln!(
         s,
-        "identifiability map of {name}: steady pure side slip (γ 0, at LONGVL), noise-free, Fx \
-         {fx}, the estimator's defaults at 1 kHz for 150 ms per point"
+        "identifiability map of {name}: steady pure side slip (α > 0, γ {gamma} rad, at LONGVL), \
+         noise-free, Fx {fx}, the estimator's defaults at 1 kHz for 150 ms per point"
     );
     let _ = writeln!(
         s,

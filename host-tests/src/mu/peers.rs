@@ -56,13 +56,25 @@ fn prior() -> Estimate<f64> {
 }
 
 /// μ of a surface λμ on the file's scale, and the MF at pure slip with that λμ (speed: the
-/// file's LONGVL; limits off).
+/// file's LONGVL; limits off; γ = 0).
 pub(super) fn eval_at(
     p: &Params<f64>,
     lambda: f64,
     fz: f64,
     alpha: f64,
     kappa: f64,
+) -> Option<mf::Output<f64>> {
+    eval_cambered(p, lambda, fz, alpha, kappa, 0.0)
+}
+
+/// [`eval_at`] at inclination `gamma` \[rad\].
+pub(super) fn eval_cambered(
+    p: &Params<f64>,
+    lambda: f64,
+    fz: f64,
+    alpha: f64,
+    kappa: f64,
+    gamma: f64,
 ) -> Option<mf::Output<f64>> {
     let mut q = p.clone();
     q.lmux = lambda;
@@ -77,6 +89,7 @@ pub(super) fn eval_at(
             fz,
             alpha,
             kappa,
+            gamma,
             vx: q.longvl,
             ..Input::default()
         },
