@@ -383,6 +383,16 @@ pub fn suite() -> Vec<Case> {
     v
 }
 
+/// A CSV field as RFC 4180 has it: quoted (inner quotes doubled) when it holds a comma, a quote
+/// or a line break — a road spec such as `step=1.0@0,0.3@90` does.
+fn csv_field(s: &str) -> std::borrow::Cow<'_, str> {
+    if s.contains([',', '"', '\n', '\r']) {
+        format!("\"{}\"", s.replace('"', "\"\"")).into()
+    } else {
+        s.into()
+    }
+}
+
 fn fmt(x: Option<f64>, digits: usize) -> String {
     x.map_or("–".into(), |v| format!("{v:.digits$}"))
 }
@@ -448,8 +458,8 @@ pub fn run(a: BenchArgs) -> Result<(), String> {
             let _ = writeln!(
                 csv,
                 "{},{},{},{},{},{},{},{},{},{},{}",
-                c.manoeuvre,
-                c.road,
+                csv_field(c.manoeuvre),
+                csv_field(&c.road),
                 method,
                 mt.n_identifiable,
                 fmt(mt.err_mean, 4),
@@ -787,6 +797,14 @@ pub fn plot_gough(p: &Params<f64>, log: &Log, w: usize, path: &Path) -> Result<(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A road spec with a comma stays one field of table.csv.
+    #[test]
+    fn csv_fields_with_commas_are_quoted() {
+        assert_eq!(csv_field("mu=0.5"), "mu=0.5");
+        assert_eq!(csv_field("step=1.0@0,0.3@90"), "\"step=1.0@0,0.3@90\"");
+        assert_eq!(csv_field("a\"b"), "\"a\"\"b\"");
+    }
 
     /// The error metrics count identifiable samples only; "within 2σ" is the share of them
     /// whose error is at most twice the σ they report.
