@@ -178,7 +178,8 @@ fn demo_runs_and_writes_its_outputs() {
 /// fusing readings does not reduce). With camber (`--gamma ±0.0225`, 1.3°) the first estimates
 /// are as good, but where the camber thrust adds to the force the curves of μ and μ + 0.1 all
 /// but touch at utilisation 0.5 (the trail no longer tells them apart) and no surface is read
-/// before utilisation 0.7; against it they are further apart than without camber. A bad file
+/// before utilisation 0.7; against it they are further apart than without camber, and μ ≥ 0.3
+/// is read below utilisation 0.8 at every load. A bad file
 /// is a one-line error.
 #[test]
 fn map_says_from_which_utilisation_mu_is_read() {
@@ -254,6 +255,15 @@ fn map_says_from_which_utilisation_mu_is_read() {
             .unwrap()
             .clone()
     };
+    // Against the thrust every surface from μ 0.3 up is read at every load (at small slip
+    // the thrust makes Fy positive there, so the sweep must not stop where |Fy| first falls).
+    for r in &against {
+        let (mu, load, util) = (r[0], r[1], r[2]);
+        assert!(
+            mu < 0.25 || util < 0.8,
+            "against the thrust: μ {mu} load {load} read from utilisation {util}"
+        );
+    }
     for r in with.iter().chain(&against) {
         let (mu, load, err, sigma) = (r[0], r[1], r[3], r[4]);
         if err.is_finite() {

@@ -132,13 +132,15 @@ impl Probe<'_> {
         };
         // The sweep: up to the peak of |Fy|, in steps of 1 % of the slip angle at the peak's scale.
         let da = 2e-4 * mu.max(0.1);
-        let mut peak: f64 = 0.0;
+        // The force of α > 0 is Fy < 0 and grows in that direction up to the peak; at small
+        // slip the shifts and the camber thrust can make Fy positive, so |Fy| first falls.
+        let mut peak = f64::NEG_INFINITY;
         for i in 1..2000 {
             let alpha = i as f64 * da;
             let Some(o) = eval(p, lam, fz, alpha, gamma) else {
                 break;
             };
-            let f = o.fy.abs();
+            let f = -o.fy;
             if f < peak {
                 break; // past the peak
             }
