@@ -294,14 +294,20 @@ fn map_says_from_which_utilisation_mu_is_read() {
             plain[6]
         );
         // And the estimator follows it: with the thrust no surface is read before
-        // utilisation 0.7 (or not at all).
-        // (NaN: never read.)
+        // utilisation 0.7, or not at all (NaN).
         assert!(
             w[2].is_nan() || w[2] >= 0.7,
             "μ {mu}: read from utilisation {} with the thrust",
             w[2]
         );
     }
+    // A camber that is no angle is a one-line error, not a map of "not identifiable".
+    let tir = tyre();
+    let o = gough(&["mu", "map", "--tir", &tir, "--gamma=nan"]);
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(err.trim().lines().count(), 1, "{err}");
+    assert!(err.contains("--gamma"), "{err}");
     let bad = tmp("bad.tir");
     std::fs::write(&bad, "[MODEL]\nFITTYP = 61\nPDY1 = abc\n").unwrap();
     let o = gough(&["mu", "map", "--tir", bad.to_str().unwrap()]);

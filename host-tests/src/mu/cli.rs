@@ -103,6 +103,9 @@ pub fn run(cmd: MuCmd) -> Result<(), String> {
         MuCmd::Bench(b) => super::bench::run(b),
         MuCmd::Demo(d) => super::bench::demo(d),
         MuCmd::Map(a) => {
+            if !a.gamma.is_finite() {
+                return Err(format!("--gamma {}: not a finite angle [rad]", a.gamma));
+            }
             let t = tyre::load(&a.tir)?;
             let cells = super::map::map(&t.params, !a.no_fx, a.gamma)?;
             let name = a.tir.file_name().map_or_else(
