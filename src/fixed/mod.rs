@@ -24,8 +24,11 @@
 //! | ε of (4.E6a), (4.E16), … | — | 1e-6 | — | 4e-4 relative (4295 LSB) |
 //!
 //! Q31.32 is chosen over an `i32` format because the largest (stiffness, 2e6) and the smallest
-//! (ε, 1e-6) quantities of one evaluation are 2e12 apart: no 32-bit format holds both, and mixing
-//! formats per quantity would mean re-typing the equations with their shifts.
+//! (ε, 1e-6) quantities of one evaluation are 2e12 apart in SI units: no 32-bit format holds
+//! both, and mixing formats per quantity would mean re-typing the equations with their shifts.
+//! A change of units does it without re-typing (forces in kN, pressures in kPa, ε rounded up to
+//! one LSB): an unmerged experiment, `docs/experiments/q16-kn.diff`, runs the same equations in
+//! Q15.16 within 8.2e-4 of the peak force over the oracle sweeps (README, "Cortex-M0").
 //!
 //! ## Arithmetic: saturating, no panic
 //! Every operation saturates (`saturating_add/sub/mul/div`); x/0 gives [`Fix::MAX`] or
@@ -67,9 +70,9 @@
 //!
 //! ## What this module leaves out
 //! - Issue 7's ≤ 4 000 instructions per combined evaluation on a Cortex-M0: 68,137 (soft-float
-//!   `f32` 97,463). About 260 products and 35 quotients of 64-bit values per evaluation remain;
-//!   fewer needs narrower `i32` formats per quantity on the hot path, which means re-typing the
-//!   equations (the trade this module declines for now, see above). `mul` and `div` are out of
+//!   `f32` 97,463). About 260 products and 35 quotients of 64-bit values per evaluation remain.
+//!   The Q15.16 experiment above costs 52,916; its operation count (237 products, 25 quotients,
+//!   40 kernel calls) puts MF 6.1 above 4,000 in any fixed-point format. `mul` and `div` are out of
 //!   line, which keeps `mf::eval::<Fix, _>` at about 14 kB of Thumb code instead of 210 kB.
 
 pub mod kernels;
