@@ -166,6 +166,47 @@ fn demo_runs_and_writes_its_outputs() {
     assert!(table.contains("fl") && table.contains("rr"), "{table}");
 }
 
+/// `gough mu bound` on the bench's first three cases (step steer on μ 1.0, 0.7, 0.5): a row per
+/// wheel and surface that reaches utilisation 0.5, σ_CRB falling from that moment to 150 ms
+/// later (information only accumulates), "decidable" exactly where 1.96·σ ≤ 0.1, and the
+/// Gough estimator's latencies those of `gough mu bench` (its step steer on μ 0.5 reads within
+/// 150 ms on the front wheels).
+#[test]
+fn bound_gives_each_wheel_a_crb_and_the_estimator_s_latency() {
+    let dir = tmp("bound");
+    let o = gough(&[
+        "mu",
+        "bound",
+        "--tir",
+        &tyre(),
+        "--cases",
+        "3",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let csv = std::fs::read_to_string(dir.join("bound.csv")).unwrap();
+    let mut rows = 0;
+    let mut front_mu05 = 0;
+    for line in csv.lines().skip(1) {
+        let f: Vec<&str> = line.split(',').collect();
+        assert_eq!(f.len(), 9, "{line}");
+        let (at_util, at_dead) = (f[4].parse::<f64>().unwrap(), f[5].parse::<f64>().unwrap());
+        assert!(at_dead > 0.0 && at_dead <= at_util, "{line}");
+        assert_eq!(f[6] == "true", 1.96 * at_dead <= 0.1, "{line}");
+        if f[1] == "mu=0.5" && (f[2] == "fl" || f[2] == "fr") {
+            let lat: f64 = f[7].parse().unwrap();
+            assert!(lat <= 0.15, "{line}");
+            front_mu05 += 1;
+        }
+        rows += 1;
+    }
+    assert!(rows >= 6, "{csv}");
+    assert_eq!(front_mu05, 2, "{csv}");
+    let table = String::from_utf8_lossy(&o.stdout);
+    assert!(table.contains("decidable"), "{table}");
+}
+
 /// `gough mu map` on the bundled MF 6.1 tyre: steady, noise-free points of the tyre's own Magic
 /// Formula through the estimator at 1 kHz. It holds what the README says of it: on the dry
 /// road at Fz0 μ becomes identifiable only above utilisation 0.5 (the curves of μ 1.0 and 1.1

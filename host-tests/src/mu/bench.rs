@@ -91,16 +91,21 @@ impl Default for Sensors {
 }
 
 /// Seeded Gaussian noise (xorshift64 + Box–Muller); deterministic across platforms.
-struct Noise(u64);
+pub(crate) struct Noise(u64);
 
 impl Noise {
+    /// A generator from `seed` (any value; 0 is made odd).
+    pub(crate) fn new(seed: u64) -> Noise {
+        Noise(seed | 1)
+    }
     fn uniform(&mut self) -> f64 {
         self.0 ^= self.0 << 13;
         self.0 ^= self.0 >> 7;
         self.0 ^= self.0 << 17;
         ((self.0 >> 11) as f64 + 0.5) / (1u64 << 53) as f64
     }
-    fn gauss(&mut self) -> f64 {
+    /// A standard normal draw.
+    pub(crate) fn gauss(&mut self) -> f64 {
         let (u, v) = (self.uniform(), self.uniform());
         (-2.0 * u.ln()).sqrt() * (2.0 * std::f64::consts::PI * v).cos()
     }
@@ -252,7 +257,7 @@ pub struct Metrics {
     pub false_alarms: usize,
 }
 
-fn median(mut v: Vec<f64>) -> Option<f64> {
+pub(crate) fn median(mut v: Vec<f64>) -> Option<f64> {
     if v.is_empty() {
         return None;
     }
@@ -271,6 +276,36 @@ fn segments(mu: &[f64]) -> Vec<(usize, usize)> {
         }
     }
     out
+}
+
+/// First row of segment `a..b` from which the reported estimate stays within ±0.1 of the truth
+/// to the segment's end, held for at least 50 rows ("stays").
+fn settled(tr: &WheelTrace, est: &[Estimate<f64>], a: usize, b: usize) -> Option<usize> {
+    let mut first_ok = None;
+    for i in (a..b).rev() {
+        let e = &est[i];
+        if e.state == State::Fallback || (e.mu - tr.mu_true[i]).abs() > 0.1 {
+            break;
+        }
+        first_ok = Some(i);
+    }
+    first_ok.filter(|&ok| b - ok >= 50)
+}
+
+/// Time from the utilisation first reaching 0.5 in segment `a..b` to row `ok` \[s\].
+fn latency_from(tr: &WheelTrace, a: usize, b: usize, ok: usize) -> Option<f64> {
+    (a..b)
+        .find(|&i| tr.util[i] >= 0.5)
+        .map(|i5| (tr.rows[ok].t - tr.rows[i5].t).max(0.0))
+}
+
+/// Latency of one wheel on segment `a..b` (rows of constant true μ): from the utilisation
+/// first reaching 0.5 to the estimate staying within ±0.1 \[s\], as [`metrics`] takes it.
+pub fn segment_latency(tr: &WheelTrace, est: &[Estimate<f64>], a: usize, b: usize) -> Option<f64> {
+    if est.len() != tr.rows.len() {
+        return None;
+    }
+    latency_from(tr, a, b, settled(tr, est, a, b)?)
 }
 
 /// Metrics of estimates `est` against the trace(s).
@@ -297,23 +332,13 @@ pub fn metrics(traces: &[WheelTrace], ests: &[Vec<Estimate<f64>>]) -> Metrics {
             false_alarms += (a..b)
                 .filter(|&i| est[i].change && tr.rows[i].t > settle)
                 .count();
-            // first index from which the reported estimate stays within ±0.1 to the segment end
-            let mut first_ok = None;
-            for i in (a..b).rev() {
-                let e = &est[i];
-                if e.state == State::Fallback || (e.mu - tr.mu_true[i]).abs() > 0.1 {
-                    break;
-                }
-                first_ok = Some(i);
-            }
-            let Some(ok) = first_ok else { continue };
-            if b - ok < 50 {
-                continue; // held for under 50 samples: not "stays"
-            }
+            let Some(ok) = settled(tr, est, a, b) else {
+                continue;
+            };
             let umax = tr.util[a..=ok].iter().copied().fold(0.0, f64::max);
             utils.push(umax);
-            if let Some(i5) = (a..b).find(|&i| tr.util[i] >= 0.5) {
-                lats.push((tr.rows[ok].t - tr.rows[i5].t).max(0.0));
+            if let Some(l) = latency_from(tr, a, b, ok) {
+                lats.push(l);
             }
             if k > 0 {
                 dets.push(tr.rows[ok].t - tr.rows[a].t);
@@ -385,7 +410,7 @@ pub fn suite() -> Vec<Case> {
 
 /// A CSV field as RFC 4180 has it: quoted (inner quotes doubled) when it holds a comma, a quote
 /// or a line break — a road spec such as `step=1.0@0,0.3@90` does.
-fn csv_field(s: &str) -> std::borrow::Cow<'_, str> {
+pub(crate) fn csv_field(s: &str) -> std::borrow::Cow<'_, str> {
     if s.contains([',', '"', '\n', '\r']) {
         format!("\"{}\"", s.replace('"', "\"\"")).into()
     } else {

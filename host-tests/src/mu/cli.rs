@@ -23,6 +23,10 @@ pub enum MuCmd {
     /// own Magic Formula on surfaces μ 1.0 … 0.1 at 0.5, 1 and 1.5·Fz0, and the trail gap
     /// between neighbouring surfaces that decides it.
     Map(MapArgs),
+    /// How soon any estimator could know μ on the benchmark's data: the Cramér–Rao bound of
+    /// its rows (exact model, the bench's noise) 150 ms after the utilisation reaches 0.5, beside
+    /// the Gough estimator's latency, wheel by wheel.
+    Bound(super::bound::BoundArgs),
 }
 
 /// Arguments of `gough mu map`.
@@ -102,6 +106,7 @@ pub fn run(cmd: MuCmd) -> Result<(), String> {
         }
         MuCmd::Bench(b) => super::bench::run(b),
         MuCmd::Demo(d) => super::bench::demo(d),
+        MuCmd::Bound(b) => super::bound::run(b),
         MuCmd::Map(a) => {
             if !a.gamma.is_finite() {
                 return Err(format!("--gamma {}: not a finite angle [rad]", a.gamma));

@@ -2,6 +2,7 @@
 //! rows, the literature baselines ([`peers`]), and the closed-loop benchmark on the vehicle
 //! simulation ([`bench`](mod@bench)). Nothing here re-implements the estimator.
 pub mod bench;
+pub mod bound;
 pub mod cli;
 pub mod map;
 pub mod peers;
