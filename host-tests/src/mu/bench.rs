@@ -142,10 +142,9 @@ impl WheelTrace {
 
 /// Applies the sensor model to wheel `w` of a log.
 pub fn measure(log: &Log, w: usize, s: &Sensors, seed: u64) -> WheelTrace {
-    let mut n = Noise(
+    let mut n = Noise::new(
         seed.wrapping_mul(0x9E37_79B9_7F4A_7C15)
-            .wrapping_add(w as u64 + 1)
-            | 1,
+            .wrapping_add(w as u64 + 1),
     );
     let lag = (s.delay / log.dt).round() as usize;
     let recs = &log.records;
