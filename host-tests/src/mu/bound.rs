@@ -25,7 +25,8 @@
 //!
 //! A wheel can meet the target only if 1.96·σ_CRB ≤ 0.1 at 150 ms after its utilisation first
 //! reaches 0.5 (a 95 % interval inside ±0.1). The table puts that beside the Gough estimator's
-//! own latency, wheel by wheel.
+//! own latency, wheel by wheel, and (`--ml`) beside [`WindowMl`], a maximum-likelihood
+//! reference with the same exact model that shows whether the bound can be reached.
 
 use super::bench::{self, Sensors, Tables, WheelTrace};
 use crate::sim::Log;
@@ -150,10 +151,6 @@ impl Surfaces {
             lo: m.surface(mu - H_MU),
             hi: m.surface(mu + H_MU),
         }
-    }
-    /// The μ they are about.
-    pub fn mu(&self) -> f64 {
-        0.5 * (self.lo.mu + self.hi.mu)
     }
 }
 
@@ -472,8 +469,9 @@ impl WheelBound {
 /// The target's deadline after the utilisation first reaches 0.5 \[s\].
 pub const DEADLINE: f64 = 0.150;
 
-/// Bounds of wheel `w` of a simulated case, one per surface on which its utilisation reaches
-/// 0.5. `gough` holds the Gough estimator's estimates over the same rows, when run.
+/// Bounds of wheel `w` of a simulated case (`tr`: its rows as [`bench::measure`] made them),
+/// one per surface on which its utilisation reaches 0.5. `gough_latency(a, b)` gives the Gough
+/// estimator's latency on the surface's rows `a..b`; `ml` also runs [`WindowMl`] there.
 pub fn wheel_bounds(
     m: &Model,
     log: &Log,
