@@ -205,6 +205,19 @@ fn bound_gives_each_wheel_a_crb_and_the_estimator_s_latency() {
     assert_eq!(front_mu05, 2, "{csv}");
     let table = String::from_utf8_lossy(&o.stdout);
     assert!(table.contains("decidable"), "{table}");
+    // A file that is not there: a one-line error, no table.
+    let bad = gough(&[
+        "mu",
+        "bound",
+        "--tir",
+        "/nonexistent/tyre.tir",
+        "--cases",
+        "1",
+    ]);
+    assert!(!bad.status.success());
+    let err = String::from_utf8_lossy(&bad.stderr);
+    assert_eq!(err.trim().lines().count(), 1, "{err}");
+    assert!(err.contains("/nonexistent/tyre.tir"), "{err}");
 }
 
 /// `gough mu map` on the bundled MF 6.1 tyre: steady, noise-free points of the tyre's own Magic
