@@ -265,7 +265,7 @@ pub(crate) fn median(mut v: Vec<f64>) -> Option<f64> {
 }
 
 /// Segments of constant true μ: (start, end) index ranges.
-fn segments(mu: &[f64]) -> Vec<(usize, usize)> {
+pub(crate) fn segments(mu: &[f64]) -> Vec<(usize, usize)> {
     let mut out = Vec::new();
     let mut s = 0;
     for i in 1..=mu.len() {

@@ -485,14 +485,9 @@ pub fn wheel_bounds(
     let recs = &log.records;
     let lag = (sens.delay / log.dt).round() as usize;
     // The rows' true μ (undelayed, as the bench's metrics take it).
-    let mu: Vec<f64> = recs.iter().map(|r| r.wheels[w].mu_true).collect();
+    let mu = &tr.mu_true;
     let mut out = Vec::new();
-    let mut a = 0;
-    while a < recs.len() {
-        let mut b = a + 1;
-        while b < recs.len() && (mu[b] - mu[a]).abs() <= 1e-9 {
-            b += 1;
-        }
+    for (a, b) in bench::segments(mu) {
         if let Some(i5) = (a..b).find(|&i| util[i] >= 0.5) {
             let t_dead = recs[i5].t + DEADLINE;
             let end = (i5..b).take_while(|&i| recs[i].t <= t_dead + 1e-9).last();
@@ -542,7 +537,6 @@ pub fn wheel_bounds(
                     .map(|e| ml_within(m, tr, sens, log.dt, a + lag, e, b)),
             });
         }
-        a = b;
     }
     out
 }
