@@ -39,7 +39,7 @@
 //! of α, γ and π·Vx/VXLOW; tan of |α| < π/2; acos on \[−1, 1\]; exp of small arguments
 //! (PKX3·dfz, q·ln x); ln of Fz/Fz0 and p/p0 (positive, O(1)); sqrt of non-negatives.
 //!
-//! For `f64`, `Fast` delegates to [`Libm`]: the host has a double-precision FPU and
+//! For `f64`, `Fast` delegates to [`Libm`](super::Libm): the host has a double-precision FPU and
 //! the `f64` path is the accuracy reference, so nothing is gained by approximating there.
 
 mod acos;
@@ -56,82 +56,17 @@ pub use ln::ln;
 pub use sqrt::sqrt;
 pub use trig::{cos, sin, tan};
 
-use super::{Backend, Libm};
+use super::Backend;
 
 /// The fast pure-`f32` backend (see the [module doc](self) for methods and measured errors).
 ///
 /// `mf::eval::<f32, Fast>` runs the Magic Formula on these kernels; `mf::eval::<f64, Fast>` is the
-/// same as with [`Libm`].
+/// same as with [`Libm`](super::Libm).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct Fast;
 
-impl Backend<f32> for Fast {
-    #[inline]
-    fn sin(x: f32) -> f32 {
-        sin(x)
-    }
-    #[inline]
-    fn cos(x: f32) -> f32 {
-        cos(x)
-    }
-    #[inline]
-    fn tan(x: f32) -> f32 {
-        tan(x)
-    }
-    #[inline]
-    fn atan(x: f32) -> f32 {
-        atan(x)
-    }
-    #[inline]
-    fn acos(x: f32) -> f32 {
-        acos(x)
-    }
-    #[inline]
-    fn exp(x: f32) -> f32 {
-        exp(x)
-    }
-    #[inline]
-    fn ln(x: f32) -> f32 {
-        ln(x)
-    }
-    #[inline]
-    fn sqrt(x: f32) -> f32 {
-        sqrt(x)
-    }
-}
+// The kernels above, by name.
+crate::math::impl_backend!(Fast, f32, in_scope);
 
-/// `f64`: delegates to [`Libm`] (see the module doc).
-impl Backend<f64> for Fast {
-    #[inline]
-    fn sin(x: f64) -> f64 {
-        <Libm as Backend<f64>>::sin(x)
-    }
-    #[inline]
-    fn cos(x: f64) -> f64 {
-        <Libm as Backend<f64>>::cos(x)
-    }
-    #[inline]
-    fn tan(x: f64) -> f64 {
-        <Libm as Backend<f64>>::tan(x)
-    }
-    #[inline]
-    fn atan(x: f64) -> f64 {
-        <Libm as Backend<f64>>::atan(x)
-    }
-    #[inline]
-    fn acos(x: f64) -> f64 {
-        <Libm as Backend<f64>>::acos(x)
-    }
-    #[inline]
-    fn exp(x: f64) -> f64 {
-        <Libm as Backend<f64>>::exp(x)
-    }
-    #[inline]
-    fn ln(x: f64) -> f64 {
-        <Libm as Backend<f64>>::ln(x)
-    }
-    #[inline]
-    fn sqrt(x: f64) -> f64 {
-        <Libm as Backend<f64>>::sqrt(x)
-    }
-}
+// `f64`: delegates each kernel to `Libm` (see the module doc).
+crate::math::f64_via_libm!(Fast);

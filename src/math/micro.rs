@@ -33,9 +33,9 @@
 //! | ln | — | 6.1e-5 abs on \[1, 10\]; **0.118 abs on (0, 1)** | x < 1 goes through micromath's `inv`, a bit trick up to 12 % off |
 //! | sqrt | "~5 % average" | 6.1 % rel | all x > 0 |
 //!
-//! For `f64`, `Micromath` delegates to [`Libm`] (micromath is f32 only).
+//! For `f64`, `Micromath` delegates to [`Libm`](super::Libm) (micromath is f32 only).
 
-use super::{Backend, Libm};
+use super::Backend;
 use micromath::F32Ext;
 
 /// micromath's kernels behind the [`Backend`] trait (see the [module doc](self) for what is
@@ -172,76 +172,11 @@ pub fn sqrt(x: f32) -> f32 {
     F32Ext::sqrt(x)
 }
 
-impl Backend<f32> for Micromath {
-    #[inline]
-    fn sin(x: f32) -> f32 {
-        sin(x)
-    }
-    #[inline]
-    fn cos(x: f32) -> f32 {
-        cos(x)
-    }
-    #[inline]
-    fn tan(x: f32) -> f32 {
-        tan(x)
-    }
-    #[inline]
-    fn atan(x: f32) -> f32 {
-        atan(x)
-    }
-    #[inline]
-    fn acos(x: f32) -> f32 {
-        acos(x)
-    }
-    #[inline]
-    fn exp(x: f32) -> f32 {
-        exp(x)
-    }
-    #[inline]
-    fn ln(x: f32) -> f32 {
-        ln(x)
-    }
-    #[inline]
-    fn sqrt(x: f32) -> f32 {
-        sqrt(x)
-    }
-}
+// The kernels above, by name.
+crate::math::impl_backend!(Micromath, f32, in_scope);
 
-/// `f64`: delegates to [`Libm`] (micromath has no `f64` kernels).
-impl Backend<f64> for Micromath {
-    #[inline]
-    fn sin(x: f64) -> f64 {
-        <Libm as Backend<f64>>::sin(x)
-    }
-    #[inline]
-    fn cos(x: f64) -> f64 {
-        <Libm as Backend<f64>>::cos(x)
-    }
-    #[inline]
-    fn tan(x: f64) -> f64 {
-        <Libm as Backend<f64>>::tan(x)
-    }
-    #[inline]
-    fn atan(x: f64) -> f64 {
-        <Libm as Backend<f64>>::atan(x)
-    }
-    #[inline]
-    fn acos(x: f64) -> f64 {
-        <Libm as Backend<f64>>::acos(x)
-    }
-    #[inline]
-    fn exp(x: f64) -> f64 {
-        <Libm as Backend<f64>>::exp(x)
-    }
-    #[inline]
-    fn ln(x: f64) -> f64 {
-        <Libm as Backend<f64>>::ln(x)
-    }
-    #[inline]
-    fn sqrt(x: f64) -> f64 {
-        <Libm as Backend<f64>>::sqrt(x)
-    }
-}
+// `f64`: delegates each kernel to `Libm` (micromath has no `f64` kernels).
+crate::math::f64_via_libm!(Micromath);
 
 #[cfg(test)]
 mod tests {

@@ -259,75 +259,78 @@ pub trait Backend<F: Float> {
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct Libm;
 
-impl Backend<f32> for Libm {
-    #[inline]
-    fn sin(x: f32) -> f32 {
-        libm::sinf(x)
-    }
-    #[inline]
-    fn cos(x: f32) -> f32 {
-        libm::cosf(x)
-    }
-    #[inline]
-    fn tan(x: f32) -> f32 {
-        libm::tanf(x)
-    }
-    #[inline]
-    fn atan(x: f32) -> f32 {
-        libm::atanf(x)
-    }
-    #[inline]
-    fn acos(x: f32) -> f32 {
-        libm::acosf(x)
-    }
-    #[inline]
-    fn exp(x: f32) -> f32 {
-        libm::expf(x)
-    }
-    #[inline]
-    fn ln(x: f32) -> f32 {
-        libm::logf(x)
-    }
-    #[inline]
-    fn sqrt(x: f32) -> f32 {
-        libm::sqrtf(x)
-    }
+/// Implements [`Backend<F>`] for a backend by delegating each kernel to a function of the same
+/// signature (`impl_backend!(Type, f32, { sin => path::to::sin, ... })`, or `impl_backend!(Type,
+/// f32, in_scope)` for functions named like the kernels where it is invoked); the compiler
+/// checks that every kernel of the trait is named.
+macro_rules! impl_backend {
+    ($backend:ty, $f:ty, in_scope) => {
+        $crate::math::impl_backend!($backend, $f, {
+            sin => sin,
+            cos => cos,
+            tan => tan,
+            atan => atan,
+            acos => acos,
+            exp => exp,
+            ln => ln,
+            sqrt => sqrt,
+        });
+    };
+    ($backend:ty, $f:ty, { $($name:ident => $fun:expr),* $(,)? }) => {
+        impl Backend<$f> for $backend {
+            $(
+                #[inline]
+                fn $name(x: $f) -> $f {
+                    ($fun)(x)
+                }
+            )*
+        }
+    };
 }
+#[cfg(any(feature = "fast", feature = "micromath"))]
+pub(crate) use impl_backend;
 
-impl Backend<f64> for Libm {
-    #[inline]
-    fn sin(x: f64) -> f64 {
-        libm::sin(x)
-    }
-    #[inline]
-    fn cos(x: f64) -> f64 {
-        libm::cos(x)
-    }
-    #[inline]
-    fn tan(x: f64) -> f64 {
-        libm::tan(x)
-    }
-    #[inline]
-    fn atan(x: f64) -> f64 {
-        libm::atan(x)
-    }
-    #[inline]
-    fn acos(x: f64) -> f64 {
-        libm::acos(x)
-    }
-    #[inline]
-    fn exp(x: f64) -> f64 {
-        libm::exp(x)
-    }
-    #[inline]
-    fn ln(x: f64) -> f64 {
-        libm::log(x)
-    }
-    #[inline]
-    fn sqrt(x: f64) -> f64 {
-        libm::sqrt(x)
-    }
+/// Implements [`Backend<f64>`] for an `f32` backend by delegating to [`Libm`] (the fast
+/// backends have no `f64` kernels of their own).
+#[cfg(any(feature = "fast", feature = "micromath"))]
+macro_rules! f64_via_libm {
+    ($backend:ty) => {
+        $crate::math::impl_backend!($backend, f64, {
+            sin => <$crate::math::Libm as $crate::math::Backend<f64>>::sin,
+            cos => <$crate::math::Libm as $crate::math::Backend<f64>>::cos,
+            tan => <$crate::math::Libm as $crate::math::Backend<f64>>::tan,
+            atan => <$crate::math::Libm as $crate::math::Backend<f64>>::atan,
+            acos => <$crate::math::Libm as $crate::math::Backend<f64>>::acos,
+            exp => <$crate::math::Libm as $crate::math::Backend<f64>>::exp,
+            ln => <$crate::math::Libm as $crate::math::Backend<f64>>::ln,
+            sqrt => <$crate::math::Libm as $crate::math::Backend<f64>>::sqrt,
+        });
+    };
 }
+#[cfg(any(feature = "fast", feature = "micromath"))]
+pub(crate) use f64_via_libm;
+
+impl_backend!(Libm, f32, {
+    sin => libm::sinf,
+    cos => libm::cosf,
+    tan => libm::tanf,
+    atan => libm::atanf,
+    acos => libm::acosf,
+    exp => libm::expf,
+    ln => libm::logf,
+    sqrt => libm::sqrtf,
+});
+
+impl_backend!(Libm, f64, {
+    sin => libm::sin,
+    cos => libm::cos,
+    tan => libm::tan,
+    atan => libm::atan,
+    acos => libm::acos,
+    exp => libm::exp,
+    ln => libm::log,
+    sqrt => libm::sqrt,
+});
 
 #[cfg(test)]
 mod tests {
