@@ -5,7 +5,7 @@
 //! (`tests/oracle.rs` ties that one to MFeval): what is measured here is what a backend and a
 //! number format cost.
 //!
-//! Prints the table the README quotes:
+//! Prints the table the README quotes (and fails if the README's rows differ):
 //! `cargo test -p gough-host --release --test backends -- --nocapture`
 //!
 //! Budgets (one table, `BUDGETS`, each with its reason) are asserted per backend.
@@ -225,9 +225,10 @@ fn backends_against_f64() {
     println!("forces in units of FNOMIN, moments of FNOMIN·R0; 'peak' = of the sweep's largest |F| (|M|)");
     println!("| backend | Fx | Fy | Mz | Mx | My | Fx, Fy / peak F | Mz / peak Mz | failed rows |");
     println!("|---|---|---|---|---|---|---|---|---|");
+    let mut rows = Vec::new();
     for (kind, w) in KINDS.iter().zip(&worst) {
         let fpk = w.peak[0].0.max(w.peak[1].0);
-        println!(
+        rows.push(format!(
             "| {} | {:.1e} | {:.1e} | {:.1e} | {:.1e} | {:.1e} | {:.2e} | {:.2e} | {} |",
             kind.name(),
             w.abs[0].0,
@@ -238,7 +239,8 @@ fn backends_against_f64() {
             fpk,
             w.peak[2].0,
             w.failed.len()
-        );
+        ));
+        println!("{}", rows.last().unwrap());
     }
     for (kind, w) in KINDS.iter().zip(&worst) {
         for (q, name) in QUANTITIES.iter().enumerate() {
@@ -282,4 +284,20 @@ fn backends_against_f64() {
         }
     }
     assert!(bad.is_empty(), "{bad:#?}");
+
+    // The README quotes this table ("Math backends"): each of its rows must be what this run
+    // printed, so that it cannot go stale unnoticed (the numbers do not depend on the build's
+    // optimisation: IEEE f32 and integer Q31.32 arithmetic are exact operations).
+    let readme =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("../README.md"))
+            .unwrap();
+    for row in &rows {
+        let head: String = row.split(" | ").next().unwrap().to_owned() + " | ";
+        let quoted: Vec<&str> = readme.lines().filter(|l| l.starts_with(&head)).collect();
+        assert_eq!(
+            quoted,
+            [row.as_str()],
+            "README.md's backend table row for {head}"
+        );
+    }
 }

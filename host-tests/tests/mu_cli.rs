@@ -166,6 +166,36 @@ fn demo_runs_and_writes_its_outputs() {
     assert!(table.contains("fl") && table.contains("rr"), "{table}");
 }
 
+/// The README's main command prints the table its console block shows (the demo is
+/// deterministic: one noise seed), run as a new user runs it, from the repository's root with
+/// the defaults; so that block cannot go stale unnoticed. (Only `--out` differs, and with it the
+/// last line, which names the files.)
+#[test]
+fn readme_demo_block_is_what_the_demo_prints() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let readme = std::fs::read_to_string(root.join("README.md")).unwrap();
+    let cmd = "$ cargo run --release --bin gough -- mu demo\n";
+    let start = readme.find(cmd).expect("the README's demo command") + cmd.len();
+    let block: Vec<&str> = readme[start..]
+        .lines()
+        .take_while(|l| !l.starts_with("-> ") && !l.starts_with("```"))
+        .collect();
+    assert!(block.len() >= 6, "{block:?}");
+    let dir = tmp("readme-demo");
+    let o = Command::new(env!("CARGO_BIN_EXE_gough"))
+        .current_dir(&root)
+        .args(["mu", "demo", "--out", dir.to_str().unwrap()])
+        .output()
+        .expect("run gough");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let out = String::from_utf8_lossy(&o.stdout);
+    let printed: Vec<&str> = out.lines().take_while(|l| !l.starts_with("-> ")).collect();
+    assert_eq!(
+        printed, block,
+        "README.md's demo block differs from what `gough mu demo` prints"
+    );
+}
+
 /// `gough mu bound` on the bench's first three cases (step steer on μ 1.0, 0.7, 0.5): a row per
 /// wheel and surface that reaches utilisation 0.5, σ_CRB falling from that moment to 150 ms
 /// later (information only accumulates), "decidable" exactly where 1.96·σ ≤ 0.1, and the
