@@ -287,7 +287,8 @@ fn backends_against_f64() {
 
     // The README quotes this table ("Math backends"): each of its rows must be what this run
     // printed, so that it cannot go stale unnoticed (the numbers do not depend on the build's
-    // optimisation: IEEE f32 and integer Q31.32 arithmetic are exact operations).
+    // optimisation: f32 operations are correctly rounded and Rust neither fuses nor reorders
+    // them, and Q31.32 is integer arithmetic).
     let readme =
         std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("../README.md"))
             .unwrap();

@@ -56,8 +56,6 @@ pub use ln::ln;
 pub use sqrt::sqrt;
 pub use trig::{cos, sin, tan};
 
-use super::Backend;
-
 /// The fast pure-`f32` backend (see the [module doc](self) for methods and measured errors).
 ///
 /// `mf::eval::<f32, Fast>` runs the Magic Formula on these kernels; `mf::eval::<f64, Fast>` is the

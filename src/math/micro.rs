@@ -35,10 +35,9 @@
 //!
 //! For `f64`, `Micromath` delegates to [`Libm`](super::Libm) (micromath is f32 only).
 
-use super::Backend;
 use micromath::F32Ext;
 
-/// micromath's kernels behind the [`Backend`] trait (see the [module doc](self) for what is
+/// micromath's kernels behind the [`Backend`](super::Backend) trait (see the [module doc](self) for what is
 /// wrapped and the measured errors). `mf::eval::<f32, Micromath>`.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct Micromath;

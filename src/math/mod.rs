@@ -277,7 +277,7 @@ macro_rules! impl_backend {
         });
     };
     ($backend:ty, $f:ty, { $($name:ident => $fun:expr),* $(,)? }) => {
-        impl Backend<$f> for $backend {
+        impl $crate::math::Backend<$f> for $backend {
             $(
                 #[inline]
                 fn $name(x: $f) -> $f {
