@@ -3,7 +3,13 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 fn gough(args: &[&str]) -> Output {
+    gough_in(Path::new("."), args)
+}
+
+/// `gough` run from the directory `dir` (as a user runs it from the repository's root).
+fn gough_in(dir: &Path, args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_gough"))
+        .current_dir(dir)
         .args(args)
         .output()
         .expect("run gough")
@@ -182,11 +188,7 @@ fn readme_demo_block_is_what_the_demo_prints() {
         .collect();
     assert!(block.len() >= 6, "{block:?}");
     let dir = tmp("readme-demo");
-    let o = Command::new(env!("CARGO_BIN_EXE_gough"))
-        .current_dir(&root)
-        .args(["mu", "demo", "--out", dir.to_str().unwrap()])
-        .output()
-        .expect("run gough");
+    let o = gough_in(&root, &["mu", "demo", "--out", dir.to_str().unwrap()]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let out = String::from_utf8_lossy(&o.stdout);
     let printed: Vec<&str> = out.lines().take_while(|l| !l.starts_with("-> ")).collect();
