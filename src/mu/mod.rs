@@ -240,6 +240,68 @@ impl State {
     }
 }
 
+/// Why the latest reading did not update the estimate ([`MuEstimator::last_hold`]): which of
+/// the estimator's gates held it. For diagnosis and for a controller that wants to tell "no
+/// excitation" from "the road may be slippery, but the data cannot tell yet"
+/// ([`Hold::Ambiguous`]). The gates are the ones [`Config`] sets.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Hold {
+    /// A sample that is not finite or goes back in time.
+    BadSample,
+    /// Too little load, speed or lateral force for the trail to mean anything, or the
+    /// longitudinal force dominates (`fz_min_rel`, `vx_min`, `fy_min_rel`, `fy_share_min`).
+    NoExcitation,
+    /// The lateral force changed side lately: readings wait until the wheel has rolled
+    /// `settle_distance` (or `settle` has passed).
+    Settling,
+    /// The trail has not dropped far enough below its small-slip value on any surface the
+    /// reading could be on for μ to be observable (`trail_drop_min`, `trail_drop_abs_min`),
+    /// or no surface of the table explains the reading.
+    TrailNotDropped,
+    /// The inversion is too ill-conditioned for the model's own uncertainty (`sigma_max`), or
+    /// a grippier surface reads the point as grippier still (a second crossing).
+    ModelUncertain,
+    /// A surface grippier than the reading's estimate (by more than `ambiguity_margin`) could
+    /// produce the same point at smaller slip (`ambiguity_sigmas`).
+    Ambiguous,
+    /// The reading is consistent with those before it, but fewer than `init_count` readings
+    /// have agreed so far: no first estimate yet.
+    Confirming,
+    /// The reading lies outside the outlier gate; it counts towards a change of surface
+    /// (`change_count`) but does not move the estimate.
+    Outlier,
+}
+
+impl Hold {
+    /// Every reason, in declaration order (for tallies).
+    pub const ALL: [Hold; 8] = [
+        Hold::BadSample,
+        Hold::NoExcitation,
+        Hold::Settling,
+        Hold::TrailNotDropped,
+        Hold::ModelUncertain,
+        Hold::Ambiguous,
+        Hold::Confirming,
+        Hold::Outlier,
+    ];
+
+    /// Name as in logs and tables: `bad_sample`, `no_excitation`, `settling`,
+    /// `trail_not_dropped`, `model_uncertain`, `ambiguous`, `confirming`, `outlier`.
+    pub const fn name(self) -> &'static str {
+        match self {
+            Hold::BadSample => "bad_sample",
+            Hold::NoExcitation => "no_excitation",
+            Hold::Settling => "settling",
+            Hold::TrailNotDropped => "trail_not_dropped",
+            Hold::ModelUncertain => "model_uncertain",
+            Hold::Ambiguous => "ambiguous",
+            Hold::Confirming => "confirming",
+            Hold::Outlier => "outlier",
+        }
+    }
+}
+
 /// An estimate of the road friction.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -324,6 +386,8 @@ pub struct MuEstimator<'t, F> {
     pending: Option<Pending<'t, F>>,
     // the state reported for the latest sample that took or finished a reading
     last_state: State,
+    // why that sample's reading (or the sample itself) did not update the estimate
+    last_hold: Option<Hold>,
 }
 
 /// A per-sample λμ with its variance (before filtering).
@@ -464,6 +528,7 @@ impl<'t, F: Float> MuEstimator<'t, F> {
             sigma_model: F::ZERO,
             pending: None,
             last_state: State::Fallback,
+            last_hold: None,
         }
     }
 
@@ -477,6 +542,25 @@ impl<'t, F: Float> MuEstimator<'t, F> {
         &self.cfg
     }
 
+    /// Why the estimate [`MuEstimator::update`] last returned is held: the gate that held the
+    /// latest reading (or that sample), or `None` when the estimate is `Identifiable` (and
+    /// before any sample). Like [`Estimate::state`], a sample that takes a reading repeats what
+    /// the previous reading left (see [`MuEstimator::update`]). A held estimate
+    /// (`NotIdentifiable` or `Fallback`) always has a reason.
+    ///
+    /// ```
+    /// use gough::{math::Libm, mu::{Config, GoughTable, Hold, MuEstimator, Sample}};
+    /// let text = include_str!("../../host-tests/data/tyres/MagicFormula61_Parameters.tir");
+    /// let tyre = gough::tir::parse(text).unwrap().params.cast::<f32>();
+    /// let table = GoughTable::for_tyre::<Libm>(&tyre).unwrap();
+    /// let mut est = MuEstimator::for_tyre(&table, &tyre, Config::default());
+    /// est.update::<Libm>(&Sample { t: 0.0, fz: 6000.0, fy: 0.0, mz: 0.0, fx: None, vx: Some(20.0), gamma: None });
+    /// assert_eq!(est.last_hold(), Some(Hold::NoExcitation)); // straight running
+    /// ```
+    pub fn last_hold(&self) -> Option<Hold> {
+        self.last_hold
+    }
+
     /// Forgets everything learnt (e.g. after a reset command).
     pub fn reset(&mut self) {
         self.fy_side = 0;
@@ -487,6 +571,7 @@ impl<'t, F: Float> MuEstimator<'t, F> {
         self.last_t = None;
         self.pending = None;
         self.last_state = State::Fallback;
+        self.last_hold = None;
     }
 
     /// The radial estimate on surface node `si` (small-slip trail `tau0`) for the reading `q`.
@@ -530,25 +615,31 @@ impl<'t, F: Float> MuEstimator<'t, F> {
     /// identifiable. Pure function of the sample; exposed for tests and diagnosis.
     /// [`MuEstimator::update`] spreads the same work over two samples.
     pub fn raw<M: Backend<F>>(&self, s: &Sample<F>) -> Option<Raw<F>> {
-        let p = self.take::<M>(s)?;
+        let p = self.take::<M>(s, &mut Hold::TrailNotDropped)?;
         (!self.held_by_grippier(&p)).then_some(p.raw)
     }
 
     /// The first stage of [`MuEstimator::raw`]: every check but the ambiguity test's trail
-    /// look-ups ([`MuEstimator::held_by_grippier`]).
+    /// look-ups ([`MuEstimator::held_by_grippier`]). When a gate holds the reading it says
+    /// which in `why` (a failed look-up into the table, which no table the builder made gives,
+    /// leaves `why` as it was). (An out-parameter rather than a `Result`: with the reading's
+    /// 108 bytes in a `Result`, the M4F's worst sample took some 500 instructions more.)
     #[inline(always)]
-    fn take<M: Backend<F>>(&self, s: &Sample<F>) -> Option<Pending<'t, F>> {
+    fn take<M: Backend<F>>(&self, s: &Sample<F>, why: &mut Hold) -> Option<Pending<'t, F>> {
         let cfg = &self.cfg;
         if s.fz < cfg.fz_min_rel * self.fz0 {
+            *why = Hold::NoExcitation;
             return None;
         }
         if let Some(vx) = s.vx {
             if vx.abs() < cfg.vx_min {
+                *why = Hold::NoExcitation;
                 return None;
             }
         }
         let fy = s.fy;
         if fy.abs() < cfg.fy_min_rel * s.fz {
+            *why = Hold::NoExcitation;
             return None;
         }
         // Without Fx the wheel is taken to roll free: its Fx, per surface, comes with the
@@ -573,6 +664,7 @@ impl<'t, F: Float> MuEstimator<'t, F> {
         let fxe = fx * self.table.mu_ratio;
         let force = M::sqrt(fxe * fxe + fy * fy);
         if fy.abs() < cfg.fy_share_min * force {
+            *why = Hold::NoExcitation;
             return None;
         }
         let fx_share = fxe.abs() / force;
@@ -662,6 +754,7 @@ impl<'t, F: Float> MuEstimator<'t, F> {
             }
         }
         if most < cfg.trail_drop_min * F::from_f64(1.0 - 1e-4) {
+            *why = Hold::TrailNotDropped;
             return None;
         }
         let mut ests: [Option<NodeEst<F>>; table::LAMBDA_NODES.len()] =
@@ -702,7 +795,10 @@ impl<'t, F: Float> MuEstimator<'t, F> {
         let s_m = cfg.sigma_mz * self.noise_scale;
         let s_f = cfg.sigma_fy_rel * s.fz * self.noise_scale;
         let var_tau = (s_m / fy).sq() + (tau * s_f / fy).sq();
-        let e = pick?;
+        let Some(e) = pick else {
+            *why = Hold::TrailNotDropped;
+            return None;
+        };
         // Ambiguity guard: the same (τ, |F|) can be a slippery surface at moderate slip or a
         // grippy one at small slip, where the trail has not dropped (or is still rising, with
         // the residual torque). An estimate is believed only if no surface grippier than it by
@@ -719,8 +815,12 @@ impl<'t, F: Float> MuEstimator<'t, F> {
             if lam_k <= e.lambda {
                 continue;
             }
-            let Some(k) = est else { return None };
+            let Some(k) = est else {
+                *why = Hold::ModelUncertain;
+                return None;
+            };
             if k.lambda >= lam_k {
+                *why = Hold::ModelUncertain;
                 return None;
             }
         }
@@ -737,12 +837,12 @@ impl<'t, F: Float> MuEstimator<'t, F> {
             + (lambda * e.spread).sq()
             + (cfg.combined_force_rel * fx_share * lambda).sq();
         let mu0 = self.table.mu0;
-        if e.drop < cfg.trail_drop_min
-            || e.drop * e.tau0 < cfg.trail_drop_abs_min
-            || var_model * mu0.sq() > cfg.sigma_max.sq()
-            || lambda <= F::ZERO
-            || !lambda.is_finite()
-        {
+        if e.drop < cfg.trail_drop_min || e.drop * e.tau0 < cfg.trail_drop_abs_min {
+            *why = Hold::TrailNotDropped;
+            return None;
+        }
+        if var_model * mu0.sq() > cfg.sigma_max.sq() || lambda <= F::ZERO || !lambda.is_finite() {
+            *why = Hold::ModelUncertain;
             return None;
         }
         Some(Pending {
@@ -853,6 +953,7 @@ impl<'t, F: Float> MuEstimator<'t, F> {
             }
         };
         let Some(dt) = dt else {
+            self.last_hold = Some(Hold::BadSample);
             return self.hold::<M>();
         };
         self.last_t = Some(s.t);
@@ -924,20 +1025,35 @@ impl<'t, F: Float> MuEstimator<'t, F> {
             let (raw, t) = (p.raw, p.t);
             self.pending = None;
             if held {
+                self.last_hold = Some(Hold::Ambiguous);
                 self.hold::<M>()
             } else {
                 self.fuse::<M>(raw, t)
             }
         } else if !clear || !settled {
+            self.last_hold = Some(if clear {
+                Hold::Settling
+            } else {
+                Hold::NoExcitation
+            });
             self.hold::<M>()
         } else {
-            match self.take::<M>(&filt) {
-                None => self.hold::<M>(),
+            let mut why = Hold::TrailNotDropped;
+            match self.take::<M>(&filt, &mut why) {
+                None => {
+                    self.last_hold = Some(why);
+                    self.hold::<M>()
+                }
                 Some(p) => {
                     // Taken; the next sample finishes it. Meanwhile the estimate stands as the
-                    // latest reading left it.
+                    // latest reading left it (and so does its reason, unless a bad sample
+                    // came between: an estimate reported `Identifiable` has none).
                     self.pending = Some(p);
-                    return self.latest::<M>();
+                    let e = self.latest::<M>();
+                    if e.state == State::Identifiable {
+                        self.last_hold = None;
+                    }
+                    return e;
                 }
             }
         };
@@ -1020,6 +1136,7 @@ impl<'t, F: Float> MuEstimator<'t, F> {
                 (r.lambda, r.var, 1)
             };
             if self.cand.2 < self.cfg.init_count {
+                self.last_hold = Some(Hold::Confirming);
                 return self.hold::<M>();
             }
             self.lambda = self.cand.0;
@@ -1061,6 +1178,7 @@ impl<'t, F: Float> MuEstimator<'t, F> {
                     self.run = 0;
                 } else {
                     // Not used: the estimate is held, as for any uninformative sample.
+                    self.last_hold = Some(Hold::Outlier);
                     return self.hold::<M>();
                 }
             } else {
@@ -1071,6 +1189,7 @@ impl<'t, F: Float> MuEstimator<'t, F> {
                 self.run = 0;
             }
         }
+        self.last_hold = None;
         self.identifiable::<M>(change)
     }
 }

@@ -451,6 +451,8 @@ proptest! {
             let s = Sample { t, fz, fy: if nan { f64::NAN } else { fy }, mz, fx, vx: None, gamma: None };
             let e = est.update::<Libm>(&s);
             prop_assert!(e.mu.is_finite() && e.sigma.is_finite() && e.sigma >= 0.0);
+            // A held estimate always says why; an identifiable one never.
+            prop_assert_eq!(e.state == State::Identifiable, est.last_hold().is_none());
         }
     }
 }
@@ -1160,4 +1162,104 @@ fn load_interpolation_error() {
     assert!(on < 0.01, "on the nodes: {on}");
     assert!(off < 0.03, "between the nodes: {off}");
     assert!(light < 0.05, "between the two lightest nodes: {light}");
+}
+
+/// Each gate names itself ([`MuEstimator::last_hold`]), in the order a slow steer-in on μ 0.3
+/// meets them, and a held estimate always has a reason.
+#[test]
+fn hold_names_the_gate() {
+    let p = tyre();
+    let table = GoughTable::for_tyre::<Libm>(&p).unwrap();
+    let mut est = MuEstimator::for_tyre(&table, &p, Config::default());
+    let mu0 = est.mu0();
+    assert_eq!(est.last_hold(), None);
+    let fz = p.fnomin;
+    let mut t = 0.0;
+    let mut seen: Vec<Option<Hold>> = Vec::new();
+    let mut step = |est: &mut MuEstimator<'_, f64>, o: &mf::Output<f64>, t: f64| {
+        let e = est.update::<Libm>(&sample(o, t, false));
+        assert_eq!(
+            e.state == State::Identifiable,
+            est.last_hold().is_none(),
+            "{e:?} {:?}",
+            est.last_hold()
+        );
+        if seen.last() != Some(&est.last_hold()) {
+            seen.push(est.last_hold());
+        }
+    };
+    // Straight running, then α ramped 0 → 0.03 rad over 1.5 s and held.
+    for i in 0..2500 {
+        let alpha = 0.03 * (f64::from(i) / 1500.0).min(1.0);
+        step(&mut est, &truth(&p, 0.3, mu0, fz, alpha, 0.0), t);
+        t += 1e-3;
+    }
+    use Hold::*;
+    assert_eq!(
+        seen,
+        [
+            Some(NoExcitation),    // α = 0
+            Some(Settling),        // the force has just found its side
+            Some(TrailNotDropped), // small slip
+            Some(ModelUncertain),  // the trail starts to drop; the inversion is still steep
+            Some(Ambiguous),       // μ 0.3 at moderate slip, or dry at small slip?
+            Some(Confirming),      // identifiable readings, fewer than `init_count`
+            None,                  // the estimate
+        ]
+    );
+    // A NaN sample, then the steer reversed: the patch settles first.
+    est.update::<Libm>(&Sample {
+        fy: f64::NAN,
+        ..sample(&truth(&p, 0.3, mu0, fz, 0.03, 0.0), t, false)
+    });
+    assert_eq!(est.last_hold(), Some(Hold::BadSample));
+    let reversed = truth(&p, 0.3, mu0, fz, -0.03, 0.0);
+    let mut reasons = Vec::new();
+    for _ in 0..20 {
+        t += 1e-3;
+        est.update::<Libm>(&sample(&reversed, t, false));
+        reasons.push(est.last_hold());
+    }
+    // (The reading taken before the NaN sample finishes first.)
+    let settling = reasons.iter().position(|&r| r == Some(Settling)).unwrap();
+    assert_eq!(
+        reasons.get(settling - 1),
+        Some(&Some(NoExcitation)),
+        "{reasons:?}"
+    );
+    assert!(
+        reasons[settling..].iter().all(|&r| r == Some(Settling)),
+        "{reasons:?}"
+    );
+    // The same steer on μ 0.6: outliers, then a change.
+    let grippy = truth(&p, 0.6, mu0, fz, -0.03, 0.0);
+    let mut outl = 0;
+    let mut changed = false;
+    for _ in 0..500 {
+        t += 1e-3;
+        let e = est.update::<Libm>(&sample(&grippy, t, false));
+        outl += usize::from(est.last_hold() == Some(Hold::Outlier));
+        changed |= e.change;
+    }
+    assert!(
+        changed && outl >= 2 * usize::from(Config::<f64>::default().change_count) - 2,
+        "{outl} {changed}"
+    );
+    assert_eq!(est.last_hold(), None);
+    // A bad sample between readings, at either parity of the two-sample reading: the next
+    // sample's estimate and its reason still agree.
+    for k in 0..2 {
+        for _ in 0..k {
+            t += 1e-3;
+            est.update::<Libm>(&sample(&grippy, t, false));
+        }
+        est.update::<Libm>(&Sample {
+            fy: f64::NAN,
+            ..sample(&grippy, t, false)
+        });
+        t += 1e-3;
+        let e = est.update::<Libm>(&sample(&grippy, t, false));
+        assert_eq!(e.state, State::Identifiable);
+        assert_eq!(est.last_hold(), None, "parity {k}");
+    }
 }
