@@ -252,6 +252,138 @@ fn bound_gives_each_wheel_a_crb_and_the_estimator_s_latency() {
     assert!(err.contains("/nonexistent/tyre.tir"), "{err}");
 }
 
+/// `gough mu bench` says where the Gough estimator's latency goes (`holds.csv`, and the second
+/// table of `table.md`): per case, the wheel-surfaces that reach utilisation 0.5, how many of
+/// them settle within ±0.1 within 150 ms — the same wheels as `gough mu bound` counts — and
+/// the shares of what the estimator reported in that window, which add up to 1. On the first
+/// three cases (step steer on μ 1.0, 0.7, 0.5) the dry and the μ 0.7 road never let the
+/// trail drop far enough within 150 ms, and μ 0.5 is read in time on two wheels.
+#[test]
+fn bench_says_where_the_latency_goes() {
+    let dir = tmp("bench-holds");
+    let args = |cmd: &'static str| -> Vec<String> {
+        [
+            "mu",
+            cmd,
+            "--tir",
+            &tyre(),
+            "--cases",
+            "3",
+            "--out",
+            dir.join(cmd).to_str().unwrap(),
+        ]
+        .map(String::from)
+        .to_vec()
+    };
+    let run = |cmd: &'static str| {
+        let a = args(cmd);
+        let o = gough(&a.iter().map(String::as_str).collect::<Vec<_>>());
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        o
+    };
+    let out = run("bench");
+    assert!(
+        String::from_utf8_lossy(&out.stdout)
+            .contains("## Where the Gough estimator's latency goes"),
+        "the table is printed"
+    );
+    run("bound");
+    let holds = std::fs::read_to_string(dir.join("bench/holds.csv")).unwrap();
+    let mut lines = holds.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let names: Vec<&str> = gough::mu::Hold::ALL.iter().map(|h| h.name()).collect();
+    assert_eq!(
+        header[..4],
+        ["manoeuvre", "road", "wheel_surfaces", "within_150ms"]
+    );
+    assert_eq!(header[4..4 + names.len()], names[..]);
+    assert_eq!(header[4 + names.len()..], ["identifiable"]);
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    assert_eq!(rows.len(), 4, "{holds}");
+    let share = |r: &[&str], name: &str| -> f64 {
+        r[header.iter().position(|h| *h == name).unwrap()]
+            .parse()
+            .unwrap()
+    };
+    let (mut windows, mut within) = (0, 0);
+    // Per case, the wheels `gough mu bound` finds the estimator within ±0.1 within 150 ms.
+    let bound = std::fs::read_to_string(dir.join("bound/bound.csv")).unwrap();
+    for r in &rows {
+        assert_eq!(r.len(), header.len(), "{r:?}");
+        let sum: f64 = r[4..].iter().map(|x| x.parse::<f64>().unwrap()).sum();
+        assert!((sum - 1.0).abs() < 2e-3, "{r:?}: shares add up to {sum}");
+        let (w, k): (usize, usize) = (r[2].parse().unwrap(), r[3].parse().unwrap());
+        assert!(k <= w && w > 0, "{r:?}");
+        if r[0] == "all" {
+            assert_eq!((w, k), (windows, within), "the total is the cases' sum");
+            continue;
+        }
+        windows += w;
+        within += k;
+        let on_time = bound
+            .lines()
+            .skip(1)
+            .map(|l| l.split(',').collect::<Vec<_>>())
+            .filter(|b| b[1] == r[1] && b[7].parse::<f64>().is_ok_and(|l| l <= 0.15))
+            .count();
+        let in_bound = bound
+            .lines()
+            .filter(|l| l.contains(&format!(",{},", r[1])))
+            .count();
+        assert_eq!((w, k), (in_bound, on_time), "{r:?} against bound.csv");
+        match r[1] {
+            "mu=1.0" | "mu=0.7" => {
+                assert_eq!(k, 0, "{r:?}");
+                assert!(share(r, "trail_not_dropped") > 0.9, "{r:?}");
+            }
+            _ => assert_eq!(k, 2, "{r:?}"),
+        }
+    }
+    // With the trail-drop gate lowered (`--set`), fewer samples are held for it, and the
+    // table says which settings it ran with; a setting that does not exist is a one-line error.
+    let all_share = |dir: &Path| -> f64 {
+        let csv = std::fs::read_to_string(dir.join("holds.csv")).unwrap();
+        let last: Vec<&str> = csv.lines().last().unwrap().split(',').collect();
+        assert_eq!(last[0], "all");
+        last[header
+            .iter()
+            .position(|h| *h == "trail_not_dropped")
+            .unwrap()]
+        .parse()
+        .unwrap()
+    };
+    let low = dir.join("bench-low");
+    let set = "trail_drop_min=0.05,trail_drop_abs_min=0.001";
+    let o = gough(&[
+        "mu",
+        "bench",
+        "--tir",
+        &tyre(),
+        "--cases",
+        "3",
+        "--out",
+        low.to_str().unwrap(),
+        "--set",
+        set,
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let (before, after) = (all_share(&dir.join("bench")), all_share(&low));
+    assert!(
+        after < before - 0.1,
+        "trail_not_dropped {before} -> {after}"
+    );
+    let md = std::fs::read_to_string(low.join("table.md")).unwrap();
+    assert!(
+        md.contains("trail_drop_min=0.05, trail_drop_abs_min=0.001"),
+        "{md}"
+    );
+    let bad = gough(&["mu", "bench", "--cases", "1", "--set", "trail_drop=0.1"]);
+    assert!(!bad.status.success());
+    let err = String::from_utf8_lossy(&bad.stderr);
+    assert_eq!(err.trim().lines().count(), 1, "{err}");
+    assert!(err.contains("trail_drop"), "{err}");
+}
+
 /// `gough mu map` on the bundled MF 6.1 tyre: steady, noise-free points of the tyre's own Magic
 /// Formula through the estimator at 1 kHz. It holds what the README says of it: on the dry
 /// road at Fz0 μ becomes identifiable only above utilisation 0.5 (the curves of μ 1.0 and 1.1

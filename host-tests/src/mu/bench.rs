@@ -22,7 +22,7 @@ use crate::sim::{self, Log, Manoeuvre, Overrides, SimConfig};
 use clap::Args;
 use gough::math::Libm;
 use gough::mf::Params;
-use gough::mu::{Config, Estimate, GoughTable, MuEstimator, Sample, State};
+use gough::mu::{Config, Estimate, GoughTable, Hold, MuEstimator, Sample, State};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
@@ -44,6 +44,73 @@ pub struct BenchArgs {
     /// Only the first N cases (for a quick look).
     #[arg(long)]
     pub cases: Option<usize>,
+    /// A setting of the Gough estimator's `Config` other than its default, as NAME=VALUE
+    /// (the field's name, e.g. `trail_drop_min=0.1`); repeatable, or comma-separated.
+    #[arg(long = "set", value_name = "NAME=VALUE", value_delimiter = ',')]
+    pub set: Vec<String>,
+}
+
+/// Sets one field of the estimator's configuration from `NAME=VALUE` (the field's name as in
+/// [`Config`]; SI units as documented there).
+pub fn set_config(c: &mut Config<f64>, kv: &str) -> Result<(), String> {
+    let (k, v) = kv
+        .split_once('=')
+        .ok_or_else(|| format!("--set {kv}: expected NAME=VALUE"))?;
+    let (k, v) = (k.trim(), v.trim());
+    let num = || -> Result<f64, String> {
+        v.parse::<f64>()
+            .ok()
+            .filter(|x| x.is_finite())
+            .ok_or_else(|| format!("--set {k}: '{v}' is not a finite number"))
+    };
+    let count = || -> Result<u16, String> {
+        v.parse::<u16>()
+            .map_err(|_| format!("--set {k}: '{v}' is not a count (0..=65535)"))
+    };
+    let f = match k {
+        "change_count" => {
+            c.change_count = count()?;
+            return Ok(());
+        }
+        "init_count" => {
+            c.init_count = count()?;
+            return Ok(());
+        }
+        "gamma" => &mut c.gamma,
+        "sigma_mz" => &mut c.sigma_mz,
+        "sigma_fy_rel" => &mut c.sigma_fy_rel,
+        "vx_min" => &mut c.vx_min,
+        "fz_min_rel" => &mut c.fz_min_rel,
+        "fy_min_rel" => &mut c.fy_min_rel,
+        "fy_share_min" => &mut c.fy_share_min,
+        "trail_drop_min" => &mut c.trail_drop_min,
+        "trail_drop_abs_min" => &mut c.trail_drop_abs_min,
+        "sigma_max" => &mut c.sigma_max,
+        "trail_model_rel" => &mut c.trail_model_rel,
+        "arm_model_rel" => &mut c.arm_model_rel,
+        "combined_model_rel" => &mut c.combined_model_rel,
+        "combined_force_rel" => &mut c.combined_force_rel,
+        "mzr_model_rel" => &mut c.mzr_model_rel,
+        "q" => &mut c.q,
+        "gate" => &mut c.gate,
+        "gate_sigma_max" => &mut c.gate_sigma_max,
+        "change_min" => &mut c.change_min,
+        "run_gap" => &mut c.run_gap,
+        "mu_prior" => &mut c.mu_prior,
+        "sigma_prior" => &mut c.sigma_prior,
+        "lowpass_tau" => &mut c.lowpass_tau,
+        "settle" => &mut c.settle,
+        "settle_distance" => &mut c.settle_distance,
+        "ambiguity_sigmas" => &mut c.ambiguity_sigmas,
+        "ambiguity_margin" => &mut c.ambiguity_margin,
+        _ => {
+            return Err(format!(
+                "--set {k}: no such setting of the estimator's Config"
+            ))
+        }
+    };
+    *f = num()?;
+    Ok(())
 }
 
 /// Arguments of `gough mu demo`.
@@ -218,12 +285,7 @@ pub fn run_method(
     tr: &WheelTrace,
 ) -> Vec<Estimate<f64>> {
     match m {
-        0 => {
-            let mut e = MuEstimator::for_tyre(tables.wheel(w), p, Config::default());
-            (0..tr.rows.len())
-                .map(|i| e.update::<Libm>(&tr.sample(i)))
-                .collect()
-        }
+        0 => run_gough(p, tables, w, tr, &Config::default()).0,
         1 => match HsuGerdes::new(p) {
             Some(mut e) => tr.rows.iter().map(|r| e.update(r)).collect(),
             None => Vec::new(),
@@ -233,6 +295,101 @@ pub fn run_method(
             None => Vec::new(),
         },
     }
+}
+
+/// The Gough estimator (settings `cfg`) over wheel `w`'s trace: its estimates and, per sample,
+/// why each held estimate was held ([`MuEstimator::last_hold`]).
+pub fn run_gough(
+    p: &Params<f64>,
+    tables: &Tables,
+    w: usize,
+    tr: &WheelTrace,
+    cfg: &Config<f64>,
+) -> (Vec<Estimate<f64>>, Vec<Option<Hold>>) {
+    let mut e = MuEstimator::for_tyre(tables.wheel(w), p, *cfg);
+    (0..tr.rows.len())
+        .map(|i| (e.update::<Libm>(&tr.sample(i)), e.last_hold()))
+        .unzip()
+}
+
+/// Where the Gough estimator's latency goes on one case: over each wheel's surfaces that reach
+/// utilisation 0.5, the samples of the target's window — from that moment until the estimate
+/// settles within ±0.1, at most [`TARGET_LATENCY`] — by what the estimator reported.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct HoldTally {
+    /// Samples held, per [`Hold::ALL`] reason.
+    pub held: [usize; Hold::ALL.len()],
+    /// Samples reported identifiable but not yet (for good) within ±0.1.
+    pub identifiable: usize,
+    /// Wheel-surfaces that reach utilisation 0.5.
+    pub windows: usize,
+    /// Of them, those whose estimate settles within ±0.1 within [`TARGET_LATENCY`].
+    pub within: usize,
+}
+
+/// The issue's latency target: within ±0.1 this long after utilisation 0.5 \[s\].
+pub const TARGET_LATENCY: f64 = 0.150;
+
+impl HoldTally {
+    /// All samples of the windows.
+    pub fn total(&self) -> usize {
+        self.held.iter().sum::<usize>() + self.identifiable
+    }
+
+    /// Adds another tally's samples and windows.
+    pub fn add(&mut self, o: &HoldTally) {
+        for (a, b) in self.held.iter_mut().zip(o.held) {
+            *a += b;
+        }
+        self.identifiable += o.identifiable;
+        self.windows += o.windows;
+        self.within += o.within;
+    }
+
+    /// Shares of the samples \[held per [`Hold::ALL`] reason…, identifiable\] (0 when empty).
+    pub fn shares(&self) -> Vec<f64> {
+        let n = self.total().max(1) as f64;
+        self.held
+            .iter()
+            .chain([&self.identifiable])
+            .map(|&k| k as f64 / n)
+            .collect()
+    }
+}
+
+/// [`HoldTally`] of the Gough estimator's estimates `est` and reasons `holds` on the traces.
+pub fn hold_tally(
+    traces: &[WheelTrace],
+    ests: &[Vec<Estimate<f64>>],
+    holds: &[Vec<Option<Hold>>],
+) -> HoldTally {
+    let mut out = HoldTally::default();
+    for ((tr, est), hs) in traces.iter().zip(ests).zip(holds) {
+        if est.len() != tr.rows.len() || hs.len() != tr.rows.len() {
+            continue;
+        }
+        for (a, b) in segments(&tr.mu_true) {
+            let Some(i5) = (a..b).find(|&i| tr.util[i] >= 0.5) else {
+                continue;
+            };
+            let ok = settled(tr, est, a, b);
+            let deadline = tr.rows[i5].t + TARGET_LATENCY;
+            let mut end = (i5..b).find(|&i| tr.rows[i].t > deadline).unwrap_or(b);
+            if let Some(ok) = ok {
+                end = end.min(ok.max(i5));
+            }
+            for h in &hs[i5..end] {
+                match h.and_then(|h| Hold::ALL.iter().position(|&x| x == h)) {
+                    Some(k) => out.held[k] += 1,
+                    None => out.identifiable += 1,
+                }
+            }
+            out.windows += 1;
+            let lat = ok.and_then(|ok| latency_from(tr, a, b, ok));
+            out.within += usize::from(lat.is_some_and(|l| l <= TARGET_LATENCY));
+        }
+    }
+    out
 }
 
 /// Metrics of one estimator on one case (all wheels).
@@ -431,6 +588,10 @@ pub fn simulate_case(p: &Params<f64>, c: &Case) -> Result<Log, String> {
 
 /// Runs the benchmark.
 pub fn run(a: BenchArgs) -> Result<(), String> {
+    let mut cfg = Config::default();
+    for kv in &a.set {
+        set_config(&mut cfg, kv)?;
+    }
     let t = crate::tyre::load(&a.tir)?;
     let p = t.params;
     let tables = Tables::new(&p)?;
@@ -445,6 +606,7 @@ pub fn run(a: BenchArgs) -> Result<(), String> {
     let _ = writeln!(md, "|---|---|---|---|---|---|---|---|---|---|---|");
     let mut csv = String::from("manoeuvre,road,estimator,n_identifiable,err_mean,err_p95,within_2sigma,util_within,latency_s,detect_s,false_alarms\n");
     let bar = indicatif::ProgressBar::new(cases.len() as u64);
+    let mut tallies: Vec<(&Case, HoldTally)> = Vec::new();
     let mut gough_wins = 0;
     let mut comparable = 0;
     for c in &cases {
@@ -453,11 +615,21 @@ pub fn run(a: BenchArgs) -> Result<(), String> {
         let traces: Vec<WheelTrace> = (0..4).map(|w| measure(&log, w, &sensors, a.seed)).collect();
         let mut ms = Vec::new();
         for (m, method) in METHODS.iter().enumerate() {
-            let ests: Vec<Vec<Estimate<f64>>> = traces
-                .iter()
-                .enumerate()
-                .map(|(w, tr)| run_method(m, &p, &tables, w, tr))
-                .collect();
+            let ests: Vec<Vec<Estimate<f64>>> = if m == 0 {
+                let (ests, holds): (Vec<_>, Vec<_>) = traces
+                    .iter()
+                    .enumerate()
+                    .map(|(w, tr)| run_gough(&p, &tables, w, tr, &cfg))
+                    .unzip();
+                tallies.push((c, hold_tally(&traces, &ests, &holds)));
+                ests
+            } else {
+                traces
+                    .iter()
+                    .enumerate()
+                    .map(|(w, tr)| run_method(m, &p, &tables, w, tr))
+                    .collect()
+            };
             let mt = metrics(&traces, &ests);
             let _ = writeln!(
                 md,
@@ -511,7 +683,7 @@ pub fn run(a: BenchArgs) -> Result<(), String> {
                 c.manoeuvre,
                 c.road.replace(['=', '+', '@', '.', ',', '/'], "_")
             );
-            let ests: Vec<Estimate<f64>> = run_method(0, &p, &tables, 0, &traces[0]);
+            let ests: Vec<Estimate<f64>> = run_gough(&p, &tables, 0, &traces[0], &cfg).0;
             plot_mu(
                 &traces[0],
                 &[("gough", &ests)],
@@ -524,11 +696,71 @@ pub fn run(a: BenchArgs) -> Result<(), String> {
     bar.finish_and_clear();
     let summary = format!("\nGough estimator at or below both peers' p95 error in {gough_wins} of {comparable} comparisons where a peer produced an estimate.\n");
     md.push_str(&summary);
+    if !a.set.is_empty() {
+        let _ = writeln!(
+            md,
+            "\nThe Gough estimator ran with these settings changed from their defaults: {}.",
+            a.set.join(", ")
+        );
+    }
+    let (holds_md, holds_csv) = hold_tables(&tallies);
+    md.push_str(&holds_md);
     std::fs::write(a.out.join("table.md"), &md).map_err(|e| e.to_string())?;
     std::fs::write(a.out.join("table.csv"), &csv).map_err(|e| e.to_string())?;
+    std::fs::write(a.out.join("holds.csv"), &holds_csv).map_err(|e| e.to_string())?;
     print!("{md}");
-    eprintln!("-> {}/table.md, table.csv, mu_*.png", a.out.display());
+    eprintln!(
+        "-> {}/table.md, table.csv, holds.csv, mu_*.png",
+        a.out.display()
+    );
     Ok(())
+}
+
+/// The "where the latency goes" table (Markdown, and CSV with one row per case and a total).
+fn hold_tables(tallies: &[(&Case, HoldTally)]) -> (String, String) {
+    let mut md = String::from(
+        "\n## Where the Gough estimator's latency goes\n\nPer case, over the wheels' surfaces that reach utilisation 0.5 (\"wheel-surfaces\"): how many settle within ±0.1 of the truth within 150 ms, and what the estimator reported over the samples of that window (from utilisation 0.5 until it settles, at most 150 ms): held, and why (`MuEstimator::last_hold`), or identifiable but not yet for good within ±0.1.\n\n| manoeuvre | road | wheel-surfaces | within 150 ms |",
+    );
+    let mut csv = String::from("manoeuvre,road,wheel_surfaces,within_150ms");
+    for h in Hold::ALL {
+        let _ = write!(md, " {} |", h.name());
+        let _ = write!(csv, ",{}", h.name());
+    }
+    md.push_str(" identifiable |\n|---|---|---|---|");
+    csv.push_str(",identifiable\n");
+    for _ in 0..=Hold::ALL.len() {
+        md.push_str("---|");
+    }
+    md.push('\n');
+    let mut total = HoldTally::default();
+    let mut row = |man: &str, road: &str, t: &HoldTally| {
+        let _ = write!(md, "| {man} | {road} | {} | {} |", t.windows, t.within);
+        let _ = write!(
+            csv,
+            "{},{},{},{}",
+            csv_field(man),
+            csv_field(road),
+            t.windows,
+            t.within
+        );
+        for x in t.shares() {
+            if t.total() == 0 {
+                md.push_str(" – |");
+                csv.push(',');
+            } else {
+                let _ = write!(md, " {:.0} % |", 100.0 * x);
+                let _ = write!(csv, ",{x:.4}");
+            }
+        }
+        md.push('\n');
+        csv.push('\n');
+    };
+    for (c, t) in tallies {
+        row(c.manoeuvre, &c.road, t);
+        total.add(t);
+    }
+    row("all", "", &total);
+    (md, csv)
 }
 
 /// The product's main job on one command: a manoeuvre on a road whose friction changes, the
@@ -828,6 +1060,152 @@ mod tests {
         assert_eq!(csv_field("mu=0.5"), "mu=0.5");
         assert_eq!(csv_field("step=1.0@0,0.3@90"), "\"step=1.0@0,0.3@90\"");
         assert_eq!(csv_field("a\"b"), "\"a\"\"b\"");
+    }
+
+    /// The tally's window: from the utilisation first reaching 0.5 to the estimate settling
+    /// (at most 150 ms), every sample counted once, by its reason; a surface that never reaches
+    /// utilisation 0.5 has no window.
+    #[test]
+    fn hold_tally_counts_the_window_by_reason() {
+        // 1 kHz, 400 rows; two surfaces: μ 0.5 (rows 0..300), μ 0.3 (300..400).
+        let n = 400;
+        let row = |i: usize| Row {
+            t: i as f64 * 1e-3,
+            fz: 4000.0,
+            vx: 20.0,
+            ..Row::default()
+        };
+        let mu_true: Vec<f64> = (0..n).map(|i| if i < 300 { 0.5 } else { 0.3 }).collect();
+        // Utilisation 0.5 from row 10 on the first surface; never on the second.
+        let util: Vec<f64> = (0..n)
+            .map(|i| if (10..300).contains(&i) { 0.6 } else { 0.2 })
+            .collect();
+        let tr = WheelTrace {
+            rows: (0..n).map(row).collect(),
+            mu_true,
+            util,
+            gamma: vec![0.0; n],
+        };
+        let est = |mu: f64, state: State| Estimate {
+            mu,
+            sigma: 0.01,
+            sigma_model: 0.0,
+            state,
+            change: false,
+        };
+        // Rows 0..40 no excitation, 40..70 ambiguous, 70..80 confirming, 80..100 identifiable but
+        // 0.2 off, from 100 on within ±0.1 (settled at row 100: latency 90 ms).
+        let (mut ests, mut holds) = (Vec::new(), Vec::new());
+        for i in 0..n {
+            let (e, h) = match i {
+                0..40 => (est(0.8, State::Fallback), Some(Hold::NoExcitation)),
+                40..70 => (est(0.8, State::Fallback), Some(Hold::Ambiguous)),
+                70..80 => (est(0.8, State::Fallback), Some(Hold::Confirming)),
+                80..100 => (est(0.7, State::Identifiable), None),
+                _ => (est(mu_true_at(i), State::Identifiable), None),
+            };
+            ests.push(e);
+            holds.push(h);
+        }
+        fn mu_true_at(i: usize) -> f64 {
+            if i < 300 {
+                0.5
+            } else {
+                0.3
+            }
+        }
+        let t = hold_tally(std::slice::from_ref(&tr), &[ests.clone()], &[holds.clone()]);
+        let k = |h: Hold| t.held[Hold::ALL.iter().position(|&x| x == h).unwrap()];
+        assert_eq!((t.windows, t.within), (1, 1));
+        assert_eq!(
+            (
+                k(Hold::NoExcitation),
+                k(Hold::Ambiguous),
+                k(Hold::Confirming),
+                t.identifiable
+            ),
+            (30, 30, 10, 20)
+        );
+        assert_eq!(t.total(), 90);
+        // Settling later than 150 ms: the window stops at the deadline, and it is not within.
+        for e in &mut ests[100..300] {
+            e.mu = 0.7;
+        }
+        for e in &mut ests[250..300] {
+            e.mu = 0.5;
+        }
+        let t = hold_tally(std::slice::from_ref(&tr), &[ests], &[holds]);
+        assert_eq!((t.windows, t.within), (1, 0));
+        assert_eq!(
+            t.total(),
+            151,
+            "rows 10..=160 (the deadline's row 160 included)"
+        );
+        assert_eq!(t.identifiable, 151 - 70);
+    }
+
+    /// Every field of the estimator's `Config` can be set by name (and only it), to the value
+    /// given; a bad value or name is an error naming it.
+    #[test]
+    fn set_config_reaches_every_field() {
+        let names = [
+            "gamma",
+            "sigma_mz",
+            "sigma_fy_rel",
+            "vx_min",
+            "fz_min_rel",
+            "fy_min_rel",
+            "fy_share_min",
+            "trail_drop_min",
+            "trail_drop_abs_min",
+            "sigma_max",
+            "trail_model_rel",
+            "arm_model_rel",
+            "combined_model_rel",
+            "combined_force_rel",
+            "mzr_model_rel",
+            "q",
+            "gate",
+            "gate_sigma_max",
+            "change_min",
+            "change_count",
+            "run_gap",
+            "init_count",
+            "mu_prior",
+            "sigma_prior",
+            "lowpass_tau",
+            "settle",
+            "settle_distance",
+            "ambiguity_sigmas",
+            "ambiguity_margin",
+        ];
+        let mut all = Config::default();
+        for n in names {
+            let mut c = Config::default();
+            set_config(&mut c, &format!("{n}=7")).unwrap();
+            assert_ne!(c, Config::default(), "{n}");
+            set_config(&mut all, &format!(" {n} = 7 ")).unwrap();
+        }
+        // Every field set: the Debug form holds no default value any more but 7s.
+        let dbg = format!("{all:?}");
+        let values: Vec<&str> = dbg
+            .split(", ")
+            .map(|kv| kv.rsplit(": ").next().unwrap().trim_end_matches(" }"))
+            .collect();
+        assert_eq!(values.len(), names.len(), "{dbg}");
+        assert!(values.iter().all(|v| *v == "7.0" || *v == "7"), "{dbg}");
+        for bad in [
+            "q",
+            "q=",
+            "q=nan",
+            "q=inf",
+            "init_count=-1",
+            "init_count=0.5",
+            "nope=1",
+        ] {
+            let e = set_config(&mut Config::default(), bad).unwrap_err();
+            assert!(e.contains(bad.split('=').next().unwrap()), "{bad}: {e}");
+        }
     }
 
     /// The error metrics count identifiable samples only; "within 2σ" is the share of them
