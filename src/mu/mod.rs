@@ -1046,13 +1046,15 @@ impl<'t, F: Float> MuEstimator<'t, F> {
                 }
                 Some(p) => {
                     // Taken; the next sample finishes it. Meanwhile the estimate stands as the
-                    // latest reading left it (and so does its reason, unless a bad sample
-                    // came between: an estimate reported `Identifiable` has none).
+                    // latest reading left it, and so does its reason — unless a bad sample came
+                    // between (an estimate reported `Identifiable` has none), or this is the
+                    // first reading since the start (no estimate yet: confirming).
                     self.pending = Some(p);
                     let e = self.latest::<M>();
-                    if e.state == State::Identifiable {
-                        self.last_hold = None;
-                    }
+                    self.last_hold = match e.state {
+                        State::Identifiable => None,
+                        _ => self.last_hold.or(Some(Hold::Confirming)),
+                    };
                     return e;
                 }
             }

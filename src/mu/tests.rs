@@ -1246,6 +1246,19 @@ fn hold_names_the_gate() {
         "{outl} {changed}"
     );
     assert_eq!(est.last_hold(), None);
+    // With no settling after a reversal, the very first sample takes a reading: its estimate
+    // (the prior) has a reason too.
+    let cfg = Config {
+        settle: 0.0,
+        settle_distance: 0.0,
+        ..Config::default()
+    };
+    let mut first = MuEstimator::for_tyre(&table, &p, cfg);
+    let e = first.update::<Libm>(&sample(&grippy, 0.0, false));
+    assert_eq!(
+        (e.state, first.last_hold()),
+        (State::Fallback, Some(Confirming))
+    );
     // A bad sample between readings, at either parity of the two-sample reading: the next
     // sample's estimate and its reason still agree.
     for k in 0..2 {
