@@ -111,6 +111,72 @@ fn estimate_reads_mu_from_a_log() {
     }
 }
 
+/// `--why` adds the column `hold`: on the ramp of `write_log` the estimator first sees no
+/// excitation (α 0), then a trail that has not dropped, and confirms its first estimate before
+/// it is identifiable; every held row has a reason, no identifiable row has one; the terminal
+/// counts them. A peer has no reasons to give: a one-line error.
+#[test]
+fn estimate_why_says_which_gate_held_each_row() {
+    let log = tmp("log-why.csv");
+    write_log(&log);
+    let out = tmp("est-why.csv");
+    let (tir, log_s, out_s) = (tyre(), log.to_str().unwrap(), out.to_str().unwrap());
+    let args = |method| {
+        [
+            "mu", "estimate", "--tir", &tir, "--log", log_s, "--out", out_s, "--method", method,
+            "--why",
+        ]
+    };
+    let o = gough(&args("gough"));
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = std::fs::read_to_string(&out).unwrap();
+    let mut lines = text.lines();
+    assert_eq!(lines.next(), Some("t,mu,sigma,state,hold"));
+    let mut order: Vec<String> = Vec::new();
+    for l in lines {
+        let f: Vec<&str> = l.split(',').collect();
+        assert_eq!(f.len(), 5, "{l}");
+        assert_eq!(f[3] == "identifiable", f[4].is_empty(), "{l}");
+        let tag = if f[4].is_empty() { "-" } else { f[4] };
+        if order.last().map(String::as_str) != Some(tag) {
+            order.push(tag.to_owned());
+        }
+    }
+    let pos = |h: &str| {
+        order
+            .iter()
+            .position(|x| x == h)
+            .unwrap_or_else(|| panic!("{h}: {order:?}"))
+    };
+    assert!(pos("no_excitation") < pos("trail_not_dropped"), "{order:?}");
+    assert!(pos("trail_not_dropped") < pos("confirming"), "{order:?}");
+    assert!(pos("confirming") < pos("-"), "{order:?}");
+    assert_eq!(
+        order.last().map(String::as_str),
+        Some("-"),
+        "ends identifiable: {order:?}"
+    );
+    let err = String::from_utf8_lossy(&o.stderr);
+    let held = err
+        .lines()
+        .find(|l| l.starts_with("held: "))
+        .unwrap_or_else(|| panic!("{err}"));
+    let counted: usize = held["held: ".len()..]
+        .split(", ")
+        .map(|kv| kv.rsplit(' ').next().unwrap().parse::<usize>().unwrap())
+        .sum();
+    assert_eq!(
+        counted,
+        text.lines().skip(1).filter(|l| !l.ends_with(',')).count(),
+        "{held}"
+    );
+    let bad = gough(&args("hsu-gerdes"));
+    assert!(!bad.status.success());
+    let e = String::from_utf8_lossy(&bad.stderr);
+    assert_eq!(e.trim().lines().count(), 1, "{e}");
+    assert!(e.contains("--why"), "{e}");
+}
+
 fn expect_error(log_text: &str, want: &[&str]) {
     let log = tmp(&format!(
         "bad-{}.csv",

@@ -305,7 +305,7 @@ pub fn run_gough(
     w: usize,
     tr: &WheelTrace,
     cfg: &Config<f64>,
-) -> (Vec<Estimate<f64>>, Vec<Option<Hold>>) {
+) -> super::Run {
     let mut e = MuEstimator::for_tyre(tables.wheel(w), p, *cfg);
     (0..tr.rows.len())
         .map(|i| (e.update::<Libm>(&tr.sample(i)), e.last_hold()))

@@ -2,6 +2,7 @@
 use super::{estimate, read_log, Method, Precision};
 use crate::tyre;
 use clap::{Args, Subcommand};
+use gough::mu::Hold;
 use std::io::Write;
 use std::path::PathBuf;
 
@@ -12,7 +13,7 @@ pub enum MuCmd {
     ///
     /// LOG columns: t,fz,fy,mz required; fx,vx,kappa,alpha,gamma optional (SI, ISO-W). The Gough
     /// method never reads alpha. EST columns: t,mu,sigma,state (identifiable, not_identifiable,
-    /// fallback).
+    /// fallback), and hold with `--why`.
     Estimate(EstimateArgs),
     /// Benchmark the Gough estimator and its peers on the simulation's manoeuvre suite.
     Bench(super::bench::BenchArgs),
@@ -67,24 +68,39 @@ pub struct EstimateArgs {
     /// Estimator.
     #[arg(long, value_enum, default_value_t = Method::Gough)]
     pub method: Method,
+    /// Add a column `hold` to EST: which gate held each held estimate (`no_excitation`,
+    /// `settling`, `trail_not_dropped`, `model_uncertain`, `ambiguous`, `confirming`,
+    /// `outlier`, `bad_sample`; empty where identifiable), and a count of each on the
+    /// terminal. Gough method only.
+    #[arg(long)]
+    pub why: bool,
 }
 
 /// Runs a `gough mu` subcommand.
 pub fn run(cmd: MuCmd) -> Result<(), String> {
     match cmd {
         MuCmd::Estimate(a) => {
+            if a.why && a.method != Method::Gough {
+                return Err("--why: only the gough method says why it holds an estimate".into());
+            }
             let t = tyre::load(&a.tir)?;
             let (rows, gamma, present) = read_log(&a.log)?;
-            let est = estimate(&t.params, &rows, present[0], &gamma, a.method, a.precision)?;
+            let (est, holds) =
+                estimate(&t.params, &rows, present[0], &gamma, a.method, a.precision)?;
             if let Some(dir) = a.out.parent().filter(|d| !d.as_os_str().is_empty()) {
                 std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
             }
             let tmp = a.out.with_extension("csv.tmp");
             let write = || -> std::io::Result<()> {
                 let mut w = std::io::BufWriter::new(std::fs::File::create(&tmp)?);
-                writeln!(w, "t,mu,sigma,state")?;
-                for (r, e) in rows.iter().zip(&est) {
-                    writeln!(w, "{},{:.6},{:.6},{}", r.t, e.mu, e.sigma, e.state.name())?;
+                writeln!(w, "t,mu,sigma,state{}", if a.why { ",hold" } else { "" })?;
+                for (i, (r, e)) in rows.iter().zip(&est).enumerate() {
+                    write!(w, "{},{:.6},{:.6},{}", r.t, e.mu, e.sigma, e.state.name())?;
+                    if a.why {
+                        let h = holds.get(i).copied().flatten();
+                        write!(w, ",{}", h.map_or("", Hold::name))?;
+                    }
+                    writeln!(w)?;
                 }
                 w.flush()?;
                 std::fs::rename(&tmp, &a.out)
@@ -102,6 +118,22 @@ pub fn run(cmd: MuCmd) -> Result<(), String> {
                 last,
                 a.out.display()
             );
+            if a.why {
+                let counts: Vec<String> = Hold::ALL
+                    .iter()
+                    .map(|&h| (h, holds.iter().filter(|&&x| x == Some(h)).count()))
+                    .filter(|&(_, n)| n > 0)
+                    .map(|(h, n)| format!("{} {n}", h.name()))
+                    .collect();
+                eprintln!(
+                    "held: {}",
+                    if counts.is_empty() {
+                        "never".into()
+                    } else {
+                        counts.join(", ")
+                    }
+                );
+            }
             Ok(())
         }
         MuCmd::Bench(b) => super::bench::run(b),

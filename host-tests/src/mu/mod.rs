@@ -10,7 +10,7 @@ pub mod peers;
 use crate::csvio;
 use gough::math::{Backend, Float, Libm};
 use gough::mf::{Params, Side};
-use gough::mu::{Config, Estimate, GoughTable, MuEstimator, Sample};
+use gough::mu::{Config, Estimate, GoughTable, Hold, MuEstimator, Sample};
 use peers::{HsuGerdes, Row, SlipSlope};
 use std::path::Path;
 
@@ -93,7 +93,12 @@ pub fn read_log(path: &Path) -> Result<Log, String> {
     Ok((rows, gamma, present))
 }
 
-/// Runs one estimator over rows; returns one estimate per row.
+/// One estimator's run over a log: an estimate per row, and for the Gough estimator why each
+/// held estimate was held (`MuEstimator::last_hold`; empty for the peers).
+pub type Run = (Vec<Estimate<f64>>, Vec<Option<Hold>>);
+
+/// Runs one estimator over rows; returns one estimate per row and, for the Gough method, why
+/// each held estimate was held (`MuEstimator::last_hold`; empty for the peers).
 pub fn estimate(
     p: &Params<f64>,
     rows: &[Row],
@@ -101,7 +106,7 @@ pub fn estimate(
     gamma: &[f64],
     method: Method,
     prec: Precision,
-) -> Result<Vec<Estimate<f64>>, String> {
+) -> Result<Run, String> {
     // Per-row camber when the log has it (NaN = not logged → the estimator's default).
     let g_of = |i: usize| gamma.get(i).copied().filter(|g| g.is_finite());
     let cfg = Config::<f64>::default();
@@ -114,7 +119,7 @@ pub fn estimate(
                     .iter()
                     .enumerate()
                     .map(|(i, r)| {
-                        est.update::<Libm>(&Sample {
+                        let e = est.update::<Libm>(&Sample {
                             t: r.t,
                             fz: r.fz,
                             fy: r.fy,
@@ -122,9 +127,10 @@ pub fn estimate(
                             fx: has_fx.then_some(r.fx),
                             vx: r.vx.is_finite().then_some(r.vx),
                             gamma: g_of(i),
-                        })
+                        });
+                        (e, est.last_hold())
                     })
-                    .collect())
+                    .unzip())
             }
             Precision::F32 => {
                 let p32 = p.cast::<f32>();
@@ -144,24 +150,25 @@ pub fn estimate(
                             vx: r.vx.is_finite().then_some(r.vx as f32),
                             gamma: g_of(i).map(|g| g as f32),
                         });
-                        Estimate {
+                        let e = Estimate {
                             mu: e.mu as f64,
                             sigma: e.sigma as f64,
                             sigma_model: e.sigma_model as f64,
                             state: e.state,
                             change: e.change,
-                        }
+                        };
+                        (e, est.last_hold())
                     })
-                    .collect())
+                    .unzip())
             }
         },
         Method::HsuGerdes => {
             let mut e = HsuGerdes::new(p).ok_or("the tyre gives no Hsu-Gerdes model")?;
-            Ok(rows.iter().map(|r| e.update(r)).collect())
+            Ok((rows.iter().map(|r| e.update(r)).collect(), Vec::new()))
         }
         Method::SlipSlope => {
             let mut e = SlipSlope::new(p).ok_or("the tyre gives no slip-slope calibration")?;
-            Ok(rows.iter().map(|r| e.update(r)).collect())
+            Ok((rows.iter().map(|r| e.update(r)).collect(), Vec::new()))
         }
     }
 }
