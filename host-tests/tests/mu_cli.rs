@@ -262,6 +262,33 @@ fn readme_demo_block_is_what_the_demo_prints() {
         printed, block,
         "README.md's demo block differs from what `gough mu demo` prints"
     );
+    // The README's `mu estimate --why` on the demo's front-left log prints what its block shows
+    // (the paths moved to this test's directory).
+    let cmd = "$ cargo run --release --bin gough -- ";
+    let start = readme
+        .find(&format!("{cmd}mu estimate "))
+        .expect("the README's estimate command");
+    let mut lines = readme[start..].lines();
+    let args: Vec<String> = lines.next().unwrap()[cmd.len()..]
+        .split(' ')
+        .map(|a| match a {
+            "out/demo/log_fl.csv" => dir.join("log_fl.csv").to_string_lossy().into_owned(),
+            "out/est.csv" => dir.join("est.csv").to_string_lossy().into_owned(),
+            a => a.to_owned(),
+        })
+        .collect();
+    let block: Vec<String> = lines
+        .take_while(|l| !l.starts_with("```"))
+        .map(|l| l.replace("out/est.csv", &dir.join("est.csv").to_string_lossy()))
+        .collect();
+    let o = gough_in(&root, &args.iter().map(String::as_str).collect::<Vec<_>>());
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(
+        err.lines().collect::<Vec<_>>(),
+        block,
+        "README.md's estimate block differs from what `gough mu estimate` prints"
+    );
 }
 
 /// `gough mu bound` on the bench's first three cases (step steer on μ 1.0, 0.7, 0.5): a row per
