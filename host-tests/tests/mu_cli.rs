@@ -470,11 +470,48 @@ fn bench_says_where_the_latency_goes() {
         md.contains("trail_drop_min=0.05, trail_drop_abs_min=0.001"),
         "{md}"
     );
-    let bad = gough(&["mu", "bench", "--cases", "1", "--set", "trail_drop=0.1"]);
-    assert!(!bad.status.success());
-    let err = String::from_utf8_lossy(&bad.stderr);
-    assert_eq!(err.trim().lines().count(), 1, "{err}");
-    assert!(err.contains("trail_drop"), "{err}");
+    let one_line_error = |args: &[&str], says: &str| {
+        let bad = gough(args);
+        assert!(!bad.status.success());
+        let err = String::from_utf8_lossy(&bad.stderr);
+        assert_eq!(err.trim().lines().count(), 1, "{err}");
+        assert!(err.contains(says), "{err}");
+    };
+    one_line_error(
+        &["mu", "bench", "--cases", "1", "--set", "trail_drop=0.1"],
+        "trail_drop",
+    );
+    // The sensors can be changed too (`--noise-mz`, `--noise-f`, `--delay`); the table says
+    // so, and a value out of range is a one-line error.
+    let quiet = dir.join("bench-quiet");
+    let o = gough(&[
+        "mu",
+        "bench",
+        "--tir",
+        &tyre(),
+        "--cases",
+        "1",
+        "--out",
+        quiet.to_str().unwrap(),
+        "--noise-mz",
+        "0",
+        "--noise-f",
+        "0",
+        "--delay",
+        "0",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let md = std::fs::read_to_string(quiet.join("table.md")).unwrap();
+    assert!(
+        md.contains(
+            "Sensor model changed from the default: Mz 0 N·m rms, F 0.00 % Fz rms, 0.0 ms delay."
+        ),
+        "{md}"
+    );
+    one_line_error(
+        &["mu", "bench", "--cases", "1", "--delay", "-0.01"],
+        "--delay -0.01",
+    );
 }
 
 /// `gough mu map` on the bundled MF 6.1 tyre: steady, noise-free points of the tyre's own Magic

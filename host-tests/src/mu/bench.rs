@@ -48,6 +48,41 @@ pub struct BenchArgs {
     /// (the field's name, e.g. `trail_drop_min=0.1`); repeatable, or comma-separated.
     #[arg(long = "set", value_name = "NAME=VALUE", value_delimiter = ',')]
     pub set: Vec<String>,
+    /// Aligning-torque sensor noise, rms \[N·m\], added to every row the estimators see. The
+    /// sensors, not the estimator: what the estimator assumes is its own `sigma_mz` (`--set`).
+    #[arg(long, value_name = "NM", allow_negative_numbers = true, default_value_t = Sensors::default().sigma_mz)]
+    pub noise_mz: f64,
+    /// Force sensor noise (Fy, Fx, Fz), rms, as a fraction of Fz \[-\]; the estimator's own
+    /// assumption is `sigma_fy_rel` (`--set`).
+    #[arg(long, value_name = "FRACTION", allow_negative_numbers = true, default_value_t = Sensors::default().sigma_rel)]
+    pub noise_f: f64,
+    /// Pure delay of every measured channel \[s\] (rounded to the simulation's step, 1 ms).
+    #[arg(long, value_name = "S", allow_negative_numbers = true, default_value_t = Sensors::default().delay)]
+    pub delay: f64,
+}
+
+impl BenchArgs {
+    /// The sensor model these arguments ask for: each value finite and ≥ 0, the delay at most
+    /// 1 s.
+    pub fn sensors(&self) -> Result<Sensors, String> {
+        for (name, v, max) in [
+            ("--noise-mz", self.noise_mz, f64::MAX),
+            ("--noise-f", self.noise_f, f64::MAX),
+            ("--delay", self.delay, 1.0),
+        ] {
+            if !(v.is_finite() && (0.0..=max).contains(&v)) {
+                return Err(format!(
+                    "{name} {v}: expected a finite value from 0 to {}",
+                    if max < f64::MAX { "1 s" } else { "any size" }
+                ));
+            }
+        }
+        Ok(Sensors {
+            sigma_mz: self.noise_mz,
+            sigma_rel: self.noise_f,
+            delay: self.delay,
+        })
+    }
 }
 
 /// Sets one field of the estimator's configuration from `NAME=VALUE` (the field's name as in
@@ -137,7 +172,7 @@ pub struct DemoArgs {
 }
 
 /// Sensor model of the benchmark.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Sensors {
     /// Mz noise rms \[N·m\].
     pub sigma_mz: f64,
@@ -592,10 +627,10 @@ pub fn run(a: BenchArgs) -> Result<(), String> {
     for kv in &a.set {
         set_config(&mut cfg, kv)?;
     }
+    let sensors = a.sensors()?;
     let t = crate::tyre::load(&a.tir)?;
     let p = t.params;
     let tables = Tables::new(&p)?;
-    let sensors = Sensors::default();
     let mut cases = suite();
     if let Some(n) = a.cases {
         cases.truncate(n);
@@ -701,6 +736,15 @@ pub fn run(a: BenchArgs) -> Result<(), String> {
             md,
             "\nThe Gough estimator ran with these settings changed from their defaults: {}.",
             a.set.join(", ")
+        );
+    }
+    if sensors != Sensors::default() {
+        let _ = writeln!(
+            md,
+            "\nSensor model changed from the default: Mz {} N·m rms, F {:.2} % Fz rms, {:.1} ms delay.",
+            sensors.sigma_mz,
+            100.0 * sensors.sigma_rel,
+            1000.0 * sensors.delay
         );
     }
     let (holds_md, holds_csv) = hold_tables(&tallies);
@@ -1054,6 +1098,178 @@ pub fn plot_gough(p: &Params<f64>, log: &Log, w: usize, path: &Path) -> Result<(
 mod tests {
     use super::*;
 
+    /// The bundled MF 6.1 tyre, as the bench runs it.
+    fn bundled_tyre() -> Params<f64> {
+        crate::tyre::load(Path::new(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/data/tyres/MagicFormula61_Parameters.tir"
+        )))
+        .unwrap()
+        .params
+    }
+
+    /// The sensor model is what `--noise-mz`, `--noise-f` and `--delay` ask for: without noise
+    /// and delay every row is the simulation's own; the delay shifts the rows by whole steps
+    /// and the noise has the rms asked for; a negative or non-finite value, or a delay over
+    /// 1 s, is refused.
+    #[test]
+    fn sensor_arguments_reach_the_rows() {
+        use clap::Parser;
+        #[derive(Parser)]
+        struct Cli {
+            #[command(flatten)]
+            a: BenchArgs,
+        }
+        let parse = |extra: &[&str]| {
+            Cli::try_parse_from(["bench"].iter().chain(extra))
+                .unwrap()
+                .a
+                .sensors()
+        };
+        assert_eq!(parse(&[]).unwrap(), Sensors::default());
+        for bad in [
+            &["--noise-mz", "-1"][..],
+            &["--noise-f", "NaN"],
+            &["--delay", "2"],
+        ] {
+            let e = parse(bad).unwrap_err();
+            assert!(e.starts_with(bad[0]), "{e}");
+        }
+        let p = bundled_tyre();
+        let case = Case {
+            manoeuvre: "step-steer",
+            road: "mu=0.5".into(),
+        };
+        let log = simulate_case(&p, &case).unwrap();
+        let exact = parse(&["--noise-mz", "0", "--noise-f", "0", "--delay", "0"]).unwrap();
+        let late = parse(&["--noise-mz", "0", "--noise-f", "0", "--delay", "0.02"]).unwrap();
+        let noisy = parse(&["--noise-mz", "5", "--noise-f", "0.02", "--delay", "0"]).unwrap();
+        let w = 1;
+        let (tr, tl, tn) = (
+            measure(&log, w, &exact, 1),
+            measure(&log, w, &late, 1),
+            measure(&log, w, &noisy, 1),
+        );
+        let (mut se_mz, mut se_fy) = (0.0, 0.0);
+        for (i, r) in log.records.iter().enumerate() {
+            let x = &r.wheels[w];
+            let (a, b, c) = (&tr.rows[i], &tl.rows[i], &tn.rows[i]);
+            assert_eq!(
+                (a.fz, a.fy, a.mz, a.fx),
+                (x.fz, x.fy, x.mz, x.fx),
+                "row {i}"
+            );
+            if i >= 20 {
+                assert_eq!(b.mz, tr.rows[i - 20].mz, "row {i}");
+            }
+            se_mz += (c.mz - x.mz).powi(2);
+            se_fy += ((c.fy - x.fy) / (0.02 * x.fz)).powi(2);
+        }
+        let n = log.records.len() as f64;
+        let (rms_mz, rms_fy) = ((se_mz / n).sqrt(), (se_fy / n).sqrt());
+        assert!((rms_mz - 5.0).abs() < 0.25, "Mz noise {rms_mz}");
+        assert!((rms_fy - 1.0).abs() < 0.05, "Fy noise {rms_fy} of 2 % Fz");
+    }
+
+    /// Why the step steer on μ 1.0 stays ambiguous with perfect sensors: its front-left wheel,
+    /// steady at 4 s (Fz ≈ 3,370 N, γ ≈ −0.036 rad, utilisation ≈ 0.56, trail 9.1 mm), makes a
+    /// point that the simulation's own Magic Formula puts on two surfaces: the true one, and
+    /// one near λμ 0.62 (μ ≈ 0.63) at utilisation ≈ 0.88, where the trail has collapsed to
+    /// the grippy curve's value at that force. No single reading can choose between
+    /// them; only how the point got there can (README, "How far the data allow it").
+    #[test]
+    fn one_steady_point_lies_on_two_surfaces() {
+        use gough::mf::{self, Input, Options, Side};
+        let p = bundled_tyre();
+        let case = Case {
+            manoeuvre: "step-steer",
+            road: "mu=1.0".into(),
+        };
+        let log = simulate_case(&p, &case).unwrap();
+        let rec = log.records.iter().find(|r| r.t >= 4.0).unwrap();
+        let w = &rec.wheels[0]; // front left
+        let tau_m = -w.mz / w.fy;
+        let opts = Options {
+            transient: true,
+            mounted: Some(Side::Left),
+            ..Options::default()
+        };
+        // The trail on surface λμ at the measured |Fy|, on the rising side of the force (small
+        // slip first), with the record's load, camber, slip ratio and speed; None when the
+        // surface never reaches the force.
+        let eval = |q: &Params<f64>, alpha: f64| {
+            let inp = Input {
+                fz: w.fz,
+                kappa: w.kappa_t,
+                alpha,
+                gamma: w.gamma,
+                vx: w.vx,
+                ..Input::default()
+            };
+            mf::eval::<f64, Libm>(q, &inp, &opts).unwrap()
+        };
+        let trail_at_force = |lam: f64| -> Option<(f64, f64)> {
+            let mut q = p.clone();
+            q.lmuy = lam;
+            q.lmux = lam;
+            let sgn = w.alpha_t.signum();
+            let (mut lo, mut hi) = (0.0, 0.0);
+            for i in 1..=400 {
+                let a = sgn * 0.0005 * i as f64;
+                if eval(&q, a).fy.abs() >= w.fy.abs() {
+                    hi = a;
+                    break;
+                }
+                lo = a;
+            }
+            if hi == 0.0 {
+                return None;
+            }
+            for _ in 0..50 {
+                let mid = 0.5 * (lo + hi);
+                if eval(&q, mid).fy.abs() < w.fy.abs() {
+                    lo = mid;
+                } else {
+                    hi = mid;
+                }
+            }
+            let o = eval(&q, hi);
+            // Utilisation as the bench counts it: |F|/(μ·Fz), μ = λμ·μy0.
+            Some((-o.mz / o.fy, w.fx.hypot(w.fy) / (lam * log.mu_y0 * w.fz)))
+        };
+        let lam_true = 1.0 / log.mu_y0;
+        let grid: Vec<f64> = (40..=130).map(|i| 0.01 * i as f64).collect();
+        let d: Vec<Option<(f64, f64)>> = grid
+            .iter()
+            .map(|&l| trail_at_force(l).map(|(t, u)| (t - tau_m, u)))
+            .collect();
+        // Surfaces whose curve passes through the measured point: sign changes of d.
+        let mut roots = Vec::new();
+        for i in 1..grid.len() {
+            if let (Some((a, _)), Some((b, u))) = (d[i - 1], d[i]) {
+                if a * b <= 0.0 && a != b {
+                    let l = grid[i - 1] + (grid[i] - grid[i - 1]) * a / (a - b);
+                    roots.push((l, u * grid[i] / l));
+                }
+            }
+        }
+        std::println!(
+            "trail {:.2} mm at Fy {:.0} N, Fz {:.0} N, γ {:.4}: on λμ {roots:.3?}",
+            1000.0 * tau_m,
+            w.fy,
+            w.fz,
+            w.gamma
+        );
+        assert_eq!(roots.len(), 2, "{roots:?}");
+        let (hi, lo) = (roots[1], roots[0]);
+        assert!(
+            (hi.0 - lam_true).abs() < 0.02,
+            "{roots:?} against {lam_true}"
+        );
+        assert!((0.55..0.7).contains(&lo.0), "{roots:?}");
+        assert!(hi.1 < 0.6 && lo.1 > 0.85, "utilisations {roots:?}");
+    }
+
     /// A road spec with a comma stays one field of table.csv.
     #[test]
     fn csv_fields_with_commas_are_quoted() {
@@ -1265,12 +1481,7 @@ mod tests {
     /// becomes a wrong estimate (p95 error 0.68 there): 13 stays.
     #[test]
     fn straight_running_with_camber_never_reads_ice() {
-        let p = crate::tyre::load(Path::new(concat!(
-            env!("CARGO_MANIFEST_DIR"),
-            "/data/tyres/MagicFormula61_Parameters.tir"
-        )))
-        .unwrap()
-        .params;
+        let p = bundled_tyre();
         let tables = Tables::new(&p).unwrap();
         let (mut hazards, mut wrong, mut right) = (0, 0, 0);
         for manoeuvre in ["sine-dwell", "slalom"] {
