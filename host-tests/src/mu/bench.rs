@@ -1174,9 +1174,9 @@ mod tests {
     /// Why the step steer on μ 1.0 stays ambiguous with perfect sensors: its front-left wheel,
     /// steady at 4 s (Fz ≈ 3,370 N, γ ≈ −0.036 rad, utilisation ≈ 0.56, trail 9.1 mm), makes a
     /// point that the simulation's own Magic Formula puts on two surfaces: the true one, and
-    /// one near λμ 0.62 (μ ≈ 0.63) at utilisation ≈ 0.88, where the trail has collapsed to
+    /// one near λμ 0.62 (μ ≈ 0.63) at utilisation ≈ 0.89, where the trail has collapsed to
     /// the grippy curve's value at that force. No single reading can choose between
-    /// them; only how the point got there can (README, "How far the data allow it").
+    /// them; only how the point got there can (README, "Not the sensors: a single point").
     #[test]
     fn one_steady_point_lies_on_two_surfaces() {
         use gough::mf::{self, Input, Options, Side};
