@@ -445,27 +445,26 @@ fn bench_says_where_the_latency_goes() {
         .parse()
         .unwrap()
     };
-    let low = dir.join("bench-low");
+    // A quick bench run (the first `cases` cases) into dir/`name` with `extra` arguments:
+    // its output directory and table.md.
+    let quick = |name: &str, cases: &str, extra: &[&str]| {
+        let out = dir.join(name);
+        let tir = tyre();
+        let mut args = vec!["mu", "bench", "--tir", &tir, "--cases", cases];
+        args.extend(["--out", out.to_str().unwrap()]);
+        args.extend(extra);
+        let o = gough(&args);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let md = std::fs::read_to_string(out.join("table.md")).unwrap();
+        (out, md)
+    };
     let set = "trail_drop_min=0.05,trail_drop_abs_min=0.001";
-    let o = gough(&[
-        "mu",
-        "bench",
-        "--tir",
-        &tyre(),
-        "--cases",
-        "3",
-        "--out",
-        low.to_str().unwrap(),
-        "--set",
-        set,
-    ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let (low, md) = quick("bench-low", "3", &["--set", set]);
     let (before, after) = (all_share(&dir.join("bench")), all_share(&low));
     assert!(
         after < before - 0.1,
         "trail_not_dropped {before} -> {after}"
     );
-    let md = std::fs::read_to_string(low.join("table.md")).unwrap();
     assert!(
         md.contains("trail_drop_min=0.05, trail_drop_abs_min=0.001"),
         "{md}"
@@ -483,25 +482,11 @@ fn bench_says_where_the_latency_goes() {
     );
     // The sensors can be changed too (`--noise-mz`, `--noise-f`, `--delay`); the table says
     // so, and a value out of range is a one-line error.
-    let quiet = dir.join("bench-quiet");
-    let o = gough(&[
-        "mu",
-        "bench",
-        "--tir",
-        &tyre(),
-        "--cases",
+    let (_, md) = quick(
+        "bench-quiet",
         "1",
-        "--out",
-        quiet.to_str().unwrap(),
-        "--noise-mz",
-        "0",
-        "--noise-f",
-        "0",
-        "--delay",
-        "0",
-    ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let md = std::fs::read_to_string(quiet.join("table.md")).unwrap();
+        &["--noise-mz", "0", "--noise-f", "0", "--delay", "0"],
+    );
     assert!(
         md.contains(
             "Sensor model changed from the default: Mz 0 N·m rms, F 0.00 % Fz rms, 0.0 ms delay."
