@@ -345,6 +345,53 @@ fn bound_gives_each_wheel_a_crb_and_the_estimator_s_latency() {
     assert!(err.contains("/nonexistent/tyre.tir"), "{err}");
 }
 
+/// `gough mu bound --ml-window S` gives the maximum-likelihood reference that much of the
+/// run-up. On the step steer on μ 1.0 a 50 ms window reads neither wheel within ±0.1 by the
+/// deadline, a 300 ms window both: what decides μ there is the way the point got there, not the
+/// last few readings. A window outside (0, 10] s is a one-line error, before the tyre is read.
+#[test]
+fn the_reference_needs_the_run_up() {
+    let within = |window: &str| {
+        let dir = tmp(&format!("bound_ml_{window}"));
+        let o = gough(&[
+            "mu",
+            "bound",
+            "--tir",
+            &tyre(),
+            "--cases",
+            "1",
+            "--ml-window",
+            window,
+            "--out",
+            dir.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let table = String::from_utf8_lossy(&o.stdout).into_owned();
+        assert!(table.contains(&format!("({window} s window)")), "{table}");
+        let csv = std::fs::read_to_string(dir.join("bound.csv")).unwrap();
+        csv.lines()
+            .skip(1)
+            .map(|l| {
+                (
+                    l.split(',').nth(2).unwrap().to_string(),
+                    l.ends_with(",true"),
+                )
+            })
+            .collect::<Vec<_>>()
+    };
+    let fl_rl = |w: bool| vec![("fl".to_string(), w), ("rl".to_string(), w)];
+    assert_eq!(within("0.05"), fl_rl(false));
+    assert_eq!(within("0.3"), fl_rl(true));
+    for bad in ["0", "-1", "nan", "11"] {
+        let arg = format!("--ml-window={bad}");
+        let o = gough(&["mu", "bound", "--tir", "/nonexistent/tyre.tir", &arg]);
+        assert!(!o.status.success());
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(err.trim().lines().count(), 1, "{err}");
+        assert!(err.contains("--ml-window"), "{err}");
+    }
+}
+
 /// `gough mu bench` says where the Gough estimator's latency goes (`holds.csv`, and the second
 /// table of `table.md`): per case, the wheel-surfaces that reach utilisation 0.5, how many of
 /// them settle within ±0.1 within 150 ms — the same wheels as `gough mu bound` counts — and

@@ -58,6 +58,10 @@ pub struct BoundArgs {
     /// 1,000 Magic Formula evaluations per row, a few minutes for the suite.
     #[arg(long)]
     pub ml: bool,
+    /// The reference's window \[s\], in (0, 10] (implies `--ml`): how much of the run-up it
+    /// may use. Default 1 s (`ML_WINDOW`).
+    #[arg(long)]
+    pub ml_window: Option<f64>,
 }
 
 /// The simulation's tyre on a surface: the file's parameters with λμx, λμy for μ.
@@ -234,7 +238,7 @@ pub fn schur_first(i: &[[f64; 4]; 4]) -> f64 {
     })
 }
 
-/// Length of the maximum-likelihood reference's window \[s\].
+/// Length of the maximum-likelihood reference's window \[s\] unless `--ml-window` says otherwise.
 pub const ML_WINDOW: f64 = 1.0;
 
 /// One μ cell of [`WindowMl`]: the surface, the row nuisances (α', κ', Fz) found for the last
@@ -471,7 +475,8 @@ pub const DEADLINE: f64 = 0.150;
 
 /// Bounds of wheel `w` of a simulated case (`tr`: its rows as [`bench::measure`] made them),
 /// one per surface on which its utilisation reaches 0.5. `gough_latency(a, b)` gives the Gough
-/// estimator's latency on the surface's rows `a..b`; `ml` also runs [`WindowMl`] there.
+/// estimator's latency on the surface's rows `a..b`; `ml` (a window length \[s\]) also runs
+/// [`WindowMl`] there.
 pub fn wheel_bounds(
     m: &Model,
     log: &Log,
@@ -479,7 +484,7 @@ pub fn wheel_bounds(
     sens: &Sensors,
     tr: &WheelTrace,
     gough_latency: &dyn Fn(usize, usize) -> Option<f64>,
-    ml: bool,
+    ml: Option<f64>,
 ) -> Vec<WheelBound> {
     let util = &tr.util;
     let recs = &log.records;
@@ -532,28 +537,29 @@ pub fn wheel_bounds(
                     f64::INFINITY // the surface ends before the deadline
                 },
                 gough_latency: gough_latency(a, b),
-                ml_within: end
-                    .filter(|&e| ml && recs[e].t + 1e-9 >= t_dead)
-                    .map(|e| ml_within(m, tr, sens, log.dt, a + lag, e, b)),
+                ml_within: ml
+                    .zip(end.filter(|&e| recs[e].t + 1e-9 >= t_dead))
+                    .map(|(window, e)| ml_within(m, tr, sens, log.dt, window, e, a + lag..b)),
             });
         }
     }
     out
 }
 
-/// Runs [`WindowMl`] over wheel trace `tr` up to row `dead` (its window starting no earlier than
-/// row `first`, the surface's first row measured on it) and on through 0.3 s or to row `end`;
-/// whether it stays within ±0.1 of the truth from `dead` on.
+/// Runs [`WindowMl`] with a `window` \[s\] over wheel trace `tr` up to row `dead` (its window
+/// starting no earlier than `surface.start`, the surface's first row measured on it) and on
+/// through 0.3 s or to `surface.end`; whether it stays within ±0.1 of the truth from `dead` on.
 fn ml_within(
     m: &Model,
     tr: &WheelTrace,
     sens: &Sensors,
     dt: f64,
-    first: usize,
+    window: f64,
     dead: usize,
-    end: usize,
+    surface: std::ops::Range<usize>,
 ) -> bool {
-    let rows = (ML_WINDOW / dt).round() as usize;
+    let (first, end) = (surface.start, surface.end);
+    let rows = (window / dt).round() as usize;
     let start = first.max((dead + 1).saturating_sub(rows)).min(dead);
     let stop = end.min(dead + 1 + (0.3 / dt).round() as usize);
     let mut est = WindowMl::new(m, 0.05, 0.01, 126, rows, *sens);
@@ -569,6 +575,13 @@ fn ml_within(
 
 /// Runs `gough mu bound`.
 pub fn run(a: BoundArgs) -> Result<(), String> {
+    let ml = match a.ml_window {
+        Some(w) if !(w.is_finite() && w > 0.0 && w <= 10.0) => {
+            return Err(format!("--ml-window {w}: not a window length in (0, 10] s"));
+        }
+        Some(w) => Some(w),
+        None => a.ml.then_some(ML_WINDOW),
+    };
     let t = crate::tyre::load(&a.tir)?;
     let p = t.params;
     let tables = Tables::new(&p)?;
@@ -601,14 +614,14 @@ pub fn run(a: BoundArgs) -> Result<(), String> {
             let est = bench::run_method(0, &p, &tables, w, &tr);
             let lat = |s: usize, e: usize| bench::segment_latency(&tr, &est, s, e);
             let model = &models[usize::from(!w.is_multiple_of(2))];
-            for b in wheel_bounds(model, &log, w, &sens, &tr, &lat, a.ml) {
+            for b in wheel_bounds(model, &log, w, &sens, &tr, &lat, ml) {
                 any = true;
                 n_wheels += 1;
                 n_dec += usize::from(b.decidable());
                 let g_ok = b.gough_latency.is_some_and(|l| l <= DEADLINE);
                 n_gough += usize::from(g_ok);
                 n_ml += usize::from(b.ml_within == Some(true));
-                let ml = |yes: &str, no: &str| match b.ml_within {
+                let ml_cell = |yes: &str, no: &str| match b.ml_within {
                     Some(true) => yes.to_string(),
                     Some(false) => no.to_string(),
                     None => String::new(),
@@ -636,7 +649,11 @@ pub fn run(a: BoundArgs) -> Result<(), String> {
                     f(b.sigma_at_util),
                     f(b.sigma_at_deadline),
                     if b.decidable() { "yes" } else { "no" },
-                    if a.ml { ml("yes", "no") } else { "–".into() },
+                    if ml.is_some() {
+                        ml_cell("yes", "no")
+                    } else {
+                        "–".into()
+                    },
                 );
                 let _ = writeln!(
                     csv,
@@ -648,7 +665,7 @@ pub fn run(a: BoundArgs) -> Result<(), String> {
                     b.sigma_at_deadline,
                     b.decidable(),
                     b.gough_latency.map_or(String::new(), |l| format!("{l:.4}")),
-                    ml("true", "false"),
+                    ml_cell("true", "false"),
                 );
             }
         }
@@ -662,8 +679,8 @@ pub fn run(a: BoundArgs) -> Result<(), String> {
     let _ = writeln!(
         md,
         "\nWheel-surfaces reaching utilisation 0.5: {n_wheels}. ±0.1 decidable within 150 ms by an unbiased estimator with the exact model (1.96·σ_CRB ≤ 0.1): {n_dec}. The Gough estimator within ±0.1 within 150 ms: {n_gough}.{}\nCases with a wheel reaching utilisation 0.5: {n_cases}; with at least one wheel decidable: {case_dec}; Gough's median latency ≤ 150 ms (the bench's criterion): {case_gough}.",
-        if a.ml {
-            format!(" The maximum-likelihood reference within ±0.1 from 150 ms on (through 0.3 s): {n_ml}.")
+        if let Some(w) = ml {
+            format!(" The maximum-likelihood reference ({w} s window) within ±0.1 from 150 ms on (through 0.3 s): {n_ml}.")
         } else {
             String::new()
         }
