@@ -291,6 +291,17 @@ fn readme_demo_block_is_what_the_demo_prints() {
     );
 }
 
+/// `gough mu bound` on the bundled tyre and the bench's first `cases` cases, written to `dir`,
+/// with `extra` arguments.
+fn bound(cases: &str, dir: &Path, extra: &[&str]) -> Output {
+    let (tir, out) = (tyre(), dir.to_str().unwrap().to_string());
+    let mut args = vec![
+        "mu", "bound", "--tir", &tir, "--cases", cases, "--out", &out,
+    ];
+    args.extend_from_slice(extra);
+    gough(&args)
+}
+
 /// `gough mu bound` on the bench's first three cases (step steer on μ 1.0, 0.7, 0.5): a row per
 /// wheel and surface that reaches utilisation 0.5, σ_CRB falling from that moment to 150 ms
 /// later (information only accumulates), "decidable" exactly where 1.96·σ ≤ 0.1, and the
@@ -299,16 +310,7 @@ fn readme_demo_block_is_what_the_demo_prints() {
 #[test]
 fn bound_gives_each_wheel_a_crb_and_the_estimator_s_latency() {
     let dir = tmp("bound");
-    let o = gough(&[
-        "mu",
-        "bound",
-        "--tir",
-        &tyre(),
-        "--cases",
-        "3",
-        "--out",
-        dir.to_str().unwrap(),
-    ]);
+    let o = bound("3", &dir, &[]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let csv = std::fs::read_to_string(dir.join("bound.csv")).unwrap();
     let mut rows = 0;
@@ -353,18 +355,7 @@ fn bound_gives_each_wheel_a_crb_and_the_estimator_s_latency() {
 fn the_reference_needs_the_run_up() {
     let within = |window: &str| {
         let dir = tmp(&format!("bound_ml_{window}"));
-        let o = gough(&[
-            "mu",
-            "bound",
-            "--tir",
-            &tyre(),
-            "--cases",
-            "1",
-            "--ml-window",
-            window,
-            "--out",
-            dir.to_str().unwrap(),
-        ]);
+        let o = bound("1", &dir, &["--ml-window", window]);
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
         let table = String::from_utf8_lossy(&o.stdout).into_owned();
         assert!(table.contains(&format!("({window} s window)")), "{table}");
