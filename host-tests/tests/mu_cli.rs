@@ -291,6 +291,15 @@ fn readme_demo_block_is_what_the_demo_prints() {
     );
 }
 
+/// `gough` with `args` fails with a one-line error that `says` something.
+fn one_line_error(args: &[&str], says: &str) {
+    let bad = gough(args);
+    assert!(!bad.status.success());
+    let err = String::from_utf8_lossy(&bad.stderr);
+    assert_eq!(err.trim().lines().count(), 1, "{err}");
+    assert!(err.contains(says), "{err}");
+}
+
 /// `gough mu bound` on the bundled tyre and the bench's first `cases` cases, written to `dir`,
 /// with `extra` arguments.
 fn bound(cases: &str, dir: &Path, extra: &[&str]) -> Output {
@@ -333,18 +342,17 @@ fn bound_gives_each_wheel_a_crb_and_the_estimator_s_latency() {
     let table = String::from_utf8_lossy(&o.stdout);
     assert!(table.contains("decidable"), "{table}");
     // A file that is not there: a one-line error, no table.
-    let bad = gough(&[
-        "mu",
-        "bound",
-        "--tir",
+    one_line_error(
+        &[
+            "mu",
+            "bound",
+            "--tir",
+            "/nonexistent/tyre.tir",
+            "--cases",
+            "1",
+        ],
         "/nonexistent/tyre.tir",
-        "--cases",
-        "1",
-    ]);
-    assert!(!bad.status.success());
-    let err = String::from_utf8_lossy(&bad.stderr);
-    assert_eq!(err.trim().lines().count(), 1, "{err}");
-    assert!(err.contains("/nonexistent/tyre.tir"), "{err}");
+    );
 }
 
 /// `gough mu bound --ml-window S` gives the maximum-likelihood reference that much of the
@@ -375,11 +383,10 @@ fn the_reference_needs_the_run_up() {
     assert_eq!(within("0.3"), fl_rl(true));
     for bad in ["0", "-1", "nan", "11"] {
         let arg = format!("--ml-window={bad}");
-        let o = gough(&["mu", "bound", "--tir", "/nonexistent/tyre.tir", &arg]);
-        assert!(!o.status.success());
-        let err = String::from_utf8_lossy(&o.stderr);
-        assert_eq!(err.trim().lines().count(), 1, "{err}");
-        assert!(err.contains("--ml-window"), "{err}");
+        one_line_error(
+            &["mu", "bound", "--tir", "/nonexistent/tyre.tir", &arg],
+            "--ml-window",
+        );
     }
 }
 
@@ -507,13 +514,6 @@ fn bench_says_where_the_latency_goes() {
         md.contains("trail_drop_min=0.05, trail_drop_abs_min=0.001"),
         "{md}"
     );
-    let one_line_error = |args: &[&str], says: &str| {
-        let bad = gough(args);
-        assert!(!bad.status.success());
-        let err = String::from_utf8_lossy(&bad.stderr);
-        assert_eq!(err.trim().lines().count(), 1, "{err}");
-        assert!(err.contains(says), "{err}");
-    };
     one_line_error(
         &["mu", "bench", "--cases", "1", "--set", "trail_drop=0.1"],
         "trail_drop",
