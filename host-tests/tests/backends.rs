@@ -285,20 +285,20 @@ fn backends_against_f64() {
     }
     assert!(bad.is_empty(), "{bad:#?}");
 
-    // The README quotes this table ("Math backends"): each of its rows must be what this run
-    // printed, so that it cannot go stale unnoticed (the numbers do not depend on the build's
-    // optimisation: f32 operations are correctly rounded and Rust neither fuses nor reorders
-    // them, and Q31.32 is integer arithmetic).
-    let readme =
-        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("../README.md"))
+    // docs/backends.md quotes this table: each of its rows must be what this run printed, so
+    // that it cannot go stale unnoticed (the numbers do not depend on the build's optimisation:
+    // f32 operations are correctly rounded and Rust neither fuses nor reorders them, and Q31.32
+    // is integer arithmetic).
+    let page =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("../docs/backends.md"))
             .unwrap();
     for row in &rows {
         let head: String = row.split(" | ").next().unwrap().to_owned() + " | ";
-        let quoted: Vec<&str> = readme.lines().filter(|l| l.starts_with(&head)).collect();
+        let quoted: Vec<&str> = page.lines().filter(|l| l.starts_with(&head)).collect();
         assert_eq!(
             quoted,
             [row.as_str()],
-            "README.md's backend table row for {head}"
+            "docs/backends.md's backend table row for {head}"
         );
     }
 }

@@ -241,7 +241,8 @@ fn demo_runs_and_writes_its_outputs() {
 /// The README's main command prints the table its console block shows (the demo is
 /// deterministic: one noise seed), run as a new user runs it, from the repository's root with
 /// the defaults; so that block cannot go stale unnoticed. (Only `--out` differs, and with it the
-/// last line, which names the files.)
+/// last line, which names the files.) The same for docs/estimator.md's `mu estimate --why`
+/// block on the demo's log.
 #[test]
 fn readme_demo_block_is_what_the_demo_prints() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
@@ -262,13 +263,14 @@ fn readme_demo_block_is_what_the_demo_prints() {
         printed, block,
         "README.md's demo block differs from what `gough mu demo` prints"
     );
-    // The README's `mu estimate --why` on the demo's front-left log prints what its block shows
-    // (the paths moved to this test's directory).
+    // docs/estimator.md's `mu estimate --why` on the demo's front-left log prints what its
+    // block shows (the paths moved to this test's directory).
+    let page = std::fs::read_to_string(root.join("docs/estimator.md")).unwrap();
     let cmd = "$ cargo run --release --bin gough -- ";
-    let start = readme
+    let start = page
         .find(&format!("{cmd}mu estimate "))
-        .expect("the README's estimate command");
-    let mut lines = readme[start..].lines();
+        .expect("docs/estimator.md's estimate command");
+    let mut lines = page[start..].lines();
     let args: Vec<String> = lines.next().unwrap()[cmd.len()..]
         .split(' ')
         .map(|a| match a {
@@ -287,7 +289,7 @@ fn readme_demo_block_is_what_the_demo_prints() {
     assert_eq!(
         err.lines().collect::<Vec<_>>(),
         block,
-        "README.md's estimate block differs from what `gough mu estimate` prints"
+        "docs/estimator.md's estimate block differs from what `gough mu estimate` prints"
     );
 }
 
