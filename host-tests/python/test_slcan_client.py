@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """An independent client of the gough CAN protocol, on python-can's `slcan` interface.
 
-This is the project's second implementation of the protocol, written from the README's
+This is the project's second implementation of the protocol, written from docs/protocol.md's
 description (not from the Rust code): framing, CRC-32, postcard bodies. It tests ours.
 
 Run by `cargo xtask test-all` against the firmware under QEMU:

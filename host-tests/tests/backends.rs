@@ -5,7 +5,7 @@
 //! (`tests/oracle.rs` ties that one to MFeval): what is measured here is what a backend and a
 //! number format cost.
 //!
-//! Prints the table the README quotes (and fails if the README's rows differ):
+//! Prints the table docs/backends.md quotes (and fails if that page's rows differ):
 //! `cargo test -p gough-host --release --test backends -- --nocapture`
 //!
 //! Budgets (one table, `BUDGETS`, each with its reason) are asserted per backend.

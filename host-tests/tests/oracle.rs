@@ -44,7 +44,7 @@ const COLUMNS: &[(&str, Unit)] = &[
     ("out_sigmay", Unit::Length),
 ];
 
-/// Deliberate differences, printed with the report (also in the README).
+/// Deliberate differences, printed with the report (also in docs/magic-formula.md).
 const DIFFERENCES: &[&str] = &[
     "out_muy: we report |muy| (a friction coefficient); MFeval reports the signed value when \
      limit checks are off (mode 2xx) and |muy| when they are on. Compared as magnitudes.",

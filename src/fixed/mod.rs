@@ -27,8 +27,8 @@
 //! (ε, 1e-6) quantities of one evaluation are 2e12 apart in SI units: no 32-bit format holds
 //! both, and mixing formats per quantity would mean re-typing the equations with their shifts.
 //! A change of units does it without re-typing (forces in kN, pressures in kPa, ε rounded up to
-//! one LSB): an unmerged experiment, `docs/experiments/q16-kn.diff`, runs the same equations in
-//! Q15.16 within 8.2e-4 of the peak force over the oracle sweeps (README, "Cortex-M0").
+//! one LSB): an unmerged experiment (docs/decisions.md, commit 6f2cbad) ran the same equations in
+//! Q15.16 within 8.2e-4 of the peak force over the oracle sweeps.
 //!
 //! ## Arithmetic: saturating, no panic
 //! Every operation saturates (`saturating_add/sub/mul/div`); x/0 gives [`Fix::MAX`] or

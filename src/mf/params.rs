@@ -22,7 +22,7 @@ pub enum Version {
     /// MF-Tyre 6.1 (`FITTYP = 61`): adds inflation pressure, turn slip, the full Mx/My.
     Mf61,
     /// MF-Tyre 6.2 (`FITTYP = 62`): the forces and moments of 6.1; differs in the vertical and
-    /// loaded-radius model, which this crate does not evaluate (see README).
+    /// loaded-radius model, which this crate does not evaluate (see README.md, "What it does not").
     Mf62,
 }
 

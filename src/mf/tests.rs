@@ -284,7 +284,7 @@ fn use_mode_digits() {
 }
 
 /// (4.E8) with Aμ = 10, where MFeval uses Aμ = 1: on a road with λμ = 0.5 the vertical shift
-/// SVy scales with λμ' = 10·0.5/(1 + 9·0.5) = 0.909, not 0.5. DIFFERS FROM MFeval (README).
+/// SVy scales with λμ' = 10·0.5/(1 + 9·0.5) = 0.909, not 0.5. DIFFERS FROM MFeval (docs/magic-formula.md).
 #[test]
 fn digressive_friction_factor() {
     let mut p = load(TYRES[1].1);

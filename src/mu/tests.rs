@@ -79,7 +79,7 @@ fn sample(o: &mf::Output<f64>, t: f64, with_fx: bool) -> Sample<f64> {
 /// loads the residual torque's uncertainty (`mzr_model_rel`, σ/|Fy|) holds the reading back to
 /// a utilisation of at most 1.05, and ice at 0.3·Fz0 (|Fy| ≤ 120 N) is never read. Braking in
 /// the turn (κ = −0.03, Fx ≈ half the grip) carries a bias of the isotropic combined-slip
-/// approximation, bounded here at ±0.13 (README).
+/// approximation, bounded here at ±0.13 (docs/estimator.md).
 #[test]
 fn steady_state_points_give_mu() {
     let p = tyre();
@@ -576,7 +576,7 @@ fn confident() -> Config<f64> {
 /// outliers (not identifiable, no change); a persistent run of them is a change of surface,
 /// flagged once. (Confident: a sensor 10× better than the default noise, so each reading's own
 /// σ is small; a reading with a large σ can pass the gate and then moves a held estimate with
-/// the full Kalman gain — see the README.)
+/// the full Kalman gain — see docs/estimator.md.)
 #[test]
 fn a_burst_after_a_hold_is_an_outlier_a_run_is_a_change() {
     let p = tyre();
@@ -1047,7 +1047,7 @@ fn a_free_rolling_wheel_without_fx_reads_as_with_it() {
 /// with anchors between loads, tried in commit 0a67143: 0.127 with the gates off, 0.126 with them at γ 0.006, and
 /// 2,317 instructions at worst on the M4F; not adopted. An equal-force correction, the
 /// reading's trail moved to each camber node by the two nodes' trail difference at the curve's
-/// force, `docs/experiments/camber-equal-force.diff`: 0.092 gate-off at γ 0.006, 0.070 at worst
+/// force (docs/decisions.md: commit 8030947): 0.092 gate-off at γ 0.006, 0.070 at worst
 /// with the gates, no change in `gough mu bench`, 3,804 at worst on the M4F; not adopted.)
 #[test]
 fn camber_interpolation_error() {
@@ -1116,7 +1116,7 @@ fn camber_interpolation_error() {
 /// cut-off and its grid from the model between the slip-angle nodes, 0.031, 0.051 and 0.082.
 /// (A quadratic interpolation in load over three nodes at equal ρ, a scratch build not kept,
 /// measured 0.006, 0.028 and 0.064, but it reads 50 % more curves per sample: 2,573
-/// instructions at worst on the M4F, over the 2,000 the estimator has. Not adopted; README.)
+/// instructions at worst on the M4F, over the 2,000 the estimator has. Not adopted; docs/decisions.md.)
 #[test]
 fn load_interpolation_error() {
     let p = tyre();

@@ -68,7 +68,7 @@ impl MsgType {
     pub fn from_u8(b: u8) -> Option<MsgType> {
         MsgType::ALL.iter().copied().find(|t| *t as u8 == b)
     }
-    /// Name as in the README's table.
+    /// Name as in docs/protocol.md's table.
     pub const fn name(self) -> &'static str {
         match self {
             MsgType::Measurement => "Measurement",
