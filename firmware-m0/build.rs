@@ -15,14 +15,9 @@ use gough::mf::{self, Options};
 use gough::mu::{table::Curve, Config, GoughTable, MuEstimator};
 use std::{env, fmt::Write as _, fs, path::PathBuf};
 
-include!("../firmware/src/points.rs");
-include!("src/streams.rs");
-include!("src/filter_point.rs");
-
-/// The firmware's bench workloads (the slalom streams), shared with `firmware/`.
-#[allow(dead_code)]
-#[path = "../firmware/src/workload.rs"]
-mod workload;
+use gough_workloads::points::{input, N};
+use gough_workloads::streams::{cast_sample, hash, Feed, HASH0, SAMPLES, STREAMS};
+use gough_workloads::{filter_point, slalom as workload};
 
 /// A table value as a Rust literal of its bits (exact, NaN and infinities included).
 trait Lit: Copy {
@@ -76,7 +71,7 @@ fn estimator<F: Float + Lit + Feed, M: Backend<F>>(
     how: &str,
 ) -> String {
     let pf = p.cast::<F>();
-    // On the heap: the Q31.32 table is 248 KB.
+    // On the heap: the Q31.32 table is twice the f32 one, too large for a thread's stack.
     let mut t = Box::new(GoughTable::<F>::zeroed());
     t.for_wheel_into::<M>(&pf, None)
         .expect("a usable Gough table");
@@ -204,7 +199,7 @@ fn main() {
     s.push_str("];\n");
     fs::write(out.join("reference.rs"), s).expect("write reference.rs");
     // The estimator's tables, for the builds that run it: f32 (feature `mu`) and Q31.32
-    // (feature `mu-fix`: 248 KB, a Cortex-M3 with 4 MB, not the nRF51822).
+    // (feature `mu-fix`: a Cortex-M3 with 4 MB, not the nRF51822).
     let mut est = String::from(
         "#[allow(dead_code)]\nconst fn b(x: u32) -> f32 {\n    f32::from_bits(x)\n}\n",
     );
@@ -232,10 +227,6 @@ fn main() {
     println!("cargo:rerun-if-changed={}", tir_path.display());
     println!("cargo:rerun-if-changed=memory-microbit.x");
     println!("cargo:rerun-if-changed=memory-an385.x");
-    println!("cargo:rerun-if-changed=../firmware/src/points.rs");
-    println!("cargo:rerun-if-changed=src/streams.rs");
-    println!("cargo:rerun-if-changed=src/filter_point.rs");
-    println!("cargo:rerun-if-changed=../firmware/src/workload.rs");
     println!("cargo:rerun-if-changed=../src");
     println!("cargo:rerun-if-changed=build.rs");
 }

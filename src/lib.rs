@@ -19,6 +19,8 @@
 //! - [`relax`] — transient slip through relaxation lengths, paper eqs. (19)–(21).
 //! - [`brush`] — the paper's brush model: physical Gough curves without a `.tir` file.
 //! - [`mu`] — the Gough-plot road-friction estimator (μ from Fy, Mz, Fz without α).
+//! - [`wheel`] — one wheel's per-sample pipeline (transient filter → Magic Formula → estimator),
+//!   as the firmware runs it.
 //!
 //! ## Guarantees
 //! The core never panics (no `unwrap`, no unchecked indexing; see the crate-level lints) and
@@ -48,3 +50,4 @@ pub mod mu;
 pub mod proto;
 pub mod relax;
 pub mod tir;
+pub mod wheel;

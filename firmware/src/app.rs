@@ -1,11 +1,11 @@
 //! The application: protocol state, parameter upload, and at each tick every queued
-//! measurement through its wheel's pipeline ([`crate::wheel`]: transient filter, Magic Formula,
+//! measurement through its wheel's pipeline ([`gough::wheel`]: transient filter, Magic Formula,
 //! friction estimator). Board independent: a board hands in its CAN driver (any
 //! `embedded_can::nb::Can`) and a millisecond clock.
 //!
 //! ## The estimator's table
-//! The estimators of the four wheels share one [`GoughTable`] (126 KB in f32, ~10 000 Magic
-//! Formula evaluations to build). The App never builds it inside [`App::poll`] or [`App::tick`]:
+//! The estimators of the four wheels share one [`GoughTable`] (~10 000 Magic Formula
+//! evaluations to build; the `table build` line of the M4F `bench` output gives its size). The App never builds it inside [`App::poll`] or [`App::tick`]:
 //! after a parameter set is loaded it hands out a [`TableJob`] ([`App::table_job`]); the board
 //! builds it — the mps2 board in thread mode while poll and tick run in the SysTick interrupt;
 //! the STM32F405 board between polls of its main loop — and returns it with
@@ -14,16 +14,17 @@
 //! estimates from its first measurement on. A board that never builds leaves
 //! [`App::estimator`] off: commits are acknowledged at once and no `Estimate` is ever sent.
 
-use crate::wheel::{self, Wheel};
 use gough::mf::Params;
 use gough::mu::{BuildError, GoughTable};
 use gough::proto::{
     self, crc32, id, link, Ack, AckCode, Command, Estimate, Feed, Forces, Measurement, Msg,
     MsgType, ParamSource, Reassembler, Settings, Status, MAX_TIR_LEN, MSG_BUF,
 };
+use gough::wheel::{self, Wheel};
 
 /// The math backend of the device's pipeline: `gough::math::Fast` (feature `fast`, on by
-/// default: as accurate as f32 libm, 7× cheaper on the M4F), else `gough::math::Libm`.
+/// default: as accurate as f32 libm and cheaper on the M4F, the `bench` output gives both
+/// backends' instruction counts), else `gough::math::Libm`.
 #[cfg(feature = "fast")]
 pub type Math = gough::math::Fast;
 /// The math backend of the device's pipeline (`fast` feature off: the libm reference).
@@ -63,7 +64,7 @@ pub struct TableJob {
 }
 
 /// Builds the table of `job` into `slot`, in place (~10 000 Magic Formula evaluations with
-/// [`Math`]; no 126 KB temporary on the stack).
+/// [`Math`]; no table-sized temporary on the stack).
 pub fn build_table(
     job: &TableJob,
     slot: &'static mut core::mem::MaybeUninit<GoughTable<f32>>,
@@ -480,7 +481,7 @@ impl App {
         }
     }
 
-    /// One measurement through its wheel's pipeline ([`crate::wheel`]): the forces (or why
+    /// One measurement through its wheel's pipeline ([`gough::wheel`]): the forces (or why
     /// none) and the estimate (when the estimator runs). The host's replay check runs the same.
     pub fn process(&mut self, m: &Measurement) -> (Result<Forces, AckCode>, Option<Estimate>) {
         let Some(w) = self.wheels.get_mut(m.wheel.index()) else {

@@ -1,7 +1,7 @@
 //! gough firmware: the board-independent application ([`app`]) and the boards.
 //!
 //! The loop (see `architecture.md`): CAN frames → `proto::Reassembler` → `Msg`; measurements
-//! are queued and, at each 1 kHz tick, run through their wheel's pipeline ([`wheel`]: the
+//! are queued and, at each 1 kHz tick, run through their wheel's pipeline ([`gough::wheel`]: the
 //! relaxation-length filter, `mf::eval` at the transient slips, the Gough-plot friction
 //! estimator; f32, `math::Fast` by default); the predicted forces and the estimates go back as
 //! `Msg::Forces` and `Msg::Estimate` through `proto::Segmenter`. The estimator's table is built
@@ -16,12 +16,9 @@
 compile_error!("choose one board: `mps2` (default) or `--no-default-features --features stm32f4`");
 
 pub mod app;
-pub mod marks;
 #[cfg(feature = "mps2")]
 pub mod mps2;
 pub mod stack;
-pub mod wheel;
-pub mod workload;
 
 /// Firmware version reported in `Status` (major, minor, patch).
 pub const VERSION: [u8; 3] = [0, 3, 0];

@@ -31,7 +31,7 @@ use gough_firmware::{stack, BUNDLED_TIR};
 static mut APP: App = App::new();
 /// The CAN port: likewise.
 static mut PORT: Option<SlcanPort> = None;
-/// The estimators' table (126 KB). Written by thread mode only while a [`TableJob`] is out (the
+/// The estimators' table (its size: the `table build` line of the `bench` output). Written by thread mode only while a [`TableJob`] is out (the
 /// App then holds no reference to it); read through the App's `&'static` once installed.
 static mut TABLE: MaybeUninit<GoughTable<f32>> = MaybeUninit::uninit();
 

@@ -1,14 +1,29 @@
-//! Host side of gough: wraps the core for the `gough` command-line tool and the tests.
-//!
-//! Nothing here re-implements a formula of the core: `mfrun` turns CSV rows into
-//! [`gough::mf::Input`] and calls [`gough::mf::eval`]; `tolerance` holds the accuracy budgets.
-pub mod csvio;
-pub mod device;
-pub mod fwcli;
-pub mod gap;
-pub mod mfrun;
-pub mod mu;
-pub mod replay;
-pub mod sim;
+//! Helpers of the tests that hold gough against full precision and outside oracles: the
+//! accuracy budgets against the MFeval oracle (one table for all tests, each with its reason)
+//! and the path of the `gough` binary for the end-to-end tests of the command line.
+use std::path::{Path, PathBuf};
+use std::sync::OnceLock;
+
 pub mod tolerance;
-pub mod tyre;
+
+/// The repository's root folder.
+pub fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+/// The `gough` binary of package `gough-host`, built (once per test process) in the profile
+/// and target folder of the tests that ask for it.
+pub fn gough_bin() -> &'static Path {
+    static BIN: OnceLock<PathBuf> = OnceLock::new();
+    BIN.get_or_init(|| {
+        let run = escargot::CargoBuild::new()
+            .manifest_path(root().join("host/Cargo.toml"))
+            .package("gough-host")
+            .bin("gough")
+            .current_release()
+            .current_target()
+            .run()
+            .unwrap_or_else(|e| panic!("cannot build the gough binary: {e}"));
+        run.path().to_path_buf()
+    })
+}

@@ -1,13 +1,5 @@
 //! Accuracy budgets against the MFeval oracle, each with its reason (one table for all tests).
-
-/// Float path under test.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Precision {
-    /// f64 on the host: the full-precision path.
-    F64,
-    /// f32: the device path (same core, `f32`, libm backend).
-    F32,
-}
+use gough_host::mfrun::Precision;
 
 /// Allowed max |error| for forces \[N\]: 1e-6·FNOMIN in f64 (the formulas are the same; what is
 /// left is rounding and the order of operations), 1e-4·FNOMIN in f32 (f32 has 6e-8 relative

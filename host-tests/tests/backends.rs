@@ -14,7 +14,7 @@ use gough::fixed::{Fix, FixMath};
 use gough::math::{Backend, Fast, Float, Libm, Micromath};
 use gough::mf::{self, Input, Options, Params};
 use gough_host::csvio;
-use gough_host::mfrun::{input_of, INPUT_COLUMNS};
+use gough_host::mfrun::InputRow;
 use std::path::{Path, PathBuf};
 
 fn data() -> PathBuf {
@@ -156,9 +156,9 @@ fn check_file(path: &Path, worst: &mut [Worst; 4]) {
     let p32 = p64.cast::<f32>();
     let pfx = p64.cast::<Fix>();
     let (fnomin, r0) = (p64.fnomin, p64.unloaded_radius);
-    let t = csvio::read(path, &INPUT_COLUMNS, &[]).unwrap();
+    let t = csvio::read::<InputRow>(path).unwrap();
 
-    let inputs: Vec<Input<f64>> = t.rows.iter().map(|r| input_of(r)).collect();
+    let inputs: Vec<Input<f64>> = t.rows.iter().map(InputRow::input).collect();
     let reference: Vec<Option<[f64; 5]>> = inputs
         .iter()
         .map(|i| eval::<f64, Libm>(&p64, i, &opts))

@@ -4,7 +4,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 fn gough(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_gough"))
+    Command::new(gough_host_tests::gough_bin())
         .args(args)
         .output()
         .expect("run gough")

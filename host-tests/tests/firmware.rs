@@ -16,7 +16,7 @@ fn root() -> &'static Path {
 #[ignore = "needs QEMU and the release firmware; run by `cargo xtask test-all`"]
 fn replay_answers_equal_the_host_f32_run() {
     let out = std::env::temp_dir().join(format!("gough-replay-{}.csv", std::process::id()));
-    let o = Proc::new(env!("CARGO_BIN_EXE_gough"))
+    let o = Proc::new(gough_host_tests::gough_bin())
         .args(["replay", "--no-build", "--check"])
         .arg("--tir")
         .arg(root().join("host-tests/data/tyres/MagicFormula61_Parameters.tir"))

@@ -1,11 +1,10 @@
-//! The firmware's per-wheel pipeline (`firmware/src/wheel.rs`, compiled into gough-host as
-//! `replay::wheel`) on the host: what it must do, checked against the core directly — the replay
-//! test only shows that device and host agree.
+//! The firmware's per-wheel pipeline (`gough::wheel`) on the host: what it must do, checked
+//! against the core directly — the replay test only shows that device and host agree.
 use gough::math::Fast;
 use gough::mf::{self, Input, Options, Params};
 use gough::mu::{self, GoughTable, MuEstimator};
 use gough::proto::{AckCode, EstimateState, Measurement, Settings, Wheel as WheelId};
-use gough_host::replay::wheel::{effective_radius, estimator_config, Wheel};
+use gough::wheel::{effective_radius, estimator_config, Wheel};
 
 fn tyre() -> Params<f32> {
     let text = include_str!("../data/tyres/MagicFormula61_Parameters.tir");

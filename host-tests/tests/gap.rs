@@ -219,7 +219,7 @@ fn indistinguishable_effects_are_reported_not_picked() {
     let sim = Sim::new(p.clone(), &g.log);
     let ctx = Ctx::new(&g.log, &sim).unwrap();
     let base = ctx.base.out.clone();
-    let mut rng = stats::Rng::new(3);
+    let mut rng = gough_host::rng::Rng::new(3);
     for (m, b) in g.log.meas.iter_mut().zip(&base) {
         *m = [
             b[0] + 20.0 * rng.normal(),
@@ -303,7 +303,7 @@ fn bad_logs_give_one_line_errors_naming_file_line_and_column() {
         }
         // CLI: exit code ≠ 0, one line on stderr, no report written.
         let report = tmp(&format!("{name}.json"));
-        let o = Command::new(env!("CARGO_BIN_EXE_gough"))
+        let o = Command::new(gough_host_tests::gough_bin())
             .args(["gap", "diagnose", "--tir"])
             .arg(&tir)
             .arg("--log")

@@ -8,7 +8,7 @@ fn gough(args: &[&str]) -> Output {
 
 /// `gough` run from the directory `dir` (as a user runs it from the repository's root).
 fn gough_in(dir: &Path, args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_gough"))
+    Command::new(gough_host_tests::gough_bin())
         .current_dir(dir)
         .args(args)
         .output()

@@ -1,14 +1,16 @@
 //! The core against the MFeval 4.0 oracle (`host-tests/data/oracle/`, see its README): every
 //! file, every mode, every usable column, in f64 and in f32.
 //!
-//! Oracle = correctness reference written by somebody else. Budgets: `gough_host::tolerance`.
+//! Oracle = correctness reference written by somebody else. Budgets: `gough_host_tests::tolerance`.
 //! Deliberate differences from MFeval are listed in `DIFFERENCES` with the reason; each is a
 //! column we compare in a documented transformed way, never a column we skip silently.
 
 use gough::mf::{Options, Params};
 use gough_host::csvio;
-use gough_host::mfrun::{eval_row, input_of, INPUT_COLUMNS};
-use gough_host::tolerance::{self, Precision};
+use gough_host::mfrun::Precision;
+use gough_host::mfrun::{eval_row, InputRow};
+use gough_host_tests::tolerance;
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 fn data() -> PathBuf {
@@ -95,21 +97,21 @@ fn check_file(path: &Path, prec: Precision, report: &mut Vec<String>) -> Vec<Fai
         .params;
     let p32 = p64.cast::<f32>();
     let (fnomin, r0) = (p64.fnomin, p64.unloaded_radius);
-    let required: Vec<&str> = INPUT_COLUMNS
-        .iter()
-        .copied()
-        .chain(COLUMNS.iter().map(|c| c.0))
-        .collect();
-    let t = csvio::read_with(path, &required, &[], true).unwrap();
+    // The inputs, and every column by name (the oracle marks undefined values NaN).
+    let inputs = csvio::read_with::<InputRow>(path, true).unwrap();
+    let t = csvio::read_with::<BTreeMap<String, f64>>(path, true).unwrap();
+    for &(col, _) in COLUMNS {
+        assert!(t.has(col), "{fname}: no column {col}");
+    }
     let mut failures = Vec::new();
     let mut worst = vec![(0.0f64, 0usize); COLUMNS.len()];
     let mut nan_rows = 0;
-    for (row, line) in t.rows.iter().zip(&t.lines) {
-        let input = input_of(&row[..7]);
+    for ((row, inp), line) in t.rows.iter().zip(&inputs.rows).zip(&t.lines) {
+        let input = inp.input();
         let out = eval_row(&p64, &p32, &input, &opts, prec)
             .unwrap_or_else(|e| panic!("{fname}: line {line}: {e}"));
         for (k, &(col, unit)) in COLUMNS.iter().enumerate() {
-            let mut want = row[7 + k];
+            let mut want = row.get(col).copied().unwrap_or(f64::NAN);
             let mut got = ours(&out, col);
             if !want.is_finite() {
                 nan_rows += 1;
@@ -129,7 +131,7 @@ fn check_file(path: &Path, prec: Precision, report: &mut Vec<String>) -> Vec<Fai
             if err.is_nan() || err > tol {
                 failures.push(Failure(format!(
                     "{fname} {prec:?} line {line} {col}: ours {got:.9e} oracle {want:.9e} |err| {err:.3e} > {tol:.3e}  (in: {:?})",
-                    &row[..7]
+                    inp.values()
                 )));
             }
             if err > worst[k].0 || err.is_nan() {

@@ -382,7 +382,7 @@ fn out_dir(name: &str) -> PathBuf {
 }
 
 fn gough() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_gough"))
+    Command::new(gough_host_tests::gough_bin())
 }
 
 const TIR: &str = concat!(

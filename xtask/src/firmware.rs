@@ -1,8 +1,8 @@
 //! Firmware steps of `test-all`, and `snapshot [--overwrite]` (the golden outputs).
 use crate::{cargo, root, run, step};
-use std::io::Read;
+use gough_host::device::qemu;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Stdio};
+use std::process::Command;
 use std::time::{Duration, Instant};
 
 const TARGET: &str = "thumbv7em-none-eabihf";
@@ -30,59 +30,16 @@ fn build_mps2() -> Result<(), String> {
     run(fw_cargo().args(["build", "--release", "--bins"]))
 }
 
-/// Runs `elf` under QEMU mps2-an386 with semihosting; returns (exit code, stdout). A run that
-/// outlives `timeout` is killed and reported as hung.
+/// Runs `elf` under QEMU mps2-an386 (the host crate's launcher, [`qemu::run`]); returns (exit
+/// code, stdout). A run that outlives `timeout` is killed and reported as hung.
 fn qemu(elf: &Path, extra: &[&str], timeout: Duration) -> Result<(i32, String), String> {
-    qemu_on(
-        &["-cpu", "cortex-m4", "-machine", "mps2-an386"],
+    qemu::run(
+        &qemu::MPS2_AN386,
         elf,
         extra,
+        &root().join("target/qemu"),
         timeout,
     )
-}
-
-/// [`qemu`] on any board: `board` gives `-cpu`/`-machine`.
-fn qemu_on(
-    board: &[&str],
-    elf: &Path,
-    extra: &[&str],
-    timeout: Duration,
-) -> Result<(i32, String), String> {
-    let wd = root().join("target/qemu");
-    std::fs::create_dir_all(&wd).map_err(|e| format!("{}: {e}", wd.display()))?;
-    let mut child = Command::new("qemu-system-arm")
-        .args(board)
-        .arg("-nographic")
-        .args(["-semihosting-config", "enable=on,target=native"])
-        .args(extra)
-        .arg("-kernel")
-        .arg(elf)
-        .current_dir(&wd)
-        .stdin(Stdio::null())
-        .stdout(Stdio::piped())
-        .spawn()
-        .map_err(|e| format!("qemu-system-arm: {e}"))?;
-    let mut out = child.stdout.take();
-    let reader = std::thread::spawn(move || {
-        let mut s = String::new();
-        if let Some(o) = out.as_mut() {
-            let _ = o.read_to_string(&mut s);
-        }
-        s
-    });
-    let t0 = Instant::now();
-    let code = loop {
-        if let Ok(Some(st)) = child.try_wait() {
-            break st.code().unwrap_or(-1);
-        }
-        if t0.elapsed() > timeout {
-            let _ = child.kill();
-            let _ = child.wait();
-            return Err(format!("{} hung (killed after {timeout:?})", elf.display()));
-        }
-        std::thread::sleep(Duration::from_millis(20));
-    };
-    Ok((code, reader.join().unwrap_or_default()))
 }
 
 fn golden(name: &str) -> PathBuf {
@@ -271,7 +228,7 @@ pub fn test_all(passed: &mut u64) -> Result<(), String> {
     crate::cargo_test(
         &[
             "-p",
-            "gough-host",
+            "gough-host-tests",
             "--test",
             "firmware",
             "--",
@@ -344,8 +301,8 @@ fn bench_m0() -> Result<(), String> {
         ]))?;
         report_size(&format!("microbit bench, {what} only"), &elf)?;
     }
-    // Both number formats in one run; then f32 with the friction estimator (its 124 KB table in
-    // flash leaves no room for the fixed-point code).
+    // Both number formats in one run; then f32 with the friction estimator (its table in flash
+    // leaves no room for the fixed-point code; `report_size` prints the flash used).
     for (features, what) in [
         (None, "both"),
         (Some("mu"), "f32 math::Fast with the estimator"),
@@ -357,11 +314,10 @@ fn bench_m0() -> Result<(), String> {
         }
         run(&mut c)?;
         report_size(&format!("microbit bench, {what}"), &elf)?;
-        no_fpu_bench(&["-cpu", "cortex-m0", "-machine", "microbit"], &elf)
-            .map_err(|e| format!("M0 bench ({what}) {e}"))?;
+        no_fpu_bench(&qemu::MICROBIT, &elf).map_err(|e| format!("M0 bench ({what}) {e}"))?;
     }
     // The same bench on a Cortex-M3 without FPU (QEMU mps2-an385, 4 MB): every workload, the
-    // Q31.32 estimator too (its 248 KB table does not fit the nRF51822).
+    // Q31.32 estimator too (its table does not fit the nRF51822's flash).
     run(m0_cargo().args([
         "build",
         "--release",
@@ -374,17 +330,17 @@ fn bench_m0() -> Result<(), String> {
     ]))?;
     let elf_m3 = dir.join("target/thumbv7m-none-eabi/release/bench");
     report_size("mps2-an385 (Cortex-M3) bench, all workloads", &elf_m3)?;
-    no_fpu_bench(&["-cpu", "cortex-m3", "-machine", "mps2-an385"], &elf_m3)
-        .map_err(|e| format!("M3 bench {e}"))
+    no_fpu_bench(&qemu::MPS2_AN385, &elf_m3).map_err(|e| format!("M3 bench {e}"))
 }
 
 /// Runs a no-FPU bench image on `board` (`-icount shift=0`), prints its output and fails on a
 /// nonzero exit ("exited with N").
-fn no_fpu_bench(board: &[&str], elf: &Path) -> Result<(), String> {
-    let (code, out) = qemu_on(
+fn no_fpu_bench(board: &qemu::Board, elf: &Path) -> Result<(), String> {
+    let (code, out) = qemu::run(
         board,
         elf,
         &["-icount", "shift=0"],
+        &root().join("target/qemu"),
         Duration::from_secs(300),
     )?;
     print!("{out}");

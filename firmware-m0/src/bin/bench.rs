@@ -1,8 +1,8 @@
 //! Instruction counts of the combined-slip Magic Formula and of one transient-filter step on a
 //! Cortex-M0 without FPU (QEMU's `microbit`, an nRF51822), soft-float f32 with `math::Fast`
 //! against Q31.32 fixed point (`fixed::Fix` + `fixed::FixMath`), and of the friction estimator
-//! on a table in flash: in f32 (feature `mu`) and in Q31.32 (feature `mu-fix`, whose 248 KB
-//! table needs the Cortex-M3 build: `--target thumbv7m-none-eabi`, QEMU's `mps2-an385`). Under
+//! on a table in flash: in f32 (feature `mu`) and in Q31.32 (feature `mu-fix`, whose table
+//! needs the Cortex-M3 build: `--target thumbv7m-none-eabi`, QEMU's `mps2-an385`). Under
 //! QEMU with `-icount shift=0`: one instruction = 1 ns of virtual time, SysTick counts the core
 //! clock (16 MHz on the M0: 62.5 instructions per count; 25 MHz on the M3: 40), calibrated below
 //! on a loop of known length, as in `firmware/src/bin/bench.rs`.
@@ -25,23 +25,18 @@ use cortex_m_semihosting::{debug, hprintln};
 use gough::math::{Backend, Float};
 use gough::mf::{self, Input, Options, Params};
 
-include!("../../../firmware/src/points.rs");
+// The workloads and markers of the M4F bench (one definition for both), and what build.rs
+// computed from them on the host (this crate's own build output).
+use gough_workloads::filter_point;
+use gough_workloads::marks::{bench_start, bench_stop};
+use gough_workloads::points::{input, N};
+#[cfg(any(feature = "mu", feature = "mu-fix"))]
+use gough_workloads::{
+    slalom as workload,
+    streams::{cast_sample, hash, Feed, HASH0, SAMPLES, STREAMS},
+};
 include!(concat!(env!("OUT_DIR"), "/reference.rs"));
-include!("../filter_point.rs");
-#[cfg(any(feature = "mu", feature = "mu-fix"))]
-include!("../streams.rs");
 include!(concat!(env!("OUT_DIR"), "/estimator.rs"));
-
-/// The firmware's bench workloads (the slalom streams), shared with `firmware/`.
-#[cfg(any(feature = "mu", feature = "mu-fix"))]
-#[allow(dead_code)]
-#[path = "../../../firmware/src/workload.rs"]
-mod workload;
-
-/// The M4F firmware's workload markers, `bench_start`/`bench_stop` (one definition for both).
-#[path = "../../../firmware/src/marks.rs"]
-mod marks;
-use marks::{bench_start, bench_stop};
 
 static WRAPS: AtomicU32 = AtomicU32::new(0);
 const RELOAD: u32 = 0x00FF_FFFF;

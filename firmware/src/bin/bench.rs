@@ -24,15 +24,16 @@ use gough::math::{Backend, Libm};
 use gough::mf::{self, Input, Options, Params};
 use gough::mu::{GoughTable, MuEstimator, State};
 use gough::proto::{Measurement, Settings};
+use gough::wheel::Wheel;
 use gough_firmware::app::{self, App, TableJob};
-use gough_firmware::marks::{bench_start, bench_stop};
-use gough_firmware::wheel::Wheel;
-use gough_firmware::{mps2, stack, workload};
+use gough_firmware::{mps2, stack};
+use gough_workloads::marks::{bench_start, bench_stop};
+// N, `input`: the grid the M0 bench measures too.
+use gough_workloads::points::{input, N};
+use gough_workloads::slalom as workload;
 
 static WRAPS: AtomicU32 = AtomicU32::new(0);
 const RELOAD: u32 = 0x00FF_FFFF;
-// N, `inputs`, `input`: the grid the M0 bench measures too.
-include!("../points.rs");
 
 fn now() -> u64 {
     loop {
@@ -201,7 +202,7 @@ fn estimator_figures<M: Backend<f32>>(
     t: &GoughTable<f32>,
     stream: &[Measurement],
 ) {
-    let cfg = gough_firmware::wheel::estimator_config(&Settings::default());
+    let cfg = gough::wheel::estimator_config(&Settings::default());
     let e = per_sample(
         ids.0,
         clock,

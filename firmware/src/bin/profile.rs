@@ -32,11 +32,11 @@ use gough::mf::{self, Input, Options};
 use gough::mu::{GoughTable, MuEstimator};
 use gough::proto::{Measurement, Settings};
 use gough_firmware::app::{self, TableJob};
-use gough_firmware::marks::{bench_start, bench_stop};
-use gough_firmware::{mps2, workload};
+use gough_firmware::mps2;
+use gough_workloads::marks::{bench_start, bench_stop};
+use gough_workloads::points::{input, N};
+use gough_workloads::slalom as workload;
 
-/// Evaluations in the first bracket (the bench's 256-point grid).
-const N: usize = 256;
 /// Samples in the second bracket (the bench's stream).
 const NS: usize = 1000;
 static mut STREAM: [Measurement; NS] = [workload::EMPTY; NS];
@@ -55,18 +55,10 @@ fn main() -> ! {
         moments: false,
         ..Options::default()
     };
-    // The bench's grid: Fz 0.5..1.5 FNOMIN, κ −0.2..0.2, α −0.15..0.15.
+    // The bench's grid (N points of `gough_workloads::points`).
     let mut ins = [Input::<f32>::default(); N];
     for (i, x) in ins.iter_mut().enumerate() {
-        let a = (i % 16) as f32 / 15.0;
-        let b = ((i / 16) % 16) as f32 / 15.0;
-        *x = Input {
-            fz: 6752.0 * (0.5 + a),
-            kappa: -0.2 + 0.4 * b,
-            alpha: -0.15 + 0.3 * ((i * 7 % 16) as f32 / 15.0),
-            vx: 16.6,
-            ..Input::default()
-        };
+        *x = input::<f32>(i);
     }
     let mut acc = 0f32;
     let mut failed = 0u32;
@@ -90,7 +82,7 @@ fn main() -> ! {
     let Ok(t) = app::build_table(&job, slot) else {
         mps2::exit(false)
     };
-    let cfg = gough_firmware::wheel::estimator_config(&Settings::default());
+    let cfg = gough::wheel::estimator_config(&Settings::default());
     let mut seen = [0u32; 2];
     for (k, mu) in [1.0, 0.2].into_iter().enumerate() {
         workload::slalom(&p32, mu, 0.02, stream);

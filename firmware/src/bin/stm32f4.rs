@@ -3,7 +3,8 @@
 //! `embedded_can::nb::Can`. defmt logs over RTT. Built and linked in CI (flash/RAM reported
 //! by `cargo xtask test-all`); not run there (no hardware).
 //!
-//! Memory (`boards/stm32f405.x`): the friction estimator's 126 KB table fills the 128 KiB SRAM;
+//! Memory (`boards/stm32f405.x`): the friction estimator's table fills most of the 128 KiB SRAM
+//! (`cargo xtask test-all` reports this image's SRAM and CCM use);
 //! the App (~36 KiB, mostly the upload buffer) and the stack live in the 64 KiB CCM. The App's
 //! initial value is copied from flash into CCM first thing in `main` (cortex-m-rt initialises
 //! only SRAM).
@@ -32,7 +33,7 @@ static TICKS: AtomicU32 = AtomicU32::new(0);
 /// The device state, in CCM (`.ccmdata`: its initial value is in flash, copied by `ccm_init`).
 #[link_section = ".ccmdata.APP"]
 static mut APP: App = App::new();
-/// The estimators' table (98 KB, SRAM). Written only while a table job is out (the App then
+/// The estimators' table (SRAM). Written only while a table job is out (the App then
 /// holds no reference to it).
 static mut TABLE: MaybeUninit<GoughTable<f32>> = MaybeUninit::uninit();
 

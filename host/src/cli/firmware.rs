@@ -1,0 +1,62 @@
+//! `gough firmware ...`: the firmware under QEMU, its UART bridged to TCP.
+use crate::device::{self, Qemu};
+use clap::{Args, Subcommand};
+use std::path::PathBuf;
+use std::time::Duration;
+
+/// `gough firmware ...`
+#[derive(Subcommand)]
+pub enum FirmwareCmd {
+    /// Build the firmware, start it in QEMU (mps2-an386) and bridge its UART0 (SLCAN) to TCP.
+    ///
+    /// Waits until QEMU exits (the firmware exits on `Command::Stop`) and returns its code.
+    /// Clients: `gough replay --port PORT`, or python-can with
+    /// `can.Bus(interface="slcan", channel="socket://127.0.0.1:PORT")`.
+    Run(RunArgs),
+}
+
+/// Where the firmware comes from and how it is reached.
+#[derive(Args, Clone)]
+pub struct RunArgs {
+    /// Firmware ELF to run (default: the release build of firmware/, built first).
+    #[arg(long)]
+    pub elf: Option<PathBuf>,
+    /// Do not build the firmware first.
+    #[arg(long)]
+    pub no_build: bool,
+    /// TCP port for UART0 (default: a free one, printed).
+    #[arg(long)]
+    pub port: Option<u16>,
+    /// Working directory of QEMU (the defmt log `firmware.defmt` lands there).
+    #[arg(long, default_value = "target/qemu")]
+    pub workdir: PathBuf,
+}
+
+/// Starts the firmware of `args` under QEMU (building it first unless told not to).
+pub fn start(args: &RunArgs) -> Result<Qemu, String> {
+    let elf = match &args.elf {
+        Some(e) => e.clone(),
+        None => {
+            if !args.no_build {
+                device::build_firmware()?;
+            }
+            device::firmware_elf("gough-firmware")
+        }
+    };
+    Qemu::start(&elf, &args.workdir, false, args.port)
+}
+
+/// `gough firmware run`
+pub fn run(cmd: FirmwareCmd) -> Result<(), String> {
+    let FirmwareCmd::Run(args) = cmd;
+    let mut q = start(&args)?;
+    eprintln!(
+        "firmware UART0 (SLCAN) on tcp 127.0.0.1:{p}; python-can: can.Bus(interface=\"slcan\", channel=\"socket://127.0.0.1:{p}\")",
+        p = q.port
+    );
+    match q.wait(Duration::from_secs(u64::MAX / 4)) {
+        Some(0) => Ok(()),
+        Some(c) => Err(format!("firmware exited with code {c}")),
+        None => Err("QEMU did not exit".into()),
+    }
+}

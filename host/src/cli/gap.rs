@@ -1,0 +1,242 @@
+//! `gough gap ...`: `diagnose` (the interface), `bench` (the withheld-effect
+//! benchmark), `generate` (a log from the benchmark's truth model, e.g. the bundled examples).
+
+use crate::gap::bench::{self, GenConfig};
+use crate::gap::effects::Effect;
+use std::path::{Path, PathBuf};
+
+/// The `gap` subcommands.
+#[derive(clap::Subcommand, Debug)]
+pub enum GapCmd {
+    /// Diagnose the gap between the sim of SIM.tir and a measured log; write a JSON report.
+    ///
+    /// Log: CSV with header, SI units, ISO-W; required t,vx,alpha,kappa,gamma,fz,fx,fy,mz;
+    /// optional p (Pa), phit (1/m), mu (reference friction); other columns ignored.
+    Diagnose {
+        /// Tyre property file of the sim (.tir).
+        #[arg(long, value_name = "SIM.tir")]
+        tir: PathBuf,
+        /// Measured log (CSV).
+        #[arg(long, value_name = "LOG.csv")]
+        log: PathBuf,
+        /// Report (JSON, written atomically).
+        #[arg(long, value_name = "REPORT.json")]
+        report: PathBuf,
+        /// Directory for PNG residual maps (created).
+        #[arg(long, value_name = "DIR")]
+        plots: Option<PathBuf>,
+    },
+    /// Withheld-effect benchmark: generate logs with one effect (or none) on, diagnose them from
+    /// SIM.tir and the log only, print the confusion matrix, false alarms, shrink achieved vs
+    /// achievable (Markdown).
+    Bench {
+        /// A smaller run (2 magnitudes, 1 noise level, 3000-row logs).
+        #[arg(long)]
+        quick: bool,
+        /// Worker threads.
+        #[arg(long, default_value_t = 1)]
+        jobs: usize,
+        /// Directory with the tyre files (default: the bundled host-tests/data/tyres).
+        #[arg(long, value_name = "DIR")]
+        tyres: Option<PathBuf>,
+        /// Also write the tables to this Markdown file.
+        #[arg(long, value_name = "FILE")]
+        markdown: Option<PathBuf>,
+        /// Also write one CSV row per log (truth, verdict, shrinks, time) to this file.
+        #[arg(long, value_name = "FILE")]
+        cases: Option<PathBuf>,
+    },
+    /// Generate a log from the benchmark's truth model (SIM.tir with one effect switched on).
+    Generate {
+        /// Tyre property file (.tir).
+        #[arg(long, value_name = "SIM.tir")]
+        tir: PathBuf,
+        /// Output CSV.
+        #[arg(long, value_name = "LOG.csv")]
+        out: PathBuf,
+        /// Effect switched on: none, camber, inflation_pressure, turn_slip, combined_slip,
+        /// relaxation_length, speed_dependent_friction, thermal, sensor_lag, sensor_bias,
+        /// conicity_plysteer.
+        #[arg(long, default_value = "none")]
+        effect: String,
+        /// Magnitude (1 large, 0.03 at the edge of detectability).
+        #[arg(long, default_value_t = 1.0)]
+        magnitude: f64,
+        /// Rows.
+        #[arg(long, default_value_t = 6000)]
+        rows: usize,
+        /// Sample rate (Hz).
+        #[arg(long, default_value_t = 200.0)]
+        rate: f64,
+        /// Seed.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// White noise as a fraction of each channel's RMS.
+        #[arg(long, default_value_t = 0.01)]
+        noise: f64,
+        /// Add a reference `mu` column.
+        #[arg(long)]
+        mu: bool,
+        /// No `p` column (the pressure stays INFLPRES).
+        #[arg(long)]
+        no_p: bool,
+        /// No `phit` column (no turn slip).
+        #[arg(long)]
+        no_phit: bool,
+    },
+}
+
+fn write_atomic(path: &Path, text: &str) -> Result<(), String> {
+    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir)
+            .map_err(|e| format!("{}: cannot create: {e}", dir.display()))?;
+    }
+    let tmp = path.with_extension("tmp");
+    std::fs::write(&tmp, text)
+        .and_then(|_| std::fs::rename(&tmp, path))
+        .map_err(|e| format!("{}: cannot write: {e}", path.display()))
+}
+
+fn effect_arg(s: &str) -> Result<Option<Effect>, String> {
+    if s == "none" {
+        return Ok(None);
+    }
+    Effect::from_name(s).map(Some).ok_or_else(|| {
+        format!(
+            "--effect '{s}': expected none or one of {}",
+            crate::gap::effects::ALL.map(|e| e.name()).join(", ")
+        )
+    })
+}
+
+/// Runs a `gap` subcommand.
+pub fn run(cmd: GapCmd) -> Result<(), String> {
+    match cmd {
+        GapCmd::Diagnose {
+            tir,
+            log,
+            report,
+            plots,
+        } => {
+            let tyre = crate::tyre::load(&tir)?;
+            let lg = crate::gap::log::read(&log)?;
+            let start = std::time::Instant::now();
+            let d = crate::gap::diagnose(
+                tyre.params,
+                &lg,
+                &tir.display().to_string(),
+                &log.display().to_string(),
+                &crate::gap::Options {
+                    progress: true,
+                    plots,
+                    fit_rows: None,
+                },
+            )?;
+            let json = serde_json::to_string_pretty(&d.report)
+                .map_err(|e| format!("cannot encode the report: {e}"))?;
+            write_atomic(&report, &(json + "\n"))?;
+            let v = &d.report.verdict;
+            let mut line = format!("verdict: {}", v.effect);
+            if let (Some(s), Some(c)) = (v.shrink, &v.channel) {
+                line += &format!(" (held-out shrink {s:.3}, mostly {c})");
+            }
+            if !v.indistinguishable_from.is_empty() {
+                line += &format!(
+                    "; indistinguishable from {}",
+                    v.indistinguishable_from.join(", ")
+                );
+            }
+            println!("{line}");
+            eprintln!(
+                "{} rows diagnosed in {:.1} s -> {}",
+                lg.len(),
+                start.elapsed().as_secs_f64(),
+                report.display()
+            );
+            Ok(())
+        }
+        GapCmd::Bench {
+            quick,
+            jobs,
+            tyres,
+            markdown,
+            cases,
+        } => {
+            let dir = tyres.unwrap_or_else(|| {
+                Path::new(env!("CARGO_MANIFEST_DIR"))
+                    .join("../host-tests/data")
+                    .join("tyres")
+            });
+            let mut cfg = bench::default_config(&dir, quick);
+            cfg.jobs = jobs.max(1);
+            let start = std::time::Instant::now();
+            let res = bench::run(&cfg)?;
+            let mut text = bench::table(&cfg, &res);
+            text += &format!(
+                "\nCommand: `cargo run --release --bin gough -- gap bench{}{}` ({:.0} s wall with {} job(s)).\n",
+                if quick { " --quick" } else { "" },
+                if jobs > 1 { format!(" --jobs {jobs}") } else { String::new() },
+                start.elapsed().as_secs_f64(),
+                cfg.jobs
+            );
+            print!("{text}");
+            if let Some(m) = markdown {
+                write_atomic(&m, &text)?;
+            }
+            if let Some(c) = cases {
+                write_atomic(&c, &bench::cases_csv(&res))?;
+            }
+            Ok(())
+        }
+        GapCmd::Generate {
+            tir,
+            out,
+            effect,
+            magnitude,
+            rows,
+            rate,
+            seed,
+            noise,
+            mu,
+            no_p,
+            no_phit,
+        } => {
+            let truth = effect_arg(&effect)?;
+            if rows < crate::gap::log::MIN_ROWS {
+                return Err(format!(
+                    "--rows {rows}: at least {}",
+                    crate::gap::log::MIN_ROWS
+                ));
+            }
+            if !(rate > 0.0 && rate.is_finite()) {
+                return Err(format!("--rate {rate}: must be > 0"));
+            }
+            if !(noise >= 0.0 && noise.is_finite() && magnitude.is_finite()) {
+                return Err("--noise must be >= 0 and --magnitude finite".into());
+            }
+            let tyre = crate::tyre::load(&tir)?;
+            let g = bench::generate(
+                &tyre.params,
+                &GenConfig {
+                    rows,
+                    rate,
+                    seed,
+                    truth,
+                    magnitude,
+                    noise,
+                    mu,
+                    p: !no_p,
+                    phit: !no_phit,
+                },
+            )?;
+            crate::gap::log::write(&out, &g.log)
+                .map_err(|e| format!("{}: cannot write: {e}", out.display()))?;
+            eprintln!(
+                "{rows} rows ({} on, magnitude {magnitude}) -> {}",
+                effect,
+                out.display()
+            );
+            Ok(())
+        }
+    }
+}

@@ -1,0 +1,167 @@
+//! `gough mu ...` subcommands.
+use crate::mu::{estimate, read_log, Method, Precision};
+use crate::tyre;
+use clap::{Args, Subcommand};
+use gough::mu::Hold;
+use std::io::Write;
+use std::path::PathBuf;
+
+/// `gough mu` subcommands.
+#[derive(Subcommand)]
+pub enum MuCmd {
+    /// Run one wheel's friction estimator over a log.
+    ///
+    /// LOG columns: t,fz,fy,mz required; fx,vx,kappa,alpha,gamma optional (SI, ISO-W). The Gough
+    /// method never reads alpha. EST columns: t,mu,sigma,state (identifiable, not_identifiable,
+    /// fallback), and hold with `--why`.
+    Estimate(EstimateArgs),
+    /// Benchmark the Gough estimator and its peers on the simulation's manoeuvre suite.
+    Bench(crate::mu::bench::BenchArgs),
+    /// The main job: a simulated manoeuvre on a road whose friction changes, the estimator at
+    /// every wheel, a table on the terminal, plots and estimates written.
+    Demo(crate::mu::bench::DemoArgs),
+    /// From which utilisation the estimator reads μ on a tyre: steady, noise-free points of its
+    /// own Magic Formula on surfaces μ 1.0 … 0.1 at 0.5, 1 and 1.5·Fz0, and the trail gap
+    /// between neighbouring surfaces that decides it.
+    Map(MapArgs),
+    /// How soon any estimator could know μ on the benchmark's data: the Cramér–Rao bound of
+    /// its rows (exact model, the bench's noise) 150 ms after the utilisation reaches 0.5, beside
+    /// the Gough estimator's latency, wheel by wheel.
+    Bound(crate::mu::bound::BoundArgs),
+}
+
+/// Arguments of `gough mu map`.
+#[derive(Args)]
+pub struct MapArgs {
+    /// Tyre property file (.tir).
+    #[arg(long)]
+    pub tir: PathBuf,
+    /// Also write the map as CSV here.
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// The samples carry no Fx, and the estimator takes the free-rolling Fx from its table (by
+    /// default they carry the model's free-rolling Fx, as a wheel that measures Fx would).
+    #[arg(long)]
+    pub no_fx: bool,
+    /// Inclination γ of the wheel \[rad\] (ISO-W; the samples carry it). The sweep is α > 0,
+    /// where Fy < 0; whether γ's camber thrust adds to that force or works against it is the
+    /// tyre's (on the bundled MF 6.1 tyre γ > 0 adds to it): compare ±γ.
+    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    pub gamma: f64,
+}
+
+/// Arguments of `gough mu estimate`.
+#[derive(Args)]
+pub struct EstimateArgs {
+    /// Tyre property file (.tir).
+    #[arg(long)]
+    pub tir: PathBuf,
+    /// Measurement log (CSV).
+    #[arg(long)]
+    pub log: PathBuf,
+    /// Output CSV.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Float path of the core estimator.
+    #[arg(long, value_enum, default_value_t = Precision::F64)]
+    pub precision: Precision,
+    /// Estimator.
+    #[arg(long, value_enum, default_value_t = Method::Gough)]
+    pub method: Method,
+    /// Add a column `hold` to EST: which gate held each held estimate (`no_excitation`,
+    /// `settling`, `trail_not_dropped`, `model_uncertain`, `ambiguous`, `confirming`,
+    /// `outlier`, `bad_sample`; empty where identifiable), and a count of each on the
+    /// terminal. Gough method only.
+    #[arg(long)]
+    pub why: bool,
+}
+
+/// Runs a `gough mu` subcommand.
+pub fn run(cmd: MuCmd) -> Result<(), String> {
+    match cmd {
+        MuCmd::Estimate(a) => {
+            if a.why && a.method != Method::Gough {
+                return Err("--why: only the gough method says why it holds an estimate".into());
+            }
+            let t = tyre::load(&a.tir)?;
+            let (rows, gamma, present) = read_log(&a.log)?;
+            let (est, holds) =
+                estimate(&t.params, &rows, present[0], &gamma, a.method, a.precision)?;
+            if let Some(dir) = a.out.parent().filter(|d| !d.as_os_str().is_empty()) {
+                std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+            }
+            let tmp = a.out.with_extension("csv.tmp");
+            let write = || -> std::io::Result<()> {
+                let mut w = std::io::BufWriter::new(std::fs::File::create(&tmp)?);
+                writeln!(w, "t,mu,sigma,state{}", if a.why { ",hold" } else { "" })?;
+                for (i, (r, e)) in rows.iter().zip(&est).enumerate() {
+                    write!(w, "{},{:.6},{:.6},{}", r.t, e.mu, e.sigma, e.state.name())?;
+                    if a.why {
+                        let h = holds.get(i).copied().flatten();
+                        write!(w, ",{}", h.map_or("", Hold::name))?;
+                    }
+                    writeln!(w)?;
+                }
+                w.flush()?;
+                std::fs::rename(&tmp, &a.out)
+            };
+            write().map_err(|e| format!("{}: cannot write: {e}", a.out.display()))?;
+            let n_id = est
+                .iter()
+                .filter(|e| e.state == gough::mu::State::Identifiable)
+                .count();
+            let last = est.last().map(|e| (e.mu, e.sigma, e.state.name()));
+            eprintln!(
+                "{} rows, {} identifiable; last: {:?} -> {}",
+                rows.len(),
+                n_id,
+                last,
+                a.out.display()
+            );
+            if a.why {
+                let counts: Vec<String> = Hold::ALL
+                    .iter()
+                    .map(|&h| (h, holds.iter().filter(|&&x| x == Some(h)).count()))
+                    .filter(|&(_, n)| n > 0)
+                    .map(|(h, n)| format!("{} {n}", h.name()))
+                    .collect();
+                eprintln!(
+                    "held: {}",
+                    if counts.is_empty() {
+                        "never".into()
+                    } else {
+                        counts.join(", ")
+                    }
+                );
+            }
+            Ok(())
+        }
+        MuCmd::Bench(b) => crate::mu::bench::run(b),
+        MuCmd::Demo(d) => crate::mu::bench::demo(d),
+        MuCmd::Bound(b) => crate::mu::bound::run(b),
+        MuCmd::Map(a) => {
+            if !a.gamma.is_finite() {
+                return Err(format!("--gamma {}: not a finite angle [rad]", a.gamma));
+            }
+            let t = tyre::load(&a.tir)?;
+            let cells = crate::mu::map::map(&t.params, !a.no_fx, a.gamma)?;
+            let name = a.tir.file_name().map_or_else(
+                || a.tir.display().to_string(),
+                |n| n.to_string_lossy().into_owned(),
+            );
+            print!(
+                "{}",
+                crate::mu::map::render(&cells, &name, t.params.fnomin, !a.no_fx, a.gamma)
+            );
+            if let Some(out) = &a.out {
+                if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
+                    std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+                }
+                std::fs::write(out, crate::mu::map::csv(&cells))
+                    .map_err(|e| format!("{}: cannot write: {e}", out.display()))?;
+                eprintln!("-> {}", out.display());
+            }
+            Ok(())
+        }
+    }
+}

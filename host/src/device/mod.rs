@@ -1,0 +1,270 @@
+//! The host end of the CAN protocol: the firmware under QEMU, its UART bridged to TCP, spoken
+//! to in SLCAN through the core's own `gough::proto` (never a second implementation).
+//!
+//! - [`qemu`]: the firmware images under QEMU — [`Qemu`] starts the firmware with
+//!   `-serial tcp:127.0.0.1:PORT`; [`qemu::run`] runs a bench or test image to its exit.
+//! - [`SlcanTcp`] is an `embedded_can::blocking::Can` driver over that socket.
+//! - [`Device`] sends messages and collects the answers through `proto::Reassembler`s.
+use embedded_can::blocking::Can;
+use embedded_can::Frame as _;
+use gough::proto::slcan::{self, CanFrame, Decoder, Line};
+use gough::proto::{
+    crc32, id, link, AckCode, Bytes, Command, Feed, Msg, MsgType, ParamBegin, ParamChunk,
+    ParamCommit, Reassembler, Status, CHUNK_LEN, MSG_BUF,
+};
+use std::io::{Read, Write};
+use std::net::TcpStream;
+use std::time::{Duration, Instant};
+
+pub mod qemu;
+pub use qemu::{build_firmware, firmware_dir, firmware_elf, free_port, Qemu};
+
+/// Why the link failed.
+#[derive(Debug)]
+pub enum LinkError {
+    /// Socket error.
+    Io(std::io::Error),
+    /// Nothing arrived in time.
+    Timeout,
+    /// The peer closed the connection.
+    Closed,
+}
+
+impl embedded_can::Error for LinkError {
+    fn kind(&self) -> embedded_can::ErrorKind {
+        embedded_can::ErrorKind::Other
+    }
+}
+
+impl std::fmt::Display for LinkError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            LinkError::Io(e) => write!(f, "socket: {e}"),
+            LinkError::Timeout => f.write_str("timed out"),
+            LinkError::Closed => f.write_str("connection closed"),
+        }
+    }
+}
+
+/// SLCAN over a TCP socket, as a blocking `embedded_can` driver.
+pub struct SlcanTcp {
+    stream: TcpStream,
+    dec: Decoder,
+    buf: Vec<u8>,
+    pos: usize,
+    /// Lines that were not SLCAN.
+    pub bad_lines: u64,
+    /// Timeout of one `receive`.
+    pub timeout: Duration,
+}
+
+impl SlcanTcp {
+    /// Connects to `127.0.0.1:port`, retrying for up to `patience`.
+    pub fn connect(port: u16, patience: Duration) -> Result<SlcanTcp, String> {
+        let t0 = Instant::now();
+        loop {
+            match TcpStream::connect(("127.0.0.1", port)) {
+                Ok(stream) => {
+                    let _ = stream.set_nodelay(true);
+                    return Ok(SlcanTcp {
+                        stream,
+                        dec: Decoder::new(),
+                        buf: Vec::new(),
+                        pos: 0,
+                        bad_lines: 0,
+                        timeout: Duration::from_secs(10),
+                    });
+                }
+                Err(e) if t0.elapsed() > patience => {
+                    return Err(format!("connect to 127.0.0.1:{port}: {e}"))
+                }
+                Err(_) => std::thread::sleep(Duration::from_millis(50)),
+            }
+        }
+    }
+
+    /// Writes raw bytes (for tests that send garbage).
+    pub fn write_raw(&mut self, bytes: &[u8]) -> std::io::Result<()> {
+        self.stream.write_all(bytes)
+    }
+
+    fn next_byte(&mut self, deadline: Instant) -> Result<u8, LinkError> {
+        if self.pos >= self.buf.len() {
+            let left = deadline.saturating_duration_since(Instant::now());
+            if left.is_zero() {
+                return Err(LinkError::Timeout);
+            }
+            self.stream
+                .set_read_timeout(Some(left))
+                .map_err(LinkError::Io)?;
+            self.buf.resize(4096, 0);
+            match self.stream.read(&mut self.buf) {
+                Ok(0) => return Err(LinkError::Closed),
+                Ok(n) => {
+                    self.buf.truncate(n);
+                    self.pos = 0;
+                }
+                Err(e)
+                    if matches!(
+                        e.kind(),
+                        std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut
+                    ) =>
+                {
+                    self.buf.clear();
+                    return Err(LinkError::Timeout);
+                }
+                Err(e) => return Err(LinkError::Io(e)),
+            }
+        }
+        let b = self.buf.get(self.pos).copied().ok_or(LinkError::Timeout)?;
+        self.pos += 1;
+        Ok(b)
+    }
+}
+
+impl Can for SlcanTcp {
+    type Frame = CanFrame;
+    type Error = LinkError;
+
+    fn transmit(&mut self, frame: &CanFrame) -> Result<(), LinkError> {
+        let mut line = [0u8; slcan::MAX_LINE];
+        self.stream
+            .write_all(slcan::encode(frame, &mut line))
+            .map_err(LinkError::Io)
+    }
+
+    fn receive(&mut self) -> Result<CanFrame, LinkError> {
+        let deadline = Instant::now() + self.timeout;
+        loop {
+            let b = self.next_byte(deadline)?;
+            match self.dec.push(b) {
+                Some(Ok(Line::Frame(f))) => return Ok(f),
+                Some(Err(_)) => self.bad_lines += 1,
+                _ => {}
+            }
+        }
+    }
+}
+
+/// A device on the other end of a [`SlcanTcp`] link.
+pub struct Device {
+    /// The link.
+    pub link: SlcanTcp,
+    rx_result: Reassembler<MSG_BUF>,
+    rx_status: Reassembler<MSG_BUF>,
+    seq: [u8; 2],
+    t0: Instant,
+}
+
+impl Device {
+    /// Wraps a connected link.
+    pub fn new(link: SlcanTcp) -> Device {
+        Device {
+            link,
+            rx_result: Reassembler::new(),
+            rx_status: Reassembler::new(),
+            seq: [0; 2],
+            t0: Instant::now(),
+        }
+    }
+
+    /// Sends one message on its identifier; returns the sequence number used.
+    pub fn send(&mut self, msg: &Msg) -> Result<u8, String> {
+        let cid = id::of(msg.msg_type());
+        let k = usize::from(cid == id::CONFIG);
+        let seq = self.seq[k];
+        self.seq[k] = seq.wrapping_add(1);
+        link::send_blocking(&mut self.link, cid, seq, msg).map_err(|e| e.to_string())?;
+        Ok(seq)
+    }
+
+    /// The next message from the device, waiting at most `timeout`.
+    pub fn recv(&mut self, timeout: Duration) -> Result<Msg, String> {
+        let deadline = Instant::now() + timeout;
+        loop {
+            let left = deadline.saturating_duration_since(Instant::now());
+            if left.is_zero() {
+                return Err("no answer from the device (timed out)".into());
+            }
+            self.link.timeout = left;
+            let f = self.link.receive().map_err(|e| e.to_string())?;
+            let now = self.t0.elapsed().as_millis() as u32;
+            let fed = match link::standard_id(&f) {
+                Some(id::RESULT) => self.rx_result.feed(f.data(), now),
+                Some(id::STATUS) => self.rx_status.feed(f.data(), now),
+                _ => continue,
+            };
+            if let Feed::Done(m) = fed {
+                return Ok(m);
+            }
+        }
+    }
+
+    /// Frames and drops seen from the device's side of the bus (result + status identifiers).
+    pub fn rx_counters(&self) -> gough::proto::Counters {
+        let mut c = *self.rx_result.counters();
+        c.add(self.rx_status.counters());
+        c
+    }
+
+    /// Waits for an `Ack` of a request type, skipping other messages.
+    pub fn wait_ack(&mut self, of: MsgType, timeout: Duration) -> Result<AckCode, String> {
+        let deadline = Instant::now() + timeout;
+        loop {
+            let left = deadline.saturating_duration_since(Instant::now());
+            match self.recv(left)? {
+                Msg::Ack(a) if a.of == of as u8 => return Ok(a.code),
+                _ => continue,
+            }
+        }
+    }
+
+    /// Asks for and returns the device's status.
+    pub fn status(&mut self, timeout: Duration) -> Result<Status, String> {
+        self.send(&Msg::Command(Command::StatusRequest))?;
+        let deadline = Instant::now() + timeout;
+        loop {
+            let left = deadline.saturating_duration_since(Instant::now());
+            if let Msg::Status(s) = self.recv(left)? {
+                return Ok(s);
+            }
+        }
+    }
+
+    /// Uploads a `.tir` text: begin (acknowledged), chunks, commit (acknowledged). The device
+    /// parses and validates it before use; its error comes back as a message naming the line.
+    pub fn upload_tir(&mut self, text: &[u8]) -> Result<u32, String> {
+        let hash = crc32(text);
+        let len = u32::try_from(text.len()).map_err(|_| "tyre file too long")?;
+        self.send(&Msg::ParamBegin(ParamBegin { len, hash }))?;
+        match self.wait_ack(MsgType::ParamBegin, Duration::from_secs(10))? {
+            AckCode::Ok => {}
+            c => return Err(format!("device refused the upload: {c:?}")),
+        }
+        for (i, c) in text.chunks(CHUNK_LEN).enumerate() {
+            let data = Bytes::new(c).ok_or("chunk too long")?;
+            let offset = (i * CHUNK_LEN) as u32;
+            self.send(&Msg::ParamChunk(ParamChunk { offset, data }))?;
+        }
+        self.send(&Msg::ParamCommit(ParamCommit { hash }))?;
+        match self.wait_ack(MsgType::ParamCommit, Duration::from_secs(30))? {
+            AckCode::Ok => Ok(hash),
+            AckCode::TirError { line } => {
+                Err(format!("the device rejected the tyre file at line {line}"))
+            }
+            c => Err(format!("upload failed: {c:?}")),
+        }
+    }
+
+    /// Sends `Command::Stop` and returns the final status.
+    pub fn stop(&mut self, timeout: Duration) -> Result<Status, String> {
+        self.send(&Msg::Command(Command::Stop))?;
+        let deadline = Instant::now() + timeout;
+        loop {
+            let left = deadline.saturating_duration_since(Instant::now());
+            if let Msg::Status(s) = self.recv(left)? {
+                return Ok(s);
+            }
+        }
+    }
+}

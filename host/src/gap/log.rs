@@ -1,0 +1,246 @@
+//! The measurement log of a gap diagnosis: a CSV with a header, SI units, ISO-W axes.
+//!
+//! Required columns `t,vx,alpha,kappa,gamma,fz,fx,fy,mz`; optional `p` (inflation pressure
+//! \[Pa\]; absent means INFLPRES), `phit` (turn slip \[1/m\]) and `mu` (reference road friction,
+//! on the tyre file's scale, see `shared/design/architecture.md`); other columns are ignored.
+//! Every error is one line naming the file, the line and the column.
+
+use crate::csvio;
+use std::path::Path;
+
+/// The required columns, in the order [`Log`] keeps them.
+pub const REQUIRED: [&str; 9] = ["t", "vx", "alpha", "kappa", "gamma", "fz", "fx", "fy", "mz"];
+
+/// The fewest data rows a log may have: five cross-validation blocks of 20 rows.
+pub const MIN_ROWS: usize = 100;
+
+/// A log, column by column. SI units, ISO-W axes at the contact point.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Log {
+    /// Time \[s\], strictly increasing.
+    pub t: Vec<f64>,
+    /// Forward speed of the wheel centre Vx \[m/s\].
+    pub vx: Vec<f64>,
+    /// Slip angle α \[rad\] (α > 0 gives Fy < 0).
+    pub alpha: Vec<f64>,
+    /// Longitudinal slip κ \[-\].
+    pub kappa: Vec<f64>,
+    /// Inclination γ \[rad\].
+    pub gamma: Vec<f64>,
+    /// Vertical load Fz \[N\].
+    pub fz: Vec<f64>,
+    /// Measured Fx, Fy \[N\] and Mz \[N·m\], as `[fx, fy, mz]` per row.
+    pub meas: Vec<[f64; 3]>,
+    /// Inflation pressure \[Pa\], when logged.
+    pub p: Option<Vec<f64>>,
+    /// Turn slip φt \[1/m\], when logged.
+    pub phit: Option<Vec<f64>>,
+    /// Reference road friction μ \[-\], when logged.
+    pub mu: Option<Vec<f64>>,
+    /// 1-based file line of each row (for error messages); empty for generated logs.
+    pub lines: Vec<usize>,
+}
+
+impl Log {
+    /// Number of rows.
+    pub fn len(&self) -> usize {
+        self.t.len()
+    }
+
+    /// No rows.
+    pub fn is_empty(&self) -> bool {
+        self.t.is_empty()
+    }
+
+    /// File line of row `i` (or `i + 2` for a generated log: header on line 1).
+    pub fn line(&self, i: usize) -> usize {
+        self.lines.get(i).copied().unwrap_or(i + 2)
+    }
+
+    /// Pressure of row `i` \[Pa\], `None` when the log has no `p` column.
+    pub fn p_at(&self, i: usize) -> Option<f64> {
+        self.p.as_ref().and_then(|p| p.get(i).copied())
+    }
+
+    /// Turn slip of row `i` \[1/m\] (0 when not logged).
+    pub fn phit_at(&self, i: usize) -> f64 {
+        self.phit
+            .as_ref()
+            .and_then(|p| p.get(i).copied())
+            .unwrap_or(0.0)
+    }
+
+    /// Kinematic slip speeds of row `i` from the logged slips: (Vsx, Vsy) \[m/s\] with
+    /// κ = −Vsx/|Vx| and tan α = Vsy/|Vx| (the sign conventions of `gough::relax`).
+    pub fn slip_velocity(&self, i: usize) -> (f64, f64) {
+        let v = self.vx[i].abs();
+        (-self.kappa[i] * v, self.alpha[i].tan() * v)
+    }
+
+    /// Slip speed |Vs| = √(Vsx² + Vsy²) of row `i` \[m/s\].
+    pub fn slip_speed(&self, i: usize) -> f64 {
+        let (a, b) = self.slip_velocity(i);
+        a.hypot(b)
+    }
+
+    /// Checks what the diagnosis relies on: equal column lengths, strictly increasing time,
+    /// positive pressure, enough rows. `name` is the file for messages.
+    pub fn validate(&self, name: &str) -> Result<(), String> {
+        let n = self.len();
+        let lens = [
+            self.vx.len(),
+            self.alpha.len(),
+            self.kappa.len(),
+            self.gamma.len(),
+            self.fz.len(),
+            self.meas.len(),
+        ];
+        if lens.iter().any(|&l| l != n)
+            || [&self.p, &self.phit, &self.mu]
+                .iter()
+                .any(|c| c.as_ref().is_some_and(|c| c.len() != n))
+        {
+            return Err(format!("{name}: columns of unequal length"));
+        }
+        for i in 1..n {
+            if self.t[i] <= self.t[i - 1] {
+                return Err(format!(
+                    "{name}: line {}, column t: time is not increasing ({} after {})",
+                    self.line(i),
+                    self.t[i],
+                    self.t[i - 1]
+                ));
+            }
+        }
+        if let Some(p) = &self.p {
+            if let Some(i) = p.iter().position(|&x| x <= 0.0) {
+                return Err(format!(
+                    "{name}: line {}, column p: inflation pressure must be > 0 Pa, got {}",
+                    self.line(i),
+                    p[i]
+                ));
+            }
+        }
+        if n < MIN_ROWS {
+            return Err(format!(
+                "{name}: {n} data rows; the diagnosis needs at least {MIN_ROWS} \
+                 (5 cross-validation blocks of 20)"
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// One row of a log file.
+#[derive(Debug, Clone, Copy, serde::Deserialize)]
+struct Row {
+    t: f64,
+    vx: f64,
+    alpha: f64,
+    kappa: f64,
+    gamma: f64,
+    fz: f64,
+    fx: f64,
+    fy: f64,
+    mz: f64,
+    #[serde(default)]
+    p: Option<f64>,
+    #[serde(default)]
+    phit: Option<f64>,
+    #[serde(default)]
+    mu: Option<f64>,
+}
+
+/// Reads and validates a log. The error is one line: `FILE: line N, column C: what`.
+pub fn read(path: &Path) -> Result<Log, String> {
+    let rows = csvio::read::<Row>(path).map_err(|e| e.to_string())?;
+    let log = from_rows(&rows);
+    log.validate(&path.display().to_string())?;
+    Ok(log)
+}
+
+/// Parses log text already in memory (as [`read`]; `name` names it in errors).
+pub fn parse(text: &str, name: &str) -> Result<Log, String> {
+    let rows = csvio::parse::<Row>(text, Path::new(name)).map_err(|e| e.to_string())?;
+    let log = from_rows(&rows);
+    log.validate(name)?;
+    Ok(log)
+}
+
+fn from_rows(t: &csvio::Rows<Row>) -> Log {
+    let col = |f: fn(&Row) -> f64| -> Vec<f64> { t.rows.iter().map(f).collect() };
+    let opt = |name: &str, f: fn(&Row) -> Option<f64>| -> Option<Vec<f64>> {
+        t.has(name)
+            .then(|| t.rows.iter().map(|r| f(r).unwrap_or(0.0)).collect())
+    };
+    Log {
+        t: col(|r| r.t),
+        vx: col(|r| r.vx),
+        alpha: col(|r| r.alpha),
+        kappa: col(|r| r.kappa),
+        gamma: col(|r| r.gamma),
+        fz: col(|r| r.fz),
+        meas: t.rows.iter().map(|r| [r.fx, r.fy, r.mz]).collect(),
+        p: opt("p", |r| r.p),
+        phit: opt("phit", |r| r.phit),
+        mu: opt("mu", |r| r.mu),
+        lines: t.lines.clone(),
+    }
+}
+
+/// Writes a log as CSV (atomically: to `PATH.tmp`, then renamed), with the optional columns it
+/// has; 8 significant digits (far below any sensor's resolution).
+pub fn write(path: &Path, log: &Log) -> std::io::Result<()> {
+    use std::io::Write;
+    let mut header: Vec<&str> = REQUIRED.to_vec();
+    let opts: [(&str, &Option<Vec<f64>>); 3] =
+        [("p", &log.p), ("phit", &log.phit), ("mu", &log.mu)];
+    for (name, c) in &opts {
+        if c.is_some() {
+            header.push(name);
+        }
+    }
+    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir)?;
+    }
+    let tmp = path.with_extension("csv.tmp");
+    {
+        let mut w = std::io::BufWriter::new(std::fs::File::create(&tmp)?);
+        writeln!(w, "{}", header.join(","))?;
+        for i in 0..log.len() {
+            let mut r = vec![
+                log.t[i],
+                log.vx[i],
+                log.alpha[i],
+                log.kappa[i],
+                log.gamma[i],
+                log.fz[i],
+                log.meas[i][0],
+                log.meas[i][1],
+                log.meas[i][2],
+            ];
+            for (_, c) in &opts {
+                if let Some(c) = c {
+                    r.push(c[i]);
+                }
+            }
+            let cells: Vec<String> = r
+                .iter()
+                .map(|v| {
+                    let s = format!("{v:.7e}");
+                    // 1.2345000e3 -> 1.2345e3: shorter, same value.
+                    match s.split_once('e') {
+                        Some((m, e)) if m.contains('.') => {
+                            let m = m.trim_end_matches('0').trim_end_matches('.');
+                            format!("{m}e{e}")
+                        }
+                        _ => s,
+                    }
+                })
+                .collect();
+            writeln!(w, "{}", cells.join(","))?;
+        }
+        w.flush()?;
+    }
+    std::fs::rename(&tmp, path)
+}

@@ -1,0 +1,24 @@
+//! Host side of gough: the `gough` command-line tool and the libraries behind it.
+//!
+//! Nothing here re-implements a formula of the core:
+//! - [`cli`] — the `gough` command line, one module per command group.
+//! - [`mfrun`] — CSV rows → [`gough::mf::Input`] → [`gough::mf::eval`] (`gough mf eval`).
+//! - [`sim`] — the vehicle simulation (`gough sim`).
+//! - [`gap`] — the sim-to-real gap diagnosis (`gough gap`).
+//! - [`mu`] — the friction estimator's bench, bound, map and peers (`gough mu`).
+//! - [`replay`], [`device`] — the firmware under QEMU over SLCAN/TCP (`gough replay`,
+//!   `gough firmware`); `xtask` runs its QEMU images through [`device::qemu`].
+//! - [`plot`] — fonts, ranges and labels of every PNG.
+//! - [`csvio`], [`tyre`] — reading logs and tyre files with one-line errors; [`rng`] — the
+//!   seeded random generator.
+pub mod cli;
+pub mod csvio;
+pub mod device;
+pub mod gap;
+pub mod mfrun;
+pub mod mu;
+pub mod plot;
+pub mod replay;
+pub mod rng;
+pub mod sim;
+pub mod tyre;

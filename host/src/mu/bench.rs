@@ -1,0 +1,1502 @@
+//! `gough mu bench` and `gough mu demo`: the estimators against simulated truth.
+//!
+//! The plant is the host vehicle simulation (`crate::sim`) on the bundled tyre; its per-wheel
+//! Fy, Mz, Fz, Fx pass through a sensor model — additive Gaussian noise (Mz 2 N·m rms, Fy, Fx and
+//! Fz 1 % of Fz rms, seeded) and a 10 ms pure delay — before any estimator sees them. The
+//! peers additionally get the (delayed, exact) slip angle and slip ratio, which the Gough method
+//! never reads.
+//!
+//! Metrics per estimator and case, over the four wheels:
+//! - μ error |μ̂ − μ| (mean and 95th percentile) over the samples the estimator calls
+//!   identifiable, and the share of them within twice the σ reported (whether σ is honest);
+//! - the utilisation |F|/(μ·Fz) (architecture.md) reached when the reported estimate first stays
+//!   within ±0.1 of the truth until the end of its surface (median over wheels);
+//! - latency: time from the utilisation first reaching 0.5 on a surface to the estimate staying
+//!   within ±0.1 (median over wheels);
+//! - for surfaces that change: the time from the wheel entering the new surface to the estimate
+//!   staying within ±0.1 of it;
+//! - false change alarms on constant surfaces (the Gough estimator's `change` flag).
+
+use super::peers::{HsuGerdes, Row, SlipSlope};
+use crate::rng::Rng;
+use crate::sim::{self, Log, Manoeuvre, Overrides, SimConfig};
+use clap::Args;
+use gough::math::Libm;
+use gough::mf::Params;
+use gough::mu::{Config, Estimate, GoughTable, Hold, MuEstimator, Sample, State};
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+/// Arguments of `gough mu bench`.
+#[derive(Args)]
+pub struct BenchArgs {
+    /// Tyre property file (.tir).
+    #[arg(
+        long,
+        default_value = "host-tests/data/tyres/MagicFormula61_Parameters.tir"
+    )]
+    pub tir: PathBuf,
+    /// Output directory for the table (table.md, table.csv) and the plots.
+    #[arg(long, default_value = "out/mu_bench")]
+    pub out: PathBuf,
+    /// Noise seed.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Only the first N cases (for a quick look).
+    #[arg(long)]
+    pub cases: Option<usize>,
+    /// A setting of the Gough estimator's `Config` other than its default, as NAME=VALUE
+    /// (the field's name, e.g. `trail_drop_min=0.1`); repeatable, or comma-separated.
+    #[arg(long = "set", value_name = "NAME=VALUE", value_delimiter = ',')]
+    pub set: Vec<String>,
+    /// Aligning-torque sensor noise, rms \[N·m\], added to every row the estimators see. The
+    /// sensors, not the estimator: what the estimator assumes is its own `sigma_mz` (`--set`).
+    #[arg(long, value_name = "NM", allow_negative_numbers = true, default_value_t = Sensors::default().sigma_mz)]
+    pub noise_mz: f64,
+    /// Force sensor noise (Fy, Fx, Fz), rms, as a fraction of Fz \[-\]; the estimator's own
+    /// assumption is `sigma_fy_rel` (`--set`).
+    #[arg(long, value_name = "FRACTION", allow_negative_numbers = true, default_value_t = Sensors::default().sigma_rel)]
+    pub noise_f: f64,
+    /// Pure delay of every measured channel \[s\] (rounded to the simulation's step, 1 ms).
+    #[arg(long, value_name = "S", allow_negative_numbers = true, default_value_t = Sensors::default().delay)]
+    pub delay: f64,
+}
+
+impl BenchArgs {
+    /// The sensor model these arguments ask for: each value finite and ≥ 0, the delay at most
+    /// 1 s.
+    pub fn sensors(&self) -> Result<Sensors, String> {
+        for (name, v, max) in [
+            ("--noise-mz", self.noise_mz, f64::MAX),
+            ("--noise-f", self.noise_f, f64::MAX),
+            ("--delay", self.delay, 1.0),
+        ] {
+            if !(v.is_finite() && (0.0..=max).contains(&v)) {
+                return Err(format!(
+                    "{name} {v}: expected a finite value from 0 to {}",
+                    if max < f64::MAX { "1 s" } else { "any size" }
+                ));
+            }
+        }
+        Ok(Sensors {
+            sigma_mz: self.noise_mz,
+            sigma_rel: self.noise_f,
+            delay: self.delay,
+        })
+    }
+}
+
+/// Sets one field of the estimator's configuration from `NAME=VALUE` (the field's name as in
+/// [`Config`]; SI units as documented there).
+pub fn set_config(c: &mut Config<f64>, kv: &str) -> Result<(), String> {
+    let (k, v) = kv
+        .split_once('=')
+        .ok_or_else(|| format!("--set {kv}: expected NAME=VALUE"))?;
+    let (k, v) = (k.trim(), v.trim());
+    let num = || -> Result<f64, String> {
+        v.parse::<f64>()
+            .ok()
+            .filter(|x| x.is_finite())
+            .ok_or_else(|| format!("--set {k}: '{v}' is not a finite number"))
+    };
+    let count = || -> Result<u16, String> {
+        v.parse::<u16>()
+            .map_err(|_| format!("--set {k}: '{v}' is not a count (0..=65535)"))
+    };
+    let f = match k {
+        "change_count" => {
+            c.change_count = count()?;
+            return Ok(());
+        }
+        "init_count" => {
+            c.init_count = count()?;
+            return Ok(());
+        }
+        "gamma" => &mut c.gamma,
+        "sigma_mz" => &mut c.sigma_mz,
+        "sigma_fy_rel" => &mut c.sigma_fy_rel,
+        "vx_min" => &mut c.vx_min,
+        "fz_min_rel" => &mut c.fz_min_rel,
+        "fy_min_rel" => &mut c.fy_min_rel,
+        "fy_share_min" => &mut c.fy_share_min,
+        "trail_drop_min" => &mut c.trail_drop_min,
+        "trail_drop_abs_min" => &mut c.trail_drop_abs_min,
+        "sigma_max" => &mut c.sigma_max,
+        "trail_model_rel" => &mut c.trail_model_rel,
+        "arm_model_rel" => &mut c.arm_model_rel,
+        "combined_model_rel" => &mut c.combined_model_rel,
+        "combined_force_rel" => &mut c.combined_force_rel,
+        "mzr_model_rel" => &mut c.mzr_model_rel,
+        "q" => &mut c.q,
+        "gate" => &mut c.gate,
+        "gate_sigma_max" => &mut c.gate_sigma_max,
+        "change_min" => &mut c.change_min,
+        "run_gap" => &mut c.run_gap,
+        "mu_prior" => &mut c.mu_prior,
+        "sigma_prior" => &mut c.sigma_prior,
+        "lowpass_tau" => &mut c.lowpass_tau,
+        "settle" => &mut c.settle,
+        "settle_distance" => &mut c.settle_distance,
+        "ambiguity_sigmas" => &mut c.ambiguity_sigmas,
+        "ambiguity_margin" => &mut c.ambiguity_margin,
+        _ => {
+            return Err(format!(
+                "--set {k}: no such setting of the estimator's Config"
+            ))
+        }
+    };
+    *f = num()?;
+    Ok(())
+}
+
+/// Arguments of `gough mu demo`.
+#[derive(Args)]
+pub struct DemoArgs {
+    /// Tyre property file (.tir).
+    #[arg(
+        long,
+        default_value = "host-tests/data/tyres/MagicFormula61_Parameters.tir"
+    )]
+    pub tir: PathBuf,
+    /// Manoeuvre (one of the simulation's).
+    #[arg(long, default_value = "sine-dwell")]
+    pub manoeuvre: String,
+    /// Road (the simulation's spec grammar).
+    #[arg(long, default_value = "mu=1.0+patch=0.4@45..300")]
+    pub road: String,
+    /// Output directory (estimates.csv, mu.png, gough.png).
+    #[arg(long, default_value = "out/demo")]
+    pub out: PathBuf,
+    /// Noise seed.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+}
+
+/// Sensor model of the benchmark.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Sensors {
+    /// Mz noise rms \[N·m\].
+    pub sigma_mz: f64,
+    /// Fy, Fx, Fz noise rms as a fraction of Fz.
+    pub sigma_rel: f64,
+    /// Pure delay \[s\].
+    pub delay: f64,
+}
+
+impl Default for Sensors {
+    fn default() -> Self {
+        Sensors {
+            sigma_mz: 2.0,
+            sigma_rel: 0.01,
+            delay: 0.010,
+        }
+    }
+}
+
+/// One wheel's measured rows (noisy, delayed) and its truth, per logged step.
+pub struct WheelTrace {
+    /// What the estimators see.
+    pub rows: Vec<Row>,
+    /// True μ under the wheel at the (undelayed) time of each row.
+    pub mu_true: Vec<f64>,
+    /// True utilisation |F|/(μ·Fz) at each row.
+    pub util: Vec<f64>,
+    /// Camber γ \[rad\] (delayed): static plus roll camber, known to an ECU from the suspension
+    /// kinematics and the roll estimate.
+    pub gamma: Vec<f64>,
+}
+
+impl WheelTrace {
+    /// Row `i` as the Gough estimator's sample (Fx, Vx and camber carried; no slip).
+    pub fn sample(&self, i: usize) -> Sample<f64> {
+        let r = &self.rows[i];
+        Sample {
+            t: r.t,
+            fz: r.fz,
+            fy: r.fy,
+            mz: r.mz,
+            fx: Some(r.fx),
+            vx: Some(r.vx),
+            gamma: self.gamma.get(i).copied(),
+        }
+    }
+}
+
+/// Applies the sensor model to wheel `w` of a log.
+pub fn measure(log: &Log, w: usize, s: &Sensors, seed: u64) -> WheelTrace {
+    let mut n = Rng::new(
+        seed.wrapping_mul(0x9E37_79B9_7F4A_7C15)
+            .wrapping_add(w as u64 + 1),
+    );
+    let lag = (s.delay / log.dt).round() as usize;
+    let recs = &log.records;
+    let mut tr = WheelTrace {
+        rows: Vec::with_capacity(recs.len()),
+        mu_true: Vec::with_capacity(recs.len()),
+        util: Vec::with_capacity(recs.len()),
+        gamma: Vec::with_capacity(recs.len()),
+    };
+    for (i, r) in recs.iter().enumerate() {
+        let src = &recs[i.saturating_sub(lag)].wheels[w];
+        let fz = src.fz.max(0.0);
+        let sr = s.sigma_rel * fz;
+        tr.rows.push(Row {
+            t: r.t,
+            fz: fz + sr * n.normal(),
+            fy: src.fy + sr * n.normal(),
+            mz: src.mz + s.sigma_mz * n.normal(),
+            fx: src.fx + sr * n.normal(),
+            vx: src.vx,
+            alpha: src.alpha,
+            kappa: src.kappa,
+        });
+        tr.gamma.push(src.gamma);
+        let now = &r.wheels[w];
+        tr.mu_true.push(now.mu_true);
+        tr.util.push(if now.fz > 0.0 && now.mu_true > 0.0 {
+            now.fx.hypot(now.fy) / (now.mu_true * now.fz)
+        } else {
+            0.0
+        });
+    }
+    tr
+}
+
+/// The estimators compared.
+pub const METHODS: [&str; 3] = ["gough", "hsu-gerdes", "slip-slope"];
+
+/// The Gough tables of the left and right wheels: the simulation mounts the tyre on both sides
+/// (mirrored where the side differs from the file's TYRESIDE), so does the estimator.
+pub struct Tables {
+    left: Box<GoughTable<f64>>,
+    right: Box<GoughTable<f64>>,
+}
+
+impl Tables {
+    /// For both sides of the vehicle.
+    pub fn new(p: &Params<f64>) -> Result<Tables, String> {
+        use gough::mf::Side;
+        Ok(Tables {
+            left: super::table::<f64, Libm>(p, Some(Side::Left))?,
+            right: super::table::<f64, Libm>(p, Some(Side::Right))?,
+        })
+    }
+    /// Table of wheel `w` (fl, fr, rl, rr).
+    pub fn wheel(&self, w: usize) -> &GoughTable<f64> {
+        if w.is_multiple_of(2) {
+            &self.left
+        } else {
+            &self.right
+        }
+    }
+}
+
+/// Runs estimator `m` (index into [`METHODS`]) over wheel `w`'s trace.
+pub fn run_method(
+    m: usize,
+    p: &Params<f64>,
+    tables: &Tables,
+    w: usize,
+    tr: &WheelTrace,
+) -> Vec<Estimate<f64>> {
+    match m {
+        0 => run_gough(p, tables, w, tr, &Config::default()).0,
+        1 => match HsuGerdes::new(p) {
+            Some(mut e) => tr.rows.iter().map(|r| e.update(r)).collect(),
+            None => Vec::new(),
+        },
+        _ => match SlipSlope::new(p) {
+            Some(mut e) => tr.rows.iter().map(|r| e.update(r)).collect(),
+            None => Vec::new(),
+        },
+    }
+}
+
+/// The Gough estimator (settings `cfg`) over wheel `w`'s trace: its estimates and, per sample,
+/// why each held estimate was held ([`MuEstimator::last_hold`]).
+pub fn run_gough(
+    p: &Params<f64>,
+    tables: &Tables,
+    w: usize,
+    tr: &WheelTrace,
+    cfg: &Config<f64>,
+) -> super::Run {
+    let mut e = MuEstimator::for_tyre(tables.wheel(w), p, *cfg);
+    (0..tr.rows.len())
+        .map(|i| (e.update::<Libm>(&tr.sample(i)), e.last_hold()))
+        .unzip()
+}
+
+/// Where the Gough estimator's latency goes on one case: over each wheel's surfaces that reach
+/// utilisation 0.5, the samples of the target's window — from that moment until the estimate
+/// settles within ±0.1, at most [`TARGET_LATENCY`] — by what the estimator reported.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct HoldTally {
+    /// Samples held, per [`Hold::ALL`] reason.
+    pub held: [usize; Hold::ALL.len()],
+    /// Samples reported identifiable but not yet (for good) within ±0.1.
+    pub identifiable: usize,
+    /// Wheel-surfaces that reach utilisation 0.5.
+    pub windows: usize,
+    /// Of them, those whose estimate settles within ±0.1 within [`TARGET_LATENCY`].
+    pub within: usize,
+}
+
+/// The issue's latency target: within ±0.1 this long after utilisation 0.5 \[s\].
+pub const TARGET_LATENCY: f64 = 0.150;
+
+impl HoldTally {
+    /// All samples of the windows.
+    pub fn total(&self) -> usize {
+        self.held.iter().sum::<usize>() + self.identifiable
+    }
+
+    /// Adds another tally's samples and windows.
+    pub fn add(&mut self, o: &HoldTally) {
+        for (a, b) in self.held.iter_mut().zip(o.held) {
+            *a += b;
+        }
+        self.identifiable += o.identifiable;
+        self.windows += o.windows;
+        self.within += o.within;
+    }
+
+    /// Shares of the samples \[held per [`Hold::ALL`] reason…, identifiable\] (0 when empty).
+    pub fn shares(&self) -> Vec<f64> {
+        let n = self.total().max(1) as f64;
+        self.held
+            .iter()
+            .chain([&self.identifiable])
+            .map(|&k| k as f64 / n)
+            .collect()
+    }
+}
+
+/// [`HoldTally`] of the Gough estimator's estimates `est` and reasons `holds` on the traces.
+pub fn hold_tally(
+    traces: &[WheelTrace],
+    ests: &[Vec<Estimate<f64>>],
+    holds: &[Vec<Option<Hold>>],
+) -> HoldTally {
+    let mut out = HoldTally::default();
+    for ((tr, est), hs) in traces.iter().zip(ests).zip(holds) {
+        if est.len() != tr.rows.len() || hs.len() != tr.rows.len() {
+            continue;
+        }
+        for (a, b) in segments(&tr.mu_true) {
+            let Some(i5) = (a..b).find(|&i| tr.util[i] >= 0.5) else {
+                continue;
+            };
+            let ok = settled(tr, est, a, b);
+            let deadline = tr.rows[i5].t + TARGET_LATENCY;
+            let mut end = (i5..b).find(|&i| tr.rows[i].t > deadline).unwrap_or(b);
+            if let Some(ok) = ok {
+                end = end.min(ok.max(i5));
+            }
+            for h in &hs[i5..end] {
+                match h.and_then(|h| Hold::ALL.iter().position(|&x| x == h)) {
+                    Some(k) => out.held[k] += 1,
+                    None => out.identifiable += 1,
+                }
+            }
+            out.windows += 1;
+            let lat = ok.and_then(|ok| latency_from(tr, a, b, ok));
+            out.within += usize::from(lat.is_some_and(|l| l <= TARGET_LATENCY));
+        }
+    }
+    out
+}
+
+/// Metrics of one estimator on one case (all wheels).
+#[derive(Debug, Clone, Default)]
+pub struct Metrics {
+    /// Samples called identifiable.
+    pub n_identifiable: usize,
+    /// Mean |error| while identifiable.
+    pub err_mean: Option<f64>,
+    /// 95th percentile |error| while identifiable.
+    pub err_p95: Option<f64>,
+    /// Share of the identifiable samples with |error| ≤ 2σ (σ as reported).
+    pub within_2sigma: Option<f64>,
+    /// Median utilisation at which the estimate first stays within ±0.1.
+    pub util_within: Option<f64>,
+    /// Median latency from utilisation 0.5 to staying within ±0.1 \[s\].
+    pub latency: Option<f64>,
+    /// Median time from a change of surface to staying within ±0.1 of the new μ \[s\].
+    pub detect: Option<f64>,
+    /// Change alarms on constant surfaces.
+    pub false_alarms: usize,
+}
+
+pub(crate) fn median(mut v: Vec<f64>) -> Option<f64> {
+    if v.is_empty() {
+        return None;
+    }
+    v.sort_by(f64::total_cmp);
+    Some(v[v.len() / 2])
+}
+
+/// Segments of constant true μ: (start, end) index ranges.
+pub(crate) fn segments(mu: &[f64]) -> Vec<(usize, usize)> {
+    let mut out = Vec::new();
+    let mut s = 0;
+    for i in 1..=mu.len() {
+        if i == mu.len() || (mu[i] - mu[s]).abs() > 1e-9 {
+            out.push((s, i));
+            s = i;
+        }
+    }
+    out
+}
+
+/// First row of segment `a..b` from which the reported estimate stays within ±0.1 of the truth
+/// to the segment's end, held for at least 50 rows ("stays").
+fn settled(tr: &WheelTrace, est: &[Estimate<f64>], a: usize, b: usize) -> Option<usize> {
+    let mut first_ok = None;
+    for i in (a..b).rev() {
+        let e = &est[i];
+        if e.state == State::Fallback || (e.mu - tr.mu_true[i]).abs() > 0.1 {
+            break;
+        }
+        first_ok = Some(i);
+    }
+    first_ok.filter(|&ok| b - ok >= 50)
+}
+
+/// Time from the utilisation first reaching 0.5 in segment `a..b` to row `ok` \[s\].
+fn latency_from(tr: &WheelTrace, a: usize, b: usize, ok: usize) -> Option<f64> {
+    (a..b)
+        .find(|&i| tr.util[i] >= 0.5)
+        .map(|i5| (tr.rows[ok].t - tr.rows[i5].t).max(0.0))
+}
+
+/// Latency of one wheel on segment `a..b` (rows of constant true μ): from the utilisation
+/// first reaching 0.5 to the estimate staying within ±0.1 \[s\], as [`metrics`] takes it.
+pub fn segment_latency(tr: &WheelTrace, est: &[Estimate<f64>], a: usize, b: usize) -> Option<f64> {
+    if est.len() != tr.rows.len() {
+        return None;
+    }
+    latency_from(tr, a, b, settled(tr, est, a, b)?)
+}
+
+/// Metrics of estimates `est` against the trace(s).
+pub fn metrics(traces: &[WheelTrace], ests: &[Vec<Estimate<f64>>]) -> Metrics {
+    let mut errs = Vec::new();
+    let (mut utils, mut lats, mut dets) = (Vec::new(), Vec::new(), Vec::new());
+    let mut false_alarms = 0;
+    let mut covered = 0;
+    for (tr, est) in traces.iter().zip(ests) {
+        if est.len() != tr.rows.len() {
+            continue;
+        }
+        for (i, e) in est.iter().enumerate() {
+            if e.state == State::Identifiable {
+                let err = (e.mu - tr.mu_true[i]).abs();
+                errs.push(err);
+                covered += usize::from(err <= 2.0 * e.sigma);
+            }
+        }
+        let segs = segments(&tr.mu_true);
+        for (k, &(a, b)) in segs.iter().enumerate() {
+            // false alarms: change flags more than 0.3 s into a segment whose μ does not change
+            let settle = tr.rows[a].t + 0.3;
+            false_alarms += (a..b)
+                .filter(|&i| est[i].change && tr.rows[i].t > settle)
+                .count();
+            let Some(ok) = settled(tr, est, a, b) else {
+                continue;
+            };
+            let umax = tr.util[a..=ok].iter().copied().fold(0.0, f64::max);
+            utils.push(umax);
+            if let Some(l) = latency_from(tr, a, b, ok) {
+                lats.push(l);
+            }
+            if k > 0 {
+                dets.push(tr.rows[ok].t - tr.rows[a].t);
+            }
+        }
+    }
+    let n = errs.len();
+    let err_mean = (n > 0).then(|| errs.iter().sum::<f64>() / n as f64);
+    let err_p95 = (n > 0).then(|| {
+        errs.sort_by(f64::total_cmp);
+        errs[((n as f64 * 0.95) as usize).min(n - 1)]
+    });
+    Metrics {
+        n_identifiable: n,
+        err_mean,
+        err_p95,
+        within_2sigma: (n > 0).then(|| covered as f64 / n as f64),
+        util_within: median(utils),
+        latency: median(lats),
+        detect: median(dets),
+        false_alarms,
+    }
+}
+
+/// A benchmark case: a manoeuvre on a road.
+#[derive(Debug, Clone)]
+pub struct Case {
+    /// Manoeuvre name.
+    pub manoeuvre: &'static str,
+    /// Road spec.
+    pub road: String,
+}
+
+/// The suite: every manoeuvre on μ = 1.0, 0.7, 0.5, 0.3, 0.1, plus surface changes.
+pub fn suite() -> Vec<Case> {
+    let mut v = Vec::new();
+    for m in [
+        "step-steer",
+        "sine-dwell",
+        "brake-in-turn",
+        "constant-radius",
+        "slalom",
+    ] {
+        for mu in ["1.0", "0.7", "0.5", "0.3", "0.1"] {
+            v.push(Case {
+                manoeuvre: m,
+                road: format!("mu={mu}"),
+            });
+        }
+    }
+    v.push(Case {
+        manoeuvre: "abs-split",
+        road: "split=0.9/0.2".into(),
+    });
+    v.push(Case {
+        manoeuvre: "sine-dwell",
+        road: "mu=1.0+patch=0.4@45..300".into(),
+    });
+    v.push(Case {
+        manoeuvre: "slalom",
+        road: "step=1.0@0,0.3@90".into(),
+    });
+    v.push(Case {
+        manoeuvre: "constant-radius",
+        road: "mu=0.9+patch=0.3@-5..5".into(),
+    });
+    v
+}
+
+/// A CSV field as RFC 4180 has it: quoted (inner quotes doubled) when it holds a comma, a quote
+/// or a line break — a road spec such as `step=1.0@0,0.3@90` does.
+pub(crate) fn csv_field(s: &str) -> std::borrow::Cow<'_, str> {
+    if s.contains([',', '"', '\n', '\r']) {
+        format!("\"{}\"", s.replace('"', "\"\"")).into()
+    } else {
+        s.into()
+    }
+}
+
+fn fmt(x: Option<f64>, digits: usize) -> String {
+    x.map_or("–".into(), |v| format!("{v:.digits$}"))
+}
+
+/// Simulates a case.
+pub fn simulate_case(p: &Params<f64>, c: &Case) -> Result<Log, String> {
+    let m = Manoeuvre::by_name(c.manoeuvre, &Overrides::default())?;
+    let mut cfg = SimConfig::new(m);
+    cfg.road = sim::Road::parse(&c.road)?;
+    sim::simulate(&cfg, p, false)
+}
+
+/// Runs the benchmark.
+pub fn run(a: BenchArgs) -> Result<(), String> {
+    let mut cfg = Config::default();
+    for kv in &a.set {
+        set_config(&mut cfg, kv)?;
+    }
+    let sensors = a.sensors()?;
+    let t = crate::tyre::load(&a.tir)?;
+    let p = t.params;
+    let tables = Tables::new(&p)?;
+    let mut cases = suite();
+    if let Some(n) = a.cases {
+        cases.truncate(n);
+    }
+    std::fs::create_dir_all(&a.out).map_err(|e| format!("{}: {e}", a.out.display()))?;
+    let mut md = String::new();
+    let _ = writeln!(md, "| manoeuvre | road | estimator | identifiable samples | mean err | p95 err | within 2σ | util when within ±0.1 | latency from util 0.5 [s] | detect change [s] | false alarms |");
+    let _ = writeln!(md, "|---|---|---|---|---|---|---|---|---|---|---|");
+    let mut csv = String::from("manoeuvre,road,estimator,n_identifiable,err_mean,err_p95,within_2sigma,util_within,latency_s,detect_s,false_alarms\n");
+    let bar = indicatif::ProgressBar::new(cases.len() as u64);
+    let mut tallies: Vec<(&Case, HoldTally)> = Vec::new();
+    let mut gough_wins = 0;
+    let mut comparable = 0;
+    for c in &cases {
+        bar.set_message(format!("{} on {}", c.manoeuvre, c.road));
+        let log = simulate_case(&p, c)?;
+        let traces: Vec<WheelTrace> = (0..4).map(|w| measure(&log, w, &sensors, a.seed)).collect();
+        let mut ms = Vec::new();
+        for (m, method) in METHODS.iter().enumerate() {
+            let ests: Vec<Vec<Estimate<f64>>> = if m == 0 {
+                let (ests, holds): (Vec<_>, Vec<_>) = traces
+                    .iter()
+                    .enumerate()
+                    .map(|(w, tr)| run_gough(&p, &tables, w, tr, &cfg))
+                    .unzip();
+                tallies.push((c, hold_tally(&traces, &ests, &holds)));
+                ests
+            } else {
+                traces
+                    .iter()
+                    .enumerate()
+                    .map(|(w, tr)| run_method(m, &p, &tables, w, tr))
+                    .collect()
+            };
+            let mt = metrics(&traces, &ests);
+            let _ = writeln!(
+                md,
+                "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
+                c.manoeuvre,
+                c.road,
+                method,
+                mt.n_identifiable,
+                fmt(mt.err_mean, 3),
+                fmt(mt.err_p95, 3),
+                mt.within_2sigma
+                    .map_or("–".into(), |x| format!("{:.1} %", 100.0 * x)),
+                fmt(mt.util_within, 2),
+                fmt(mt.latency, 3),
+                fmt(mt.detect, 3),
+                if m == 0 {
+                    mt.false_alarms.to_string()
+                } else {
+                    "n/a".into()
+                }
+            );
+            let _ = writeln!(
+                csv,
+                "{},{},{},{},{},{},{},{},{},{},{}",
+                csv_field(c.manoeuvre),
+                csv_field(&c.road),
+                method,
+                mt.n_identifiable,
+                fmt(mt.err_mean, 4),
+                fmt(mt.err_p95, 4),
+                fmt(mt.within_2sigma, 4),
+                fmt(mt.util_within, 3),
+                fmt(mt.latency, 4),
+                fmt(mt.detect, 4),
+                mt.false_alarms
+            );
+            ms.push(mt);
+        }
+        // "Better than both peers where they produce an estimate": compare p95 error.
+        for peer in &ms[1..] {
+            if let (Some(g), Some(q)) = (ms[0].err_p95, peer.err_p95) {
+                comparable += 1;
+                if g <= q {
+                    gough_wins += 1;
+                }
+            }
+        }
+        if c.road.contains("patch") || c.road.contains("step") {
+            let name = format!(
+                "{}_{}",
+                c.manoeuvre,
+                c.road.replace(['=', '+', '@', '.', ',', '/'], "_")
+            );
+            let ests: Vec<Estimate<f64>> = run_gough(&p, &tables, 0, &traces[0], &cfg).0;
+            plot_mu(
+                &traces[0],
+                &[("gough", &ests)],
+                &a.out.join(format!("mu_{name}.png")),
+                &format!("{} on {} (front left)", c.manoeuvre, c.road),
+            )?;
+        }
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    let summary = format!("\nGough estimator at or below both peers' p95 error in {gough_wins} of {comparable} comparisons where a peer produced an estimate.\n");
+    md.push_str(&summary);
+    if !a.set.is_empty() {
+        let _ = writeln!(
+            md,
+            "\nThe Gough estimator ran with these settings changed from their defaults: {}.",
+            a.set.join(", ")
+        );
+    }
+    if sensors != Sensors::default() {
+        let _ = writeln!(
+            md,
+            "\nSensor model changed from the default: Mz {} N·m rms, F {:.2} % Fz rms, {:.1} ms delay.",
+            sensors.sigma_mz,
+            100.0 * sensors.sigma_rel,
+            1000.0 * sensors.delay
+        );
+    }
+    let (holds_md, holds_csv) = hold_tables(&tallies);
+    md.push_str(&holds_md);
+    std::fs::write(a.out.join("table.md"), &md).map_err(|e| e.to_string())?;
+    std::fs::write(a.out.join("table.csv"), &csv).map_err(|e| e.to_string())?;
+    std::fs::write(a.out.join("holds.csv"), &holds_csv).map_err(|e| e.to_string())?;
+    print!("{md}");
+    eprintln!(
+        "-> {}/table.md, table.csv, holds.csv, mu_*.png",
+        a.out.display()
+    );
+    Ok(())
+}
+
+/// The "where the latency goes" table (Markdown, and CSV with one row per case and a total).
+fn hold_tables(tallies: &[(&Case, HoldTally)]) -> (String, String) {
+    let mut md = String::from(
+        "\n## Where the Gough estimator's latency goes\n\nPer case, over the wheels' surfaces that reach utilisation 0.5 (\"wheel-surfaces\"): how many settle within ±0.1 of the truth within 150 ms, and what the estimator reported over the samples of that window (from utilisation 0.5 until it settles, at most 150 ms): held, and why (`MuEstimator::last_hold`), or identifiable but not yet for good within ±0.1.\n\n| manoeuvre | road | wheel-surfaces | within 150 ms |",
+    );
+    let mut csv = String::from("manoeuvre,road,wheel_surfaces,within_150ms");
+    for h in Hold::ALL {
+        let _ = write!(md, " {} |", h.name());
+        let _ = write!(csv, ",{}", h.name());
+    }
+    md.push_str(" identifiable |\n|---|---|---|---|");
+    csv.push_str(",identifiable\n");
+    for _ in 0..=Hold::ALL.len() {
+        md.push_str("---|");
+    }
+    md.push('\n');
+    let mut total = HoldTally::default();
+    let mut row = |man: &str, road: &str, t: &HoldTally| {
+        let _ = write!(md, "| {man} | {road} | {} | {} |", t.windows, t.within);
+        let _ = write!(
+            csv,
+            "{},{},{},{}",
+            csv_field(man),
+            csv_field(road),
+            t.windows,
+            t.within
+        );
+        for x in t.shares() {
+            if t.total() == 0 {
+                md.push_str(" – |");
+                csv.push(',');
+            } else {
+                let _ = write!(md, " {:.0} % |", 100.0 * x);
+                let _ = write!(csv, ",{x:.4}");
+            }
+        }
+        md.push('\n');
+        csv.push('\n');
+    };
+    for (c, t) in tallies {
+        row(c.manoeuvre, &c.road, t);
+        total.add(t);
+    }
+    row("all", "", &total);
+    (md, csv)
+}
+
+/// The product's main job on one command: a manoeuvre on a road whose friction changes, the
+/// estimator at every wheel, a short table, plots.
+pub fn demo(a: DemoArgs) -> Result<(), String> {
+    let t = crate::tyre::load(&a.tir)?;
+    let p = t.params;
+    let tables = Tables::new(&p)?;
+    let case = Case {
+        manoeuvre: sim::MANOEUVRES
+            .iter()
+            .copied()
+            .find(|m| *m == a.manoeuvre)
+            .ok_or_else(|| {
+                format!(
+                    "unknown manoeuvre '{}' (one of {})",
+                    a.manoeuvre,
+                    sim::MANOEUVRES.join(", ")
+                )
+            })?,
+        road: a.road.clone(),
+    };
+    let log = simulate_case(&p, &case)?;
+    let sensors = Sensors::default();
+    std::fs::create_dir_all(&a.out).map_err(|e| format!("{}: {e}", a.out.display()))?;
+    let names = ["fl", "fr", "rl", "rr"];
+    let mut csv = String::from("t,wheel,mu_true,mu,sigma,state,util\n");
+    println!(
+        "{} on '{}' ({}), estimator at every wheel (noise: Mz 2 N·m, F 1 % Fz, 10 ms lag):",
+        case.manoeuvre,
+        case.road,
+        p.version.name()
+    );
+    println!("wheel | true μ (start → end) | estimate at end | state | max utilisation | within ±0.1 from util");
+    let mut first: Option<(WheelTrace, Vec<Estimate<f64>>)> = None;
+    for (w, name) in names.iter().enumerate() {
+        let tr = measure(&log, w, &sensors, a.seed);
+        let est = run_method(0, &p, &tables, w, &tr);
+        for (i, e) in est.iter().enumerate().step_by(10) {
+            let _ = writeln!(
+                csv,
+                "{:.3},{},{:.3},{:.4},{:.4},{},{:.3}",
+                tr.rows[i].t,
+                name,
+                tr.mu_true[i],
+                e.mu,
+                e.sigma,
+                e.state.name(),
+                tr.util[i]
+            );
+        }
+        let m = metrics(std::slice::from_ref(&tr), std::slice::from_ref(&est));
+        let last = est.last().copied().unwrap_or(Estimate {
+            mu: f64::NAN,
+            sigma: f64::NAN,
+            sigma_model: f64::NAN,
+            state: State::Fallback,
+            change: false,
+        });
+        println!(
+            "{:5} | {:.2} → {:.2} | {:.3} ± {:.3} | {} | {:.2} | {}",
+            name,
+            tr.mu_true.first().copied().unwrap_or(f64::NAN),
+            tr.mu_true.last().copied().unwrap_or(f64::NAN),
+            last.mu,
+            last.sigma,
+            last.state.name(),
+            tr.util.iter().copied().fold(0.0, f64::max),
+            fmt(m.util_within, 2)
+        );
+        if w == 0 {
+            // The front-left wheel's measured channels as a LOG for `gough mu estimate`.
+            let rows: Vec<Vec<f64>> = tr
+                .rows
+                .iter()
+                .zip(&tr.gamma)
+                .zip(&tr.mu_true)
+                .map(|((r, &g), &m)| {
+                    vec![r.t, r.fz, r.fy, r.mz, r.fx, r.vx, r.kappa, r.alpha, g, m]
+                })
+                .collect();
+            crate::csvio::write(
+                &a.out.join("log_fl.csv"),
+                &[
+                    "t", "fz", "fy", "mz", "fx", "vx", "kappa", "alpha", "gamma", "mu",
+                ],
+                &rows,
+            )
+            .map_err(|e| format!("{}: {e}", a.out.display()))?;
+        }
+        if first.is_none() {
+            first = Some((tr, est));
+        }
+    }
+    std::fs::write(a.out.join("estimates.csv"), csv).map_err(|e| e.to_string())?;
+    if let Some((tr, est)) = first {
+        plot_mu(
+            &tr,
+            &[("gough", &est)],
+            &a.out.join("mu.png"),
+            &format!("{} on {} (front left)", case.manoeuvre, case.road),
+        )?;
+        plot_gough(&p, &log, 0, &a.out.join("gough.png"))?;
+    }
+    eprintln!(
+        "-> {}/estimates.csv, log_fl.csv, mu.png, gough.png",
+        a.out.display()
+    );
+    Ok(())
+}
+
+/// μ against time: truth and estimates (σ band for the first).
+pub fn plot_mu(
+    tr: &WheelTrace,
+    series: &[(&str, &Vec<Estimate<f64>>)],
+    path: &Path,
+    title: &str,
+) -> Result<(), String> {
+    use plotters::prelude::*;
+    crate::plot::font()?;
+    let e = |x: &dyn std::fmt::Display| format!("{}: {x}", path.display());
+    let root = BitMapBackend::new(path, (900, 450)).into_drawing_area();
+    root.fill(&WHITE).map_err(|x| e(&x))?;
+    let t_end = tr.rows.last().map_or(1.0, |r| r.t);
+    let mut ch = ChartBuilder::on(&root)
+        .caption(title, ("sans-serif", 18))
+        .margin(10)
+        .x_label_area_size(35)
+        .y_label_area_size(45)
+        .build_cartesian_2d(0.0..t_end, 0.0..1.4)
+        .map_err(|x| e(&x))?;
+    ch.configure_mesh()
+        .x_desc("t [s]")
+        .y_desc("μ")
+        .label_style(("sans-serif", 12))
+        .draw()
+        .map_err(|x| e(&x))?;
+    let step = (tr.rows.len() / 2000).max(1);
+    ch.draw_series(LineSeries::new(
+        tr.rows
+            .iter()
+            .zip(&tr.mu_true)
+            .step_by(step)
+            .map(|(r, &m)| (r.t, m)),
+        BLACK.stroke_width(2),
+    ))
+    .map_err(|x| e(&x))?
+    .label("true μ")
+    .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 15, y)], BLACK));
+    ch.draw_series(LineSeries::new(
+        tr.rows
+            .iter()
+            .zip(&tr.util)
+            .step_by(step)
+            .map(|(r, &u)| (r.t, u.min(1.4))),
+        RGBColor(180, 180, 180),
+    ))
+    .map_err(|x| e(&x))?
+    .label("utilisation |F|/(μFz)")
+    .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 15, y)], RGBColor(180, 180, 180)));
+    let colours = [
+        RGBColor(214, 39, 40),
+        RGBColor(31, 119, 180),
+        RGBColor(44, 160, 44),
+    ];
+    for (k, (name, est)) in series.iter().enumerate() {
+        let c = colours[k % 3];
+        ch.draw_series(
+            tr.rows
+                .iter()
+                .zip(est.iter())
+                .step_by(step)
+                .filter(|(_, e)| e.state == State::Identifiable)
+                .map(|(r, e)| Circle::new((r.t, e.mu), 1, c.filled())),
+        )
+        .map_err(|x| e(&x))?
+        .label(format!("{name} (identifiable)"))
+        .legend(move |(x, y)| Circle::new((x + 7, y), 3, c.filled()));
+        ch.draw_series(LineSeries::new(
+            tr.rows
+                .iter()
+                .zip(est.iter())
+                .step_by(step)
+                .map(|(r, e)| (r.t, e.mu)),
+            c.mix(0.5),
+        ))
+        .map_err(|x| e(&x))?;
+    }
+    ch.configure_series_labels()
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .label_font(("sans-serif", 12))
+        .draw()
+        .map_err(|x| e(&x))?;
+    root.present().map_err(|x| e(&x))?;
+    Ok(())
+}
+
+/// The Gough plot: the model's Fy–Mz family for μ = 0.1…1.0 at the wheel's mean load, and the
+/// wheel's simulated trajectory.
+pub fn plot_gough(p: &Params<f64>, log: &Log, w: usize, path: &Path) -> Result<(), String> {
+    use gough::mf::{self, Input, Options};
+    use plotters::prelude::*;
+    crate::plot::font()?;
+    let e = |x: &dyn std::fmt::Display| format!("{}: {x}", path.display());
+    let fz_mean =
+        log.records.iter().map(|r| r.wheels[w].fz).sum::<f64>() / log.records.len().max(1) as f64;
+    let mu0 = log.mu_y0;
+    let mut curves = Vec::new();
+    for mu in [0.1, 0.3, 0.5, 0.7, 1.0] {
+        let mut q = p.clone();
+        q.lmux = mu / mu0;
+        q.lmuy = mu / mu0;
+        let pts: Vec<(f64, f64)> = (-120..=120)
+            .filter_map(|i| {
+                let a = i as f64 * 0.0025;
+                mf::eval::<f64, Libm>(
+                    &q,
+                    &Input {
+                        fz: fz_mean,
+                        alpha: a,
+                        vx: 20.0,
+                        ..Input::default()
+                    },
+                    &Options {
+                        limits: false,
+                        ..Options::default()
+                    },
+                )
+                .ok()
+                .map(|o| (o.mz, o.fy))
+            })
+            .collect();
+        curves.push((mu, pts));
+    }
+    let (mut mz_lo, mut mz_hi, mut fy_lo, mut fy_hi) = (0.0f64, 0.0f64, 0.0f64, 0.0f64);
+    for (_, pts) in &curves {
+        for &(m, f) in pts {
+            mz_lo = mz_lo.min(m);
+            mz_hi = mz_hi.max(m);
+            fy_lo = fy_lo.min(f);
+            fy_hi = fy_hi.max(f);
+        }
+    }
+    let root = BitMapBackend::new(path, (700, 600)).into_drawing_area();
+    root.fill(&WHITE).map_err(|x| e(&x))?;
+    let mut ch = ChartBuilder::on(&root)
+        .caption(
+            format!("Gough plot: model family at Fz = {fz_mean:.0} N, and the wheel's trajectory"),
+            ("sans-serif", 16),
+        )
+        .margin(10)
+        .x_label_area_size(35)
+        .y_label_area_size(55)
+        .build_cartesian_2d(mz_lo * 1.1..mz_hi * 1.1, fy_lo * 1.1..fy_hi * 1.1)
+        .map_err(|x| e(&x))?;
+    ch.configure_mesh()
+        .x_desc("Mz [N·m]")
+        .y_desc("Fy [N]")
+        .label_style(("sans-serif", 12))
+        .draw()
+        .map_err(|x| e(&x))?;
+    for (k, (mu, pts)) in curves.iter().enumerate() {
+        let c = Palette99::pick(k);
+        ch.draw_series(LineSeries::new(pts.iter().copied(), c.stroke_width(2)))
+            .map_err(|x| e(&x))?
+            .label(format!("μ = {mu}"))
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 15, y)], Palette99::pick(k)));
+    }
+    let step = (log.records.len() / 3000).max(1);
+    ch.draw_series(
+        log.records
+            .iter()
+            .step_by(step)
+            .map(|r| Circle::new((r.wheels[w].mz, r.wheels[w].fy), 1, BLACK.filled())),
+    )
+    .map_err(|x| e(&x))?
+    .label("simulated wheel")
+    .legend(|(x, y)| Circle::new((x + 7, y), 3, BLACK.filled()));
+    ch.configure_series_labels()
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .label_font(("sans-serif", 12))
+        .draw()
+        .map_err(|x| e(&x))?;
+    root.present().map_err(|x| e(&x))?;
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The bundled MF 6.1 tyre, as the bench runs it.
+    fn bundled_tyre() -> Params<f64> {
+        crate::tyre::load(Path::new(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../host-tests/data/tyres/MagicFormula61_Parameters.tir"
+        )))
+        .unwrap()
+        .params
+    }
+
+    /// The sensor model is what `--noise-mz`, `--noise-f` and `--delay` ask for: without noise
+    /// and delay every row is the simulation's own; the delay shifts the rows by whole steps
+    /// and the noise has the rms asked for; a negative or non-finite value, or a delay over
+    /// 1 s, is refused.
+    #[test]
+    fn sensor_arguments_reach_the_rows() {
+        use clap::Parser;
+        #[derive(Parser)]
+        struct Cli {
+            #[command(flatten)]
+            a: BenchArgs,
+        }
+        let parse = |extra: &[&str]| {
+            Cli::try_parse_from(["bench"].iter().chain(extra))
+                .unwrap()
+                .a
+                .sensors()
+        };
+        assert_eq!(parse(&[]).unwrap(), Sensors::default());
+        for bad in [
+            &["--noise-mz", "-1"][..],
+            &["--noise-f", "NaN"],
+            &["--delay", "2"],
+        ] {
+            let e = parse(bad).unwrap_err();
+            assert!(e.starts_with(bad[0]), "{e}");
+        }
+        let p = bundled_tyre();
+        let case = Case {
+            manoeuvre: "step-steer",
+            road: "mu=0.5".into(),
+        };
+        let log = simulate_case(&p, &case).unwrap();
+        let exact = parse(&["--noise-mz", "0", "--noise-f", "0", "--delay", "0"]).unwrap();
+        let late = parse(&["--noise-mz", "0", "--noise-f", "0", "--delay", "0.02"]).unwrap();
+        let noisy = parse(&["--noise-mz", "5", "--noise-f", "0.02", "--delay", "0"]).unwrap();
+        let w = 1;
+        let (tr, tl, tn) = (
+            measure(&log, w, &exact, 1),
+            measure(&log, w, &late, 1),
+            measure(&log, w, &noisy, 1),
+        );
+        let (mut se_mz, mut se_fy) = (0.0, 0.0);
+        for (i, r) in log.records.iter().enumerate() {
+            let x = &r.wheels[w];
+            let (a, b, c) = (&tr.rows[i], &tl.rows[i], &tn.rows[i]);
+            assert_eq!(
+                (a.fz, a.fy, a.mz, a.fx),
+                (x.fz, x.fy, x.mz, x.fx),
+                "row {i}"
+            );
+            if i >= 20 {
+                assert_eq!(b.mz, tr.rows[i - 20].mz, "row {i}");
+            }
+            se_mz += (c.mz - x.mz).powi(2);
+            se_fy += ((c.fy - x.fy) / (0.02 * x.fz)).powi(2);
+        }
+        let n = log.records.len() as f64;
+        let (rms_mz, rms_fy) = ((se_mz / n).sqrt(), (se_fy / n).sqrt());
+        assert!((rms_mz - 5.0).abs() < 0.25, "Mz noise {rms_mz}");
+        assert!((rms_fy - 1.0).abs() < 0.05, "Fy noise {rms_fy} of 2 % Fz");
+    }
+
+    /// Why the step steer on μ 1.0 stays ambiguous with perfect sensors: its front-left wheel,
+    /// steady at 4 s (Fz ≈ 3,370 N, γ ≈ −0.036 rad, utilisation ≈ 0.56, trail 9.1 mm), makes a
+    /// point that the simulation's own Magic Formula puts on two surfaces: the true one, and
+    /// one near λμ 0.62 (μ ≈ 0.63) at utilisation ≈ 0.89, where the trail has collapsed to
+    /// the grippy curve's value at that force. No single reading can choose between
+    /// them; only how the point got there can (README, "Not the sensors: a single point").
+    #[test]
+    fn one_steady_point_lies_on_two_surfaces() {
+        use gough::mf::{self, Input, Options, Side};
+        let p = bundled_tyre();
+        let case = Case {
+            manoeuvre: "step-steer",
+            road: "mu=1.0".into(),
+        };
+        let log = simulate_case(&p, &case).unwrap();
+        let rec = log.records.iter().find(|r| r.t >= 4.0).unwrap();
+        let w = &rec.wheels[0]; // front left
+        let tau_m = -w.mz / w.fy;
+        let opts = Options {
+            transient: true,
+            mounted: Some(Side::Left),
+            ..Options::default()
+        };
+        // The trail on surface λμ at the measured |Fy|, on the rising side of the force (small
+        // slip first), with the record's load, camber, slip ratio and speed; None when the
+        // surface never reaches the force.
+        let eval = |q: &Params<f64>, alpha: f64| {
+            let inp = Input {
+                fz: w.fz,
+                kappa: w.kappa_t,
+                alpha,
+                gamma: w.gamma,
+                vx: w.vx,
+                ..Input::default()
+            };
+            mf::eval::<f64, Libm>(q, &inp, &opts).unwrap()
+        };
+        let trail_at_force = |lam: f64| -> Option<(f64, f64)> {
+            let mut q = p.clone();
+            q.lmuy = lam;
+            q.lmux = lam;
+            let sgn = w.alpha_t.signum();
+            let (mut lo, mut hi) = (0.0, 0.0);
+            for i in 1..=400 {
+                let a = sgn * 0.0005 * i as f64;
+                if eval(&q, a).fy.abs() >= w.fy.abs() {
+                    hi = a;
+                    break;
+                }
+                lo = a;
+            }
+            if hi == 0.0 {
+                return None;
+            }
+            for _ in 0..50 {
+                let mid = 0.5 * (lo + hi);
+                if eval(&q, mid).fy.abs() < w.fy.abs() {
+                    lo = mid;
+                } else {
+                    hi = mid;
+                }
+            }
+            let o = eval(&q, hi);
+            // Utilisation as the bench counts it: |F|/(μ·Fz), μ = λμ·μy0.
+            Some((-o.mz / o.fy, w.fx.hypot(w.fy) / (lam * log.mu_y0 * w.fz)))
+        };
+        let lam_true = 1.0 / log.mu_y0;
+        let grid: Vec<f64> = (40..=130).map(|i| 0.01 * i as f64).collect();
+        let d: Vec<Option<(f64, f64)>> = grid
+            .iter()
+            .map(|&l| trail_at_force(l).map(|(t, u)| (t - tau_m, u)))
+            .collect();
+        // Surfaces whose curve passes through the measured point: sign changes of d.
+        let mut roots = Vec::new();
+        for i in 1..grid.len() {
+            if let (Some((a, _)), Some((b, u))) = (d[i - 1], d[i]) {
+                if a * b <= 0.0 && a != b {
+                    let l = grid[i - 1] + (grid[i] - grid[i - 1]) * a / (a - b);
+                    roots.push((l, u * grid[i] / l));
+                }
+            }
+        }
+        std::println!(
+            "trail {:.2} mm at Fy {:.0} N, Fz {:.0} N, γ {:.4}: on λμ {roots:.3?}",
+            1000.0 * tau_m,
+            w.fy,
+            w.fz,
+            w.gamma
+        );
+        assert_eq!(roots.len(), 2, "{roots:?}");
+        let (hi, lo) = (roots[1], roots[0]);
+        assert!(
+            (hi.0 - lam_true).abs() < 0.02,
+            "{roots:?} against {lam_true}"
+        );
+        assert!((0.55..0.7).contains(&lo.0), "{roots:?}");
+        assert!(hi.1 < 0.6 && lo.1 > 0.85, "utilisations {roots:?}");
+    }
+
+    /// A road spec with a comma stays one field of table.csv.
+    #[test]
+    fn csv_fields_with_commas_are_quoted() {
+        assert_eq!(csv_field("mu=0.5"), "mu=0.5");
+        assert_eq!(csv_field("step=1.0@0,0.3@90"), "\"step=1.0@0,0.3@90\"");
+        assert_eq!(csv_field("a\"b"), "\"a\"\"b\"");
+    }
+
+    /// The tally's window: from the utilisation first reaching 0.5 to the estimate settling
+    /// (at most 150 ms), every sample counted once, by its reason; a surface that never reaches
+    /// utilisation 0.5 has no window.
+    #[test]
+    fn hold_tally_counts_the_window_by_reason() {
+        // 1 kHz, 400 rows; two surfaces: μ 0.5 (rows 0..300), μ 0.3 (300..400).
+        let n = 400;
+        let row = |i: usize| Row {
+            t: i as f64 * 1e-3,
+            fz: 4000.0,
+            vx: 20.0,
+            ..Row::default()
+        };
+        let mu_true: Vec<f64> = (0..n).map(|i| if i < 300 { 0.5 } else { 0.3 }).collect();
+        // Utilisation 0.5 from row 10 on the first surface; never on the second.
+        let util: Vec<f64> = (0..n)
+            .map(|i| if (10..300).contains(&i) { 0.6 } else { 0.2 })
+            .collect();
+        let tr = WheelTrace {
+            rows: (0..n).map(row).collect(),
+            mu_true,
+            util,
+            gamma: vec![0.0; n],
+        };
+        let est = |mu: f64, state: State| Estimate {
+            mu,
+            sigma: 0.01,
+            sigma_model: 0.0,
+            state,
+            change: false,
+        };
+        // Rows 0..40 no excitation, 40..70 ambiguous, 70..80 confirming, 80..100 identifiable but
+        // 0.2 off, from 100 on within ±0.1 (settled at row 100: latency 90 ms).
+        let (mut ests, mut holds) = (Vec::new(), Vec::new());
+        for i in 0..n {
+            let (e, h) = match i {
+                0..40 => (est(0.8, State::Fallback), Some(Hold::NoExcitation)),
+                40..70 => (est(0.8, State::Fallback), Some(Hold::Ambiguous)),
+                70..80 => (est(0.8, State::Fallback), Some(Hold::Confirming)),
+                80..100 => (est(0.7, State::Identifiable), None),
+                _ => (est(mu_true_at(i), State::Identifiable), None),
+            };
+            ests.push(e);
+            holds.push(h);
+        }
+        fn mu_true_at(i: usize) -> f64 {
+            if i < 300 {
+                0.5
+            } else {
+                0.3
+            }
+        }
+        let t = hold_tally(std::slice::from_ref(&tr), &[ests.clone()], &[holds.clone()]);
+        let k = |h: Hold| t.held[Hold::ALL.iter().position(|&x| x == h).unwrap()];
+        assert_eq!((t.windows, t.within), (1, 1));
+        assert_eq!(
+            (
+                k(Hold::NoExcitation),
+                k(Hold::Ambiguous),
+                k(Hold::Confirming),
+                t.identifiable
+            ),
+            (30, 30, 10, 20)
+        );
+        assert_eq!(t.total(), 90);
+        // Settling later than 150 ms: the window stops at the deadline, and it is not within.
+        for e in &mut ests[100..300] {
+            e.mu = 0.7;
+        }
+        for e in &mut ests[250..300] {
+            e.mu = 0.5;
+        }
+        let t = hold_tally(std::slice::from_ref(&tr), &[ests], &[holds]);
+        assert_eq!((t.windows, t.within), (1, 0));
+        assert_eq!(
+            t.total(),
+            151,
+            "rows 10..=160 (the deadline's row 160 included)"
+        );
+        assert_eq!(t.identifiable, 151 - 70);
+    }
+
+    /// Every field of the estimator's `Config` can be set by name (and only it), to the value
+    /// given; a bad value or name is an error naming it.
+    #[test]
+    fn set_config_reaches_every_field() {
+        let names = [
+            "gamma",
+            "sigma_mz",
+            "sigma_fy_rel",
+            "vx_min",
+            "fz_min_rel",
+            "fy_min_rel",
+            "fy_share_min",
+            "trail_drop_min",
+            "trail_drop_abs_min",
+            "sigma_max",
+            "trail_model_rel",
+            "arm_model_rel",
+            "combined_model_rel",
+            "combined_force_rel",
+            "mzr_model_rel",
+            "q",
+            "gate",
+            "gate_sigma_max",
+            "change_min",
+            "change_count",
+            "run_gap",
+            "init_count",
+            "mu_prior",
+            "sigma_prior",
+            "lowpass_tau",
+            "settle",
+            "settle_distance",
+            "ambiguity_sigmas",
+            "ambiguity_margin",
+        ];
+        let mut all = Config::default();
+        for n in names {
+            let mut c = Config::default();
+            set_config(&mut c, &format!("{n}=7")).unwrap();
+            assert_ne!(c, Config::default(), "{n}");
+            set_config(&mut all, &format!(" {n} = 7 ")).unwrap();
+        }
+        // Every field set: the Debug form holds no default value any more but 7s.
+        let dbg = format!("{all:?}");
+        let values: Vec<&str> = dbg
+            .split(", ")
+            .map(|kv| kv.rsplit(": ").next().unwrap().trim_end_matches(" }"))
+            .collect();
+        assert_eq!(values.len(), names.len(), "{dbg}");
+        assert!(values.iter().all(|v| *v == "7.0" || *v == "7"), "{dbg}");
+        for bad in [
+            "q",
+            "q=",
+            "q=nan",
+            "q=inf",
+            "init_count=-1",
+            "init_count=0.5",
+            "nope=1",
+        ] {
+            let e = set_config(&mut Config::default(), bad).unwrap_err();
+            assert!(e.contains(bad.split('=').next().unwrap()), "{bad}: {e}");
+        }
+    }
+
+    /// The error metrics count identifiable samples only; "within 2σ" is the share of them
+    /// whose error is at most twice the σ they report.
+    #[test]
+    fn metrics_count_errors_and_their_sigma() {
+        let n = 6;
+        let tr = WheelTrace {
+            rows: (0..n)
+                .map(|i| Row {
+                    t: i as f64 * 1e-3,
+                    fz: 4000.0,
+                    fy: 0.0,
+                    mz: 0.0,
+                    fx: 0.0,
+                    vx: 20.0,
+                    alpha: f64::NAN,
+                    kappa: f64::NAN,
+                })
+                .collect(),
+            mu_true: vec![0.5; n],
+            util: vec![0.6; n],
+            gamma: vec![0.0; n],
+        };
+        let e = |mu: f64, sigma: f64, state: State| Estimate {
+            mu,
+            sigma,
+            sigma_model: 0.0,
+            state,
+            change: false,
+        };
+        let est = vec![
+            e(0.8, 0.4, State::Fallback),
+            e(0.55, 0.03, State::Identifiable), // 0.05 ≤ 0.06
+            e(0.6, 0.03, State::Identifiable),  // 0.10 > 0.06
+            e(0.6, 0.03, State::NotIdentifiable),
+            e(0.48, 0.011, State::Identifiable), // 0.02 ≤ 0.022
+            e(0.5, 0.05, State::Identifiable),
+        ];
+        let m = metrics(std::slice::from_ref(&tr), std::slice::from_ref(&est));
+        assert_eq!(m.n_identifiable, 4);
+        assert_eq!(m.within_2sigma, Some(0.75));
+        assert!((m.err_mean.unwrap() - 0.17 / 4.0).abs() < 1e-12);
+        let none = vec![e(0.8, 0.4, State::Fallback); n];
+        let m = metrics(std::slice::from_ref(&tr), std::slice::from_ref(&none));
+        assert_eq!((m.n_identifiable, m.within_2sigma), (0, None));
+    }
+
+    /// Straight running with a static camber makes points that read like ice at full sliding:
+    /// the camber thrust alone passes `fy_min_rel` (|Fy|/Fz ≈ 0.05 at 0.85·Fz0) and the
+    /// residual torque leaves a trail of a few mm (Fy ≈ 300 N, Mz ≈ −2 N·m), so the trail looks
+    /// collapsed and the reading says μ ≈ 0.05. Every per-reading check passes many of them
+    /// ([`MuEstimator::raw`] returns a reading: 320 here). They come in runs; it is
+    /// `init_count` that keeps them from becoming an estimate: with it at 1 this test counts
+    /// 22 wrong estimates below a utilisation of 0.2 (and over the whole bench suite, 36; a
+    /// scratch run). At 6 none, but then a burst at higher utilisation in the slalom on μ 1.0
+    /// becomes a wrong estimate (p95 error 0.68 there): 13 stays.
+    #[test]
+    fn straight_running_with_camber_never_reads_ice() {
+        let p = bundled_tyre();
+        let tables = Tables::new(&p).unwrap();
+        let (mut hazards, mut wrong, mut right) = (0, 0, 0);
+        for manoeuvre in ["sine-dwell", "slalom"] {
+            let case = Case {
+                manoeuvre,
+                road: "mu=1.0".into(),
+            };
+            let log = simulate_case(&p, &case).unwrap();
+            for w in 0..4 {
+                let tr = measure(&log, w, &Sensors::default(), 1);
+                let est = run_method(0, &p, &tables, w, &tr);
+                let probe = MuEstimator::for_tyre(tables.wheel(w), &p, Config::default());
+                for (i, e) in est.iter().enumerate() {
+                    let low = tr.util[i] < 0.2;
+                    // What one reading of the sample (unfiltered) says.
+                    let raw = probe.raw::<Libm>(&tr.sample(i));
+                    if low && raw.is_some_and(|x| (x.lambda * probe.mu0() - 1.0).abs() > 0.5) {
+                        hazards += 1;
+                    }
+                    if e.state == State::Identifiable {
+                        if (e.mu - tr.mu_true[i]).abs() > 0.1 && low {
+                            wrong += 1;
+                        } else {
+                            right += 1;
+                        }
+                    }
+                }
+            }
+        }
+        println!("ice-like readings below utilisation 0.2: {hazards}; wrong estimates there: {wrong}; other identifiable: {right}");
+        assert!(
+            hazards > 50,
+            "the hazard this test guards is gone ({hazards}): revisit it"
+        );
+        assert_eq!(wrong, 0);
+        assert!(right > 1000);
+    }
+}

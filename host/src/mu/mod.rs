@@ -1,0 +1,166 @@
+//! Friction estimation on logs: the core's Gough-plot estimator (`gough::mu`) driven by CSV
+//! rows, the literature baselines ([`peers`]), and the closed-loop benchmark on the vehicle
+//! simulation ([`bench`](mod@bench)). Nothing here re-implements the estimator.
+pub mod bench;
+pub mod bound;
+pub mod map;
+pub mod peers;
+
+use crate::csvio;
+use gough::math::{Backend, Float, Libm};
+use gough::mf::{Params, Side};
+use gough::mu::{Config, Estimate, GoughTable, Hold, MuEstimator, Sample};
+use peers::{HsuGerdes, Row, SlipSlope};
+use std::path::Path;
+
+/// The Gough table of `p` mounted on `mounted` (`GoughTable::for_wheel_into`), built in place on
+/// the heap: a debug build copies a value the size of an f64 table several times on its way
+/// out of `GoughTable::for_wheel` — enough to overflow a test thread's stack.
+pub fn table<F: Float, M: Backend<F>>(
+    p: &Params<F>,
+    mounted: Option<Side>,
+) -> Result<Box<GoughTable<F>>, String> {
+    let mut t = Box::new(GoughTable::zeroed());
+    t.for_wheel_into::<M>(p, mounted)
+        .map_err(|e| e.to_string())?;
+    Ok(t)
+}
+
+/// Which estimator.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum Method {
+    /// The Gough-plot estimator of the core (uses Fy, Mz, Fz, Fx, Vx — never α).
+    Gough,
+    /// Hsu, Laws & Gerdes (2010): pneumatic trail with the slip angle.
+    HsuGerdes,
+    /// Gustafsson (1997): longitudinal slip slope.
+    SlipSlope,
+}
+
+/// Float path of the core estimator.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum Precision {
+    /// f64 (host).
+    F64,
+    /// f32 (the device's).
+    F32,
+}
+
+/// Optional log columns, in the order of [`Log`]'s presence flags.
+pub const OPTIONAL: [&str; 5] = ["fx", "vx", "kappa", "alpha", "gamma"];
+
+/// A log as the estimators read it: rows, the camber column (NaN where absent) and which of
+/// [`OPTIONAL`] were present.
+pub type Log = (Vec<Row>, Vec<f64>, [bool; 5]);
+
+/// Reads a log into rows; the error is one line naming file, line and column. Time must
+/// increase strictly. Absent optional values read as NaN (never mistaken for a measured 0).
+pub fn read_log(path: &Path) -> Result<Log, String> {
+    let t = csvio::read::<csvio::WheelRow>(path).map_err(|e| e.to_string())?;
+    let mut rows = Vec::with_capacity(t.rows.len());
+    let mut gamma = Vec::with_capacity(t.rows.len());
+    let mut last = f64::NEG_INFINITY;
+    let v = |x: Option<f64>| x.unwrap_or(f64::NAN);
+    for (r, line) in t.rows.iter().zip(&t.lines) {
+        if r.t <= last {
+            return Err(format!(
+                "{}: line {line}, column t: time does not increase ({} after {last})",
+                path.display(),
+                r.t
+            ));
+        }
+        last = r.t;
+        rows.push(Row {
+            t: r.t,
+            fz: r.fz,
+            fy: r.fy,
+            mz: r.mz,
+            fx: v(r.fx),
+            vx: v(r.vx),
+            kappa: v(r.kappa),
+            alpha: v(r.alpha),
+        });
+        gamma.push(v(r.gamma));
+    }
+    Ok((rows, gamma, OPTIONAL.map(|c| t.has(c))))
+}
+
+/// One estimator's run over a log: an estimate per row, and for the Gough estimator why each
+/// held estimate was held (`MuEstimator::last_hold`; empty for the peers).
+pub type Run = (Vec<Estimate<f64>>, Vec<Option<Hold>>);
+
+/// Runs one estimator over rows; returns one estimate per row and, for the Gough method, why
+/// each held estimate was held (`MuEstimator::last_hold`; empty for the peers).
+pub fn estimate(
+    p: &Params<f64>,
+    rows: &[Row],
+    has_fx: bool,
+    gamma: &[f64],
+    method: Method,
+    prec: Precision,
+) -> Result<Run, String> {
+    // Per-row camber when the log has it (NaN = not logged → the estimator's default).
+    let g_of = |i: usize| gamma.get(i).copied().filter(|g| g.is_finite());
+    let cfg = Config::<f64>::default();
+    match method {
+        Method::Gough => match prec {
+            Precision::F64 => {
+                let table = table::<f64, Libm>(p, None)?;
+                let mut est = MuEstimator::for_tyre(&table, p, cfg);
+                Ok(rows
+                    .iter()
+                    .enumerate()
+                    .map(|(i, r)| {
+                        let e = est.update::<Libm>(&Sample {
+                            t: r.t,
+                            fz: r.fz,
+                            fy: r.fy,
+                            mz: r.mz,
+                            fx: has_fx.then_some(r.fx),
+                            vx: r.vx.is_finite().then_some(r.vx),
+                            gamma: g_of(i),
+                        });
+                        (e, est.last_hold())
+                    })
+                    .unzip())
+            }
+            Precision::F32 => {
+                let p32 = p.cast::<f32>();
+                let table = table::<f32, Libm>(&p32, None)?;
+                let cfg32 = Config::<f32>::default();
+                let mut est = MuEstimator::for_tyre(&table, &p32, cfg32);
+                Ok(rows
+                    .iter()
+                    .enumerate()
+                    .map(|(i, r)| {
+                        let e = est.update::<Libm>(&Sample {
+                            t: r.t as f32,
+                            fz: r.fz as f32,
+                            fy: r.fy as f32,
+                            mz: r.mz as f32,
+                            fx: has_fx.then_some(r.fx as f32),
+                            vx: r.vx.is_finite().then_some(r.vx as f32),
+                            gamma: g_of(i).map(|g| g as f32),
+                        });
+                        let e = Estimate {
+                            mu: e.mu as f64,
+                            sigma: e.sigma as f64,
+                            sigma_model: e.sigma_model as f64,
+                            state: e.state,
+                            change: e.change,
+                        };
+                        (e, est.last_hold())
+                    })
+                    .unzip())
+            }
+        },
+        Method::HsuGerdes => {
+            let mut e = HsuGerdes::new(p).ok_or("the tyre gives no Hsu-Gerdes model")?;
+            Ok((rows.iter().map(|r| e.update(r)).collect(), Vec::new()))
+        }
+        Method::SlipSlope => {
+            let mut e = SlipSlope::new(p).ok_or("the tyre gives no slip-slope calibration")?;
+            Ok((rows.iter().map(|r| e.update(r)).collect(), Vec::new()))
+        }
+    }
+}

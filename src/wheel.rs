@@ -1,0 +1,335 @@
+//! One wheel's per-sample pipeline: measurement → transient slips → Magic Formula → `Forces`,
+//! and measurement → friction estimator → `Estimate`.
+//!
+//! `no_std`, no allocation, no panics: the firmware runs it in its 1 kHz tick, and the host's
+//! replay check (`gough replay --check`) runs the same code on the host, in f32 with the same
+//! math backend, so "device = host f32 run" compares one piece of code built for two targets,
+//! bit for bit.
+//!
+//! ## Forces
+//! - A measurement **with kinematics** (Vx, plus α, κ or ω) goes through the relaxation-length
+//!   filter ([`crate::relax::Transient`], eq. 20 solved exactly over the step between this
+//!   wheel's timestamps): slip speeds Vsy = |Vx|·tan α and Vsx = −|Vx|·κ, or Vsx = Vx − ω·Re when ω
+//!   is given without κ ([`effective_radius`]); the Magic Formula is evaluated at the transient
+//!   α', κ' (`Options::transient`). The relaxation lengths of a step are those of the previous
+//!   evaluation (σ varies with Fz, which changes little over one step), as in
+//!   [`crate::relax::TransientTyre`]. The damping speed is |Vx|
+//!   ([`crate::relax::DampingSpeed::Forward`], TNO's form): a constant input settles on
+//!   exactly the steady-state Magic Formula at the measured α, κ — the slips the Magic Formula
+//!   was fitted with.
+//! - **Start** (a wheel's first sample; after a gap longer than [`MAX_STEP_US`], a timestamp that
+//!   does not advance, a parameter upload, or a sample without kinematics): the deflections start
+//!   in the steady state of the measured slips (v = σα·tan α, u = σκ·κ) and the forces are the
+//!   steady-state Magic Formula — a stream that starts mid-manoeuvre does not start from an
+//!   undeflected tyre.
+//! - **Without kinematics** (no Vx, or neither α, κ nor ω): the steady-state Magic Formula at the
+//!   measured α, κ ([`Measurement::mf_input`](crate::proto::Measurement::mf_input),
+//!   Vx = LONGVL), see [`steady`].
+//!
+//! ## Estimate
+//! [`MuEstimator::update`](crate::mu::MuEstimator::update) on the measured Fz, Fy, Mz, and Fx,
+//! Vx, γ when given — never on the model's forces and never on α. Its time is this wheel's µs
+//! since the estimator started, accumulated from wrapping `u32` differences (an older timestamp
+//! is fed as such: the estimator holds). The prior is `Settings::fallback_mu`.
+use crate::math::Backend;
+use crate::mf::{self, Input, Options, Output, Params};
+use crate::mu::{self, GoughTable, MuEstimator};
+use crate::proto::{AckCode, Estimate, EstimateState, Forces, Measurement, Settings};
+use crate::relax::{self, DampingSpeed, Kinematics, Sigma, Transient};
+
+/// Longest step the filter takes \[µs\] (`relax::MAX_DT`); a longer gap restarts it.
+pub const MAX_STEP_US: i32 = 1_000_000;
+
+/// The filter's state between samples.
+#[derive(Debug, Clone, Copy)]
+struct Deflection {
+    tr: Transient<f32>,
+    cfg: relax::Config<f32>,
+    /// σκ, σα of the last evaluation \[m\].
+    sigma: Sigma<f32>,
+    /// Timestamp of the last sample \[µs\].
+    t_us: u32,
+}
+
+/// A measurement's kinematics.
+#[derive(Debug, Clone, Copy)]
+struct Kin {
+    kin: Kinematics<f32>,
+    /// Steady-state slips: the measured α (0 if absent) and κ (measured, or from ω).
+    alpha: f32,
+    kappa: f32,
+    tan_alpha: f32,
+}
+
+/// One wheel: transient filter, estimator clock, estimator. A few hundred bytes.
+#[derive(Debug, Clone)]
+pub struct Wheel<'t> {
+    defl: Option<Deflection>,
+    est: Option<MuEstimator<'t, f32>>,
+    /// (last timestamp \[µs\], µs since the estimator started).
+    clock: Option<(u32, i64)>,
+}
+
+impl Default for Wheel<'_> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+/// The estimator's settings from the protocol's: the prior is `fallback_mu` (when it is a
+/// positive number); `window` and `min_utilisation` have no counterpart in the Gough estimator
+/// (a Kalman filter gated by the trail's drop) and are not used.
+pub fn estimator_config(s: &Settings) -> mu::Config<f32> {
+    let mut c = mu::Config::default();
+    if s.fallback_mu.is_finite() && s.fallback_mu > 0.0 {
+        c.mu_prior = s.fallback_mu;
+    }
+    c
+}
+
+/// Effective rolling radius Re \[m\] at load `fz` \[N\] for slip from the wheel speed ω: MF 6.x,
+/// `Re = R0·Q_RE0 − ρFz0·(DREFF·atan(BREFF·ρd) + FREFF·ρd)` with the vertical deflection taken
+/// linear (ρFz0 = FNOMIN/Cz, ρd = Fz/FNOMIN) and the speed growth of the free radius (Q_V1) left
+/// out; R0 when the file has no vertical stiffness.
+pub fn effective_radius<M: Backend<f32>>(p: &Params<f32>, fz: f32) -> f32 {
+    let r0 = p.unloaded_radius;
+    if !(p.vertical_stiffness > 0.0 && p.fnomin > 0.0) {
+        return r0;
+    }
+    let q = if p.q_re0 > 0.0 { p.q_re0 } else { 1.0 };
+    let rho0 = p.fnomin / p.vertical_stiffness;
+    let d = fz.max(0.0) / p.fnomin;
+    r0 * q - rho0 * (p.dreff * M::atan(p.breff * d) + p.freff * d)
+}
+
+fn kinematics<M: Backend<f32>>(p: &Params<f32>, m: &Measurement) -> Option<Kin> {
+    let vx = m.vx?;
+    if m.alpha.is_none() && m.kappa.is_none() && m.omega.is_none() {
+        return None;
+    }
+    let speed = vx.abs();
+    let alpha = m.alpha.unwrap_or(0.0);
+    let tan_alpha = M::tan(alpha);
+    let (vsx, kappa) = match (m.kappa, m.omega) {
+        (Some(k), _) => (-k * speed, k),
+        (None, Some(w)) => {
+            let vsx = vx - w * effective_radius::<M>(p, m.fz);
+            let k = if speed > 0.0 {
+                (-vsx / speed).clamp(-1.0, 1.0)
+            } else {
+                0.0
+            };
+            (vsx, k)
+        }
+        (None, None) => (0.0, 0.0),
+    };
+    Some(Kin {
+        kin: Kinematics {
+            vx,
+            vsx,
+            vsy: tan_alpha * speed,
+        },
+        alpha,
+        kappa,
+        tan_alpha,
+    })
+}
+
+fn eval<M: Backend<f32>>(
+    p: &Params<f32>,
+    input: &Input<f32>,
+    opts: &Options,
+) -> Result<Output<f32>, AckCode> {
+    mf::eval::<f32, M>(p, input, opts).map_err(|_| AckCode::EvalError)
+}
+
+fn forces_of(m: &Measurement, o: &Output<f32>) -> Forces {
+    Forces {
+        wheel: m.wheel,
+        t_us: m.t_us,
+        fx: o.fx,
+        fy: o.fy,
+        mz: o.mz,
+        flags: o.flags.0,
+    }
+}
+
+/// The steady-state answer (no filter): the Magic Formula at the measured slips.
+pub fn steady<M: Backend<f32>>(
+    p: &Params<f32>,
+    limits: bool,
+    m: &Measurement,
+) -> Result<Forces, AckCode> {
+    let input = m.mf_input(p).ok_or(AckCode::NoSlip)?;
+    let opts = Options {
+        limits,
+        moments: false, // the Forces message carries Fx, Fy, Mz
+        ..Options::default()
+    };
+    eval::<M>(p, &input, &opts).map(|o| forces_of(m, &o))
+}
+
+impl<'t> Wheel<'t> {
+    /// No filter state, no estimator.
+    pub const fn new() -> Self {
+        Wheel {
+            defl: None,
+            est: None,
+            clock: None,
+        }
+    }
+
+    /// Forgets the filter's deflections (the next sample starts it in the steady state).
+    pub fn reset_filter(&mut self) {
+        self.defl = None;
+    }
+
+    /// (Re)starts the estimator on `table` (it forgets what it learnt).
+    pub fn start_estimator(&mut self, table: &'t GoughTable<f32>, p: &Params<f32>, s: &Settings) {
+        self.est = Some(MuEstimator::for_tyre(table, p, estimator_config(s)));
+        self.clock = None;
+    }
+
+    /// Drops the estimator (and with it the borrow of the table).
+    pub fn stop_estimator(&mut self) {
+        self.est = None;
+        self.clock = None;
+    }
+
+    /// Is an estimator running?
+    pub fn has_estimator(&self) -> bool {
+        self.est.is_some()
+    }
+
+    /// The filter's deflections (v lateral, u longitudinal) \[m\], if it runs.
+    pub fn deflection(&self) -> Option<(f32, f32)> {
+        self.defl.map(|d| (d.tr.v, d.tr.u))
+    }
+
+    /// The predicted forces of one sample (see the module doc), or why there are none. The
+    /// filter's state moves on only when the evaluation succeeds.
+    pub fn forces<M: Backend<f32>>(
+        &mut self,
+        p: &Params<f32>,
+        limits: bool,
+        m: &Measurement,
+    ) -> Result<Forces, AckCode> {
+        let Some(k) = kinematics::<M>(p, m) else {
+            self.defl = None;
+            return steady::<M>(p, limits, m);
+        };
+        let gamma = m.gamma.unwrap_or(0.0);
+        let input = |kappa: f32, alpha: f32| Input {
+            fz: m.fz,
+            kappa,
+            alpha,
+            gamma,
+            phit: 0.0,
+            vx: k.kin.vx,
+            p: None,
+        };
+        if let Some(d) = self.defl {
+            let dt = m.t_us.wrapping_sub(d.t_us) as i32;
+            if dt > 0 && dt <= MAX_STEP_US {
+                let mut tr = d.tr;
+                let s = tr
+                    .step::<M>(&d.cfg, dt as f32 / 1.0e6, &k.kin, &d.sigma)
+                    .map_err(|_| AckCode::EvalError)?;
+                let opts = Options {
+                    limits,
+                    transient: true,
+                    moments: false, // the Forces message carries Fx, Fy, Mz
+                    ..Options::default()
+                };
+                let o = eval::<M>(p, &input(s.kappa, s.alpha), &opts)?;
+                self.defl = Some(Deflection {
+                    tr,
+                    cfg: d.cfg,
+                    sigma: Sigma {
+                        sigma_kappa: o.sigma_x,
+                        sigma_alpha: o.sigma_y,
+                    },
+                    t_us: m.t_us,
+                });
+                return Ok(forces_of(m, &o));
+            }
+        }
+        // Start: steady state of the measured slips.
+        self.defl = None;
+        let opts = Options {
+            limits,
+            moments: false, // the Forces message carries Fx, Fy, Mz
+            ..Options::default()
+        };
+        let o = eval::<M>(p, &input(k.kappa, k.alpha), &opts)?;
+        let cfg = relax::Config {
+            damping: DampingSpeed::Forward,
+            ..relax::Config::from_params(p)
+        };
+        // The floor `Transient::step` puts on σ.
+        let floor = |s: f32| {
+            let s = s.abs();
+            if s < cfg.sigma_min {
+                cfg.sigma_min.max(1e-6)
+            } else {
+                s
+            }
+        };
+        let (s_a, s_k) = (floor(o.sigma_y), floor(o.sigma_x));
+        let (v_max, u_max) = (cfg.max_tan_alpha * s_a, cfg.max_kappa * s_k);
+        let tr = Transient {
+            v: (s_a * k.tan_alpha).max(-v_max).min(v_max),
+            u: (s_k * k.kappa).max(-u_max).min(u_max),
+        };
+        self.defl = Some(Deflection {
+            tr,
+            cfg,
+            sigma: Sigma {
+                sigma_kappa: o.sigma_x,
+                sigma_alpha: o.sigma_y,
+            },
+            t_us: m.t_us,
+        });
+        Ok(forces_of(m, &o))
+    }
+
+    /// The estimator's time for a timestamp \[s\] (see the module doc).
+    fn time(&mut self, t_us: u32) -> f32 {
+        let (last, el) = match self.clock {
+            None => {
+                self.clock = Some((t_us, 0));
+                return 0.0;
+            }
+            Some(c) => c,
+        };
+        let d = i64::from(t_us.wrapping_sub(last) as i32);
+        if d > 0 {
+            self.clock = Some((t_us, el + d));
+        }
+        (el + d) as f32 / 1.0e6
+    }
+
+    /// Runs the estimator on one sample: the estimate, and whether it declared a change of
+    /// surface. `None` when no estimator runs (no table yet).
+    pub fn estimate<M: Backend<f32>>(&mut self, m: &Measurement) -> Option<(Estimate, bool)> {
+        self.est.as_ref()?;
+        let t = self.time(m.t_us);
+        let est = self.est.as_mut()?;
+        let e = est.update::<M>(&m.sample(t));
+        let state = match e.state {
+            mu::State::Identifiable => EstimateState::Identifiable,
+            mu::State::NotIdentifiable => EstimateState::NotIdentifiable,
+            mu::State::Fallback => EstimateState::Fallback,
+        };
+        Some((
+            Estimate {
+                wheel: m.wheel,
+                t_us: m.t_us,
+                mu: e.mu,
+                sigma: e.sigma,
+                state,
+            },
+            e.change,
+        ))
+    }
+}
