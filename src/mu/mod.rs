@@ -40,6 +40,7 @@
 //! Pure longitudinal excitation (straight braking, no Fy): the trail carries no information
 //! then; that is the slip-slope method's domain (a host peer in `gough-host`). Turn slip.
 
+pub mod bank;
 pub mod table;
 
 use crate::brush::Brush;

@@ -733,6 +733,7 @@ mod tests {
             sigma_mz: 0.2,
             sigma_rel: 0.001,
             delay: 0.0,
+            ..Sensors::default()
         };
         let mu = 0.6;
         let truth = RowState {
