@@ -72,6 +72,7 @@ pub struct WeightsLoad<F> {
 }
 
 /// [`WeightsLoad`] of the conditioned load `c`.
+#[inline(always)]
 pub fn weights_load<F: Float>(p: &Params<F>, c: &mut Conditioned<F>) -> WeightsLoad<F> {
     let (dfz, g) = (c.dfz, c.gamma_star);
     let r_vy = p.rvy1 + p.rvy2 * dfz + p.rvy3 * g;
@@ -100,7 +101,7 @@ pub fn weights_load<F: Float>(p: &Params<F>, c: &mut Conditioned<F>) -> WeightsL
 
 /// Combined-slip longitudinal force, (57)–(62) RECONSTRUCTED for Delft 96 (from eq. (12) and
 /// MF 5.2), (4.E50)–(4.E57): the slip stage, given Fx0.
-#[inline]
+#[inline(always)]
 pub fn fx_slip<F: Float, G: Lift<F>, M: Backend<G>>(
     w: &WeightsLoad<F>,
     kappa: G,
@@ -129,7 +130,7 @@ pub struct Fy<F> {
 
 /// Gyκ (14), (4.E59), (4.E60), with Byκ (15), (4.E62) and κS (4.E61): depends on neither Fy0
 /// nor μy.
-#[inline]
+#[inline(always)]
 pub fn g_yk<F: Float, G: Lift<F>, M: Backend<G>>(
     w: &WeightsLoad<F>,
     kappa: G,
@@ -144,7 +145,7 @@ pub fn g_yk<F: Float, G: Lift<F>, M: Backend<G>>(
 
 /// Combined-slip lateral force, eqs. (13)–(16), (63)–(68), (4.E58)–(4.E67): the slip stage,
 /// given Fy0, μy and ζ2.
-#[inline]
+#[inline(always)]
 pub fn fy_slip<F: Float, G: Lift<F>, M: Backend<G>>(
     w: &WeightsLoad<F>,
     c: &Conditioned<F>,
@@ -287,7 +288,7 @@ pub struct MzLoad<F> {
 /// the slip stage.
 // DIFFERS FROM MFeval: MFeval multiplies t by λFz0 (LFZO), which no published equation has;
 // we follow the equations (every bundled file has LFZO = 1, so the oracle cannot tell).
-#[inline]
+#[inline(always)]
 pub fn mz_slip<F: Float, G: Lift<F>, M: Backend<G>>(
     l: &MzLoad<F>,
     c: &Conditioned<F>,

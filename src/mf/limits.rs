@@ -106,6 +106,7 @@ fn check<F: Float>(x: F, field: InputField) -> Result<(), EvalError> {
 
 /// The finiteness check of an input, in the order of `Input`'s fields (the first non-finite one
 /// is reported).
+#[inline(always)]
 pub fn check_finite<F: Float>(input: &Input<F>) -> Result<(), EvalError> {
     let Input {
         fz,
@@ -160,6 +161,7 @@ pub fn condition<F: Float, M: Backend<F>>(
 
 /// The load stage of the conditioning: everything but κ and α (which it leaves 0; [`slips`]
 /// conditions them). `input.kappa` and `input.alpha` are not read.
+#[inline(always)]
 pub fn condition_load<F: Float, M: Backend<F>>(
     p: &Params<F>,
     input: &Input<F>,
@@ -310,7 +312,7 @@ pub struct Slips<G> {
 }
 
 /// The slip stage of the conditioning: κ and α at the load stage's speed and limits.
-#[inline]
+#[inline(always)]
 pub fn slips<F: Float, G: Lift<F>, M: Backend<G>>(
     c: &Conditioned<F>,
     mut kappa: G,

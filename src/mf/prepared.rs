@@ -167,6 +167,7 @@ impl<F: Float> Prepared<F> {
     /// options of `mf::eval` (limits, α*, mounted side, transient; `moments` is not read).
     /// Errors: non-finite input, pressure ≤ 0, and turn slip (which has no load stage:
     /// [`EvalError::TurnSlipUnavailable`]).
+    #[inline(always)]
     pub fn new<M: Backend<F>>(
         p: &Params<F>,
         op: &Operating<F>,
@@ -191,6 +192,7 @@ impl<F: Float> Prepared<F> {
     }
 
     /// The stages from a conditioned load; with turn slip, `turn` is (κ, α*) of `c`'s point.
+    #[inline(always)]
     pub(crate) fn from_conditioned<M: Backend<F>>(
         p: &Params<F>,
         mut c: Conditioned<F>,
@@ -265,6 +267,7 @@ impl<F: Float> Prepared<F> {
         &self.mu
     }
 
+    #[inline(always)]
     fn mu_stage<G: Lift<F>>(&self, lmux_star: G, lmuy_star: G) -> Mu<G> {
         if !self.contact {
             return Mu::default();
@@ -312,13 +315,13 @@ impl<F: Float> Prepared<F> {
     }
 
     /// The slip stage at the file's λμ: Fx, Fy, Mz at (κ, α), equal to `mf::eval`'s.
-    #[inline]
+    #[inline(always)]
     pub fn eval<M: Backend<F>>(&self, kappa: F, alpha: F) -> Result<Forces<F>, EvalError> {
         self.eval_with::<M>(&self.mu, kappa, alpha)
     }
 
     /// The slip stage with the friction stage `mu` (from [`Prepared::with_mu`]).
-    #[inline]
+    #[inline(always)]
     pub fn eval_with<M: Backend<F>>(
         &self,
         mu: &Mu<F>,
@@ -379,7 +382,7 @@ impl<F: Float> Prepared<F> {
     }
 
     /// The slip stage, computed in `G` from the load stage (`F`) and a friction stage (`H`).
-    #[inline]
+    #[inline(always)]
     fn slip<H: Float, G: Lift<F> + Lift<H>, M: Backend<G>>(
         &self,
         mu: &Mu<H>,
@@ -511,6 +514,7 @@ fn split<F: Float, const N: usize>(
 
 /// The conditioned load of an evaluation with turn slip (all stages at one point), or the load
 /// stage alone: what `mf::eval` runs.
+#[inline(always)]
 pub(crate) fn for_eval<F: Float, M: Backend<F>>(
     p: &Params<F>,
     input: &Input<F>,

@@ -61,6 +61,7 @@ pub struct Fx0Load<F> {
 }
 
 /// [`Fx0Load`] of the conditioned load `c`.
+#[inline(always)]
 pub fn fx0_load<F: Float, M: Backend<F>>(p: &Params<F>, c: &Conditioned<F>) -> Fx0Load<F> {
     let (fz, dfz, dpi) = (c.fz, c.dfz, c.dpi);
     let zeta1 = c.turn.map_or(F::ONE, |t| t.zeta1);
@@ -110,6 +111,7 @@ pub struct Fx0Mu<G> {
 }
 
 /// [`Fx0Mu`] at λμx* = `lmux_star`, λμx' = `lmux_prime` (4.E7), (4.E8).
+#[inline(always)]
 pub fn fx0_mu<F: Float, G: Lift<F>>(
     l: &Fx0Load<F>,
     c: &Conditioned<F>,
@@ -138,7 +140,7 @@ pub fn fx0_mu<F: Float, G: Lift<F>>(
 }
 
 /// Slip stage of Fx0 at the conditioned κ: (22), (23), (27) / (4.E9), (4.E10), (4.E14).
-#[inline]
+#[inline(always)]
 pub fn fx0_slip<F: Float, H: Float, G: Lift<F> + Lift<H>, M: Backend<G>>(
     l: &Fx0Load<F>,
     m: &Fx0Mu<H>,
@@ -230,6 +232,7 @@ pub struct Fy0Load<F> {
 
 /// [`Fy0Load`] at camber `gamma_star` (the aligning torque needs Fy0 at γ = 0 too), with or
 /// without turn slip.
+#[inline(always)]
 pub fn fy0_load<F: Float, M: Backend<F>>(
     p: &Params<F>,
     c: &mut Conditioned<F>,
@@ -326,6 +329,7 @@ pub struct Fy0Mu<G> {
 }
 
 /// [`Fy0Mu`] at λμy* = `lmuy_star`, λμy' = `lmuy_prime` (4.E7), (4.E8).
+#[inline(always)]
 pub fn fy0_mu<F: Float, G: Lift<F>>(
     l: &Fy0Load<F>,
     c: &Conditioned<F>,
@@ -373,7 +377,7 @@ pub fn fy0_mu<F: Float, G: Lift<F>>(
 }
 
 /// Slip stage of Fy0 at α*: (32), (33), (38) / (4.E19), (4.E20), (4.E24).
-#[inline]
+#[inline(always)]
 pub fn fy0_slip<F: Float, H: Float, G: Lift<F> + Lift<H>, M: Backend<G>>(
     l: &Fy0Load<F>,
     m: &Fy0Mu<H>,
@@ -451,6 +455,7 @@ pub struct Mz0Load<F> {
 
 /// [`Mz0Load`] of the conditioned load `c`; with turn slip, `turn_g_yk` is (μy, Gyκ) at the
 /// slips of `c`, which the turn-slip factors (4.92)–(4.104) need.
+#[inline(always)]
 pub fn mz0_load<F: Float, M: Backend<F>>(
     p: &Params<F>,
     c: &mut Conditioned<F>,
@@ -527,6 +532,7 @@ pub struct Mz0Mu<G> {
 }
 
 /// [`Mz0Mu`] at λμy* = `lmuy_star`, with Fy0's friction stage `fy`.
+#[inline(always)]
 pub fn mz0_mu<F: Float, G: Lift<F>>(
     l: &Mz0Load<F>,
     fy_l: &Fy0Load<F>,

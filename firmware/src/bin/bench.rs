@@ -153,7 +153,9 @@ fn staged<M: Backend<f32>>(name: &str, first_id: u32, per_count: f64, p32: &Para
     bench_start(id);
     let t0 = now();
     for x in ins.iter() {
-        core::hint::black_box(Prepared::new::<M>(p32, &op(core::hint::black_box(x)), &opts).ok());
+        if let Ok(p) = Prepared::new::<M>(p32, &op(core::hint::black_box(x)), &opts) {
+            core::hint::black_box(&p);
+        }
     }
     let total = now() - t0;
     bench_stop(id);
@@ -161,6 +163,7 @@ fn staged<M: Backend<f32>>(name: &str, first_id: u32, per_count: f64, p32: &Para
     for (i, x) in ins.iter().enumerate() {
         let t0 = now();
         let r = Prepared::new::<M>(p32, &op(core::hint::black_box(x)), &opts).ok();
+        core::hint::black_box(&r);
         let t = now() - t0;
         worst = worst.max(t as f64);
         // Points i and i + 16k share the load (points.rs: Fz depends on i % 16 alone).
@@ -169,13 +172,13 @@ fn staged<M: Backend<f32>>(name: &str, first_id: u32, per_count: f64, p32: &Para
         }
     }
     print("mf_load_stage", total, worst, size_of::<Prepared<f32>>());
-    let prep = |i: usize| preps.get(i % 16).copied().flatten();
+    let prep = |i: usize| preps.get(i % 16).and_then(|p| p.as_ref());
     // Friction stage: λμ 0.5 at each point's load.
     bench_start(id + 1);
     let t0 = now();
     for i in 0..N {
         if let Some(p) = prep(i) {
-            core::hint::black_box(p.with_mu(0.5, 0.5));
+            core::hint::black_box(&p.with_mu(0.5, 0.5));
         }
     }
     let total = now() - t0;
@@ -184,7 +187,7 @@ fn staged<M: Backend<f32>>(name: &str, first_id: u32, per_count: f64, p32: &Para
     for i in 0..N {
         if let Some(p) = prep(i) {
             let t0 = now();
-            core::hint::black_box(p.with_mu(core::hint::black_box(0.5), 0.5));
+            core::hint::black_box(&p.with_mu(core::hint::black_box(0.5), 0.5));
             worst = worst.max((now() - t0) as f64);
         }
     }
@@ -197,7 +200,7 @@ fn staged<M: Backend<f32>>(name: &str, first_id: u32, per_count: f64, p32: &Para
         let t0 = now();
         for (i, x) in ins.iter().enumerate() {
             if let Some(p) = prep(i) {
-                core::hint::black_box(f(&p, core::hint::black_box(x)));
+                core::hint::black_box(f(p, core::hint::black_box(x)));
             }
         }
         let total = now() - t0;
@@ -206,7 +209,7 @@ fn staged<M: Backend<f32>>(name: &str, first_id: u32, per_count: f64, p32: &Para
         for (i, x) in ins.iter().enumerate() {
             if let Some(p) = prep(i) {
                 let t0 = now();
-                let fy = f(&p, core::hint::black_box(x));
+                let fy = f(p, core::hint::black_box(x));
                 worst = worst.max((now() - t0) as f64);
                 let r = mf::eval::<f32, M>(p32, x, &opts).map_or(f32::NAN, |r| r.fy);
                 if fy != r {
