@@ -224,11 +224,15 @@ fn staged<M: Backend<f32>>(name: &str, first_id: u32, per_count: f64, p32: &Para
     });
     slip("mf_slip_stage_d_kappa_alpha", id + 3, &|p, x| {
         p.eval_d::<M>(p.mu(), x.kappa, x.alpha)
-            .map_or(f32::NAN, |(r, d)| core::hint::black_box(d).alpha.fy * 0.0 + r.fy)
+            .map_or(f32::NAN, |(r, d)| {
+                core::hint::black_box(d).alpha.fy * 0.0 + r.fy
+            })
     });
     slip("mf_slip_stage_d_kappa_alpha_mu", id + 4, &|p, x| {
         p.eval_d_mu::<M>(1.0, x.kappa, x.alpha)
-            .map_or(f32::NAN, |(r, d)| core::hint::black_box(d).lmu.fy * 0.0 + r.fy)
+            .map_or(f32::NAN, |(r, d)| {
+                core::hint::black_box(d).lmu.fy * 0.0 + r.fy
+            })
     });
     hprintln!(
         "staged MF, {}: slip stage vs mf::eval over {} points: {} differ",
