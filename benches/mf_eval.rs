@@ -1,9 +1,12 @@
 //! ns per combined-slip Fx/Fy/Mz evaluation (with Mx, My, t, Mzr, σ), per version, f32 and f64,
 //! libm backend, limits on. Host only; device costs are counted in instructions under QEMU.
 //!
+//! Then, per slip-stage evaluation (`mf::prepared`), the slip stage alone and with its slopes.
+//!
 //! `cargo bench --bench mf_eval`
 use criterion::{criterion_group, criterion_main, Criterion};
 use gough::math::Libm;
+use gough::mf::prepared::{Operating, Prepared};
 use gough::mf::{self, Input, Options, Params};
 use std::hint::black_box;
 
@@ -75,6 +78,56 @@ fn bench(c: &mut Criterion) {
             b.iter(|| {
                 for i in &in32 {
                     black_box(mf::eval::<f32, Libm>(&p32, black_box(i), &opts).unwrap());
+                }
+            })
+        });
+        g.finish();
+
+        // The staged evaluation (`mf::prepared`): one load stage, then the slip stage at each
+        // of the 64 slips (f32, as on the device; moments off, as the estimator runs it).
+        let staged = Options {
+            moments: false,
+            ..Options::default()
+        };
+        let mut g = c.benchmark_group(format!("slip stage/{name}"));
+        g.throughput(criterion::Throughput::Elements(in32.len() as u64));
+        let load = Prepared::new::<Libm>(&p32, &Operating::from(&in32[0]), &staged).unwrap();
+        g.bench_function("mf::eval f32 (moments off)", |b| {
+            b.iter(|| {
+                for i in &in32 {
+                    let i = Input {
+                        fz: in32[0].fz,
+                        gamma: in32[0].gamma,
+                        ..*i
+                    };
+                    black_box(mf::eval::<f32, Libm>(&p32, black_box(&i), &staged).unwrap());
+                }
+            })
+        });
+        g.bench_function("slip stage f32", |b| {
+            b.iter(|| {
+                for i in &in32 {
+                    black_box(load.eval::<Libm>(black_box(i.kappa), i.alpha).unwrap());
+                }
+            })
+        });
+        g.bench_function("slip stage + d/dkappa, d/dalpha f32", |b| {
+            b.iter(|| {
+                for i in &in32 {
+                    black_box(
+                        load.eval_d::<Libm>(load.mu(), black_box(i.kappa), i.alpha)
+                            .unwrap(),
+                    );
+                }
+            })
+        });
+        g.bench_function("slip stage + d/dkappa, d/dalpha, d/dlambda_mu f32", |b| {
+            b.iter(|| {
+                for i in &in32 {
+                    black_box(
+                        load.eval_d_mu::<Libm>(1.0, black_box(i.kappa), i.alpha)
+                            .unwrap(),
+                    );
                 }
             })
         });

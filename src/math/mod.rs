@@ -30,6 +30,9 @@
 
 use core::ops::{Add, AddAssign, Div, Mul, MulAssign, Neg, Sub, SubAssign};
 
+pub mod dual;
+pub use dual::Dual;
+
 #[cfg(any(feature = "fast", feature = "fixed"))]
 pub(crate) mod minimax;
 
@@ -228,6 +231,21 @@ impl_float!(
     core::f64::consts::FRAC_PI_2,
     core::f64::consts::FRAC_2_PI
 );
+
+/// A [`Float`] that a value of `F` converts into: `F` itself (the identity, free) and
+/// [`Dual<F, N>`] (a constant). The Magic Formula's slip stage reads its load-stage values
+/// (stored as `F`) through it, so that one generic body computes in `F` or in dual numbers.
+pub trait Lift<F>: Float {
+    /// `x` as a `Self` (for a dual number: a constant).
+    fn lift(x: F) -> Self;
+}
+
+impl<F: Float> Lift<F> for F {
+    #[inline]
+    fn lift(x: F) -> F {
+        x
+    }
+}
 
 /// The transcendental kernels of the Magic Formula, chosen by type.
 ///

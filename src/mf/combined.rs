@@ -7,14 +7,14 @@
 //! and the absent ones are zero.
 
 use super::limits::Conditioned;
-use super::pure::{fy0, Fx0, Fy0, Mz0};
-use super::{clip_e, cos_atan, magic_cos, Flags, Params, Version};
-use crate::math::{Backend, Float};
+use super::{clip_e, cos_atan, magic_cos, Flags, Params};
+use crate::math::{Backend, Float, Lift};
 
 /// G = cos[C·atan{B·x − E(B·x − atan B·x)}] / cos[C·atan{B·S − E(B·S − atan B·S)}], eqs. (14),
 /// (4.E51)/(4.E52), (4.E59)/(4.E60), at x = slip + S. A vanishing denominator (only for C > 1
 /// with a large shift S: outside any fitted tyre) returns G = 1 and flags [`Flags::GUARD`].
 /// Without a shift (S = 0) the denominator is cos 0 = 1 exactly and is not evaluated.
+#[inline]
 fn weight<F: Float, M: Backend<F>>(b: F, c: F, e: F, s_h: F, x: F, flags: &mut Flags) -> F {
     if s_h == F::ZERO {
         return magic_cos::<F, M>(b, c, e, x);
@@ -27,73 +27,154 @@ fn weight<F: Float, M: Backend<F>>(b: F, c: F, e: F, s_h: F, x: F, flags: &mut F
     magic_cos::<F, M>(b, c, e, x) / g0
 }
 
+/// Load stage of the combined-slip Fx and Fy, (57)–(68) / (4.E50)–(4.E67): the weights'
+/// factors free of κ and α.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct WeightsLoad<F> {
+    /// Cxα (4.E55).
+    pub c_xa: F,
+    /// Exα (4.E56), clipped; 0 for Delft 96.
+    pub e_xa: F,
+    /// SHxα (4.E57).
+    pub s_hxa: F,
+    /// rBx1 + rBx3·γ*² of Bxα (4.E54).
+    pub b_xa1: F,
+    /// rBx2.
+    pub rbx2: F,
+    /// λxα.
+    pub lxal: F,
+    /// Fz·(rVy1 + rVy2·dfz + rVy3·γ*) of DVyκ (68), (4.E67) per μy·ζ2.
+    pub d_vyk1: F,
+    /// rVy1 + rVy2·dfz + rVy3·γ* is 0: no κ-induced side force.
+    pub no_vyk: bool,
+    /// rVy4, rVy5, rVy6.
+    pub rvy4: F,
+    /// rVy5.
+    pub rvy5: F,
+    /// rVy6.
+    pub rvy6: F,
+    /// λVyκ.
+    pub lvyka: F,
+    /// SHyκ (4.E65).
+    pub s_hyk: F,
+    /// Eyκ (4.E64), clipped; 0 for Delft 96.
+    pub e_yk: F,
+    /// Cyκ (4.E63).
+    pub c_yk: F,
+    /// rBy1 + rBy4·γ*² of Byκ (15), (4.E62).
+    pub b_yk1: F,
+    /// rBy2.
+    pub rby2: F,
+    /// rBy3.
+    pub rby3: F,
+    /// λyκ.
+    pub lyka: F,
+}
+
+/// [`WeightsLoad`] of the conditioned load `c`.
+#[inline(always)]
+pub fn weights_load<F: Float>(p: &Params<F>, c: &mut Conditioned<F>) -> WeightsLoad<F> {
+    let (dfz, g) = (c.dfz, c.gamma_star);
+    let r_vy = p.rvy1 + p.rvy2 * dfz + p.rvy3 * g;
+    WeightsLoad {
+        c_xa: p.rcx1,                                                // (4.E55)
+        e_xa: clip_e(p.rex1 + p.rex2 * dfz, c.limits, &mut c.flags), // (4.E56); 0 for Delft 96
+        s_hxa: p.rhx1,                                               // (4.E57)
+        b_xa1: p.rbx1 + p.rbx3 * g * g,
+        rbx2: p.rbx2,
+        lxal: p.lxal,
+        d_vyk1: c.fz * r_vy,
+        no_vyk: r_vy == F::ZERO,
+        rvy4: p.rvy4,
+        rvy5: p.rvy5,
+        rvy6: p.rvy6,
+        lvyka: p.lvyka,
+        s_hyk: p.rhy1 + p.rhy2 * dfz, // (4.E65); RHY2 from MF 5.2 on
+        e_yk: clip_e(p.rey1 + p.rey2 * dfz, c.limits, &mut c.flags), // (4.E64); 0 for Delft 96
+        c_yk: p.rcy1,                 // (4.E63)
+        b_yk1: p.rby1 + p.rby4 * g * g,
+        rby2: p.rby2,
+        rby3: p.rby3,
+        lyka: p.lyka,
+    }
+}
+
 /// Combined-slip longitudinal force, (57)–(62) RECONSTRUCTED for Delft 96 (from eq. (12) and
-/// MF 5.2), (4.E50)–(4.E57).
-pub fn fx<F: Float, M: Backend<F>>(p: &Params<F>, c: &mut Conditioned<F>, fx0: F) -> F {
-    let c_xa = p.rcx1; // (4.E55)
-    let e_xa = clip_e(p.rex1 + p.rex2 * c.dfz, c); // (4.E56); 0 for Delft 96
-    let s_hxa = p.rhx1; // (4.E57)
-    let b_xa = (p.rbx1 + p.rbx3 * c.gamma_star * c.gamma_star)
-        * cos_atan::<F, M>(p.rbx2 * c.kappa)
-        * p.lxal; // (4.E54)
-    let alpha_s = c.alpha_star + s_hxa; // (4.E53)
-    let g_xa = weight::<F, M>(b_xa, c_xa, e_xa, s_hxa, alpha_s, &mut c.flags); // (4.E51), (4.E52)
+/// MF 5.2), (4.E50)–(4.E57): the slip stage, given Fx0.
+#[inline(always)]
+pub fn fx_slip<F: Float, G: Lift<F>, M: Backend<G>>(
+    w: &WeightsLoad<F>,
+    kappa: G,
+    alpha_star: G,
+    fx0: G,
+    flags: &mut Flags,
+) -> G {
+    let f = |x: F| G::lift(x);
+    let b_xa = f(w.b_xa1) * cos_atan::<G, M>(f(w.rbx2) * kappa) * f(w.lxal); // (4.E54)
+    let alpha_s = alpha_star + f(w.s_hxa); // (4.E53)
+    let g_xa = weight::<G, M>(b_xa, f(w.c_xa), f(w.e_xa), f(w.s_hxa), alpha_s, flags); // (4.E51), (4.E52)
     g_xa * fx0 // (4.E50)
 }
 
-/// Results of [`fy`].
+/// Results of [`fy_slip`].
 #[derive(Debug, Clone, Copy)]
 pub struct Fy<F> {
     /// Combined-slip lateral force Fy \[N\] (13), (4.E58).
     pub fy: F,
     /// Gyκ (14), (4.E59). It does not depend on Fy0, μy or ζ2: the aligning torque reuses it.
     pub g_yk: F,
-    /// κ-induced side force SVyκ \[N\] (16), (4.E66).
-    pub s_vyk: F,
     /// SVyκ per unit μy·ζ2 \[N\]: SVyκ = μy·ζ2·`s_vyk_per_mu` (with the low-speed reduction),
     /// so that the aligning torque gets SVyκ at another μy without the kernels again.
     pub s_vyk_per_mu: F,
 }
 
-/// Combined-slip lateral force, eqs. (13)–(16), (63)–(68), (4.E58)–(4.E67), given Fy0 and μy
-/// at camber `gamma_star`.
-pub fn fy<F: Float, M: Backend<F>>(
-    p: &Params<F>,
-    c: &mut Conditioned<F>,
-    fy0: F,
-    mu_y: F,
-    gamma_star: F,
-    zeta2: F,
-) -> Fy<F> {
-    let dfz = c.dfz;
+/// Gyκ (14), (4.E59), (4.E60), with Byκ (15), (4.E62) and κS (4.E61): depends on neither Fy0
+/// nor μy.
+#[inline(always)]
+pub fn g_yk<F: Float, G: Lift<F>, M: Backend<G>>(
+    w: &WeightsLoad<F>,
+    kappa: G,
+    alpha_star: G,
+    flags: &mut Flags,
+) -> G {
+    let f = |x: F| G::lift(x);
+    let b_yk = f(w.b_yk1) * cos_atan::<G, M>(f(w.rby2) * (alpha_star - f(w.rby3))) * f(w.lyka); // (15), (4.E62)
+    let kappa_s = kappa + f(w.s_hyk); // (4.E61)
+    weight::<G, M>(b_yk, f(w.c_yk), f(w.e_yk), f(w.s_hyk), kappa_s, flags) // (14), (4.E59), (4.E60)
+}
+
+/// Combined-slip lateral force, eqs. (13)–(16), (63)–(68), (4.E58)–(4.E67): the slip stage,
+/// given Fy0, μy and ζ2.
+#[inline(always)]
+pub fn fy_slip<F: Float, G: Lift<F>, M: Backend<G>>(
+    w: &WeightsLoad<F>,
+    c: &Conditioned<F>,
+    (kappa, alpha_star): (G, G),
+    fy0: G,
+    mu_y: G,
+    zeta2: G,
+    flags: &mut Flags,
+) -> Fy<G> {
+    let f = |x: F| G::lift(x);
     // (68), (4.E67) DVyκ = μy·Fz·(rVy1 + rVy2·dfz + rVy3·γ*)·cos(atan(rVy4·α*))·ζ2, and
     // (16), (4.E66) SVyκ = DVyκ·sin(rVy5·atan(rVy6·κ))·λVyκ, computed per unit μy·ζ2 (and not
     // at all for a file without the κ-induced side force).
-    let r_vy = p.rvy1 + p.rvy2 * dfz + p.rvy3 * gamma_star;
-    let mut s_vyk_per_mu = if r_vy == F::ZERO {
-        F::ZERO
+    let mut s_vyk_per_mu = if w.no_vyk {
+        G::ZERO
     } else {
-        c.fz * r_vy
-            * cos_atan::<F, M>(p.rvy4 * c.alpha_star)
-            * M::sin(p.rvy5 * M::atan(p.rvy6 * c.kappa))
-            * p.lvyka
+        f(w.d_vyk1)
+            * cos_atan::<G, M>(f(w.rvy4) * alpha_star)
+            * M::sin(f(w.rvy5) * M::atan(f(w.rvy6) * kappa))
+            * f(w.lvyka)
     };
     if c.low_speed {
-        s_vyk_per_mu *= c.red_smooth;
+        s_vyk_per_mu *= f(c.red_smooth);
     }
     let s_vyk = mu_y * zeta2 * s_vyk_per_mu;
-    let s_hyk = p.rhy1 + p.rhy2 * dfz; // (4.E65); RHY2 from MF 5.2 on
-    let e_yk = clip_e(p.rey1 + p.rey2 * dfz, c); // (4.E64); 0 for Delft 96
-    let c_yk = p.rcy1; // (4.E63)
-    let b_yk = (p.rby1 + p.rby4 * gamma_star * gamma_star)
-        * cos_atan::<F, M>(p.rby2 * (c.alpha_star - p.rby3))
-        * p.lyka; // (15), (4.E62)
-    let kappa_s = c.kappa + s_hyk; // (4.E61)
-    let g_yk = weight::<F, M>(b_yk, c_yk, e_yk, s_hyk, kappa_s, &mut c.flags); // (14), (4.E59), (4.E60)
+    let g_yk = g_yk::<F, G, M>(w, kappa, alpha_star, flags);
     Fy {
         fy: g_yk * fy0 + s_vyk, // (13), (4.E58)
         g_yk,
-        s_vyk,
         s_vyk_per_mu,
     }
 }
@@ -128,8 +209,15 @@ impl<F: Float> Arm<F> {
     /// \[rad\]: s = R0·(ssz1 + ssz2·Fy/Fz0 + (ssz3 + ssz4·dfz)·γ)·λs (73), (A56) — Fy/Fz0 and γ,
     /// not Fz0' and γ*, as the paper and TNO.
     pub fn s(&self, fy: F, dfz: F, gamma: F) -> F {
+        self.s_at::<F>(fy, dfz, gamma)
+    }
+
+    /// [`Arm::s`] computed in `G` (a dual number carries ∂s/∂Fy).
+    #[inline]
+    pub fn s_at<G: Lift<F>>(&self, fy: G, dfz: F, gamma: F) -> G {
+        let f = |x: F| G::lift(x);
         let [s1, s2, s3, s4] = self.ssz;
-        self.r0 * (s1 + s2 * (fy / self.fz0) + (s3 + s4 * dfz) * gamma) * self.ls
+        f(self.r0) * (f(s1) + f(s2) * (fy / f(self.fz0)) + f((s3 + s4 * dfz) * gamma)) * f(self.ls)
     }
 
     /// [`Arm::s`] of the tyre as mounted: a mirrored tyre's arm is the mirror of the file's,
@@ -143,7 +231,7 @@ impl<F: Float> Arm<F> {
     }
 }
 
-/// Results of [`mz`].
+/// Results of [`mz_slip`].
 #[derive(Debug, Clone, Copy)]
 pub struct Mz<F> {
     /// Aligning torque Mz \[N·m\] (17), (69), (4.E71).
@@ -154,61 +242,82 @@ pub struct Mz<F> {
     pub m_zr: F,
 }
 
-/// Combined-slip aligning torque, eqs. (17), (18), (69)–(75) / (4.E71)–(4.E78), (A54)–(A56).
+/// What the combined-slip aligning torque takes from the slip stage's earlier results.
+#[derive(Debug, Clone, Copy)]
+pub struct MzIn<G> {
+    /// κ (conditioned).
+    pub kappa: G,
+    /// αt = α* + SHt (45), (4.E34) \[rad\].
+    pub alpha_t: G,
+    /// αr = α* + SHf (47), (4.E37) \[rad\].
+    pub alpha_r: G,
+    /// Bt (50), (A58).
+    pub b_t: G,
+    /// Et (53), (4.E44).
+    pub e_t: G,
+    /// Dr (56), (4.E47) \[N·m\].
+    pub d_r: G,
+    /// Br (55), (4.E45).
+    pub b_r: G,
+    /// cos α' (4.E6).
+    pub cos_alpha_prime: G,
+    /// Combined Fx \[N\].
+    pub fx: G,
+    /// Combined Fy \[N\].
+    pub fy: G,
+    /// F'y (4.E74) (MF 6.x) or the Fy − SVyκ of MF 5.2 and Delft 96 \[N\].
+    pub fy_arm: G,
+}
+
+/// The aligning torque's load-stage factors.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct MzLoad<F> {
+    /// Kxκ/Kyα' of (A54), (A55).
+    pub k_ratio: F,
+    /// Dt \[m\] (52), (A60).
+    pub d_t: F,
+    /// Ct (51), (4.E41).
+    pub c_t: F,
+    /// Cr (4.E46).
+    pub c_r: F,
+    /// The arm s of Fx (73), (A56).
+    pub arm: Arm<F>,
+}
+
+/// Combined-slip aligning torque, eqs. (17), (18), (69)–(75) / (4.E71)–(4.E78), (A54)–(A56):
+/// the slip stage.
 // DIFFERS FROM MFeval: MFeval multiplies t by λFz0 (LFZO), which no published equation has;
 // we follow the equations (every bundled file has LFZO = 1, so the oracle cannot tell).
-pub fn mz<F: Float, M: Backend<F>>(
-    p: &Params<F>,
-    c: &mut Conditioned<F>,
-    fx0: &Fx0<F>,
-    fy0_full: &Fy0<F>,
-    m: &Mz0<F>,
-    fx: F,
-    fy_c: &Fy<F>,
-) -> Mz<F> {
-    let kappa = c.kappa;
+#[inline(always)]
+pub fn mz_slip<F: Float, G: Lift<F>, M: Backend<G>>(
+    l: &MzLoad<F>,
+    c: &Conditioned<F>,
+    m: &MzIn<G>,
+) -> Mz<G> {
+    let f = |x: F| G::lift(x);
     // (18), (74), (75), (A54), (A55): equivalent slip angles with (Kxκ/Kyα')²κ².
-    let kk = (fx0.k_xk / m.k_ya_prime) * kappa;
+    let kk = f(l.k_ratio) * m.kappa;
     let kk2 = kk * kk;
     let tan_r = M::tan(m.alpha_r);
     let tan_t = M::tan(m.alpha_t);
     let alpha_r_eq = M::atan(M::sqrt(tan_r * tan_r + kk2)) * m.alpha_r.sign(); // (75), (A54)
     let alpha_t_eq = M::atan(M::sqrt(tan_t * tan_t + kk2)) * m.alpha_t.sign(); // (74), (A55)
                                                                                // (73), (A56): s with Fy/Fz0 and γ (not Fz0', γ*), as the paper and TNO.
-    let s = Arm::from_params(p).s(fy_c.fy, c.dfz, c.gamma);
+    let s = l.arm.s_at::<G>(m.fy, c.dfz, c.gamma);
     // (72), (4.E75); Cr = 1 without turn slip, and cos(atan x) = 1/√(1 + x²) exactly.
-    let mut m_zr = if m.c_r == F::ONE {
-        m.d_r * cos_atan::<F, M>(m.b_r * alpha_r_eq)
+    let mut m_zr = if l.c_r == F::ONE {
+        m.d_r * cos_atan::<G, M>(m.b_r * alpha_r_eq)
     } else {
-        m.d_r * M::cos(m.c_r * M::atan(m.b_r * alpha_r_eq))
+        m.d_r * M::cos(f(l.c_r) * M::atan(m.b_r * alpha_r_eq))
     };
-
-    // F'y (4.E74): Fy at γ = 0 (MF 6.x); the weighting Gyκ keeps the actual γ* (TNO, MFeval).
-    // At γ* = 0 that is the Fy0 already computed (the common case on a car: no extra cost).
-    let (fy0_g0, mu_y_g0) = if c.gamma_star == F::ZERO {
-        (fy0_full.fy0, fy0_full.mu_y)
-    } else {
-        let f = fy0::<F, M>(p, c, F::ZERO, c.turn.is_some());
-        (f.fy0, f.mu_y)
-    };
-    // The weight and the κ-induced shift of F'y are taken without the turn-slip ζ2 (MFeval's
-    // `internalParams_sub0`): Gyκ is Fy's own (it depends on neither Fy0, μy nor ζ2), SVyκ is
-    // Fy's per unit μy at μy(γ = 0).
-    let fy_prime = fy_c.g_yk * fy0_g0; // (4.E74)
-    let s_vyk_sub = mu_y_g0 * fy_c.s_vyk_per_mu;
-
     let mut t =
-        m.d_t * super::magic_cos::<F, M>(m.b_t, m.c_t, m.e_t, alpha_t_eq) * c.cos_alpha_prime; // (70), (4.E73)
+        f(l.d_t) * magic_cos::<G, M>(m.b_t, f(l.c_t), m.e_t, alpha_t_eq) * m.cos_alpha_prime; // (70), (4.E73)
     if c.low_speed {
-        t *= c.red_smooth;
-        m_zr *= c.red_smooth;
+        t *= f(c.red_smooth);
+        m_zr *= f(c.red_smooth);
     }
-    let mz = match p.version {
-        // (69)–(71) and MF 5.2: Mz = −t·(Fy − SVyκ) + Mzr + s·Fx.
-        // RECONSTRUCTED (69): the scan reads "s·Fz"; eq. (17) of the body has s·Fx.
-        Version::Delft96 | Version::Mf52 => -t * (fy_c.fy - s_vyk_sub) + m_zr + s * fx,
-        // (4.E71), (4.E72): Mz = −t·F'y + Mzr + s·Fx.
-        Version::Mf61 | Version::Mf62 => -t * fy_prime + m_zr + s * fx,
-    };
+    // (69)–(71) and MF 5.2: Mz = −t·(Fy − SVyκ) + Mzr + s·Fx; RECONSTRUCTED (69): the scan
+    // reads "s·Fz"; eq. (17) of the body has s·Fx. (4.E71), (4.E72): Mz = −t·F'y + Mzr + s·Fx.
+    let mz = -t * m.fy_arm + m_zr + s * m.fx;
     Mz { mz, t, m_zr }
 }

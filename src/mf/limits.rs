@@ -10,7 +10,7 @@
 //! Every clip sets its [`Flags`] bit; nothing is clipped silently.
 
 use super::{EvalError, Flags, Input, InputField, Options, Params, Version, EPS};
-use crate::math::{Backend, Float};
+use crate::math::{Backend, Float, Lift};
 
 /// Digressive friction factor Aμ of (4.E8): λμ' = Aμ·λμ*/(1 + (Aμ − 1)·λμ*). The book suggests
 /// 10. With λμ = 1 (every bundled file) λμ' = 1 whatever Aμ is.
@@ -76,6 +76,18 @@ pub struct Conditioned<F> {
     pub lmuy_prime: F,
     /// Low-speed smooth reduction factor (1 above VXLOW).
     pub red_smooth: F,
+    /// Low-speed linear reduction factor |Vx|/VXLOW of κ (1 above VXLOW).
+    pub red_linear: F,
+    /// ALPMIN \[rad\] (the slips' ranges, for the slip stage).
+    pub alpmin: F,
+    /// ALPMAX \[rad\].
+    pub alpmax: F,
+    /// KPUMIN \[-\].
+    pub kpumin: F,
+    /// KPUMAX \[-\].
+    pub kpumax: F,
+    /// VXLOW \[m/s\].
+    pub vxlow: F,
     /// |Vx| ≤ VXLOW with limits on.
     pub low_speed: bool,
     /// Turn-slip state, when turn slip is evaluated.
@@ -92,25 +104,22 @@ fn check<F: Float>(x: F, field: InputField) -> Result<(), EvalError> {
     }
 }
 
-/// Validates and conditions one input (see the module doc).
-pub fn condition<F: Float, M: Backend<F>>(
-    p: &Params<F>,
-    input: &Input<F>,
-    opts: &Options,
-) -> Result<Conditioned<F>, EvalError> {
+/// The finiteness check of an input, in the order of `Input`'s fields (the first non-finite one
+/// is reported).
+#[inline(always)]
+pub fn check_finite<F: Float>(input: &Input<F>) -> Result<(), EvalError> {
     let Input {
-        mut fz,
-        mut kappa,
-        mut alpha,
-        mut gamma,
-        mut phit,
+        fz,
+        kappa,
+        alpha,
+        gamma,
+        phit,
         vx,
         p: p_in,
     } = *input;
     // An absent p is 0 here: finite.
     let finite = F::all_finite(&[fz, kappa, alpha, gamma, phit, vx, p_in.unwrap_or(F::ZERO)]);
     if !finite {
-        // Which one: the first, in the order of `Input`'s fields.
         check(fz, InputField::Fz)?;
         check(kappa, InputField::Kappa)?;
         check(alpha, InputField::Alpha)?;
@@ -121,6 +130,56 @@ pub fn condition<F: Float, M: Backend<F>>(
             check(x, InputField::P)?;
         }
     }
+    Ok(())
+}
+
+/// Validates and conditions one input (see the module doc): the load stage
+/// ([`condition_load`]) and the slips ([`slips`]) in one.
+pub fn condition<F: Float, M: Backend<F>>(
+    p: &Params<F>,
+    input: &Input<F>,
+    opts: &Options,
+) -> Result<Conditioned<F>, EvalError> {
+    check_finite(input)?;
+    let mut c = condition_load::<F, M>(p, input, opts)?;
+    if opts.limits && opts.turn_slip {
+        // Turn slip seen by the contact patch shrinks with the slip angle (MFeval "empirically
+        // discovered"; TNO behaviour). φt is read by the turn-slip equations only.
+        c.phit *= M::cos(input.alpha);
+    }
+    let s = slips::<F, F, M>(&c, input.kappa, input.alpha);
+    c.kappa = s.kappa;
+    c.kappa_out = s.kappa_out;
+    c.kappa_u = input.kappa;
+    c.alpha = s.alpha;
+    c.alpha_star = s.alpha_star;
+    c.cos_alpha_star = s.cos_alpha_star;
+    c.cos_alpha_prime = s.cos_alpha_prime;
+    c.flags.insert(s.flags);
+    Ok(c)
+}
+
+/// The load stage of the conditioning: everything but κ and α (which it leaves 0; [`slips`]
+/// conditions them). `input.kappa` and `input.alpha` are not read.
+#[inline(always)]
+pub fn condition_load<F: Float, M: Backend<F>>(
+    p: &Params<F>,
+    input: &Input<F>,
+    opts: &Options,
+) -> Result<Conditioned<F>, EvalError> {
+    let Input {
+        mut fz,
+        mut gamma,
+        mut phit,
+        vx,
+        p: p_in,
+        ..
+    } = *input;
+    check_finite(&Input {
+        kappa: F::ZERO,
+        alpha: F::ZERO,
+        ..*input
+    })?;
     let mut pres = p_in.unwrap_or(p.inflpres);
     let mf6 = p.version.is_mf6();
     if mf6 && pres <= F::ZERO {
@@ -133,45 +192,24 @@ pub fn condition<F: Float, M: Backend<F>>(
         fz = F::ZERO;
     }
     let fz_u = fz;
-    let kappa_u = kappa;
-    let mut kappa_out = kappa;
     let mut fz_low = fz;
     let mut red_smooth = F::ONE;
+    let mut red_linear = F::ONE;
     let mut low_speed = false;
 
-    // tan α, reused below (computed again only if α is reduced or clipped).
-    let alpha_in = alpha;
-    let mut tan_alpha = M::tan(alpha);
     if opts.limits {
-        // Turn slip seen by the contact patch shrinks with the slip angle (MFeval "empirically
-        // discovered"; TNO behaviour). φt is read by the turn-slip equations only.
-        if opts.turn_slip {
-            phit *= M::cos(alpha);
-        }
         let vxlow = p.vxlow;
         if vx.abs() <= vxlow && vxlow > F::ZERO {
             low_speed = true;
             flags.insert(Flags::LOW_SPEED);
             // Smooth reduction 1 − ½(1 + cos(π·Vx/VXLOW)): 0 at standstill, 1 at VXLOW.
             red_smooth = F::ONE - F::HALF * (F::ONE + M::cos(F::PI * (vx / vxlow)));
-            let red_linear = (vx / vxlow).abs();
-            kappa_out = kappa * red_linear;
-            if !opts.transient {
-                kappa *= red_linear;
-            }
+            red_linear = (vx / vxlow).abs();
             phit *= red_linear;
         }
         if vx < F::ZERO {
             phit = -phit;
         }
-        // α fades when the total speed |Vx| + |Vsy| falls below VXLOW (Vsy = tan(α)·Vx).
-        let speed_sum = vx.abs() + (tan_alpha * vx).abs();
-        if speed_sum < p.vxlow && !opts.transient {
-            alpha *= speed_sum / p.vxlow;
-        }
-        let (a, fa) = alpha.clamp_flag(p.alpmin, p.alpmax);
-        alpha = a;
-        flags.set_if(Flags::ALPHA, fa);
         let (g, fg) = gamma.clamp_flag(p.cammin, p.cammax);
         gamma = g;
         flags.set_if(Flags::GAMMA, fg);
@@ -189,14 +227,8 @@ pub fn condition<F: Float, M: Backend<F>>(
             pres = q;
             flags.set_if(Flags::PRESSURE, fp);
         }
-        let (k, fk) = kappa.clamp_flag(p.kpumin, p.kpumax);
-        kappa = k;
-        flags.set_if(Flags::KAPPA, fk);
     }
 
-    if alpha != alpha_in {
-        tan_alpha = M::tan(alpha);
-    }
     let fz0_prime = p.lfzo * p.fnomin; // (4.E1)
     let dfz = (fz - fz0_prime) / fz0_prime; // (4.E2a)
     let dpi = if mf6 {
@@ -204,29 +236,14 @@ pub fn condition<F: Float, M: Backend<F>>(
     } else {
         F::ZERO
     };
-    let (alpha_star, gamma_star) = if opts.alpha_star {
-        (tan_alpha * vx.sign(), M::sin(gamma)) // (4.E3), (4.E4)
+    let gamma_star = if opts.alpha_star {
+        M::sin(gamma) // (4.E4)
     } else {
-        (alpha, gamma)
+        gamma
     };
-    // cos α* for Dr (4.E47): without α*, from tan α as 1/√(1 + tan²α) where that is exact
-    // (|α| < π/2, where cos α > 0): one square root instead of a cosine.
-    let cos_alpha_star = if !opts.alpha_star && alpha.abs() < F::FRAC_PI_2 {
-        F::ONE / M::sqrt(F::ONE + tan_alpha * tan_alpha)
-    } else {
-        M::cos(alpha_star)
-    };
-    // (4.E6), (4.E6a): Vc' = Vc + ε·sign(Vc), with Vsy = tan(α)·|Vx| and Vcy = Vsy.
-    let vsy = tan_alpha * vx.abs();
-    let vc = M::sqrt(vx * vx + vsy * vsy);
-    let vc_prime = vc + F::from_f64(EPS) * vc.sign_nz();
-    let cos_alpha_prime = vx / vc_prime;
     // (4.E7) with λμV = 0, (4.E8) with Aμ.
-    let a_mu = F::from_f64(A_MU);
     let lmux_star = p.lmux;
     let lmuy_star = p.lmuy;
-    let lmux_prime = a_mu * lmux_star / (F::ONE + (a_mu - F::ONE) * lmux_star);
-    let lmuy_prime = a_mu * lmuy_star / (F::ONE + (a_mu - F::ONE) * lmuy_star);
 
     Ok(Conditioned {
         version: p.version,
@@ -236,10 +253,10 @@ pub fn condition<F: Float, M: Backend<F>>(
         fz,
         fz_low,
         fz_u,
-        kappa,
-        kappa_out,
-        kappa_u,
-        alpha,
+        kappa: F::ZERO,
+        kappa_out: F::ZERO,
+        kappa_u: F::ZERO,
+        alpha: F::ZERO,
         gamma,
         phit,
         vx,
@@ -247,17 +264,115 @@ pub fn condition<F: Float, M: Backend<F>>(
         fz0_prime,
         dfz,
         dpi,
-        alpha_star,
+        alpha_star: F::ZERO,
         gamma_star,
-        cos_alpha_star,
-        cos_alpha_prime,
+        cos_alpha_star: F::ONE,
+        cos_alpha_prime: F::ONE,
         lmux_star,
         lmuy_star,
-        lmux_prime,
-        lmuy_prime,
+        lmux_prime: digressive(lmux_star),
+        lmuy_prime: digressive(lmuy_star),
         red_smooth,
+        red_linear,
         low_speed,
+        alpmin: p.alpmin,
+        alpmax: p.alpmax,
+        kpumin: p.kpumin,
+        kpumax: p.kpumax,
+        vxlow: p.vxlow,
         turn: None,
         flags,
     })
+}
+
+/// λμ' = Aμ·λμ*/(1 + (Aμ − 1)·λμ*) (4.E8).
+#[inline]
+pub fn digressive<F: Float>(lmu_star: F) -> F {
+    let a_mu = F::from_f64(A_MU);
+    a_mu * lmu_star / (F::ONE + (a_mu - F::ONE) * lmu_star)
+}
+
+/// κ and α after conditioning, and what the equations take from α.
+#[derive(Debug, Clone, Copy)]
+pub struct Slips<G> {
+    /// κ used by the equations (reduced at low speed, clipped).
+    pub kappa: G,
+    /// κ after the low-speed reduction, before clipping (reported).
+    pub kappa_out: G,
+    /// α used by the equations \[rad\].
+    pub alpha: G,
+    /// α* (4.E3).
+    pub alpha_star: G,
+    /// cos α* (4.E47).
+    pub cos_alpha_star: G,
+    /// cos α' = Vx/Vc' (4.E6), (4.E6a).
+    pub cos_alpha_prime: G,
+    /// Clips of κ and α.
+    pub flags: Flags,
+}
+
+/// The slip stage of the conditioning: κ and α at the load stage's speed and limits.
+#[inline(always)]
+pub fn slips<F: Float, G: Lift<F>, M: Backend<G>>(
+    c: &Conditioned<F>,
+    mut kappa: G,
+    mut alpha: G,
+) -> Slips<G> {
+    let l = |x: F| G::lift(x);
+    let vx = l(c.vx);
+    let mut flags = Flags::default();
+    let mut kappa_out = kappa;
+    // tan α, reused below (computed again only if α is reduced or clipped).
+    let alpha_in = alpha;
+    let mut tan_alpha = M::tan(alpha);
+    if c.limits {
+        if c.low_speed {
+            let red_linear = l(c.red_linear);
+            kappa_out = kappa * red_linear;
+            if !c.transient {
+                kappa *= red_linear;
+            }
+        }
+        // α fades when the total speed |Vx| + |Vsy| falls below VXLOW (Vsy = tan(α)·Vx).
+        let vxlow = l(c.vxlow);
+        let speed_sum = vx.abs() + (tan_alpha * vx).abs();
+        if speed_sum < vxlow && !c.transient {
+            alpha *= speed_sum / vxlow;
+        }
+        let (a, fa) = alpha.clamp_flag(l(c.alpmin), l(c.alpmax));
+        alpha = a;
+        flags.set_if(Flags::ALPHA, fa);
+        let (k, fk) = kappa.clamp_flag(l(c.kpumin), l(c.kpumax));
+        kappa = k;
+        flags.set_if(Flags::KAPPA, fk);
+    }
+    if alpha != alpha_in {
+        tan_alpha = M::tan(alpha);
+    }
+    let alpha_star = if c.use_alpha_star {
+        tan_alpha * vx.sign() // (4.E3)
+    } else {
+        alpha
+    };
+    // cos α* for Dr (4.E47): without α*, from tan α as 1/√(1 + tan²α) where that is exact
+    // (|α| < π/2, where cos α > 0): one square root instead of a cosine.
+    let cos_alpha_star = if !c.use_alpha_star && alpha.abs() < G::FRAC_PI_2 {
+        G::ONE / M::sqrt(G::ONE + tan_alpha * tan_alpha)
+    } else {
+        M::cos(alpha_star)
+    };
+    // (4.E6), (4.E6a): Vc' = Vc + ε·sign(Vc), with Vsy = tan(α)·|Vx| and Vcy = Vsy.
+    let vsy = tan_alpha * vx.abs();
+    let vc = M::sqrt(vx * vx + vsy * vsy);
+    let vc_prime = vc + G::from_f64(EPS) * vc.sign_nz();
+    let cos_alpha_prime = vx / vc_prime;
+    Slips {
+        kappa,
+        kappa_out,
+        alpha,
+        alpha_star,
+        cos_alpha_star,
+        cos_alpha_prime,
+        flags,
+    }
 }

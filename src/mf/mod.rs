@@ -5,6 +5,10 @@
 //! intermediates ([`pure`]) → `fx` → `fy` ([`combined`]) → `mx` → `my` ([`moments`]) → `mz`
 //! ([`combined`]) → relaxation lengths ([`sigma`]). Turn slip ([`turnslip`]) is an option.
 //!
+//! [`eval`] runs in stages ([`prepared`]): the load stage (everything that depends on Fz, γ, p,
+//! Vx and the scalings), the friction stage (λμ) and the slip stage (κ, α); [`prepared::Prepared`]
+//! keeps the first two for many evaluations at one load, with derivatives in κ, α and λμ.
+//!
 //! ## Axes, units, signs
 //! ISO-W (TYDEX W) at the contact point, SI units, angles in radians: α > 0 gives Fy < 0 and
 //! (below the peak) Mz > 0; κ > 0 (driving) gives Fx > 0; κ = −1 is a locked wheel; γ > 0 tilts
@@ -15,10 +19,10 @@
 //! |---|---|---|---|
 //! | Fx0 | (22)–(31) | (4.E9)–(4.E18) | [`pure::fx0`] |
 //! | Fy0 | (32)–(42) | (4.E19)–(4.E30) | [`pure::fy0`] |
-//! | t, Mzr (pure) | (43)–(56), reconstructed | (4.E31)–(4.E49), (A58), (A60) | [`pure::mz0`] |
-//! | Fx | (57)–(62), reconstructed | (4.E50)–(4.E57) | [`combined::fx`] |
-//! | Fy | (13)–(16), (63)–(68) | (4.E58)–(4.E67) | [`combined::fy`] |
-//! | Mz | (17), (18), (69)–(75) | (4.E71)–(4.E78), (A54)–(A56) | [`combined::mz`] |
+//! | t, Mzr (pure) | (43)–(56), reconstructed | (4.E31)–(4.E49), (A58), (A60) | [`pure::mz0_load`], [`pure::mz0_mu`] |
+//! | Fx | (57)–(62), reconstructed | (4.E50)–(4.E57) | [`combined::fx_slip`] |
+//! | Fy | (13)–(16), (63)–(68) | (4.E58)–(4.E67) | [`combined::fy_slip`] |
+//! | Mz | (17), (18), (69)–(75) | (4.E71)–(4.E78), (A54)–(A56) | [`combined::mz_slip`] |
 //! | Mx, My | — (MF 5.2 forms) | (A47)/(49 draft), (A48) | [`moments`] |
 //! | σx, σy | — (MF 5.2 forms) | Besselink eqs. (17)–(19) | [`sigma`] |
 //!
@@ -34,6 +38,7 @@ pub mod combined;
 pub mod limits;
 pub mod moments;
 pub mod params;
+pub mod prepared;
 pub mod pure;
 pub mod sigma;
 pub mod turnslip;
@@ -308,97 +313,62 @@ pub fn eval<F: Float, M: Backend<F>>(
     input: &Input<F>,
     opts: &Options,
 ) -> Result<Output<F>, EvalError> {
-    let mirrored = p.mirrored_on(opts.mounted);
-    let mut inp = *input;
-    if mirrored {
-        inp.alpha = -inp.alpha;
-        inp.gamma = -inp.gamma;
-        inp.phit = -inp.phit;
-    }
-    let mut out = eval_unmirrored::<F, M>(p, &inp, opts)?;
-    if mirrored {
-        out.fy = -out.fy;
-        out.mx = -out.mx;
-        out.mz = -out.mz;
-        out.m_zr = -out.m_zr;
-        out.flags.insert(Flags::MIRRORED);
-    }
-    Ok(out)
-}
-
-fn eval_unmirrored<F: Float, M: Backend<F>>(
-    p: &Params<F>,
-    input: &Input<F>,
-    opts: &Options,
-) -> Result<Output<F>, EvalError> {
     if opts.turn_slip && !turnslip::available(p) {
         return Err(EvalError::TurnSlipUnavailable);
     }
-    let mut c = limits::condition::<F, M>(p, input, opts)?;
-    if c.fz <= F::ZERO {
+    limits::check_finite(input)?;
+    // The load stage (with turn slip: every stage's load part at this point), then the slip
+    // stage: the `prepared` module's, so that its results are this function's.
+    let prep = prepared::for_eval::<F, M>(p, input, opts)?;
+    let f = prep.eval::<M>(input.kappa, input.alpha)?;
+    if !prep.contact() {
         // No contact: no force, no moment (MFeval gives the same, see the `load` oracle sweep).
         return Ok(Output {
-            kappa: c.kappa_out,
-            flags: c.flags,
+            kappa: f.kappa,
+            flags: f.flags,
             ..Output::default()
         });
     }
-    if opts.turn_slip {
-        turnslip::prepare::<F, M>(p, &mut c);
-    }
-
-    let fx0 = pure::fx0::<F, M>(p, &mut c);
-    let (gamma_star, turn_on) = (c.gamma_star, c.turn.is_some());
-    let fy0 = pure::fy0::<F, M>(p, &mut c, gamma_star, turn_on);
-    let mz0 = pure::mz0::<F, M>(p, &mut c, &fy0);
-    let fx = combined::fx::<F, M>(p, &mut c, fx0.fx0);
-    let fy = combined::fy::<F, M>(p, &mut c, fy0.fy0, fy0.mu_y, gamma_star, fy0.zeta2);
+    let c = prep.conditioned();
+    let mirrored = prep.mirrored();
     let (mx, my) = if opts.moments {
+        // Mx of the file's tyre (unmirrored Fy), mirrored back below.
+        let fy = if mirrored { -f.fy } else { f.fy };
+        let mx = moments::mx::<F, M>(p, c, fy);
         (
-            moments::mx::<F, M>(p, &c, fy.fy),
-            moments::my::<F, M>(p, &c, fx),
+            if mirrored { -mx } else { mx },
+            moments::my::<F, M>(p, c, f.fx, input.kappa),
         )
     } else {
         (F::ZERO, F::ZERO)
     };
-    let mz = combined::mz::<F, M>(p, &mut c, &fx0, &fy0, &mz0, fx, &fy);
-    let (sigma_x, sigma_y) = sigma::sigma::<F, M>(p, &c, fx0.k_xk, fy0.k_ya);
-
-    let mu_y = if c.fz == F::ZERO {
-        F::ZERO
-    } else {
-        fy0.mu_y.abs()
-    };
+    let (sigma_x, sigma_y) = sigma::sigma::<F, M>(p, c, prep.k_xk(), prep.k_ya());
+    let mu = prep.mu();
     let out = Output {
-        fx,
-        fy: fy.fy,
+        fx: f.fx,
+        fy: f.fy,
         fz: c.fz,
         mx,
         my,
-        mz: mz.mz,
-        mu_x: fx0.mu_x,
-        mu_y,
-        k_xk: fx0.k_xk,
-        k_ya: fy0.k_ya,
-        t: mz.t,
-        m_zr: mz.m_zr,
+        mz: f.mz,
+        mu_x: mu.mu_x(),
+        mu_y: mu.mu_y(),
+        k_xk: prep.k_xk(),
+        k_ya: prep.k_ya(),
+        t: f.t,
+        m_zr: f.m_zr,
         sigma_x,
         sigma_y,
-        kappa: c.kappa_out,
-        flags: c.flags,
+        kappa: f.kappa,
+        flags: f.flags,
     };
     let all = [
-        out.fx,
-        out.fy,
         out.mx,
         out.my,
-        out.mz,
         out.mu_x,
         out.mu_y,
         out.k_xk,
         out.k_ya,
-        out.t,
-        out.m_zr,
         out.sigma_x,
         out.sigma_y,
     ];
@@ -443,9 +413,9 @@ pub(crate) fn cos_atan<F: Float, M: Backend<F>>(x: F) -> F {
 /// Clips a curvature factor to ≤ 1 when limits are on ("(≤ 1)" in eqs. (27), (38), (4.E14),
 /// (4.E24), (4.E44), (4.E56), (4.E64)) and flags it.
 #[inline]
-pub(crate) fn clip_e<F: Float>(e: F, c: &mut limits::Conditioned<F>) -> F {
-    if c.limits && e > F::ONE {
-        c.flags.insert(Flags::E_CLIPPED);
+pub(crate) fn clip_e<F: Float>(e: F, limits: bool, flags: &mut Flags) -> F {
+    if limits && e > F::ONE {
+        flags.insert(Flags::E_CLIPPED);
         F::ONE
     } else {
         e

@@ -55,8 +55,9 @@ fn pow<F: Float, M: Backend<F>>(x: F, y: F) -> F {
     }
 }
 
-/// Rolling resistance moment My \[N·m\], (A48) for MF 6.x, MF 5.2 form otherwise.
-pub fn my<F: Float, M: Backend<F>>(p: &Params<F>, c: &Conditioned<F>, fx: F) -> F {
+/// Rolling resistance moment My \[N·m\], (A48) for MF 6.x, MF 5.2 form otherwise; `kappa_u` is
+/// κ as given.
+pub fn my<F: Float, M: Backend<F>>(p: &Params<F>, c: &Conditioned<F>, fx: F, kappa_u: F) -> F {
     let fz = low_load(c.fz_u, p.fzmin, false);
     let (fz0, r0, v0) = (p.fnomin, p.unloaded_radius, p.longvl);
     let vx = c.vx;
@@ -81,7 +82,7 @@ pub fn my<F: Float, M: Backend<F>>(p: &Params<F>, c: &Conditioned<F>, fx: F) -> 
     // Near a locked wheel (κ → −1) the wheel hardly rotates and My fades out: sin of a linear
     // ramp from 0 at κ = −1 to π/2 at κ = VXLOW/|Vx| − 1; below the window My reverses (the
     // wheel spins backwards). TNO solver behaviour as MFeval reproduces it.
-    let kappa = c.kappa_u;
+    let kappa = kappa_u;
     let high = p.vxlow / vx.abs() - F::ONE;
     let low = -F::ONE - p.vxlow - high;
     if kappa >= low && kappa <= high {

@@ -7,10 +7,16 @@
 //!   (42); no μx camber term, no E in the combined-slip weights.
 //! - MF 5.2: exp(+PKX3·dfz); SHy = (PHY1 + PHY2·dfz)·λHy + PHY3·γy; γx, γy, γz with λγ.
 //! - MF 6.x: pressure terms; camber through Kyγ0 (4.E30) and the shift (4.E27); PKY4..7, PEY5.
+//!
+//! Each quantity is computed in one of three stages (see [`super::prepared`]): `*_load`
+//! (Fz, γ, p, Vx and the scaling factors other than λμ: every exp/sin/atan of the load),
+//! `*_mu` (the friction scalings λμx*, λμy*: arithmetic only) and `*_slip` (κ, α). The slip
+//! stage is generic over the type `G` it computes in (the stored `F`, or dual numbers for
+//! derivatives; [`Lift`]).
 
 use super::limits::Conditioned;
-use super::{clip_e, magic_sin, Params, Version, EPS};
-use crate::math::{Backend, Float};
+use super::{clip_e, magic_sin, Flags, Params, Version, EPS};
+use crate::math::{Backend, Float, Lift};
 
 /// Results of [`fx0`].
 #[derive(Debug, Clone, Copy)]
@@ -31,20 +37,39 @@ fn gamma_x<F: Float>(p: &Params<F>, gamma: F) -> F {
     }
 }
 
-/// Pure longitudinal slip force, eqs. (22)–(31) / (4.E9)–(4.E18).
-pub fn fx0<F: Float, M: Backend<F>>(p: &Params<F>, c: &mut Conditioned<F>) -> Fx0<F> {
+/// Load stage of Fx0, eqs. (22)–(31) / (4.E9)–(4.E18): every factor free of κ and λμ.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Fx0Load<F> {
+    /// μx / λμx* \[-\] (26), (4.E13).
+    pub mu_x1: F,
+    /// Cx (24), (4.E11).
+    pub c_x: F,
+    /// Kxκ \[N\] (28), (4.E15).
+    pub k_xk: F,
+    /// SHx (30), (4.E17), with the low-speed reduction.
+    pub s_hx: F,
+    /// SVx / (λμx'·ζ1) \[N\] (31), (4.E18).
+    pub s_vx1: F,
+    /// ζ1 (turn slip, 1 without).
+    pub zeta1: F,
+    /// pEx1 + pEx2·dfz + pEx3·dfz² of (27), (4.E14).
+    pub e_x1: F,
+    /// pEx4.
+    pub pex4: F,
+    /// λEx.
+    pub lex: F,
+}
+
+/// [`Fx0Load`] of the conditioned load `c`.
+#[inline(always)]
+pub fn fx0_load<F: Float, M: Backend<F>>(p: &Params<F>, c: &Conditioned<F>) -> Fx0Load<F> {
     let (fz, dfz, dpi) = (c.fz, c.dfz, c.dpi);
     let zeta1 = c.turn.map_or(F::ONE, |t| t.zeta1);
     let gx = gamma_x(p, c.gamma);
     let c_x = p.pcx1 * p.lcx; // (24), (4.E11)
-    let mut mu_x = (p.pdx1 + p.pdx2 * dfz)
+    let mu_x1 = (p.pdx1 + p.pdx2 * dfz)
         * (F::ONE + p.ppx3 * dpi + p.ppx4 * dpi * dpi)
-        * (F::ONE - p.pdx3 * gx * gx)
-        * c.lmux_star; // (26), (4.E13)
-    if fz == F::ZERO {
-        mu_x = F::ZERO;
-    }
-    let d_x = mu_x * fz * zeta1; // (25), (4.E12)
+        * (F::ONE - p.pdx3 * gx * gx); // (26), (4.E13) without λμx*
     let exp_arg = match p.version {
         // (28): exp(−pKx3·dfz) in the paper's appendix.
         Version::Delft96 => -p.pkx3 * dfz,
@@ -55,19 +80,80 @@ pub fn fx0<F: Float, M: Backend<F>>(p: &Params<F>, c: &mut Conditioned<F>) -> Fx
         * M::exp(exp_arg)
         * (F::ONE + p.ppx1 * dpi + p.ppx2 * dpi * dpi)
         * p.lkx; // (28), (4.E15)
-    let eps = F::from_f64(EPS);
-    let b_x = k_xk / (c_x * d_x + eps * d_x.sign_nz()); // (29), (4.E16) with the signed ε
     let mut s_hx = (p.phx1 + p.phx2 * dfz) * p.lhx; // (30), (4.E17)
-    let mut s_vx = fz * (p.pvx1 + p.pvx2 * dfz) * p.lvx * c.lmux_prime * zeta1; // (31), (4.E18)
     if c.low_speed {
-        s_vx *= c.red_smooth;
         s_hx *= c.red_smooth;
     }
-    let kappa_x = c.kappa + s_hx; // (23), (4.E10)
-    let e_x =
-        (p.pex1 + p.pex2 * dfz + p.pex3 * dfz * dfz) * (F::ONE - p.pex4 * kappa_x.sign()) * p.lex; // (27), (4.E14)
-    let e_x = clip_e(e_x, c);
-    let mut fx0 = magic_sin::<F, M>(b_x, c_x, d_x, e_x, kappa_x) + s_vx; // (22), (4.E9)
+    Fx0Load {
+        mu_x1,
+        c_x,
+        k_xk,
+        s_hx,
+        s_vx1: fz * (p.pvx1 + p.pvx2 * dfz) * p.lvx, // (31), (4.E18) without λμx'·ζ1
+        zeta1,
+        e_x1: p.pex1 + p.pex2 * dfz + p.pex3 * dfz * dfz,
+        pex4: p.pex4,
+        lex: p.lex,
+    }
+}
+
+/// Friction stage of Fx0: the factors that scale with λμx.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Fx0Mu<G> {
+    /// μx \[-\] (26), (4.E13).
+    pub mu_x: G,
+    /// Dx \[N\] (25), (4.E12).
+    pub d_x: G,
+    /// Bx (29), (4.E16).
+    pub b_x: G,
+    /// SVx \[N\] (31), (4.E18).
+    pub s_vx: G,
+}
+
+/// [`Fx0Mu`] at λμx* = `lmux_star`, λμx' = `lmux_prime` (4.E7), (4.E8).
+#[inline(always)]
+pub fn fx0_mu<F: Float, G: Lift<F>>(
+    l: &Fx0Load<F>,
+    c: &Conditioned<F>,
+    lmux_star: G,
+    lmux_prime: G,
+) -> Fx0Mu<G> {
+    let f = |x: F| G::lift(x);
+    let fz = f(c.fz);
+    let mut mu_x = f(l.mu_x1) * lmux_star; // (26), (4.E13)
+    if c.fz == F::ZERO {
+        mu_x = G::ZERO;
+    }
+    let d_x = mu_x * fz * f(l.zeta1); // (25), (4.E12)
+    let eps = G::from_f64(EPS);
+    let b_x = f(l.k_xk) / (f(l.c_x) * d_x + eps * d_x.sign_nz()); // (29), (4.E16) with the signed ε
+    let mut s_vx = f(l.s_vx1) * lmux_prime * f(l.zeta1); // (31), (4.E18)
+    if c.low_speed {
+        s_vx *= f(c.red_smooth);
+    }
+    Fx0Mu {
+        mu_x,
+        d_x,
+        b_x,
+        s_vx,
+    }
+}
+
+/// Slip stage of Fx0 at the conditioned κ: (22), (23), (27) / (4.E9), (4.E10), (4.E14).
+#[inline(always)]
+pub fn fx0_slip<F: Float, H: Float, G: Lift<F> + Lift<H>, M: Backend<G>>(
+    l: &Fx0Load<F>,
+    m: &Fx0Mu<H>,
+    c: &Conditioned<F>,
+    kappa: G,
+    flags: &mut Flags,
+) -> G {
+    let f = |x: F| <G as Lift<F>>::lift(x);
+    let h = |x: H| <G as Lift<H>>::lift(x);
+    let kappa_x = kappa + f(l.s_hx); // (23), (4.E10)
+    let e_x = f(l.e_x1) * (G::ONE - f(l.pex4) * kappa_x.sign()) * f(l.lex); // (27), (4.E14)
+    let e_x = clip_e(e_x, c.limits, flags);
+    let mut fx0 = magic_sin::<G, M>(h(m.b_x), f(l.c_x), h(m.d_x), e_x, kappa_x) + h(m.s_vx); // (22), (4.E9)
     if c.vx < F::ZERO && !c.transient {
         // Running backwards: mirror image (appendix, first paragraph), for steady-state slips
         // defined with κ = −1 locked in both directions. Slips from the transient model
@@ -75,7 +161,22 @@ pub fn fx0<F: Float, M: Backend<F>>(p: &Params<F>, c: &mut Conditioned<F>) -> Fx
         // has κ' = +1 and must get Fx > 0 (MFeval's dynamic modes flip κ for the same reason).
         fx0 = -fx0;
     }
-    Fx0 { fx0, mu_x, k_xk }
+    fx0
+}
+
+/// Pure longitudinal slip force, eqs. (22)–(31) / (4.E9)–(4.E18), at the conditioned `c`: the
+/// three stages in a row.
+pub fn fx0<F: Float, M: Backend<F>>(p: &Params<F>, c: &mut Conditioned<F>) -> Fx0<F> {
+    let l = fx0_load::<F, M>(p, c);
+    let m = fx0_mu::<F, F>(&l, c, c.lmux_star, c.lmux_prime);
+    let mut flags = c.flags;
+    let fx0 = fx0_slip::<F, F, F, M>(&l, &m, c, c.kappa, &mut flags);
+    c.flags = flags;
+    Fx0 {
+        fx0,
+        mu_x: m.mu_x,
+        k_xk: l.k_xk,
+    }
 }
 
 /// Results of [`fy0`].
@@ -89,24 +190,55 @@ pub struct Fy0<F> {
     pub k_ya: F,
     /// SHy \[rad\] (41), (4.E27).
     pub s_hy: F,
-    /// SVy \[N\] (42), (4.E29).
-    pub s_vy: F,
-    /// By \[1/rad\] (40), (4.E26).
-    pub b_y: F,
-    /// Cy \[-\] (35), (4.E21).
+}
+
+/// Load stage of Fy0, eqs. (32)–(42) / (4.E19)–(4.E30), at one camber: every factor free of
+/// α and λμ.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Fy0Load<F> {
+    /// Kyα \[N/rad\] (39), (4.E25).
+    pub k_ya: F,
+    /// Kyα' = Kyα + ε·sign(Kyα) (4.E39).
+    pub k_ya_prime: F,
+    /// μy / λμy* (37), (4.E23).
+    pub mu_y1: F,
+    /// Cy (35), (4.E21).
     pub c_y: F,
     /// ζ2 (turn slip, 1 without).
     pub zeta2: F,
+    /// SVy's term that scales with λμy' (and ζ2) \[N\] (42), (4.E29).
+    pub s_vy1: F,
+    /// SVy's camber term per λμy' (MF 5.2), SVyγ per λμy'·ζ2 (MF 6.x, (4.E28)) \[N\].
+    pub s_vyg1: F,
+    /// SHy without the SVyγ terms (41), (4.E27).
+    pub s_hy1: F,
+    /// Kyγ0·γ* (4.E30) (MF 6.x).
+    pub k_yg: F,
+    /// ζ0 (turn slip; 1 without).
+    pub zeta0: F,
+    /// SHyp (4.80) (turn slip; 0 without).
+    pub s_hyp: F,
+    /// Turn slip on.
+    pub turn: bool,
+    /// pEy1 + pEy2·dfz of (38), (4.E24).
+    pub e_y1: F,
+    /// 1 + pEy5·γ*².
+    pub e_y2: F,
+    /// pEy3 + pEy4·γ*.
+    pub e_y3: F,
+    /// λEy.
+    pub ley: F,
 }
 
-/// Pure side-slip force, eqs. (32)–(42) / (4.E19)–(4.E30), at camber `gamma_star` (the
-/// aligning torque needs Fy0 at γ = 0 too) and with or without turn slip.
-pub fn fy0<F: Float, M: Backend<F>>(
+/// [`Fy0Load`] at camber `gamma_star` (the aligning torque needs Fy0 at γ = 0 too), with or
+/// without turn slip.
+#[inline(always)]
+pub fn fy0_load<F: Float, M: Backend<F>>(
     p: &Params<F>,
     c: &mut Conditioned<F>,
     gamma_star: F,
     turn_slip: bool,
-) -> Fy0<F> {
+) -> Fy0Load<F> {
     let (fz, dfz, dpi) = (c.fz, c.dfz, c.dpi);
     let fz0p = c.fz0_prime;
     let eps = F::from_f64(EPS);
@@ -130,107 +262,205 @@ pub fn fy0<F: Float, M: Backend<F>>(
         * p.lky; // (39), (4.E25)
     let k_ya_prime = k_ya + eps * k_ya.sign_nz(); // (4.E39)
 
-    let (mut s_hy, mut s_vy) = match p.version {
+    let (mut zeta0, mut s_hyp, mut k_yg) = (F::ONE, F::ZERO, F::ZERO);
+    let (s_hy1, s_vy1, s_vyg1) = match p.version {
         Version::Delft96 => {
             // (41), (42): λHy and λVy scale the camber terms too.
             let s_hy = (p.phy1 + p.phy2 * dfz + p.phy3 * g_y) * p.lhy;
-            let s_vy =
-                fz * (p.pvy1 + p.pvy2 * dfz + (p.pvy3 + p.pvy4 * dfz) * g_y) * p.lvy * c.lmuy_prime;
-            (s_hy, s_vy)
+            let s_vy = fz * (p.pvy1 + p.pvy2 * dfz + (p.pvy3 + p.pvy4 * dfz) * g_y) * p.lvy;
+            (s_hy, s_vy, F::ZERO)
         }
         Version::Mf52 => {
             // MF-Tyre 5.2 equation manual.
             let s_hy = (p.phy1 + p.phy2 * dfz) * p.lhy + p.phy3 * g_y;
-            let s_vy = fz * (p.pvy1 + p.pvy2 * dfz) * p.lvy * c.lmuy_prime
-                + fz * (p.pvy3 + p.pvy4 * dfz) * g_y * c.lmuy_prime;
-            (s_hy, s_vy)
+            (
+                s_hy,
+                fz * (p.pvy1 + p.pvy2 * dfz) * p.lvy,
+                fz * (p.pvy3 + p.pvy4 * dfz) * g_y,
+            )
         }
         Version::Mf61 | Version::Mf62 => {
-            let s_vyg = fz * (p.pvy3 + p.pvy4 * dfz) * g_y * p.lkyc * c.lmuy_prime * zeta2; // (4.E28)
+            let s_vyg1 = fz * (p.pvy3 + p.pvy4 * dfz) * g_y * p.lkyc; // (4.E28) per λμy'·ζ2
             let k_yg0 = fz * (p.pky6 + p.pky7 * dfz) * (F::ONE + p.ppy5 * dpi) * p.lkyc; // (4.E30)
-            let (zeta0, zeta4) = match spin {
-                Some(_) => {
-                    let s_hyp = super::turnslip::s_hyp::<F, M>(p, c, k_yg0);
-                    (F::ZERO, F::ONE + s_hyp - s_vyg / k_ya_prime) // (4.83), (4.84)
-                }
-                None => (F::ONE, F::ONE),
+            k_yg = k_yg0 * g_y;
+            if spin.is_some() {
+                zeta0 = F::ZERO; // (4.83)
+                s_hyp = super::turnslip::s_hyp::<F, M>(p, c, k_yg0);
+            }
+            let s_hy1 = (p.phy1 + p.phy2 * dfz) * p.lhy;
+            (s_hy1, fz * (p.pvy1 + p.pvy2 * dfz) * p.lvy, s_vyg1)
+        }
+    };
+    Fy0Load {
+        k_ya,
+        k_ya_prime,
+        mu_y1: (p.pdy1 + p.pdy2 * dfz)
+            * (F::ONE + p.ppy3 * dpi + p.ppy4 * dpi * dpi)
+            * (F::ONE - p.pdy3 * g_y * g_y), // (37), (4.E23) without λμy*
+        c_y: p.pcy1 * p.lcy, // (35), (4.E21)
+        zeta2,
+        s_vy1,
+        s_vyg1,
+        s_hy1,
+        k_yg,
+        zeta0,
+        s_hyp,
+        turn: spin.is_some(),
+        e_y1: p.pey1 + p.pey2 * dfz,
+        e_y2: F::ONE + p.pey5 * g_y * g_y,
+        e_y3: p.pey3 + p.pey4 * g_y,
+        ley: p.ley,
+    }
+}
+
+/// Friction stage of Fy0: the factors that scale with λμy.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Fy0Mu<G> {
+    /// μy \[-\] (37), (4.E23), signed as the file fits it.
+    pub mu_y: G,
+    /// Dy \[N\] (36), (4.E22).
+    pub d_y: G,
+    /// By (40), (4.E26).
+    pub b_y: G,
+    /// SHy \[rad\] (41), (4.E27).
+    pub s_hy: G,
+    /// SVy \[N\] (42), (4.E29).
+    pub s_vy: G,
+}
+
+/// [`Fy0Mu`] at λμy* = `lmuy_star`, λμy' = `lmuy_prime` (4.E7), (4.E8).
+#[inline(always)]
+pub fn fy0_mu<F: Float, G: Lift<F>>(
+    l: &Fy0Load<F>,
+    c: &Conditioned<F>,
+    lmuy_star: G,
+    lmuy_prime: G,
+) -> Fy0Mu<G> {
+    let f = |x: F| G::lift(x);
+    let eps = G::from_f64(EPS);
+    let zeta2 = f(l.zeta2);
+    let (mut s_hy, mut s_vy) = match c.version {
+        // (41), (42).
+        Version::Delft96 => (f(l.s_hy1), f(l.s_vy1) * lmuy_prime),
+        Version::Mf52 => (
+            f(l.s_hy1),
+            f(l.s_vy1) * lmuy_prime + f(l.s_vyg1) * lmuy_prime,
+        ),
+        Version::Mf61 | Version::Mf62 => {
+            let k_ya_prime = f(l.k_ya_prime);
+            let s_vyg = f(l.s_vyg1) * lmuy_prime * zeta2; // (4.E28)
+            let zeta4 = if l.turn {
+                G::ONE + f(l.s_hyp) - s_vyg / k_ya_prime // (4.84)
+            } else {
+                G::ONE
             };
-            let s_hy = (p.phy1 + p.phy2 * dfz) * p.lhy
-                + ((k_yg0 * g_y - s_vyg) / k_ya_prime) * zeta0
-                + zeta4
-                - F::ONE; // (4.E27)
-            let s_vy = fz * (p.pvy1 + p.pvy2 * dfz) * p.lvy * c.lmuy_prime * zeta2 + s_vyg; // (4.E29)
+            let s_hy =
+                f(l.s_hy1) + ((f(l.k_yg) - s_vyg) / k_ya_prime) * f(l.zeta0) + zeta4 - G::ONE; // (4.E27)
+            let s_vy = f(l.s_vy1) * lmuy_prime * zeta2 + s_vyg; // (4.E29)
             (s_hy, s_vy)
         }
     };
     if c.low_speed {
-        s_vy *= c.red_smooth;
-        s_hy *= c.red_smooth;
+        s_vy *= f(c.red_smooth);
+        s_hy *= f(c.red_smooth);
     }
-    let alpha_y = c.alpha_star + s_hy; // (33), (4.E20)
-    let c_y = p.pcy1 * p.lcy; // (35), (4.E21)
-    let mut mu_y = (p.pdy1 + p.pdy2 * dfz)
-        * (F::ONE + p.ppy3 * dpi + p.ppy4 * dpi * dpi)
-        * (F::ONE - p.pdy3 * g_y * g_y)
-        * c.lmuy_star; // (37), (4.E23)
-    let d_y = mu_y * fz * zeta2; // (36), (4.E22)
-    let e_y = (p.pey1 + p.pey2 * dfz)
-        * (F::ONE + p.pey5 * g_y * g_y - (p.pey3 + p.pey4 * g_y) * alpha_y.sign_nz())
-        * p.ley; // (38), (4.E24)
-    let e_y = clip_e(e_y, c);
-    let b_y = k_ya / (c_y * d_y + eps * d_y.sign_nz()); // (40), (4.E26) with the signed ε
-    let mut fy0 = magic_sin::<F, M>(b_y, c_y, d_y, e_y, alpha_y) + s_vy; // (32), (4.E19)
+    let mu_y = f(l.mu_y1) * lmuy_star; // (37), (4.E23)
+    let d_y = mu_y * f(c.fz) * zeta2; // (36), (4.E22)
+    let b_y = f(l.k_ya) / (f(l.c_y) * d_y + eps * d_y.sign_nz()); // (40), (4.E26) with the signed ε
+    Fy0Mu {
+        mu_y: if c.fz == F::ZERO { G::ZERO } else { mu_y },
+        d_y,
+        b_y,
+        s_hy,
+        s_vy,
+    }
+}
+
+/// Slip stage of Fy0 at α*: (32), (33), (38) / (4.E19), (4.E20), (4.E24).
+#[inline(always)]
+pub fn fy0_slip<F: Float, H: Float, G: Lift<F> + Lift<H>, M: Backend<G>>(
+    l: &Fy0Load<F>,
+    m: &Fy0Mu<H>,
+    c: &Conditioned<F>,
+    alpha_star: G,
+    flags: &mut Flags,
+) -> G {
+    let f = |x: F| <G as Lift<F>>::lift(x);
+    let h = |x: H| <G as Lift<H>>::lift(x);
+    let alpha_y = alpha_star + h(m.s_hy); // (33), (4.E20)
+    let e_y = f(l.e_y1) * (f(l.e_y2) - f(l.e_y3) * alpha_y.sign_nz()) * f(l.ley); // (38), (4.E24)
+    let e_y = clip_e(e_y, c.limits, flags);
+    let mut fy0 = magic_sin::<G, M>(h(m.b_y), f(l.c_y), h(m.d_y), e_y, alpha_y) + h(m.s_vy); // (32), (4.E19)
     if c.use_alpha_star && c.vx < F::ZERO {
         // With α* = tan(α)·sign(Vx) the force changes sign with Vx; undo it (MFeval, TNO).
         fy0 = -fy0;
     }
-    if fz == F::ZERO {
-        mu_y = F::ZERO;
-    }
+    fy0
+}
+
+/// Pure side-slip force, eqs. (32)–(42) / (4.E19)–(4.E30), at the conditioned `c` and camber
+/// `gamma_star`: the three stages in a row.
+pub fn fy0<F: Float, M: Backend<F>>(
+    p: &Params<F>,
+    c: &mut Conditioned<F>,
+    gamma_star: F,
+    turn_slip: bool,
+) -> Fy0<F> {
+    let l = fy0_load::<F, M>(p, c, gamma_star, turn_slip);
+    let m = fy0_mu::<F, F>(&l, c, c.lmuy_star, c.lmuy_prime);
+    let mut flags = c.flags;
+    let fy0 = fy0_slip::<F, F, F, M>(&l, &m, c, c.alpha_star, &mut flags);
+    c.flags = flags;
     Fy0 {
         fy0,
-        mu_y,
-        k_ya,
-        s_hy,
-        s_vy,
-        b_y,
-        c_y,
-        zeta2,
+        mu_y: m.mu_y,
+        k_ya: l.k_ya,
+        s_hy: m.s_hy,
     }
 }
 
-/// Factors of the pneumatic trail t and the residual torque Mzr at pure slip, from which the
-/// combined-slip aligning torque is built.
-#[derive(Debug, Clone, Copy)]
-pub struct Mz0<F> {
-    /// αr = α* + SHf (47), (4.E37) \[rad\].
-    pub alpha_r: F,
-    /// αt = α* + SHt (45), (4.E34) \[rad\].
-    pub alpha_t: F,
-    /// Kyα' = Kyα + ε·sign(Kyα) (4.E39) \[N/rad\].
-    pub k_ya_prime: F,
-    /// Bt (50), (A58).
-    pub b_t: F,
-    /// Ct (51), (4.E41).
-    pub c_t: F,
-    /// Dt \[m\] (52), (A60).
-    pub d_t: F,
-    /// Et (53), (4.E44).
-    pub e_t: F,
-    /// Br (55), (4.E45).
-    pub b_r: F,
-    /// Cr (4.E46): 1 without turn slip.
-    pub c_r: F,
-    /// Dr \[N·m\] (56), (4.E47).
-    pub d_r: F,
-}
-
-/// Pneumatic trail and residual torque factors, eqs. (43)–(56) / (4.E31)–(4.E49).
+/// Load stage of the pneumatic trail t and the residual torque Mzr, eqs. (43)–(56) /
+/// (4.E31)–(4.E49).
 ///
 /// RECONSTRUCTED (paper eqs. 43–56, damaged in the scan): from eqs. (7)–(11) of the body and
 /// MF 5.2, which kept Delft Tyre 96's aligning torque. The equation numbers cited are the
 /// paper's where its text is legible, else the MF 5.2/6.1 numbers.
-pub fn mz0<F: Float, M: Backend<F>>(p: &Params<F>, c: &mut Conditioned<F>, fy0: &Fy0<F>) -> Mz0<F> {
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Mz0Load<F> {
+    /// SHt \[rad\] (54), (4.E35).
+    pub s_ht: F,
+    /// Dt \[m\] (52), (A60).
+    pub d_t: F,
+    /// Bt·λμy* (50), (A58).
+    pub b_t1: F,
+    /// Ct (51), (4.E41).
+    pub c_t: F,
+    /// qEz1 + qEz2·dfz + qEz3·dfz² of (53), (4.E44).
+    pub e_t1: F,
+    /// (qEz4 + qEz5·γz*)·2/π of (53), (4.E44).
+    pub e_t2: F,
+    /// Fz·R0·(…) of Dr (56), (4.E47), before λμy*, sign(Vx) and cos α*.
+    pub d_r1: F,
+    /// ζ8 of Dr (4.E47) (turn slip; 1 without).
+    pub zeta8: F,
+    /// qBz9·λKy of Br (55), (4.E45).
+    pub b_r1: F,
+    /// qBz10 of Br.
+    pub qbz10: F,
+    /// ζ6 of Br (turn slip; 1 without).
+    pub zeta6: F,
+    /// Cr (4.E46): 1 without turn slip.
+    pub c_r: F,
+}
+
+/// [`Mz0Load`] of the conditioned load `c`; with turn slip, `turn_g_yk` is (μy, Gyκ) at the
+/// slips of `c`, which the turn-slip factors (4.92)–(4.104) need.
+#[inline(always)]
+pub fn mz0_load<F: Float, M: Backend<F>>(
+    p: &Params<F>,
+    c: &mut Conditioned<F>,
+    turn_g_yk: Option<(F, F)>,
+) -> Mz0Load<F> {
     let fz = c.fz_low; // Dt, Dr use Fz raised to FZMIN (TNO limit handling)
     let (dfz, dpi) = (c.dfz, c.dpi);
     let r0 = p.unloaded_radius;
@@ -242,10 +472,6 @@ pub fn mz0<F: Float, M: Backend<F>>(p: &Params<F>, c: &mut Conditioned<F>, fy0: 
         (c.gamma * p.lgaz, c.gamma_star * p.lgaz)
     };
     let s_ht = p.qhz1 + p.qhz2 * dfz + (p.qhz3 + p.qhz4 * dfz) * g_z_star; // (54), (4.E35)
-    let k_ya_prime = fy0.k_ya + F::from_f64(EPS) * fy0.k_ya.sign_nz(); // (4.E39)
-    let s_hf = fy0.s_hy + fy0.s_vy / k_ya_prime; // (48), (4.E38)
-    let alpha_r = c.alpha_star + s_hf; // (47), (4.E37)
-    let alpha_t = c.alpha_star + s_ht; // (45), (4.E34)
     let zeta5 = c.turn.map_or(F::ONE, |t| t.zeta5);
     let fz0_for_dt = match p.version {
         Version::Delft96 => p.fnomin, // (52): R0/Fz0
@@ -260,21 +486,11 @@ pub fn mz0<F: Float, M: Backend<F>>(p: &Params<F>, c: &mut Conditioned<F>, fy0: 
         * (r0 / fz0_for_dt)
         * p.ltr
         * zeta5; // (52), (A60)
-    let b_t = (p.qbz1 + p.qbz2 * dfz + p.qbz3 * dfz * dfz)
+    let b_t1 = (p.qbz1 + p.qbz2 * dfz + p.qbz3 * dfz * dfz)
         * (F::ONE + p.qbz4 * g_z + p.qbz5 * g_z.abs())
-        * p.lky
-        / c.lmuy_star; // (50), (A58)
-    let c_t = p.qcz1; // (51), (4.E41)
-    let e_t = (p.qez1 + p.qez2 * dfz + p.qez3 * dfz * dfz)
-        * (F::ONE + (p.qez4 + p.qez5 * g_z_star) * F::FRAC_2_PI * M::atan(b_t * c_t * alpha_t)); // (53), (4.E44)
-    let e_t = clip_e(e_t, c);
-
-    let (zeta0, zeta2, zeta6, zeta7, zeta8) = match c.turn {
-        Some(_) => {
-            let g_yk =
-                super::combined::fy::<F, M>(p, c, fy0.fy0, fy0.mu_y, c.gamma_star, fy0.zeta2).g_yk;
-            super::turnslip::mz_zetas::<F, M>(p, c, fz, fy0.mu_y, g_yk)
-        }
+        * p.lky; // (50), (A58) without 1/λμy*
+    let (zeta0, zeta2, zeta6, zeta7, zeta8) = match turn_g_yk {
+        Some((mu_y, g_yk)) => super::turnslip::mz_zetas::<F, M>(p, c, fz, mu_y, g_yk),
         None => (F::ONE, F::ONE, F::ONE, F::ONE, F::ONE),
     };
     let camber_torque = if mf6 {
@@ -286,26 +502,49 @@ pub fn mz0<F: Float, M: Backend<F>>(p: &Params<F>, c: &mut Conditioned<F>, fy0: 
     } else {
         (p.qdz8 + p.qdz9 * dfz) * g_z_star // (56)
     };
-    let d_r = fz
-        * r0
-        * ((p.qdz6 + p.qdz7 * dfz) * p.lres * zeta2 + camber_torque)
-        * c.lmuy_star
-        * c.vx.sign()
-        * c.cos_alpha_star
-        + zeta8
-        - F::ONE; // (56), (4.E47); the cos α of (46)/(72) is carried here
-    let b_r = (p.qbz9 * p.lky / c.lmuy_star + p.qbz10 * fy0.b_y * fy0.c_y) * zeta6; // (55), (4.E45)
-    let c_r = zeta7; // (4.E46)
-    Mz0 {
-        alpha_r,
-        alpha_t,
-        k_ya_prime,
-        b_t,
-        c_t,
+    Mz0Load {
+        s_ht,
         d_t,
-        e_t,
-        b_r,
-        c_r,
-        d_r,
+        b_t1,
+        c_t: p.qcz1, // (51), (4.E41)
+        e_t1: p.qez1 + p.qez2 * dfz + p.qez3 * dfz * dfz,
+        e_t2: (p.qez4 + p.qez5 * g_z_star) * F::FRAC_2_PI,
+        d_r1: fz * r0 * ((p.qdz6 + p.qdz7 * dfz) * p.lres * zeta2 + camber_torque), // (56), (4.E47)
+        zeta8,
+        b_r1: p.qbz9 * p.lky,
+        qbz10: p.qbz10,
+        zeta6,
+        c_r: zeta7, // (4.E46)
+    }
+}
+
+/// Friction stage of t and Mzr.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Mz0Mu<G> {
+    /// Bt (50), (A58).
+    pub b_t: G,
+    /// The factor of cos α* in Dr \[N·m\] (56), (4.E47).
+    pub d_r1: G,
+    /// Br (55), (4.E45).
+    pub b_r: G,
+    /// SHf = SHy + SVy/Kyα' \[rad\] (48), (4.E38).
+    pub s_hf: G,
+}
+
+/// [`Mz0Mu`] at λμy* = `lmuy_star`, with Fy0's friction stage `fy`.
+#[inline(always)]
+pub fn mz0_mu<F: Float, G: Lift<F>>(
+    l: &Mz0Load<F>,
+    fy_l: &Fy0Load<F>,
+    fy: &Fy0Mu<G>,
+    c: &Conditioned<F>,
+    lmuy_star: G,
+) -> Mz0Mu<G> {
+    let f = |x: F| G::lift(x);
+    Mz0Mu {
+        b_t: f(l.b_t1) / lmuy_star,                   // (50), (A58)
+        d_r1: f(l.d_r1) * lmuy_star * f(c.vx.sign()), // (56), (4.E47)
+        b_r: (f(l.b_r1) / lmuy_star + f(l.qbz10) * fy.b_y * f(fy_l.c_y)) * f(l.zeta6), // (55), (4.E45)
+        s_hf: fy.s_hy + fy.s_vy / f(fy_l.k_ya_prime), // (48), (4.E38)
     }
 }

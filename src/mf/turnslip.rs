@@ -119,7 +119,7 @@ pub fn s_hyp<F: Float, M: Backend<F>>(p: &Params<F>, c: &mut Conditioned<F>, k_y
     let k_ya0_prime = k_ya0 + F::from_f64(EPS) * k_ya0.sign_nz();
     let c_hyp = p.phyp1; // (4.85)
     let d_hyp = (p.phyp2 + p.phyp3 * dfz) * c.vx.sign(); // (4.86)
-    let e_hyp = super::clip_e(p.phyp4, c); // (4.87)
+    let e_hyp = super::clip_e(p.phyp4, c.limits, &mut c.flags); // (4.87)
     let one_m_eg = F::ONE - s.eps_gamma;
     let den = c_hyp * d_hyp * k_ya0_prime * one_m_eg;
     if den == F::ZERO {

@@ -115,6 +115,134 @@ fn kernels<M: Backend<f32>>(name: &str, per_count: f64) {
     );
 }
 
+/// The staged Magic Formula (`mf::prepared`, issue 38) with backend `M` over the 256 points
+/// of `points.rs`: the load stage (`Prepared::new`, one per point), the friction stage
+/// (`Prepared::with_mu`), the slip stage (`Prepared::eval`), the slip stage with ∂/∂κ and ∂/∂α
+/// (`eval_d`) and with ∂/∂λμ too (`eval_d_mu`). Each as `bench: <name> mean=<n> worst=<n>
+/// ram=<bytes>`: instructions per call, the mean over the 256 (one bracket, loop included) and
+/// the worst call (each timed alone, less the timer's own cost); ram is the state the stage
+/// keeps (`Prepared<f32>`, `Mu<f32>`). Each slip-stage result is checked against `mf::eval`.
+fn staged<M: Backend<f32>>(name: &str, first_id: u32, per_count: f64, p32: &Params<f32>) {
+    use gough::mf::prepared::{Mu, Operating, Prepared};
+    let opts = Options {
+        moments: false,
+        ..Options::default()
+    };
+    let ins: [Input<f32>; N] = core::array::from_fn(input::<f32>);
+    let op = |x: &Input<f32>| Operating::from(x);
+    // The timer's own cost [counts].
+    let mut o = 0u64;
+    for _ in 0..64 {
+        let t0 = now();
+        core::hint::black_box(0);
+        o += now() - t0;
+    }
+    let overhead = o as f64 / 64.0;
+    let print = |what: &str, total: u64, worst: f64, ram: usize| {
+        hprintln!(
+            "bench: {}_{} mean={} worst={} ram={}",
+            what,
+            name,
+            (total as f64 * per_count / N as f64 + 0.5) as u32,
+            ((worst - overhead).max(0.0) * per_count + 0.5) as u32,
+            ram
+        );
+    };
+    // Load stage: one per point.
+    let mut preps: [Option<Prepared<f32>>; 16] = [None; 16];
+    let id = first_id;
+    bench_start(id);
+    let t0 = now();
+    for x in ins.iter() {
+        if let Ok(p) = Prepared::new::<M>(p32, &op(core::hint::black_box(x)), &opts) {
+            core::hint::black_box(&p);
+        }
+    }
+    let total = now() - t0;
+    bench_stop(id);
+    let mut worst = 0f64;
+    for (i, x) in ins.iter().enumerate() {
+        let t0 = now();
+        let r = Prepared::new::<M>(p32, &op(core::hint::black_box(x)), &opts).ok();
+        core::hint::black_box(&r);
+        let t = now() - t0;
+        worst = worst.max(t as f64);
+        // Points i and i + 16k share the load (points.rs: Fz depends on i % 16 alone).
+        if let Some(slot) = preps.get_mut(i % 16) {
+            *slot = r;
+        }
+    }
+    print("mf_load_stage", total, worst, size_of::<Prepared<f32>>());
+    let prep = |i: usize| preps.get(i % 16).and_then(|p| p.as_ref());
+    // Friction stage: λμ 0.5 at each point's load.
+    bench_start(id + 1);
+    let t0 = now();
+    for i in 0..N {
+        if let Some(p) = prep(i) {
+            core::hint::black_box(&p.with_mu(0.5, 0.5));
+        }
+    }
+    let total = now() - t0;
+    bench_stop(id + 1);
+    let mut worst = 0f64;
+    for i in 0..N {
+        if let Some(p) = prep(i) {
+            let t0 = now();
+            core::hint::black_box(&p.with_mu(core::hint::black_box(0.5), 0.5));
+            worst = worst.max((now() - t0) as f64);
+        }
+    }
+    print("mf_mu_stage", total, worst, size_of::<Mu<f32>>());
+    // The slip stages; each result checked against mf::eval at the same point (the staged
+    // evaluation is mf::eval's own code, so they agree to the bit).
+    let mut bad = 0u32;
+    let mut slip = |what: &str, id: u32, f: &dyn Fn(&Prepared<f32>, &Input<f32>) -> f32| {
+        bench_start(id);
+        let t0 = now();
+        for (i, x) in ins.iter().enumerate() {
+            if let Some(p) = prep(i) {
+                core::hint::black_box(f(p, core::hint::black_box(x)));
+            }
+        }
+        let total = now() - t0;
+        bench_stop(id);
+        let mut worst = 0f64;
+        for (i, x) in ins.iter().enumerate() {
+            if let Some(p) = prep(i) {
+                let t0 = now();
+                let fy = f(p, core::hint::black_box(x));
+                worst = worst.max((now() - t0) as f64);
+                let r = mf::eval::<f32, M>(p32, x, &opts).map_or(f32::NAN, |r| r.fy);
+                if fy != r {
+                    bad += 1;
+                }
+            }
+        }
+        print(what, total, worst, size_of::<Prepared<f32>>());
+    };
+    slip("mf_slip_stage", id + 2, &|p, x| {
+        p.eval::<M>(x.kappa, x.alpha).map_or(f32::NAN, |r| r.fy)
+    });
+    slip("mf_slip_stage_d_kappa_alpha", id + 3, &|p, x| {
+        p.eval_d::<M>(p.mu(), x.kappa, x.alpha)
+            .map_or(f32::NAN, |(r, d)| {
+                core::hint::black_box(d).alpha.fy * 0.0 + r.fy
+            })
+    });
+    slip("mf_slip_stage_d_kappa_alpha_mu", id + 4, &|p, x| {
+        p.eval_d_mu::<M>(1.0, x.kappa, x.alpha)
+            .map_or(f32::NAN, |(r, d)| {
+                core::hint::black_box(d).lmu.fy * 0.0 + r.fy
+            })
+    });
+    hprintln!(
+        "staged MF, {}: slip stage vs mf::eval over {} points: {} differ",
+        name,
+        N,
+        bad
+    );
+}
+
 /// Samples in the estimator's stream (1 s at 1 kHz).
 const NS: usize = 1000;
 static mut STREAM: [Measurement; NS] = [workload::EMPTY; NS];
@@ -322,6 +450,8 @@ fn main() -> ! {
     }
     #[cfg(feature = "fast")]
     kernels::<gough::math::Fast>("fast", per_count);
+    #[cfg(feature = "fast")]
+    staged::<gough::math::Fast>("fast", 90, per_count, &p32);
     #[cfg(not(feature = "micromath"))]
     hprintln!(
         "micromath: not built (firmware feature `micromath` needs gough's `micromath` backend)"

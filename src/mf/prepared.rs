@@ -1,0 +1,539 @@
+//! The staged Magic Formula: a load stage built once per (Fz, γ, p, Vx, scalings), a friction
+//! stage per road-friction scaling λμ, and a slip stage evaluated at any (κ, α) — with the
+//! derivatives of Fx, Fy, Mz in κ, α and λμ from forward-mode dual numbers over the same code.
+//!
+//! [`crate::mf::eval`] is these three stages in a row, so the stages compute exactly what it
+//! computes: every formula is written once (in [`super::pure`], [`super::combined`],
+//! [`super::limits`]), split by what it depends on:
+//!
+//! | stage | depends on | computes (paper / MF 5.2–6.1 equation numbers) |
+//! |---|---|---|
+//! | load ([`Prepared::new`]) | Fz, γ, p, Vx, φt, the λ's but λμ | conditioning of Fz, γ, p, Vx (4.E1)–(4.E2b), (4.E4); Kxκ (28), (4.E15); Kyα (39), (4.E25) and Kyα' (4.E39); Kyγ0 (4.E30); Cx, Cy, Ct; SHx (30); SHt (54); Dt (52), (A60); the polynomial parts of Ex, Ey, Et (27), (38), (53); the combined-slip weights' Cxα, Exα, SHxα, Cyκ, Eyκ, SHyκ and the load parts of Bxα, Byκ, DVyκ (4.E54)–(4.E67); the arm s's coefficients (73) |
+//! | friction ([`Prepared::with_mu`]) | λμx*, λμy* (4.E7), (4.E8) | μx, μy (26), (37); Dx, Dy (25), (36); Bx, By (29), (40); SVx, SVy, SHy (31), (41), (42), (4.E27)–(4.E29); Bt (50); Br (55); SHf (48); Dr but its cos α* (56), (4.E47) — arithmetic only |
+//! | slip ([`Prepared::eval`]) | κ, α | conditioning of κ, α (limits, low speed, α*, cos α*, cos α') (4.E3), (4.E6); κx, αy, αt, αr (23), (33), (45), (47); Ex, Ey, Et (27), (38), (53); Fx0, Fy0 (22), (32); Gxα, Gyκ with Bxα, Byκ (14), (15), (4.E51)–(4.E62); SVyκ (16), (68); Fx, Fy (13); αt,eq, αr,eq (74), (75); t, Mzr, s, Mz (69)–(73), (4.E71)–(4.E75) |
+//!
+//! Turn slip has no load-only stage (its ζ factors depend on κ and α, (4.78), (4.105),
+//! (4.106)): [`Prepared::new`] refuses it and `mf::eval` runs all stages at each point.
+//! Mx, My and the relaxation lengths are `mf::eval`'s, not the slip stage's.
+//!
+//! ## Derivatives
+//! [`Prepared::eval_d`] gives ∂(Fx, Fy, Mz)/∂κ and ∂/∂α of the inputs κ, α (through the
+//! conditioning: a clipped slip has derivative 0); [`Prepared::eval_d_mu`] adds ∂/∂λμ with
+//! λμx* = λμy* = λμ moved together (the road-friction scaling of the estimator). At the
+//! model's kinks (sign switches: κx = 0 and αy = 0 in Ex, Ey; αt = 0, αr = 0 in Mz; the clips)
+//! the derivative is the one-sided one of the branch taken.
+
+use super::combined::{self, Arm, MzIn, MzLoad, WeightsLoad};
+use super::limits::{self, condition_load, digressive, slips, Conditioned};
+use super::pure::{self, Fx0Load, Fx0Mu, Fy0Load, Fy0Mu, Mz0Load, Mz0Mu};
+use super::{clip_e, EvalError, Flags, Input, InputField, Options, Params, Version};
+use crate::math::{Backend, Dual, Float, Lift};
+
+/// The operating point without the slips: what the load stage depends on. SI units, ISO-W.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Operating<F> {
+    /// Vertical load Fz \[N\]; ≤ 0 means no contact (all forces zero).
+    pub fz: F,
+    /// Inclination (camber) angle γ \[rad\].
+    pub gamma: F,
+    /// Turn slip φt \[1/m\] (read only with turn slip on, which the stages do not support).
+    pub phit: F,
+    /// Longitudinal speed of the wheel centre Vx \[m/s\].
+    pub vx: F,
+    /// Inflation pressure p \[Pa\]; `None` takes `INFLPRES`.
+    pub p: Option<F>,
+}
+
+impl<F: Copy> From<&Input<F>> for Operating<F> {
+    fn from(i: &Input<F>) -> Self {
+        Operating {
+            fz: i.fz,
+            gamma: i.gamma,
+            phit: i.phit,
+            vx: i.vx,
+            p: i.p,
+        }
+    }
+}
+
+/// The friction stage: the coefficients that scale with λμx*, λμy*. Cheap to make
+/// ([`Prepared::with_mu`]: arithmetic only) for one surface hypothesis after another.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Mu<F> {
+    fx0: Fx0Mu<F>,
+    fy0: Fy0Mu<F>,
+    fy0_g0: Fy0Mu<F>,
+    mz0: Mz0Mu<F>,
+}
+
+impl<F: Float> Mu<F> {
+    /// μx \[-\] (26), (4.E13) at this load and friction scaling.
+    pub fn mu_x(&self) -> F {
+        self.fx0.mu_x
+    }
+    /// μy \[-\] (37), (4.E23), as a magnitude.
+    pub fn mu_y(&self) -> F {
+        self.fy0.mu_y.abs()
+    }
+}
+
+/// Fx, Fy, Mz and what goes with them, as [`super::Output`] has them.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Forces<F> {
+    /// Longitudinal force Fx \[N\].
+    pub fx: F,
+    /// Lateral force Fy \[N\].
+    pub fy: F,
+    /// Aligning moment Mz \[N·m\].
+    pub mz: F,
+    /// Pneumatic trail t \[m\] (4.E73).
+    pub t: F,
+    /// Residual aligning torque Mzr \[N·m\] (4.E75).
+    pub m_zr: F,
+    /// κ after the low-speed reduction \[-\].
+    pub kappa: F,
+    /// What was clipped or regularised (load and slip stages).
+    pub flags: Flags,
+}
+
+/// ∂Fx, ∂Fy, ∂Mz along one direction.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Partials<F> {
+    /// ∂Fx \[N per unit of the direction\].
+    pub fx: F,
+    /// ∂Fy.
+    pub fy: F,
+    /// ∂Mz \[N·m per unit\].
+    pub mz: F,
+}
+
+/// The slopes of Fx, Fy, Mz in the input slips.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Slopes<F> {
+    /// ∂/∂κ \[N, N·m\].
+    pub kappa: Partials<F>,
+    /// ∂/∂α \[N/rad, N·m/rad\].
+    pub alpha: Partials<F>,
+}
+
+/// The slopes in the slips and in the road-friction scaling λμ.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct SlopesMu<F> {
+    /// ∂/∂κ, ∂/∂α.
+    pub slip: Slopes<F>,
+    /// ∂/∂λμ with λμx* = λμy* = λμ \[N, N·m per unit λμ\].
+    pub lmu: Partials<F>,
+}
+
+/// The load stage of the Magic Formula at one (Fz, γ, p, Vx), with the friction stage at the
+/// file's λμx, λμy. See the [module doc](self).
+///
+/// ```
+/// use gough::{math::Libm, mf::{self, Input, Options, Params, Version}};
+/// use gough::mf::prepared::{Operating, Prepared};
+/// let mut p = Params::<f64>::zeroed(Version::Mf52); // a made-up tyre, for the example
+/// p.fnomin = 4000.0; p.unloaded_radius = 0.3; p.longvl = 16.7; p.vxlow = 1.0;
+/// p.pcy1 = 1.3; p.pdy1 = 1.0; p.pky1 = -20.0; p.pky2 = 2.0; p.pcx1 = 1.6; p.pdx1 = 1.0;
+/// p.pkx1 = 20.0; p.qcz1 = 1.2; p.qbz1 = 10.0; p.qdz1 = 0.1;
+/// let opts = Options { limits: false, ..Options::default() };
+/// let op = Operating { fz: 4000.0, vx: 20.0, ..Default::default() };
+/// let load = Prepared::new::<Libm>(&p, &op, &opts).unwrap();
+/// let f = load.eval::<Libm>(0.02, 0.05).unwrap();
+/// let i = Input { fz: 4000.0, kappa: 0.02, alpha: 0.05, vx: 20.0, ..Default::default() };
+/// assert_eq!(f.fy, mf::eval::<f64, Libm>(&p, &i, &opts).unwrap().fy);
+/// // Another road: λμ = 0.5, then the slopes there.
+/// let wet = load.with_mu(0.5, 0.5);
+/// let (g, d) = load.eval_d::<Libm>(&wet, 0.02, 0.05).unwrap();
+/// assert!(g.fy.abs() < f.fy.abs() && d.alpha.fy < 0.0);
+/// ```
+#[derive(Debug, Clone, Copy)]
+pub struct Prepared<F> {
+    c: Conditioned<F>,
+    contact: bool,
+    mirrored: bool,
+    fx0: Fx0Load<F>,
+    fy0: Fy0Load<F>,
+    /// Fy0 at γ = 0 (MF 6.x's F'y (4.E74), MF 5.2's SVyκ at μy(γ = 0)); `None` at γ* = 0.
+    fy0_g0: Option<Fy0Load<F>>,
+    mz0: Mz0Load<F>,
+    w: WeightsLoad<F>,
+    mz: MzLoad<F>,
+    mu: Mu<F>,
+}
+
+impl<F: Float> Prepared<F> {
+    /// The load stage (and the friction stage at the file's λμ) of `p` at `op`, with the
+    /// options of `mf::eval` (limits, α*, mounted side, transient; `moments` is not read).
+    /// Errors: non-finite input, pressure ≤ 0, and turn slip (which has no load stage:
+    /// [`EvalError::TurnSlipUnavailable`]).
+    #[inline(always)]
+    pub fn new<M: Backend<F>>(
+        p: &Params<F>,
+        op: &Operating<F>,
+        opts: &Options,
+    ) -> Result<Self, EvalError> {
+        if opts.turn_slip {
+            return Err(EvalError::TurnSlipUnavailable);
+        }
+        let mirrored = p.mirrored_on(opts.mounted);
+        let sgn = |x: F| if mirrored { -x } else { x };
+        let input = Input {
+            fz: op.fz,
+            kappa: F::ZERO,
+            alpha: F::ZERO,
+            gamma: sgn(op.gamma),
+            phit: sgn(op.phit),
+            vx: op.vx,
+            p: op.p,
+        };
+        let c = condition_load::<F, M>(p, &input, opts)?;
+        Ok(Self::from_conditioned::<M>(p, c, mirrored, None))
+    }
+
+    /// The stages from a conditioned load; with turn slip, `turn` is (κ, α*) of `c`'s point.
+    #[inline(always)]
+    pub(crate) fn from_conditioned<M: Backend<F>>(
+        p: &Params<F>,
+        mut c: Conditioned<F>,
+        mirrored: bool,
+        turn: Option<(F, F)>,
+    ) -> Self {
+        c.flags.set_if(Flags::MIRRORED, mirrored);
+        if c.fz <= F::ZERO {
+            return Prepared {
+                c,
+                contact: false,
+                mirrored,
+                fx0: Fx0Load::default(),
+                fy0: Fy0Load::default(),
+                fy0_g0: None,
+                mz0: Mz0Load::default(),
+                w: WeightsLoad::default(),
+                mz: MzLoad::default(),
+                mu: Mu::default(),
+            };
+        }
+        let fx0 = pure::fx0_load::<F, M>(p, &c);
+        let turn_on = c.turn.is_some();
+        let gamma_star = c.gamma_star;
+        let fy0 = pure::fy0_load::<F, M>(p, &mut c, gamma_star, turn_on);
+        let fy0_g0 = if gamma_star == F::ZERO {
+            None
+        } else {
+            Some(pure::fy0_load::<F, M>(p, &mut c, F::ZERO, turn_on))
+        };
+        let w = combined::weights_load(p, &mut c);
+        let turn_g_yk = turn.map(|(kappa, alpha_star)| {
+            let m = pure::fy0_mu::<F, F>(&fy0, &c, c.lmuy_star, c.lmuy_prime);
+            let mut flags = c.flags;
+            let g = combined::g_yk::<F, F, M>(&w, kappa, alpha_star, &mut flags);
+            c.flags = flags;
+            (m.mu_y, g)
+        });
+        let mz0 = pure::mz0_load::<F, M>(p, &mut c, turn_g_yk);
+        let mz = MzLoad {
+            k_ratio: fx0.k_xk / fy0.k_ya_prime,
+            d_t: mz0.d_t,
+            c_t: mz0.c_t,
+            c_r: mz0.c_r,
+            arm: Arm::from_params(p),
+        };
+        let mut s = Prepared {
+            c,
+            contact: true,
+            mirrored,
+            fx0,
+            fy0,
+            fy0_g0,
+            mz0,
+            w,
+            mz,
+            mu: Mu::default(),
+        };
+        s.mu = s.mu_stage::<F>(c.lmux_star, c.lmuy_star);
+        s
+    }
+
+    /// The friction stage at λμx* = `lmu_x`, λμy* = `lmu_y` (4.E7) (these replace the file's
+    /// LMUX, LMUY; the estimator's road scaling moves both together). Arithmetic only: a few
+    /// dozen operations, no kernel.
+    pub fn with_mu(&self, lmu_x: F, lmu_y: F) -> Mu<F> {
+        self.mu_stage::<F>(lmu_x, lmu_y)
+    }
+
+    /// The friction stage at the file's λμx, λμy (what [`Prepared::eval`] uses).
+    pub fn mu(&self) -> &Mu<F> {
+        &self.mu
+    }
+
+    #[inline(always)]
+    fn mu_stage<G: Lift<F>>(&self, lmux_star: G, lmuy_star: G) -> Mu<G> {
+        if !self.contact {
+            return Mu::default();
+        }
+        let c = &self.c;
+        let (lmux_prime, lmuy_prime) = (digressive(lmux_star), digressive(lmuy_star)); // (4.E8)
+        let fx0 = pure::fx0_mu::<F, G>(&self.fx0, c, lmux_star, lmux_prime);
+        let fy0 = pure::fy0_mu::<F, G>(&self.fy0, c, lmuy_star, lmuy_prime);
+        let fy0_g0 = match &self.fy0_g0 {
+            Some(l) => pure::fy0_mu::<F, G>(l, c, lmuy_star, lmuy_prime),
+            None => fy0,
+        };
+        let mz0 = pure::mz0_mu::<F, G>(&self.mz0, &self.fy0, &fy0, c, lmuy_star);
+        Mu {
+            fx0,
+            fy0,
+            fy0_g0,
+            mz0,
+        }
+    }
+
+    /// Vertical load used \[N\] (after clipping).
+    pub fn fz(&self) -> F {
+        self.c.fz
+    }
+    /// Kxκ \[N\] (28), (4.E15).
+    pub fn k_xk(&self) -> F {
+        self.fx0.k_xk
+    }
+    /// Kyα \[N/rad\] (39), (4.E25).
+    pub fn k_ya(&self) -> F {
+        self.fy0.k_ya
+    }
+    /// The conditioned load (for `mf::eval`'s moments and relaxation lengths).
+    pub(crate) fn conditioned(&self) -> &Conditioned<F> {
+        &self.c
+    }
+    /// Whether the tyre touches the road (Fz > 0).
+    pub fn contact(&self) -> bool {
+        self.contact
+    }
+    /// Whether the tyre is mirrored (mounted side differs from TYRESIDE).
+    pub fn mirrored(&self) -> bool {
+        self.mirrored
+    }
+
+    /// The slip stage at the file's λμ: Fx, Fy, Mz at (κ, α), equal to `mf::eval`'s.
+    #[inline(always)]
+    pub fn eval<M: Backend<F>>(&self, kappa: F, alpha: F) -> Result<Forces<F>, EvalError> {
+        self.eval_with::<M>(&self.mu, kappa, alpha)
+    }
+
+    /// The slip stage with the friction stage `mu` (from [`Prepared::with_mu`]).
+    #[inline(always)]
+    pub fn eval_with<M: Backend<F>>(
+        &self,
+        mu: &Mu<F>,
+        kappa: F,
+        alpha: F,
+    ) -> Result<Forces<F>, EvalError> {
+        check_slips(kappa, alpha)?;
+        let f = self.slip::<F, F, M>(mu, kappa, alpha);
+        finite(f)
+    }
+
+    /// The slip stage and the slopes ∂/∂κ, ∂/∂α of Fx, Fy, Mz (dual numbers, two directions).
+    pub fn eval_d<M: Backend<F>>(
+        &self,
+        mu: &Mu<F>,
+        kappa: F,
+        alpha: F,
+    ) -> Result<(Forces<F>, Slopes<F>), EvalError> {
+        check_slips(kappa, alpha)?;
+        let f = self.slip::<F, Dual<F, 2>, M>(mu, Dual::var(kappa, 0), Dual::var(alpha, 1));
+        let (v, d) = split(f)?;
+        Ok((
+            v,
+            Slopes {
+                kappa: d(0),
+                alpha: d(1),
+            },
+        ))
+    }
+
+    /// The friction stage at λμx* = λμy* = `lmu` and the slip stage, with the slopes in κ, α
+    /// and ∂/∂λμ (both scalings moved together).
+    pub fn eval_d_mu<M: Backend<F>>(
+        &self,
+        lmu: F,
+        kappa: F,
+        alpha: F,
+    ) -> Result<(Forces<F>, SlopesMu<F>), EvalError> {
+        check_slips(kappa, alpha)?;
+        if !lmu.is_finite() {
+            return Err(EvalError::NonFinite(InputField::P));
+        }
+        let l = Dual::<F, 3>::var(lmu, 2);
+        let mu = self.mu_stage::<Dual<F, 3>>(l, l);
+        let f =
+            self.slip::<Dual<F, 3>, Dual<F, 3>, M>(&mu, Dual::var(kappa, 0), Dual::var(alpha, 1));
+        let (v, d) = split(f)?;
+        Ok((
+            v,
+            SlopesMu {
+                slip: Slopes {
+                    kappa: d(0),
+                    alpha: d(1),
+                },
+                lmu: d(2),
+            },
+        ))
+    }
+
+    /// The slip stage, computed in `G` from the load stage (`F`) and a friction stage (`H`).
+    #[inline(always)]
+    fn slip<H: Float, G: Lift<F> + Lift<H>, M: Backend<G>>(
+        &self,
+        mu: &Mu<H>,
+        kappa: G,
+        alpha: G,
+    ) -> Forces<G> {
+        let f = |x: F| <G as Lift<F>>::lift(x);
+        let h = |x: H| <G as Lift<H>>::lift(x);
+        let c = &self.c;
+        let alpha = if self.mirrored { -alpha } else { alpha };
+        let s = slips::<F, G, M>(c, kappa, alpha);
+        let mut flags = c.flags;
+        flags.insert(s.flags);
+        if !self.contact {
+            // No contact: no force, no moment (MFeval gives the same, see the `load` sweep).
+            return Forces {
+                kappa: s.kappa_out,
+                flags,
+                ..Forces::default()
+            };
+        }
+        let fx0 = pure::fx0_slip::<F, H, G, M>(&self.fx0, &mu.fx0, c, s.kappa, &mut flags);
+        let fy0 = pure::fy0_slip::<F, H, G, M>(&self.fy0, &mu.fy0, c, s.alpha_star, &mut flags);
+        // t and Mzr at pure slip: (45), (47), (53), (56) / (4.E34), (4.E37), (4.E44), (4.E47).
+        let m0 = &self.mz0;
+        let alpha_r = s.alpha_star + h(mu.mz0.s_hf); // (47), (4.E37)
+        let alpha_t = s.alpha_star + f(m0.s_ht); // (45), (4.E34)
+        let b_t = h(mu.mz0.b_t);
+        let e_t = f(m0.e_t1) * (G::ONE + f(m0.e_t2) * M::atan(b_t * f(m0.c_t) * alpha_t)); // (53), (4.E44)
+        let e_t = clip_e(e_t, c.limits, &mut flags);
+        let d_r = h(mu.mz0.d_r1) * s.cos_alpha_star + f(m0.zeta8) - G::ONE; // (56), (4.E47)
+
+        let fx = combined::fx_slip::<F, G, M>(&self.w, s.kappa, s.alpha_star, fx0, &mut flags);
+        let mu_y = h(mu.fy0.mu_y);
+        let fy = combined::fy_slip::<F, G, M>(
+            &self.w,
+            c,
+            (s.kappa, s.alpha_star),
+            fy0,
+            mu_y,
+            f(self.fy0.zeta2),
+            &mut flags,
+        );
+        // F'y (4.E74): Fy at γ = 0 (MF 6.x); the weighting Gyκ keeps the actual γ* (TNO,
+        // MFeval). At γ* = 0 that is the Fy0 already computed (the common case on a car).
+        let (fy0_g0, mu_y_g0) = match &self.fy0_g0 {
+            None => (fy0, mu_y),
+            Some(l) => (
+                pure::fy0_slip::<F, H, G, M>(l, &mu.fy0_g0, c, s.alpha_star, &mut flags),
+                h(mu.fy0_g0.mu_y),
+            ),
+        };
+        // The weight and the κ-induced shift of F'y are taken without the turn-slip ζ2
+        // (MFeval's `internalParams_sub0`): Gyκ is Fy's own, SVyκ is Fy's per unit μy at
+        // μy(γ = 0).
+        let fy_arm = match c.version {
+            Version::Delft96 | Version::Mf52 => fy.fy - mu_y_g0 * fy.s_vyk_per_mu,
+            Version::Mf61 | Version::Mf62 => fy.g_yk * fy0_g0, // (4.E74)
+        };
+        let mz = combined::mz_slip::<F, G, M>(
+            &self.mz,
+            c,
+            &MzIn {
+                kappa: s.kappa,
+                alpha_t,
+                alpha_r,
+                b_t,
+                e_t,
+                d_r,
+                b_r: h(mu.mz0.b_r),
+                cos_alpha_prime: s.cos_alpha_prime,
+                fx,
+                fy: fy.fy,
+                fy_arm,
+            },
+        );
+        let sgn = |x: G| if self.mirrored { -x } else { x };
+        Forces {
+            fx,
+            fy: sgn(fy.fy),
+            mz: sgn(mz.mz),
+            t: mz.t,
+            m_zr: sgn(mz.m_zr),
+            kappa: s.kappa_out,
+            flags,
+        }
+    }
+}
+
+fn check_slips<F: Float>(kappa: F, alpha: F) -> Result<(), EvalError> {
+    if !kappa.is_finite() {
+        return Err(EvalError::NonFinite(InputField::Kappa));
+    }
+    if !alpha.is_finite() {
+        return Err(EvalError::NonFinite(InputField::Alpha));
+    }
+    Ok(())
+}
+
+fn finite<F: Float>(f: Forces<F>) -> Result<Forces<F>, EvalError> {
+    if F::all_finite(&[f.fx, f.fy, f.mz, f.t, f.m_zr]) {
+        Ok(f)
+    } else {
+        Err(EvalError::Overflow)
+    }
+}
+
+/// The values and a direction-`i` reader of a dual result; non-finite → [`EvalError::Overflow`].
+#[allow(clippy::type_complexity)]
+fn split<F: Float, const N: usize>(
+    f: Forces<Dual<F, N>>,
+) -> Result<(Forces<F>, impl Fn(usize) -> Partials<F>), EvalError> {
+    finite(f)?;
+    let v = Forces {
+        fx: f.fx.v,
+        fy: f.fy.v,
+        mz: f.mz.v,
+        t: f.t.v,
+        m_zr: f.m_zr.v,
+        kappa: f.kappa.v,
+        flags: f.flags,
+    };
+    Ok((v, move |i| Partials {
+        fx: f.fx.der(i),
+        fy: f.fy.der(i),
+        mz: f.mz.der(i),
+    }))
+}
+
+/// The conditioned load of an evaluation with turn slip (all stages at one point), or the load
+/// stage alone: what `mf::eval` runs.
+#[inline(always)]
+pub(crate) fn for_eval<F: Float, M: Backend<F>>(
+    p: &Params<F>,
+    input: &Input<F>,
+    opts: &Options,
+) -> Result<Prepared<F>, EvalError> {
+    if !opts.turn_slip {
+        return Prepared::new::<M>(p, &Operating::from(input), opts);
+    }
+    let mirrored = p.mirrored_on(opts.mounted);
+    let mut inp = *input;
+    if mirrored {
+        inp.alpha = -inp.alpha;
+        inp.gamma = -inp.gamma;
+        inp.phit = -inp.phit;
+    }
+    let mut c = limits::condition::<F, M>(p, &inp, opts)?;
+    if c.fz > F::ZERO {
+        super::turnslip::prepare::<F, M>(p, &mut c);
+    }
+    let turn = (c.kappa, c.alpha_star);
+    Ok(Prepared::from_conditioned::<M>(p, c, mirrored, Some(turn)))
+}
