@@ -317,66 +317,68 @@ pub fn eval<F: Float, M: Backend<F>>(
         return Err(EvalError::TurnSlipUnavailable);
     }
     limits::check_finite(input)?;
-    // The load stage (with turn slip: every stage's load part at this point), then the slip
-    // stage: the `prepared` module's, so that its results are this function's.
-    let prep = prepared::for_eval::<F, M>(p, input, opts)?;
-    let f = prep.eval::<M>(input.kappa, input.alpha)?;
-    if !prep.contact() {
-        // No contact: no force, no moment (MFeval gives the same, see the `load` oracle sweep).
-        return Ok(Output {
+    let (c, mirrored, turn) = prepared::for_eval::<F, M>(p, input, opts)?;
+    // The load stage (with turn slip: every stage's load part at this point) on locals, then
+    // the slip stage: the `prepared` module's, so that its results are this function's.
+    prepared::stages::<F, M, _>(p, c, mirrored, turn, |prep| {
+        let mu = prep.mu_stage::<F>(prep.c.lmux_star, prep.c.lmuy_star);
+        let f = prep.eval_with::<M>(&mu, input.kappa, input.alpha)?;
+        if !prep.contact {
+            // No contact: no force, no moment (MFeval gives the same, see the `load` oracle sweep).
+            return Ok(Output {
+                kappa: f.kappa,
+                flags: f.flags,
+                ..Output::default()
+            });
+        }
+        let c = prep.c;
+        let (mx, my) = if opts.moments {
+            // Mx of the file's tyre (unmirrored Fy), mirrored back below.
+            let fy = if mirrored { -f.fy } else { f.fy };
+            let mx = moments::mx::<F, M>(p, c, fy);
+            (
+                if mirrored { -mx } else { mx },
+                moments::my::<F, M>(p, c, f.fx, input.kappa),
+            )
+        } else {
+            (F::ZERO, F::ZERO)
+        };
+        let (k_xk, k_ya) = (prep.fx0.k_xk, prep.fy0.k_ya);
+        let (sigma_x, sigma_y) = sigma::sigma::<F, M>(p, c, k_xk, k_ya);
+        let out = Output {
+            fx: f.fx,
+            fy: f.fy,
+            fz: c.fz,
+            mx,
+            my,
+            mz: f.mz,
+            mu_x: mu.mu_x(),
+            mu_y: mu.mu_y(),
+            k_xk,
+            k_ya,
+            t: f.t,
+            m_zr: f.m_zr,
+            sigma_x,
+            sigma_y,
             kappa: f.kappa,
             flags: f.flags,
-            ..Output::default()
-        });
-    }
-    let c = prep.conditioned();
-    let mirrored = prep.mirrored();
-    let (mx, my) = if opts.moments {
-        // Mx of the file's tyre (unmirrored Fy), mirrored back below.
-        let fy = if mirrored { -f.fy } else { f.fy };
-        let mx = moments::mx::<F, M>(p, c, fy);
-        (
-            if mirrored { -mx } else { mx },
-            moments::my::<F, M>(p, c, f.fx, input.kappa),
-        )
-    } else {
-        (F::ZERO, F::ZERO)
-    };
-    let (sigma_x, sigma_y) = sigma::sigma::<F, M>(p, c, prep.k_xk(), prep.k_ya());
-    let mu = prep.mu();
-    let out = Output {
-        fx: f.fx,
-        fy: f.fy,
-        fz: c.fz,
-        mx,
-        my,
-        mz: f.mz,
-        mu_x: mu.mu_x(),
-        mu_y: mu.mu_y(),
-        k_xk: prep.k_xk(),
-        k_ya: prep.k_ya(),
-        t: f.t,
-        m_zr: f.m_zr,
-        sigma_x,
-        sigma_y,
-        kappa: f.kappa,
-        flags: f.flags,
-    };
-    let all = [
-        out.mx,
-        out.my,
-        out.mu_x,
-        out.mu_y,
-        out.k_xk,
-        out.k_ya,
-        out.sigma_x,
-        out.sigma_y,
-    ];
-    if F::all_finite(&all) {
-        Ok(out)
-    } else {
-        Err(EvalError::Overflow)
-    }
+        };
+        let all = [
+            out.mx,
+            out.my,
+            out.mu_x,
+            out.mu_y,
+            out.k_xk,
+            out.k_ya,
+            out.sigma_x,
+            out.sigma_y,
+        ];
+        if F::all_finite(&all) {
+            Ok(out)
+        } else {
+            Err(EvalError::Overflow)
+        }
+    })
 }
 
 /// The sine version of the Magic Formula, eq. (3): D·sin[C·atan{B·x − E·(B·x − atan(B·x))}].

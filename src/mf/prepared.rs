@@ -176,117 +176,62 @@ impl<F: Float> Prepared<F> {
         if opts.turn_slip {
             return Err(EvalError::TurnSlipUnavailable);
         }
-        let mirrored = p.mirrored_on(opts.mounted);
-        let sgn = |x: F| if mirrored { -x } else { x };
         let input = Input {
             fz: op.fz,
             kappa: F::ZERO,
             alpha: F::ZERO,
-            gamma: sgn(op.gamma),
-            phit: sgn(op.phit),
+            gamma: op.gamma,
+            phit: op.phit,
             vx: op.vx,
             p: op.p,
         };
-        let c = condition_load::<F, M>(p, &input, opts)?;
-        Ok(Self::from_conditioned::<M>(p, c, mirrored, None))
+        let (c, mirrored, _) = for_eval::<F, M>(p, &input, opts)?;
+        stages::<F, M, _>(p, c, mirrored, None, |v| Ok(Self::from_view(v)))
     }
 
-    /// The stages from a conditioned load; with turn slip, `turn` is (κ, α*) of `c`'s point.
+    /// The load stage's parts copied into a `Prepared`, with the friction stage at the file's λμ.
     #[inline(always)]
-    pub(crate) fn from_conditioned<M: Backend<F>>(
-        p: &Params<F>,
-        mut c: Conditioned<F>,
-        mirrored: bool,
-        turn: Option<(F, F)>,
-    ) -> Self {
-        c.flags.set_if(Flags::MIRRORED, mirrored);
-        if c.fz <= F::ZERO {
-            return Prepared {
-                c,
-                contact: false,
-                mirrored,
-                fx0: Fx0Load::default(),
-                fy0: Fy0Load::default(),
-                fy0_g0: None,
-                mz0: Mz0Load::default(),
-                w: WeightsLoad::default(),
-                mz: MzLoad::default(),
-                mu: Mu::default(),
-            };
+    fn from_view(v: View<'_, F>) -> Self {
+        Prepared {
+            c: *v.c,
+            contact: v.contact,
+            mirrored: v.mirrored,
+            fx0: *v.fx0,
+            fy0: *v.fy0,
+            fy0_g0: v.fy0_g0.copied(),
+            mz0: *v.mz0,
+            w: *v.w,
+            mz: *v.mz,
+            mu: v.mu_stage::<F>(v.c.lmux_star, v.c.lmuy_star),
         }
-        let fx0 = pure::fx0_load::<F, M>(p, &c);
-        let turn_on = c.turn.is_some();
-        let gamma_star = c.gamma_star;
-        let fy0 = pure::fy0_load::<F, M>(p, &mut c, gamma_star, turn_on);
-        let fy0_g0 = if gamma_star == F::ZERO {
-            None
-        } else {
-            Some(pure::fy0_load::<F, M>(p, &mut c, F::ZERO, turn_on))
-        };
-        let w = combined::weights_load(p, &mut c);
-        let turn_g_yk = turn.map(|(kappa, alpha_star)| {
-            let m = pure::fy0_mu::<F, F>(&fy0, &c, c.lmuy_star, c.lmuy_prime);
-            let mut flags = c.flags;
-            let g = combined::g_yk::<F, F, M>(&w, kappa, alpha_star, &mut flags);
-            c.flags = flags;
-            (m.mu_y, g)
-        });
-        let mz0 = pure::mz0_load::<F, M>(p, &mut c, turn_g_yk);
-        let mz = MzLoad {
-            k_ratio: fx0.k_xk / fy0.k_ya_prime,
-            d_t: mz0.d_t,
-            c_t: mz0.c_t,
-            c_r: mz0.c_r,
-            arm: Arm::from_params(p),
-        };
-        let mut s = Prepared {
-            c,
-            contact: true,
-            mirrored,
-            fx0,
-            fy0,
-            fy0_g0,
-            mz0,
-            w,
-            mz,
-            mu: Mu::default(),
-        };
-        s.mu = s.mu_stage::<F>(c.lmux_star, c.lmuy_star);
-        s
+    }
+
+    /// The stages as references (what the slip stage reads).
+    #[inline(always)]
+    fn view(&self) -> View<'_, F> {
+        View {
+            c: &self.c,
+            contact: self.contact,
+            mirrored: self.mirrored,
+            fx0: &self.fx0,
+            fy0: &self.fy0,
+            fy0_g0: self.fy0_g0.as_ref(),
+            mz0: &self.mz0,
+            w: &self.w,
+            mz: &self.mz,
+        }
     }
 
     /// The friction stage at λμx* = `lmu_x`, λμy* = `lmu_y` (4.E7) (these replace the file's
     /// LMUX, LMUY; the estimator's road scaling moves both together). Arithmetic only: a few
     /// dozen operations, no kernel.
     pub fn with_mu(&self, lmu_x: F, lmu_y: F) -> Mu<F> {
-        self.mu_stage::<F>(lmu_x, lmu_y)
+        self.view().mu_stage::<F>(lmu_x, lmu_y)
     }
 
     /// The friction stage at the file's λμx, λμy (what [`Prepared::eval`] uses).
     pub fn mu(&self) -> &Mu<F> {
         &self.mu
-    }
-
-    #[inline(always)]
-    fn mu_stage<G: Lift<F>>(&self, lmux_star: G, lmuy_star: G) -> Mu<G> {
-        if !self.contact {
-            return Mu::default();
-        }
-        let c = &self.c;
-        let (lmux_prime, lmuy_prime) = (digressive(lmux_star), digressive(lmuy_star)); // (4.E8)
-        let fx0 = pure::fx0_mu::<F, G>(&self.fx0, c, lmux_star, lmux_prime);
-        let fy0 = pure::fy0_mu::<F, G>(&self.fy0, c, lmuy_star, lmuy_prime);
-        let fy0_g0 = match &self.fy0_g0 {
-            Some(l) => pure::fy0_mu::<F, G>(l, c, lmuy_star, lmuy_prime),
-            None => fy0,
-        };
-        let mz0 = pure::mz0_mu::<F, G>(&self.mz0, &self.fy0, &fy0, c, lmuy_star);
-        Mu {
-            fx0,
-            fy0,
-            fy0_g0,
-            mz0,
-        }
     }
 
     /// Vertical load used \[N\] (after clipping).
@@ -300,10 +245,6 @@ impl<F: Float> Prepared<F> {
     /// Kyα \[N/rad\] (39), (4.E25).
     pub fn k_ya(&self) -> F {
         self.fy0.k_ya
-    }
-    /// The conditioned load (for `mf::eval`'s moments and relaxation lengths).
-    pub(crate) fn conditioned(&self) -> &Conditioned<F> {
-        &self.c
     }
     /// Whether the tyre touches the road (Fz > 0).
     pub fn contact(&self) -> bool {
@@ -329,8 +270,7 @@ impl<F: Float> Prepared<F> {
         alpha: F,
     ) -> Result<Forces<F>, EvalError> {
         check_slips(kappa, alpha)?;
-        let f = self.slip::<F, F, M>(mu, kappa, alpha);
-        finite(f)
+        self.view().eval_with::<M>(mu, kappa, alpha)
     }
 
     /// The slip stage and the slopes ∂/∂κ, ∂/∂α of Fx, Fy, Mz (dual numbers, two directions).
@@ -341,7 +281,9 @@ impl<F: Float> Prepared<F> {
         alpha: F,
     ) -> Result<(Forces<F>, Slopes<F>), EvalError> {
         check_slips(kappa, alpha)?;
-        let f = self.slip::<F, Dual<F, 2>, M>(mu, Dual::var(kappa, 0), Dual::var(alpha, 1));
+        let f = self
+            .view()
+            .slip::<F, Dual<F, 2>, M>(mu, Dual::var(kappa, 0), Dual::var(alpha, 1));
         let (v, d) = split(f)?;
         Ok((
             v,
@@ -365,9 +307,12 @@ impl<F: Float> Prepared<F> {
             return Err(EvalError::NonFinite(InputField::P));
         }
         let l = Dual::<F, 3>::var(lmu, 2);
-        let mu = self.mu_stage::<Dual<F, 3>>(l, l);
-        let f =
-            self.slip::<Dual<F, 3>, Dual<F, 3>, M>(&mu, Dual::var(kappa, 0), Dual::var(alpha, 1));
+        let mu = self.view().mu_stage::<Dual<F, 3>>(l, l);
+        let f = self.view().slip::<Dual<F, 3>, Dual<F, 3>, M>(
+            &mu,
+            Dual::var(kappa, 0),
+            Dual::var(alpha, 1),
+        );
         let (v, d) = split(f)?;
         Ok((
             v,
@@ -380,10 +325,149 @@ impl<F: Float> Prepared<F> {
             },
         ))
     }
+}
+
+/// The friction stage from the load stage's parts (λμx*, λμy* (4.E7), λμ' (4.E8)).
+#[inline(always)]
+fn mu_of<F: Float, G: Lift<F>>(
+    c: &Conditioned<F>,
+    fx0_l: &Fx0Load<F>,
+    fy0_l: &Fy0Load<F>,
+    fy0_g0_l: Option<&Fy0Load<F>>,
+    mz0_l: &Mz0Load<F>,
+    lmux_star: G,
+    lmuy_star: G,
+) -> Mu<G> {
+    let (lmux_prime, lmuy_prime) = (digressive(lmux_star), digressive(lmuy_star)); // (4.E8)
+    let fx0 = pure::fx0_mu::<F, G>(fx0_l, c, lmux_star, lmux_prime);
+    let fy0 = pure::fy0_mu::<F, G>(fy0_l, c, lmuy_star, lmuy_prime);
+    let fy0_g0 = match fy0_g0_l {
+        Some(l) => pure::fy0_mu::<F, G>(l, c, lmuy_star, lmuy_prime),
+        None => fy0,
+    };
+    let mz0 = pure::mz0_mu::<F, G>(mz0_l, fy0_l, &fy0, c, lmuy_star);
+    Mu {
+        fx0,
+        fy0,
+        fy0_g0,
+        mz0,
+    }
+}
+
+/// The load stage's parts, borrowed: what the friction and slip stages read. `mf::eval` makes
+/// one over its locals ([`stages`]), [`Prepared`] over its fields: no copy of the load stage
+/// on `mf::eval`'s path.
+#[derive(Clone, Copy)]
+pub(crate) struct View<'a, F> {
+    pub(crate) c: &'a Conditioned<F>,
+    pub(crate) contact: bool,
+    pub(crate) mirrored: bool,
+    pub(crate) fx0: &'a Fx0Load<F>,
+    pub(crate) fy0: &'a Fy0Load<F>,
+    /// Fy0 at γ = 0 (MF 6.x's F'y (4.E74), MF 5.2's SVyκ at μy(γ = 0)); `None` at γ* = 0.
+    pub(crate) fy0_g0: Option<&'a Fy0Load<F>>,
+    pub(crate) mz0: &'a Mz0Load<F>,
+    pub(crate) w: &'a WeightsLoad<F>,
+    pub(crate) mz: &'a MzLoad<F>,
+}
+
+/// The load stage from a conditioned load (with turn slip, `turn` is (κ, α*) of `c`'s point),
+/// handed to `k` as a [`View`] of locals.
+#[inline(always)]
+pub(crate) fn stages<F: Float, M: Backend<F>, R>(
+    p: &Params<F>,
+    mut c: Conditioned<F>,
+    mirrored: bool,
+    turn: Option<(F, F)>,
+    k: impl FnOnce(View<'_, F>) -> R,
+) -> R {
+    c.flags.set_if(Flags::MIRRORED, mirrored);
+    if c.fz <= F::ZERO {
+        let (fx0, fy0, mz0) = (Fx0Load::default(), Fy0Load::default(), Mz0Load::default());
+        let (w, mz) = (WeightsLoad::default(), MzLoad::default());
+        return k(View {
+            c: &c,
+            contact: false,
+            mirrored,
+            fx0: &fx0,
+            fy0: &fy0,
+            fy0_g0: None,
+            mz0: &mz0,
+            w: &w,
+            mz: &mz,
+        });
+    }
+    let fx0 = pure::fx0_load::<F, M>(p, &c);
+    let turn_on = c.turn.is_some();
+    let gamma_star = c.gamma_star;
+    let fy0 = pure::fy0_load::<F, M>(p, &mut c, gamma_star, turn_on);
+    let fy0_g0 = if gamma_star == F::ZERO {
+        None
+    } else {
+        Some(pure::fy0_load::<F, M>(p, &mut c, F::ZERO, turn_on))
+    };
+    let w = combined::weights_load(p, &mut c);
+    let turn_g_yk = turn.map(|(kappa, alpha_star)| {
+        let m = pure::fy0_mu::<F, F>(&fy0, &c, c.lmuy_star, c.lmuy_prime);
+        let mut flags = c.flags;
+        let g = combined::g_yk::<F, F, M>(&w, kappa, alpha_star, &mut flags);
+        c.flags = flags;
+        (m.mu_y, g)
+    });
+    let mz0 = pure::mz0_load::<F, M>(p, &mut c, turn_g_yk);
+    let mz = MzLoad {
+        k_ratio: fx0.k_xk / fy0.k_ya_prime,
+        d_t: mz0.d_t,
+        c_t: mz0.c_t,
+        c_r: mz0.c_r,
+        arm: Arm::from_params(p),
+    };
+    k(View {
+        c: &c,
+        contact: true,
+        mirrored,
+        fx0: &fx0,
+        fy0: &fy0,
+        fy0_g0: fy0_g0.as_ref(),
+        mz0: &mz0,
+        w: &w,
+        mz: &mz,
+    })
+}
+
+impl<F: Float> View<'_, F> {
+    #[inline(always)]
+    pub(crate) fn mu_stage<G: Lift<F>>(&self, lmux_star: G, lmuy_star: G) -> Mu<G> {
+        if !self.contact {
+            return Mu::default();
+        }
+        mu_of::<F, G>(
+            self.c,
+            self.fx0,
+            self.fy0,
+            self.fy0_g0,
+            self.mz0,
+            lmux_star,
+            lmuy_star,
+        )
+    }
+
+    /// The slip stage in `F` with the friction stage `mu`: `Prepared::eval_with`'s.
+    #[inline(always)]
+    pub(crate) fn eval_with<M: Backend<F>>(
+        &self,
+        mu: &Mu<F>,
+        kappa: F,
+        alpha: F,
+    ) -> Result<Forces<F>, EvalError> {
+        check_slips(kappa, alpha)?;
+        let f = self.slip::<F, F, M>(mu, kappa, alpha);
+        finite(f)
+    }
 
     /// The slip stage, computed in `G` from the load stage (`F`) and a friction stage (`H`).
     #[inline(always)]
-    fn slip<H: Float, G: Lift<F> + Lift<H>, M: Backend<G>>(
+    pub(crate) fn slip<H: Float, G: Lift<F> + Lift<H>, M: Backend<G>>(
         &self,
         mu: &Mu<H>,
         kappa: G,
@@ -404,10 +488,10 @@ impl<F: Float> Prepared<F> {
                 ..Forces::default()
             };
         }
-        let fx0 = pure::fx0_slip::<F, H, G, M>(&self.fx0, &mu.fx0, c, s.kappa, &mut flags);
-        let fy0 = pure::fy0_slip::<F, H, G, M>(&self.fy0, &mu.fy0, c, s.alpha_star, &mut flags);
+        let fx0 = pure::fx0_slip::<F, H, G, M>(self.fx0, &mu.fx0, c, s.kappa, &mut flags);
+        let fy0 = pure::fy0_slip::<F, H, G, M>(self.fy0, &mu.fy0, c, s.alpha_star, &mut flags);
         // t and Mzr at pure slip: (45), (47), (53), (56) / (4.E34), (4.E37), (4.E44), (4.E47).
-        let m0 = &self.mz0;
+        let m0 = self.mz0;
         let alpha_r = s.alpha_star + h(mu.mz0.s_hf); // (47), (4.E37)
         let alpha_t = s.alpha_star + f(m0.s_ht); // (45), (4.E34)
         let b_t = h(mu.mz0.b_t);
@@ -415,10 +499,10 @@ impl<F: Float> Prepared<F> {
         let e_t = clip_e(e_t, c.limits, &mut flags);
         let d_r = h(mu.mz0.d_r1) * s.cos_alpha_star + f(m0.zeta8) - G::ONE; // (56), (4.E47)
 
-        let fx = combined::fx_slip::<F, G, M>(&self.w, s.kappa, s.alpha_star, fx0, &mut flags);
+        let fx = combined::fx_slip::<F, G, M>(self.w, s.kappa, s.alpha_star, fx0, &mut flags);
         let mu_y = h(mu.fy0.mu_y);
         let fy = combined::fy_slip::<F, G, M>(
-            &self.w,
+            self.w,
             c,
             (s.kappa, s.alpha_star),
             fy0,
@@ -443,7 +527,7 @@ impl<F: Float> Prepared<F> {
             Version::Mf61 | Version::Mf62 => fy.g_yk * fy0_g0, // (4.E74)
         };
         let mz = combined::mz_slip::<F, G, M>(
-            &self.mz,
+            self.mz,
             c,
             &MzIn {
                 kappa: s.kappa,
@@ -512,28 +596,39 @@ fn split<F: Float, const N: usize>(
     }))
 }
 
-/// The conditioned load of an evaluation with turn slip (all stages at one point), or the load
-/// stage alone: what `mf::eval` runs.
+/// What `mf::eval` builds its stages from: the conditioned load (with turn slip: of the whole
+/// point, every stage's load part there), whether mirrored, and with turn slip (κ, α*).
+/// Returned apart from the [`Prepared`] so that `mf::eval` builds that in place (no copy of it
+/// through a `Result`).
+#[allow(clippy::type_complexity)]
 #[inline(always)]
 pub(crate) fn for_eval<F: Float, M: Backend<F>>(
     p: &Params<F>,
     input: &Input<F>,
     opts: &Options,
-) -> Result<Prepared<F>, EvalError> {
-    if !opts.turn_slip {
-        return Prepared::new::<M>(p, &Operating::from(input), opts);
-    }
+) -> Result<(Conditioned<F>, bool, Option<(F, F)>), EvalError> {
     let mirrored = p.mirrored_on(opts.mounted);
-    let mut inp = *input;
-    if mirrored {
-        inp.alpha = -inp.alpha;
-        inp.gamma = -inp.gamma;
-        inp.phit = -inp.phit;
+    let sgn = |x: F| if mirrored { -x } else { x };
+    if !opts.turn_slip {
+        let load = Input {
+            fz: input.fz,
+            kappa: F::ZERO,
+            alpha: F::ZERO,
+            gamma: sgn(input.gamma),
+            phit: sgn(input.phit),
+            vx: input.vx,
+            p: input.p,
+        };
+        return Ok((condition_load::<F, M>(p, &load, opts)?, mirrored, None));
     }
+    let mut inp = *input;
+    inp.alpha = sgn(inp.alpha);
+    inp.gamma = sgn(inp.gamma);
+    inp.phit = sgn(inp.phit);
     let mut c = limits::condition::<F, M>(p, &inp, opts)?;
     if c.fz > F::ZERO {
         super::turnslip::prepare::<F, M>(p, &mut c);
     }
     let turn = (c.kappa, c.alpha_star);
-    Ok(Prepared::from_conditioned::<M>(p, c, mirrored, Some(turn)))
+    Ok((c, mirrored, Some(turn)))
 }
