@@ -1,7 +1,7 @@
 //! The staged Magic Formula (`gough::mf::prepared`, issue 38) on every MFeval oracle sweep:
 //! - the slip stage of a load stage built once per operating point (Fz, γ, φt, Vx, p) gives
 //!   `mf::eval`'s Fx, Fy, Mz, t, Mzr (f64 Libm, f32 Libm, f32 Fast), and so meets the oracle
-//!   within the budgets of `gough_host::tolerance`; the friction stage remade by
+//!   within the budgets of `gough_host_tests::tolerance`; the friction stage remade by
 //!   `with_mu(LMUX, LMUY)` gives the same;
 //! - the slopes ∂/∂κ, ∂/∂α (`eval_d`) and ∂/∂λμ (`eval_d_mu`) equal central differences of
 //!   `mf::eval` in f64 to 1e-6 relative (floor: 1e-6·FNOMIN per unit slip, ·R0 for Mz), away
@@ -15,8 +15,8 @@ use gough::math::{Fast, Libm};
 use gough::mf::prepared::{Operating, Partials, Prepared};
 use gough::mf::{self, EvalError, Input, Options, Params};
 use gough_host::csvio;
-use gough_host::mfrun::{input_of, INPUT_COLUMNS};
-use gough_host::tolerance::{self, Precision};
+use gough_host::mfrun::{InputRow, Precision};
+use gough_host_tests::tolerance;
 use std::path::{Path, PathBuf};
 
 fn data() -> PathBuf {
@@ -55,8 +55,8 @@ fn params(tyre: &str) -> Params<f64> {
 }
 
 fn rows(path: &Path) -> Vec<Input<f64>> {
-    let t = csvio::read_with(path, &INPUT_COLUMNS, &[], true).unwrap();
-    t.rows.iter().map(|r| input_of(&r[..7])).collect()
+    let rows = csvio::read_with::<InputRow>(path, true).unwrap();
+    rows.rows.iter().map(InputRow::input).collect()
 }
 
 fn f32_input(i: &Input<f64>) -> Input<f32> {

@@ -238,6 +238,10 @@ impl<F: Float> Prepared<F> {
     pub fn fz(&self) -> F {
         self.c.fz
     }
+    /// The conditioned load-stage inputs (for the relaxation lengths, `mf::sigma`).
+    pub(crate) fn conditioned(&self) -> &Conditioned<F> {
+        &self.c
+    }
     /// Kxκ \[N\] (28), (4.E15).
     pub fn k_xk(&self) -> F {
         self.fx0.k_xk

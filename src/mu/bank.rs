@@ -47,6 +47,7 @@
 //! and one without (plus one more for at most [`RESEEDS`] poorly fitting cells per batch).
 
 use crate::math::{Backend, Float};
+use crate::mf::prepared::{Mu, Operating, Prepared};
 use crate::mf::{self, Input, Options, Params, Side};
 
 /// Number of surface hypotheses.
@@ -55,6 +56,8 @@ pub const CELLS: usize = 25;
 pub const RESEEDS: usize = 6;
 /// Slip angles \[rad\] a poorly fitting cell tries in turn (on the side of the lateral force).
 const SCAN: [f64; 8] = [0.01, 0.02, 0.035, 0.05, 0.08, 0.12, 0.2, 0.35];
+/// A cell out of contention is fitted on every `VISIT`th batch.
+pub const VISIT: usize = 4;
 /// The longest sample interval \[µs\] inside a batch; a longer one restarts it.
 pub const MAX_GAP_US: u32 = 200_000;
 
@@ -331,7 +334,8 @@ struct Batch<F> {
 #[derive(Debug, Clone)]
 pub struct Bank<'p, F> {
     params: &'p Params<F>,
-    scratch: Params<F>,
+    /// The Magic Formula's load stage at the pending batch's Fz, γ, Vx.
+    prep: Option<Prepared<F>>,
     opts: Options,
     mu_y0: F,
     cfg: Config<F>,
@@ -350,6 +354,11 @@ pub struct Bank<'p, F> {
     reseed_from: usize,
     /// Position in the re-seed scan.
     scan: usize,
+    /// The cells fitted in the pending batch, and how many (see [`Bank::select`]).
+    active: [bool; CELLS],
+    n_active: usize,
+    /// Batches so far (modulo [`VISIT`]), for the visits of far cells.
+    round: usize,
     last_t: Option<u32>,
     /// κ′ implied by the measured κ (first-order lag over σκ/|Vx|), and σκ \[m\].
     kappa_lag: Option<F>,
@@ -394,7 +403,7 @@ impl<'p, F: Float> Bank<'p, F> {
         };
         Ok(Bank {
             params,
-            scratch: params.clone(),
+            prep: None,
             opts,
             mu_y0,
             cfg,
@@ -408,6 +417,9 @@ impl<'p, F: Float> Bank<'p, F> {
             kappa_prev: None,
             reseed_from: 0,
             scan: 0,
+            active: [false; CELLS],
+            n_active: 0,
+            round: 0,
             last_t: None,
             kappa_lag: None,
             sigma_kappa_len: F::from_f64(0.3),
@@ -555,7 +567,32 @@ impl<'p, F: Float> Bank<'p, F> {
                 }
             }
             self.kappa_prev = b.kappa.map(|(k, _)| k);
-            self.pending = Some(b);
+            let op = Operating {
+                fz: b.fz,
+                gamma: b.gamma,
+                phit: F::ZERO,
+                vx: b.vx,
+                p: None,
+            };
+            self.select(&b);
+            self.prep = if self.n_active > 0 {
+                Prepared::new::<M>(self.params, &op, &self.opts).ok()
+            } else {
+                None
+            };
+            if let Some(pr) = &self.prep {
+                let (sx, _) =
+                    mf::sigma::sigma::<F, M>(self.params, pr.conditioned(), pr.k_xk(), pr.k_ya());
+                if sx.is_finite() && sx > F::ZERO {
+                    self.sigma_kappa_len = sx;
+                }
+            }
+            if self.prep.is_some() {
+                self.pending = Some(b);
+            } else {
+                // Nothing to fit (no excitation, or no contact): the evidence only ages.
+                self.finish::<M>(&b);
+            }
             self.next = 0;
             self.reseeds = 0;
         }
@@ -624,21 +661,52 @@ impl<'p, F: Float> Bank<'p, F> {
         }
     }
 
+    /// Chooses the cells to fit on batch `b`: none without excitation (the batch is no
+    /// evidence, and the slips need not follow); otherwise every cell still in contention (ℓ
+    /// below the switching cap), the best cell's neighbours, and every [`VISIT`]th of the
+    /// others in turn (so that a surface excluded long ago is looked at again within [`VISIT`]
+    /// batches; in between its last χ² stands).
+    fn select(&mut self, b: &Batch<F>) {
+        let f = b.fy.0.abs().max(b.fx.map_or(F::ZERO, |(v, _)| v.abs()));
+        let excited = f >= self.cfg.excitation * b.fz;
+        self.round = (self.round + 1) % VISIT;
+        let mut best = 0;
+        let mut lo = F::from_f64(f64::MAX);
+        for (k, c) in self.cells.iter().enumerate() {
+            if c.nll < lo {
+                lo = c.nll;
+                best = k;
+            }
+        }
+        let cap = self.cfg.switch_nll - F::HALF;
+        self.n_active = 0;
+        for (k, (a, c)) in self.active.iter_mut().zip(self.cells.iter()).enumerate() {
+            *a = excited && (c.nll < cap || k.abs_diff(best) <= 2 || k % VISIT == self.round);
+            self.n_active += usize::from(*a);
+        }
+    }
+
     /// Fits the next cells of the pending batch; finishes the batch after the last.
     fn work<M: Backend<F>>(&mut self) {
         let Some(b) = self.pending else { return };
-        let per = CELLS.div_ceil(usize::from(self.cfg.batch.max(1)));
-        let end = (self.next + per).min(CELLS);
-        for i in self.next..end {
+        let per = self
+            .n_active
+            .div_ceil(usize::from(self.cfg.batch.max(1)))
+            .max(1);
+        let mut done = 0;
+        while self.next < CELLS && done < per {
             // Rotated order, so that the re-seeds of successive batches go to different cells.
-            let k = (i + self.reseed_from) % CELLS;
-            let chi2 = self.fit_cell::<M>(k, &b);
-            if let Some(slot) = self.chi2.get_mut(k) {
-                *slot = chi2;
+            let k = (self.next + self.reseed_from) % CELLS;
+            self.next += 1;
+            if self.active.get(k).copied().unwrap_or(false) {
+                done += 1;
+                let chi2 = self.fit_cell::<M>(k, &b);
+                if let Some(slot) = self.chi2.get_mut(k) {
+                    *slot = chi2;
+                }
             }
         }
-        self.next = end;
-        if end >= CELLS {
+        if self.next >= CELLS {
             self.pending = None;
             self.reseed_from = (self.reseed_from + 7) % CELLS;
             self.finish::<M>(&b);
@@ -651,7 +719,12 @@ impl<'p, F: Float> Bank<'p, F> {
         let Some(cell) = self.cells.get(k).copied() else {
             return F::ZERO;
         };
-        let (r0, jac) = match self.residuals::<M>(lambda, b, cell.alpha, cell.kappa, true) {
+        let Some(prep) = self.prep.as_ref() else {
+            return F::ZERO;
+        };
+        // The friction stage of this surface: λμx = λμy = μ/μy0 times the file's (architecture.md).
+        let mu = prep.with_mu(self.params.lmux * lambda, self.params.lmuy * lambda);
+        let (r0, jac) = match self.residuals::<M>(&mu, b, cell.alpha, cell.kappa, true) {
             Some(x) => x,
             None => return self.cfg.chi2_cap,
         };
@@ -686,7 +759,7 @@ impl<'p, F: Float> Bank<'p, F> {
             }
             let na = clamp(cell.alpha + da, F::from_f64(1.4));
             let nk = clamp(cell.kappa + dk, F::ONE);
-            match self.residuals::<M>(lambda, b, na, nk, false) {
+            match self.residuals::<M>(&mu, b, na, nk, false) {
                 Some((r1, _)) if norm2(&r1) < chi0 => {
                     chi = norm2(&r1);
                     next.alpha = na;
@@ -716,7 +789,7 @@ impl<'p, F: Float> Bank<'p, F> {
                     a
                 }
             };
-            if let Some((r2, _)) = self.residuals::<M>(lambda, b, sa, sk, false) {
+            if let Some((r2, _)) = self.residuals::<M>(&mu, b, sa, sk, false) {
                 if norm2(&r2) < chi {
                     chi = norm2(&r2);
                     next.alpha = sa;
@@ -736,38 +809,41 @@ impl<'p, F: Float> Bank<'p, F> {
     }
 
     /// The normalised residuals (measured − model)/σ of (Fx, Fy, Mz, κ′) at slips (α′, κ′) on
-    /// surface λμ, and (when `jac`) their derivatives in (α′, κ′) of the model's part (forward
-    /// differences). Rows that are not measured are 0.
+    /// the friction stage `mu`, and (when `jac`) the derivatives of the model's part in
+    /// (α′, κ′), from the slip stage's dual numbers. Rows that are not measured are 0.
     #[allow(clippy::type_complexity)]
     fn residuals<M: Backend<F>>(
-        &mut self,
-        lambda: F,
+        &self,
+        mu: &Mu<F>,
         b: &Batch<F>,
         alpha: F,
         kappa: F,
         jac: bool,
     ) -> Option<([F; 4], [[F; 2]; 4])> {
-        let f0 = self.forces::<M>(lambda, b, alpha, kappa)?;
-        let r = self.res_of(b, &f0, kappa);
+        let prep = self.prep.as_ref()?;
         let mut j = [[F::ZERO; 2]; 4];
-        if jac {
-            let ha = F::from_f64(1e-4);
-            let hk = F::from_f64(1e-4);
-            let fa = self.forces::<M>(lambda, b, alpha + ha, kappa)?;
-            let fk = self.forces::<M>(lambda, b, alpha, kappa + hk)?;
-            let ra = self.res_of(b, &fa, kappa);
-            let rk = self.res_of(b, &fk, kappa + hk);
-            // J = ∂(model)/∂θ in σ units = −∂r/∂θ.
-            for i in 0..4 {
-                if let (Some(ji), Some(a), Some(k), Some(r0)) =
-                    (j.get_mut(i), ra.get(i), rk.get(i), r.get(i))
-                {
-                    ji[0] = (*r0 - *a) / ha;
-                    ji[1] = (*r0 - *k) / hk;
-                }
-            }
+        let f = if jac {
+            let (f, d) = prep.eval_d::<M>(mu, kappa, alpha).ok()?;
+            let sx = b.fx.map_or(F::ZERO, |(_, s)| F::ONE / s);
+            j[0] = [d.alpha.fx * sx, d.kappa.fx * sx];
+            j[1] = [d.alpha.fy / b.fy.1, d.kappa.fy / b.fy.1];
+            j[2] = [d.alpha.mz / b.mz.1, d.kappa.mz / b.mz.1];
+            j[3] = match (b.kappa, b.fx) {
+                (Some((_, s)), _) => [F::ZERO, F::ONE / s],
+                (None, None) => [F::ZERO, F::ONE / F::from_f64(0.01)],
+                (None, Some(_)) => [F::ZERO, F::ZERO],
+            };
+            f
+        } else {
+            prep.eval_with::<M>(mu, kappa, alpha).ok()?
+        };
+        let m = [f.fx, f.fy, f.mz];
+        if !F::all_finite(&m)
+            || !F::all_finite(&[j[0][0], j[0][1], j[1][0], j[1][1], j[2][0], j[2][1]])
+        {
+            return None;
         }
-        Some((r, j))
+        Some((self.res_of(b, &m, kappa), j))
     }
 
     fn res_of(&self, b: &Batch<F>, f: &[F; 3], kappa: F) -> [F; 4] {
@@ -777,41 +853,10 @@ impl<'p, F: Float> Bank<'p, F> {
         let rk = match (b.kappa, b.fx) {
             (Some((v, s)), _) => (v - kappa) / s,
             // Neither κ nor Fx: κ′ is pinned near free rolling.
-            (None, None) => kappa / F::from_f64(0.01),
+            (None, None) => -kappa / F::from_f64(0.01),
             (None, Some(_)) => F::ZERO,
         };
         [rx, ry, rm, rk]
-    }
-
-    /// (Fx, Fy, Mz) of the model on surface λμ at the batch's load and the given slips.
-    fn forces<M: Backend<F>>(
-        &mut self,
-        lambda: F,
-        b: &Batch<F>,
-        alpha: F,
-        kappa: F,
-    ) -> Option<[F; 3]> {
-        self.scratch.lmux = self.params.lmux * lambda;
-        self.scratch.lmuy = self.params.lmuy * lambda;
-        let o = mf::eval::<F, M>(
-            &self.scratch,
-            &Input {
-                fz: b.fz,
-                kappa,
-                alpha,
-                gamma: b.gamma,
-                phit: F::ZERO,
-                vx: b.vx,
-                p: None,
-            },
-            &self.opts,
-        )
-        .ok()?;
-        if o.sigma_x.is_finite() && o.sigma_x > F::ZERO {
-            self.sigma_kappa_len = o.sigma_x;
-        }
-        let f = [o.fx, o.fy, o.mz];
-        F::all_finite(&f).then_some(f)
     }
 
     /// Forgets evidence over `dt` seconds and `dist` metres.

@@ -368,6 +368,58 @@ fn estimator_figures<M: Backend<f32>>(
     );
 }
 
+/// The exact-model bank estimator ([`gough::mu::bank::Bank`]) alone, with backend `M`: its
+/// instructions per sample (mean over the stream, worst sample) and its state's RAM, as a
+/// `bench: mu_bank_<name>_<stream> mean=<n> worst=<n> ram=<bytes>` line.
+fn bank_figures<M: Backend<f32>>(
+    name: &str,
+    stream_name: &str,
+    id: u32,
+    clock: Clock,
+    p: &Params<f32>,
+    stream: &[Measurement],
+) {
+    use gough::mu::bank::{self, Bank};
+    if Bank::new::<M>(p, None, bank::Config::default()).is_err() {
+        hprintln!("bank: no friction in the tyre file");
+        return;
+    }
+    let e = per_sample(
+        id,
+        clock,
+        stream,
+        || Bank::new::<M>(p, None, bank::Config::default()).ok(),
+        |est, m| {
+            let Some(est) = est.as_mut() else {
+                return State::Fallback;
+            };
+            let s = bank::Sample {
+                t_us: m.t_us,
+                fz: m.fz,
+                fy: m.fy,
+                mz: m.mz,
+                fx: m.fx,
+                kappa: m.kappa,
+                vx: m.vx,
+                gamma: m.gamma,
+            };
+            match est.update::<M>(&s).state {
+                bank::State::Identifiable => State::Identifiable,
+                bank::State::NotIdentifiable => State::NotIdentifiable,
+                bank::State::Fallback => State::Fallback,
+            }
+        },
+    );
+    hprintln!(
+        "bench: mu_bank_{}_{} mean={} worst={} ram={}",
+        name,
+        stream_name,
+        e.mean,
+        e.max,
+        size_of::<Bank<'_, f32>>()
+    );
+}
+
 /// `app::build_table` in a frame of its own (not merged into `main`'s), so that its stack use
 /// shows.
 #[inline(never)]
@@ -529,19 +581,21 @@ fn main() -> ! {
     // Streams: the slalom on the tyre's own surface (λμ 1) with and without camber; then on a
     // wet and an icy road, where the estimate sits on the lower surfaces of the table and the
     // ambiguity guard checks the grippier ones (the estimator's costliest path).
-    for (k, (camber, mu, what)) in [
+    for (k, (camber, mu, what, short)) in [
         (
             0.02,
             1.0,
             "λμ 1 (dry), camber measured (roll, ±0.02 rad: between table nodes)",
+            "dry",
         ),
         (
             0.0,
             1.0,
             "λμ 1 (dry), no camber in the message (static 0: a table node)",
+            "dry_nocamber",
         ),
-        (0.02, 0.5, "λμ 0.5 (wet), camber measured"),
-        (0.02, 0.2, "λμ 0.2 (ice), camber measured"),
+        (0.02, 0.5, "λμ 0.5 (wet), camber measured", "wet"),
+        (0.02, 0.2, "λμ 0.2 (ice), camber measured", "ice"),
     ]
     .into_iter()
     .enumerate()
@@ -549,6 +603,7 @@ fn main() -> ! {
         workload::slalom(&p32, mu, camber, stream);
         hprintln!("stream: 1 s slalom at 1 kHz, noise; {}", what);
         let id = 30 + 10 * k as u32;
+        bank_figures::<app::Math>(app::MATH_NAME, short, id + 5, clock, &p32, stream);
         estimator_figures::<app::Math>(
             app::MATH_NAME,
             (id + 1, id + 2),

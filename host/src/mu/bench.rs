@@ -336,7 +336,8 @@ pub fn run_bank(p: &Params<f64>, w: usize, tr: &WheelTrace) -> Vec<Estimate<f64>
     } else {
         Side::Right
     };
-    let Ok(mut e) = bank::Bank::new::<Libm>(p, Some(side), bank::Config::default()) else {
+    let cfg = bank::Config::default();
+    let Ok(mut e) = bank::Bank::new::<Libm>(p, Some(side), cfg) else {
         return Vec::new();
     };
     (0..tr.rows.len())
