@@ -66,7 +66,7 @@ pub struct EstimateArgs {
     #[arg(long, value_enum, default_value_t = Precision::F64)]
     pub precision: Precision,
     /// Estimator.
-    #[arg(long, value_enum, default_value_t = Method::Gough)]
+    #[arg(long, value_enum, default_value_t = Method::Bank)]
     pub method: Method,
     /// Add a column `hold` to EST: which gate held each held estimate (`no_excitation`,
     /// `settling`, `trail_not_dropped`, `model_uncertain`, `ambiguous`, `confirming`,

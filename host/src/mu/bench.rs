@@ -327,7 +327,7 @@ pub fn run_method(
     }
 }
 
-/// The bank estimator over wheel `w`'s trace (as the old estimate type, for the metrics).
+/// The bank estimator over wheel `w`'s trace (mounted on the wheel's side, measured κ).
 pub fn run_bank(p: &Params<f64>, w: usize, tr: &WheelTrace) -> Vec<Estimate<f64>> {
     use gough::mf::Side;
     use gough::mu::bank;
@@ -336,34 +336,15 @@ pub fn run_bank(p: &Params<f64>, w: usize, tr: &WheelTrace) -> Vec<Estimate<f64>
     } else {
         Side::Right
     };
-    let cfg = bank::Config::default();
-    let Ok(mut e) = bank::Bank::new::<Libm>(p, Some(side), cfg) else {
+    let Ok(mut e) = bank::Bank::new::<Libm>(p, Some(side), bank::Config::default()) else {
         return Vec::new();
     };
     (0..tr.rows.len())
         .map(|i| {
-            let r = &tr.rows[i];
-            let b = e.update::<Libm>(&bank::Sample {
-                t_us: (r.t * 1e6).round() as i64 as u32,
-                fz: r.fz,
-                fy: r.fy,
-                mz: r.mz,
-                fx: Some(r.fx),
-                kappa: tr.kappa_meas.get(i).copied(),
-                vx: Some(r.vx),
-                gamma: tr.gamma.get(i).copied(),
-            });
-            Estimate {
-                mu: b.mu,
-                sigma: b.sigma,
-                sigma_model: 0.0,
-                state: match b.state {
-                    bank::State::Identifiable => State::Identifiable,
-                    bank::State::NotIdentifiable => State::NotIdentifiable,
-                    bank::State::Fallback => State::Fallback,
-                },
-                change: b.change,
-            }
+            let mut r = tr.rows[i];
+            r.kappa = tr.kappa_meas.get(i).copied().unwrap_or(f64::NAN);
+            let s = super::bank_sample(&r, true, true, tr.gamma.get(i).copied());
+            super::bank_estimate(e.update::<Libm>(&s))
         })
         .collect()
 }
@@ -892,7 +873,6 @@ fn hold_tables(tallies: &[(&Case, HoldTally)]) -> (String, String) {
 pub fn demo(a: DemoArgs) -> Result<(), String> {
     let t = crate::tyre::load(&a.tir)?;
     let p = t.params;
-    let tables = Tables::new(&p)?;
     let case = Case {
         manoeuvre: sim::MANOEUVRES
             .iter()
@@ -922,7 +902,7 @@ pub fn demo(a: DemoArgs) -> Result<(), String> {
     let mut first: Option<(WheelTrace, Vec<Estimate<f64>>)> = None;
     for (w, name) in names.iter().enumerate() {
         let tr = measure(&log, w, &sensors, a.seed);
-        let est = run_method(0, &p, &tables, w, &tr);
+        let est = run_bank(&p, w, &tr);
         for (i, e) in est.iter().enumerate().step_by(10) {
             let _ = writeln!(
                 csv,
@@ -962,8 +942,9 @@ pub fn demo(a: DemoArgs) -> Result<(), String> {
                 .iter()
                 .zip(&tr.gamma)
                 .zip(&tr.mu_true)
-                .map(|((r, &g), &m)| {
-                    vec![r.t, r.fz, r.fy, r.mz, r.fx, r.vx, r.kappa, r.alpha, g, m]
+                .zip(&tr.kappa_meas)
+                .map(|(((r, &g), &m), &k)| {
+                    vec![r.t, r.fz, r.fy, r.mz, r.fx, r.vx, k, r.alpha, g, m]
                 })
                 .collect();
             crate::csvio::write(
@@ -983,7 +964,7 @@ pub fn demo(a: DemoArgs) -> Result<(), String> {
     if let Some((tr, est)) = first {
         plot_mu(
             &tr,
-            &[("gough", &est)],
+            &[("bank", &est)],
             &a.out.join("mu.png"),
             &format!("{} on {} (front left)", case.manoeuvre, case.road),
         )?;

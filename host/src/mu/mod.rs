@@ -9,7 +9,7 @@ pub mod peers;
 use crate::csvio;
 use gough::math::{Backend, Float, Libm};
 use gough::mf::{Params, Side};
-use gough::mu::{Config, Estimate, GoughTable, Hold, MuEstimator, Sample};
+use gough::mu::{bank, Config, Estimate, GoughTable, Hold, MuEstimator, Sample};
 use peers::{HsuGerdes, Row, SlipSlope};
 use std::path::Path;
 
@@ -29,7 +29,11 @@ pub fn table<F: Float, M: Backend<F>>(
 /// Which estimator.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
 pub enum Method {
-    /// The Gough-plot estimator of the core (uses Fy, Mz, Fz, Fx, Vx — never α).
+    /// The exact-model bank of the core (`gough::mu::bank`: Fy, Mz, Fz, Fx, κ, Vx, γ — never
+    /// α): the current estimator.
+    Bank,
+    /// The table estimator of the core (`gough::mu::MuEstimator`, uses Fy, Mz, Fz, Fx, Vx —
+    /// never α): the previous one, kept as a peer until the firmware runs the bank.
     Gough,
     /// Hsu, Laws & Gerdes (2010): pneumatic trail with the slip angle.
     HsuGerdes,
@@ -85,6 +89,41 @@ pub fn read_log(path: &Path) -> Result<Log, String> {
     Ok((rows, gamma, OPTIONAL.map(|c| t.has(c))))
 }
 
+/// A log row as the bank's sample: the time in wrapping microseconds (only differences are
+/// used, so an offset clock gives the same estimates), κ where the log has it.
+pub fn bank_sample(
+    r: &Row,
+    has_fx: bool,
+    has_kappa: bool,
+    gamma: Option<f64>,
+) -> bank::Sample<f64> {
+    bank::Sample {
+        t_us: (r.t * 1e6).round() as i64 as u32,
+        fz: r.fz,
+        fy: r.fy,
+        mz: r.mz,
+        fx: has_fx.then_some(r.fx),
+        kappa: (has_kappa && r.kappa.is_finite()).then_some(r.kappa),
+        vx: r.vx.is_finite().then_some(r.vx),
+        gamma,
+    }
+}
+
+/// The bank's estimate as the bench's and the CLI's estimate type.
+pub fn bank_estimate(b: bank::Estimate<f64>) -> Estimate<f64> {
+    Estimate {
+        mu: b.mu,
+        sigma: b.sigma,
+        sigma_model: 0.0,
+        state: match b.state {
+            bank::State::Identifiable => gough::mu::State::Identifiable,
+            bank::State::NotIdentifiable => gough::mu::State::NotIdentifiable,
+            bank::State::Fallback => gough::mu::State::Fallback,
+        },
+        change: b.change,
+    }
+}
+
 /// One estimator's run over a log: an estimate per row, and for the Gough estimator why each
 /// held estimate was held (`MuEstimator::last_hold`; empty for the peers).
 pub type Run = (Vec<Estimate<f64>>, Vec<Option<Hold>>);
@@ -103,6 +142,61 @@ pub fn estimate(
     let g_of = |i: usize| gamma.get(i).copied().filter(|g| g.is_finite());
     let cfg = Config::<f64>::default();
     match method {
+        Method::Bank => {
+            let has_kappa = rows.iter().any(|r| r.kappa.is_finite());
+            match prec {
+                Precision::F64 => {
+                    let mut est = bank::Bank::new::<Libm>(p, None, bank::Config::default())
+                        .map_err(|e| e.to_string())?;
+                    Ok((
+                        rows.iter()
+                            .enumerate()
+                            .map(|(i, r)| {
+                                bank_estimate(est.update::<Libm>(&bank_sample(
+                                    r,
+                                    has_fx,
+                                    has_kappa,
+                                    g_of(i),
+                                )))
+                            })
+                            .collect(),
+                        Vec::new(),
+                    ))
+                }
+                Precision::F32 => {
+                    let p32 = p.cast::<f32>();
+                    let mut est = bank::Bank::new::<Libm>(&p32, None, bank::Config::default())
+                        .map_err(|e| e.to_string())?;
+                    Ok((
+                        rows.iter()
+                            .enumerate()
+                            .map(|(i, r)| {
+                                let s = bank_sample(r, has_fx, has_kappa, g_of(i));
+                                let c = |x: f64| x as f32;
+                                let e = est.update::<Libm>(&bank::Sample {
+                                    t_us: s.t_us,
+                                    fz: c(s.fz),
+                                    fy: c(s.fy),
+                                    mz: c(s.mz),
+                                    fx: s.fx.map(c),
+                                    kappa: s.kappa.map(c),
+                                    vx: s.vx.map(c),
+                                    gamma: s.gamma.map(c),
+                                });
+                                bank_estimate(bank::Estimate {
+                                    mu: f64::from(e.mu),
+                                    sigma: f64::from(e.sigma),
+                                    mu_min: f64::from(e.mu_min),
+                                    state: e.state,
+                                    change: e.change,
+                                })
+                            })
+                            .collect(),
+                        Vec::new(),
+                    ))
+                }
+            }
+        }
         Method::Gough => match prec {
             Precision::F64 => {
                 let table = table::<f64, Libm>(p, None)?;
