@@ -59,6 +59,28 @@ fn ensure_arm_gcc() -> Result<(), String> {
     }
 }
 
+/// Installs `cmake` with apt-get when missing and we may.
+fn ensure_cmake() -> Result<(), String> {
+    step("cmake (Debian cmake)");
+    if have("cmake") {
+        return Ok(());
+    }
+    if is_root() && have("apt-get") {
+        eprintln!("cmake is missing: installing it with apt-get");
+        let _ = run(Command::new("apt-get").arg("update").stdout(Stdio::null()));
+        run(Command::new("apt-get").args(["install", "-y", "--no-install-recommends", "cmake"]))?;
+    }
+    if have("cmake") {
+        Ok(())
+    } else {
+        Err(
+            "cmake is required for the C example's CMake build; install it (Debian/Ubuntu: \
+             `sudo apt-get install cmake`) and run again"
+                .into(),
+        )
+    }
+}
+
 /// `data.h` of the C example: the bundled `.tir` text (what the Rust firmware boots with) and
 /// the replay stream `examples/replay_log.csv` as f32 bits, read as `gough replay` reads it.
 fn data_h(out: &Path) -> Result<(), String> {
@@ -196,6 +218,31 @@ fn example(fw_elf: &Path) -> Result<(), String> {
         ))
         .arg(format!("BUILD={}", build.display())))?;
     let c_out = qemu_run(&build.join("capi-example.elf"))?;
+    // The same image with CMake (docs/c-api.md's snippet): its results must be the same.
+    ensure_cmake()?;
+    let cm = target_dir().join("capi/m4f-cmake");
+    let src = root().join("capi/examples/m4f");
+    run(Command::new("cmake")
+        .arg("-S")
+        .arg(&src)
+        .arg("-B")
+        .arg(&cm)
+        .arg(format!(
+            "-DCMAKE_TOOLCHAIN_FILE={}",
+            src.join("arm-none-eabi.cmake").display()
+        ))
+        .arg(format!(
+            "-DGOUGH_LIB={}",
+            lib(Some(DEVICE_TARGETS[0])).display()
+        ))
+        .arg(format!("-DGOUGH_DATA_DIR={}", build.display())))?;
+    run(Command::new("cmake").arg("--build").arg(&cm))?;
+    let cmake_out = qemu_run(&cm.join("capi-example.elf"))?;
+    if results(&cmake_out) != results(&c_out) {
+        return Err(
+            "the CMake build of the C example prints other results than the Make build".into(),
+        );
+    }
     let rust_out = qemu_run(fw_elf)?;
     let (c, r) = (results(&c_out), results(&rust_out));
     if c.len() < 300 || c != r {
