@@ -23,15 +23,16 @@
 #![allow(non_camel_case_types)]
 // Raw pointers from C are checked for null before use; each `unsafe` block says why it holds.
 #![allow(clippy::missing_safety_doc)]
+// The core is a dependency named `core_gough` here: this library's own name is `gough`.
 
 use core::mem::{align_of, size_of};
 use core::ptr;
-use gough::math::{Fast, Libm};
-use gough::mf::{self, EvalError, Input, Options, Params};
-use gough::mu::bank::{self, Bank};
-use gough::mu::GoughTable;
-use gough::proto::{self, Feed, Msg, Mtu, Reassembler, Segmenter, Settings, MSG_BUF};
-use gough::wheel::Wheel;
+use core_gough::math::{Fast, Libm};
+use core_gough::mf::{self, EvalError, Input, Options, Params};
+use core_gough::mu::bank::{self, Bank};
+use core_gough::mu::GoughTable;
+use core_gough::proto::{self, Feed, Msg, Mtu, Reassembler, Segmenter, Settings, MSG_BUF};
+use core_gough::wheel::Wheel;
 
 /// On the device the core never panics; the handler must still exist. It stops the core
 /// (an ABS/ESC controller's watchdog takes over).
@@ -278,7 +279,7 @@ pub unsafe extern "C" fn gough_tir_parse(
                 ));
             }
         };
-        let tir = gough::tir::parse(s).map_err(|e| fail(e.line))?;
+        let tir = core_gough::tir::parse(s).map_err(|e| fail(e.line))?;
         let p64 = tir.params;
         let p32 = p64.cast::<f32>();
         // SAFETY: non-null; the storage is GOUGH_PARAMS_SIZE bytes, aligned to 8 (its type).
@@ -1392,4 +1393,92 @@ pub unsafe extern "C" fn gough_rx_feed(
         unsafe { out.write(msg) };
         code
     })
+}
+
+/// The storage macros against what each type needs on this target, and the basic contract from
+/// Rust (the C-side tests are `capi/tests/host_test.c` and the example firmware, run by
+/// `cargo xtask test-all`).
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::boxed::Box;
+    use std::ptr;
+
+    #[test]
+    fn every_storage_macro_fits_its_type_with_little_slack() {
+        let used = used_sizes();
+        let macros = [
+            GOUGH_PARAMS_SIZE,
+            GOUGH_TABLE_SIZE,
+            GOUGH_WHEEL_SIZE,
+            GOUGH_ESTIMATOR_SIZE,
+            GOUGH_RX_SIZE,
+        ];
+        let names = ["params", "table", "wheel", "estimator", "rx"];
+        for ((u, m), n) in used.iter().zip(macros).zip(names) {
+            println!(
+                "{n}: needs {u} bytes on this target, GOUGH_{}_SIZE = {m}",
+                n.to_uppercase()
+            );
+            assert!(*u <= m, "{n}: {u} > {m}");
+            // The macros are the largest target's need (x86-64) rounded up: keep them tight.
+            if cfg!(target_pointer_width = "64") {
+                assert!(
+                    m - u < 64,
+                    "{n}: {m} bytes declared for {u} needed: shrink the macro"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn null_pointers_and_uninitialised_storage_are_errors() {
+        let text = include_str!("../../host-tests/data/tyres/MagicFormula61_Parameters.tir");
+        let mut p = Box::new(gough_params_t_zeroed());
+        let mut line = 7u32;
+        // SAFETY: valid pointers or null, as the C API allows.
+        unsafe {
+            assert_eq!(
+                gough_tir_parse(ptr::null(), 3, &mut *p, &mut line),
+                GOUGH_E_NULL
+            );
+            let input = gough_mf_input_t {
+                fz: 4000.0,
+                vx: 10.0,
+                alpha: 0.02,
+                ..Default::default()
+            };
+            let mut out = gough_mf_output_t::default();
+            assert_eq!(gough_mf_eval(&*p, &input, 111, &mut out), GOUGH_E_UNINIT);
+            assert_eq!(
+                gough_tir_parse(text.as_ptr().cast(), text.len(), &mut *p, &mut line),
+                GOUGH_OK
+            );
+            assert_eq!(line, 0);
+            assert_eq!(gough_mf_eval(&*p, &input, 111, &mut out), GOUGH_OK);
+            assert!(
+                out.fy < 0.0,
+                "ISO-W: positive α gives negative Fy ({})",
+                out.fy
+            );
+            assert_eq!(
+                gough_mf_eval(&*p, &input, 111, ptr::null_mut()),
+                GOUGH_E_NULL
+            );
+            assert_eq!(gough_mf_eval(&*p, &input, 131, &mut out), GOUGH_E_ARG);
+            let bad = "[MODEL]\nFITTYP = 61\nLONGVL = x\n";
+            assert_eq!(
+                gough_tir_parse(bad.as_ptr().cast(), bad.len(), &mut *p, &mut line),
+                GOUGH_E_PARSE
+            );
+            assert_eq!(line, 3);
+            // A failed parse leaves the storage unusable.
+            assert_eq!(gough_mf_eval(&*p, &input, 111, &mut out), GOUGH_E_UNINIT);
+        }
+    }
+
+    fn gough_params_t_zeroed() -> gough_params_t {
+        // SAFETY: an opaque array of u64: all-zero bits are a valid (unmarked) storage.
+        unsafe { std::mem::zeroed() }
+    }
 }
