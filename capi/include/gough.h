@@ -254,19 +254,19 @@ typedef struct gough_params_t {
  */
 typedef struct gough_params_info_t {
   /**
-   * Nominal load FNOMIN \[N\].
+   * Nominal load FNOMIN [N].
    */
   double fnomin;
   /**
-   * Unloaded radius UNLOADED_RADIUS R0 \[m\].
+   * Unloaded radius UNLOADED_RADIUS R0 [m].
    */
   double unloaded_radius;
   /**
-   * Reference speed LONGVL \[m/s\].
+   * Reference speed LONGVL [m/s].
    */
   double longvl;
   /**
-   * Inflation pressure INFLPRES \[Pa\] (0 for MF 5.x files, which have none).
+   * Inflation pressure INFLPRES [Pa], as parsed.
    */
   double inflpres;
 } gough_params_info_t;
@@ -276,31 +276,31 @@ typedef struct gough_params_info_t {
  */
 typedef struct gough_mf_input_t {
   /**
-   * Vertical load Fz \[N\] (positive: the tyre is loaded).
+   * Vertical load Fz [N] (positive: the tyre is loaded).
    */
   float fz;
   /**
-   * Longitudinal slip κ \[-\] (positive: driving).
+   * Longitudinal slip κ [-] (positive: driving).
    */
   float kappa;
   /**
-   * Slip angle α \[rad\] (ISO-W: positive gives a negative Fy on a tyre without offsets).
+   * Slip angle α [rad] (ISO-W: positive gives a negative Fy on a tyre without offsets).
    */
   float alpha;
   /**
-   * Inclination (camber) angle γ \[rad\].
+   * Inclination (camber) angle γ [rad].
    */
   float gamma;
   /**
-   * Turn slip φt \[1/m\] (used with use_mode xx2 only).
+   * Turn slip φt [1/m] (used with use_mode xx2 only).
    */
   float phit;
   /**
-   * Forward speed of the wheel centre Vx \[m/s\].
+   * Forward speed of the wheel centre Vx [m/s].
    */
   float vx;
   /**
-   * Inflation pressure p \[Pa\]; 0: the file's INFLPRES.
+   * Inflation pressure p [Pa]; 0: the file's INFLPRES.
    */
   float p;
 } gough_mf_input_t;
@@ -311,63 +311,63 @@ typedef struct gough_mf_input_t {
  */
 typedef struct gough_mf_output_t {
   /**
-   * Longitudinal force Fx \[N\].
+   * Longitudinal force Fx [N].
    */
   float fx;
   /**
-   * Lateral force Fy \[N\].
+   * Lateral force Fy [N].
    */
   float fy;
   /**
-   * Vertical load Fz \[N\] as used (clipped to FZMIN..FZMAX with limits on).
+   * Vertical load Fz [N] as used (clipped to FZMIN..FZMAX with limits on).
    */
   float fz;
   /**
-   * Overturning moment Mx \[N m\].
+   * Overturning moment Mx [N m].
    */
   float mx;
   /**
-   * Rolling resistance moment My \[N m\].
+   * Rolling resistance moment My [N m].
    */
   float my;
   /**
-   * Self-aligning moment Mz \[N m\].
+   * Self-aligning moment Mz [N m].
    */
   float mz;
   /**
-   * Longitudinal friction coefficient μx \[-\].
+   * Longitudinal friction coefficient μx [-].
    */
   float mu_x;
   /**
-   * Lateral friction coefficient |μy| \[-\].
+   * Lateral friction coefficient |μy| [-].
    */
   float mu_y;
   /**
-   * Longitudinal relaxation length σκ \[m\].
+   * Longitudinal relaxation length σκ [m].
    */
   float sigma_x;
   /**
-   * Lateral relaxation length σα \[m\].
+   * Lateral relaxation length σα [m].
    */
   float sigma_y;
   /**
-   * Longitudinal slip stiffness Kxκ \[N\].
+   * Longitudinal slip stiffness Kxκ [N].
    */
   float k_xk;
   /**
-   * Cornering stiffness Kyα \[N/rad\].
+   * Cornering stiffness Kyα [N/rad].
    */
   float k_ya;
   /**
-   * Pneumatic trail t \[m\].
+   * Pneumatic trail t [m].
    */
   float t;
   /**
-   * Residual torque Mzr \[N m\].
+   * Residual torque Mzr [N m].
    */
   float m_zr;
   /**
-   * The κ used \[-\] (after the limits).
+   * The κ used [-] (after the limits).
    */
   float kappa;
   /**
@@ -381,31 +381,31 @@ typedef struct gough_mf_output_t {
  */
 typedef struct gough_mf_input_f64_t {
   /**
-   * Vertical load Fz \[N\].
+   * Vertical load Fz [N].
    */
   double fz;
   /**
-   * Longitudinal slip κ \[-\].
+   * Longitudinal slip κ [-].
    */
   double kappa;
   /**
-   * Slip angle α \[rad\].
+   * Slip angle α [rad].
    */
   double alpha;
   /**
-   * Inclination angle γ \[rad\].
+   * Inclination angle γ [rad].
    */
   double gamma;
   /**
-   * Turn slip φt \[1/m\].
+   * Turn slip φt [1/m].
    */
   double phit;
   /**
-   * Forward speed Vx \[m/s\].
+   * Forward speed Vx [m/s].
    */
   double vx;
   /**
-   * Inflation pressure p \[Pa\]; 0: the file's INFLPRES.
+   * Inflation pressure p [Pa]; 0: the file's INFLPRES.
    */
   double p;
 } gough_mf_input_f64_t;
@@ -415,63 +415,63 @@ typedef struct gough_mf_input_f64_t {
  */
 typedef struct gough_mf_output_f64_t {
   /**
-   * Longitudinal force Fx \[N\].
+   * Longitudinal force Fx [N].
    */
   double fx;
   /**
-   * Lateral force Fy \[N\].
+   * Lateral force Fy [N].
    */
   double fy;
   /**
-   * Vertical load Fz \[N\] as used.
+   * Vertical load Fz [N] as used.
    */
   double fz;
   /**
-   * Overturning moment Mx \[N m\].
+   * Overturning moment Mx [N m].
    */
   double mx;
   /**
-   * Rolling resistance moment My \[N m\].
+   * Rolling resistance moment My [N m].
    */
   double my;
   /**
-   * Self-aligning moment Mz \[N m\].
+   * Self-aligning moment Mz [N m].
    */
   double mz;
   /**
-   * Longitudinal friction coefficient μx \[-\].
+   * Longitudinal friction coefficient μx [-].
    */
   double mu_x;
   /**
-   * Lateral friction coefficient |μy| \[-\].
+   * Lateral friction coefficient |μy| [-].
    */
   double mu_y;
   /**
-   * Longitudinal relaxation length σκ \[m\].
+   * Longitudinal relaxation length σκ [m].
    */
   double sigma_x;
   /**
-   * Lateral relaxation length σα \[m\].
+   * Lateral relaxation length σα [m].
    */
   double sigma_y;
   /**
-   * Longitudinal slip stiffness Kxκ \[N\].
+   * Longitudinal slip stiffness Kxκ [N].
    */
   double k_xk;
   /**
-   * Cornering stiffness Kyα \[N/rad\].
+   * Cornering stiffness Kyα [N/rad].
    */
   double k_ya;
   /**
-   * Pneumatic trail t \[m\].
+   * Pneumatic trail t [m].
    */
   double t;
   /**
-   * Residual torque Mzr \[N m\].
+   * Residual torque Mzr [N m].
    */
   double m_zr;
   /**
-   * The κ used \[-\].
+   * The κ used [-].
    */
   double kappa;
   /**
@@ -506,47 +506,47 @@ typedef struct gough_measurement_t {
    */
   uint32_t wheel;
   /**
-   * Timestamp \[µs\], wrapping (only differences between a wheel's samples are used).
+   * Timestamp [µs], wrapping (only differences between a wheel's samples are used).
    */
   uint32_t t_us;
   /**
-   * Vertical load Fz \[N\].
+   * Vertical load Fz [N].
    */
   float fz;
   /**
-   * Measured lateral force Fy \[N\].
+   * Measured lateral force Fy [N].
    */
   float fy;
   /**
-   * Measured aligning moment Mz \[N m\].
+   * Measured aligning moment Mz [N m].
    */
   float mz;
   /**
-   * Measured longitudinal force Fx \[N\] (`GOUGH_HAS_FX`).
+   * Measured longitudinal force Fx [N] (`GOUGH_HAS_FX`).
    */
   float fx;
   /**
-   * Forward speed of the wheel centre Vx \[m/s\] (`GOUGH_HAS_VX`).
+   * Forward speed of the wheel centre Vx [m/s] (`GOUGH_HAS_VX`).
    */
   float vx;
   /**
-   * Wheel spin speed ω \[rad/s\] (`GOUGH_HAS_OMEGA`).
+   * Wheel spin speed ω [rad/s] (`GOUGH_HAS_OMEGA`).
    */
   float omega;
   /**
-   * Steering angle δ \[rad\] (`GOUGH_HAS_DELTA`).
+   * Steering angle δ [rad] (`GOUGH_HAS_DELTA`).
    */
   float delta;
   /**
-   * Slip angle α \[rad\] (`GOUGH_HAS_ALPHA`).
+   * Slip angle α [rad] (`GOUGH_HAS_ALPHA`).
    */
   float alpha;
   /**
-   * Longitudinal slip κ \[-\] (`GOUGH_HAS_KAPPA`).
+   * Longitudinal slip κ [-] (`GOUGH_HAS_KAPPA`).
    */
   float kappa;
   /**
-   * Inclination angle γ \[rad\] (`GOUGH_HAS_GAMMA`).
+   * Inclination angle γ [rad] (`GOUGH_HAS_GAMMA`).
    */
   float gamma;
   /**
@@ -560,15 +560,15 @@ typedef struct gough_measurement_t {
  */
 typedef struct gough_forces_t {
   /**
-   * Longitudinal force Fx \[N\].
+   * Longitudinal force Fx [N].
    */
   float fx;
   /**
-   * Lateral force Fy \[N\].
+   * Lateral force Fy [N].
    */
   float fy;
   /**
-   * Self-aligning moment Mz \[N m\].
+   * Self-aligning moment Mz [N m].
    */
   float mz;
   /**
@@ -582,12 +582,12 @@ typedef struct gough_forces_t {
  */
 typedef struct gough_estimate_t {
   /**
-   * Road friction μ \[-\] on the tyre file's scale (1: the tyre's test surface as fitted,
+   * Road friction μ [-] on the tyre file's scale (1: the tyre's test surface as fitted,
    * λμ = 1); the prior in `GOUGH_STATE_FALLBACK`.
    */
   float mu;
   /**
-   * Standard deviation of μ \[-\].
+   * Standard deviation of μ [-].
    */
   float sigma;
   /**
@@ -615,35 +615,35 @@ typedef struct gough_estimator_t {
  */
 typedef struct gough_sample_t {
   /**
-   * Timestamp \[µs\], wrapping: only differences are used.
+   * Timestamp [µs], wrapping: only differences are used.
    */
   uint32_t t_us;
   /**
-   * Vertical load Fz \[N\].
+   * Vertical load Fz [N].
    */
   float fz;
   /**
-   * Measured lateral force Fy \[N\].
+   * Measured lateral force Fy [N].
    */
   float fy;
   /**
-   * Measured aligning moment Mz \[N m\].
+   * Measured aligning moment Mz [N m].
    */
   float mz;
   /**
-   * Measured longitudinal force Fx \[N\] (`GOUGH_HAS_FX`).
+   * Measured longitudinal force Fx [N] (`GOUGH_HAS_FX`).
    */
   float fx;
   /**
-   * Longitudinal slip κ \[-\] (`GOUGH_HAS_KAPPA`).
+   * Longitudinal slip κ [-] (`GOUGH_HAS_KAPPA`).
    */
   float kappa;
   /**
-   * Forward speed Vx \[m/s\] (`GOUGH_HAS_VX`).
+   * Forward speed Vx [m/s] (`GOUGH_HAS_VX`).
    */
   float vx;
   /**
-   * Inclination angle γ \[rad\] (`GOUGH_HAS_GAMMA`).
+   * Inclination angle γ [rad] (`GOUGH_HAS_GAMMA`).
    */
   float gamma;
   /**
@@ -661,15 +661,15 @@ typedef struct gough_settings_t {
    */
   uint32_t limits;
   /**
-   * μ \[-\] reported in the fallback state.
+   * μ [-] reported in the fallback state.
    */
   float fallback_mu;
   /**
-   * Estimator window \[samples\].
+   * Estimator window [samples].
    */
   uint32_t window;
   /**
-   * Minimum utilisation |F|/(μ·Fz) \[-\].
+   * Minimum utilisation |F|/(μ·Fz) [-].
    */
   float min_utilisation;
 } gough_settings_t;
@@ -691,7 +691,7 @@ typedef struct gough_msg_t {
    */
   uint32_t wheel;
   /**
-   * `GOUGH_MSG_FORCES`, `GOUGH_MSG_ESTIMATE`: timestamp of the measurement \[µs\].
+   * `GOUGH_MSG_FORCES`, `GOUGH_MSG_ESTIMATE`: timestamp of the measurement [µs].
    */
   uint32_t t_us;
   /**
@@ -703,7 +703,7 @@ typedef struct gough_msg_t {
    */
   struct gough_estimate_t estimate;
   /**
-   * `GOUGH_MSG_PARAM_BEGIN`: length of the `.tir` text \[bytes\].
+   * `GOUGH_MSG_PARAM_BEGIN`: length of the `.tir` text [bytes].
    */
   uint32_t param_len;
   /**
@@ -711,7 +711,7 @@ typedef struct gough_msg_t {
    */
   uint32_t param_hash;
   /**
-   * `GOUGH_MSG_PARAM_CHUNK`: where the chunk goes in the text \[bytes\].
+   * `GOUGH_MSG_PARAM_CHUNK`: where the chunk goes in the text [bytes].
    */
   uint32_t param_offset;
   /**
@@ -877,7 +877,7 @@ int32_t gough_msg_encode(const struct gough_msg_t *msg,
 int32_t gough_rx_init(struct gough_rx_t *rx);
 
 /**
- * Feeds one received frame at time `now_ms` \[ms\] (a message whose frames are more than 50 ms
+ * Feeds one received frame at time `now_ms` [ms] (a message whose frames are more than 50 ms
  * apart is dropped). `*out` gets the message when this frame completes one, else
  * `kind = GOUGH_MSG_NONE`. `GOUGH_E_PROTO`: the frame or the message was dropped (counted).
  */

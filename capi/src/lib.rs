@@ -296,13 +296,13 @@ pub unsafe extern "C" fn gough_tir_parse(
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Default)]
 pub struct gough_params_info_t {
-    /// Nominal load FNOMIN \[N\].
+    /// Nominal load FNOMIN [N].
     pub fnomin: f64,
-    /// Unloaded radius UNLOADED_RADIUS R0 \[m\].
+    /// Unloaded radius UNLOADED_RADIUS R0 [m].
     pub unloaded_radius: f64,
-    /// Reference speed LONGVL \[m/s\].
+    /// Reference speed LONGVL [m/s].
     pub longvl: f64,
-    /// Inflation pressure INFLPRES \[Pa\] (0 for MF 5.x files, which have none).
+    /// Inflation pressure INFLPRES [Pa], as parsed.
     pub inflpres: f64,
 }
 
@@ -340,19 +340,19 @@ pub unsafe extern "C" fn gough_params_info(
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Default)]
 pub struct gough_mf_input_t {
-    /// Vertical load Fz \[N\] (positive: the tyre is loaded).
+    /// Vertical load Fz [N] (positive: the tyre is loaded).
     pub fz: f32,
-    /// Longitudinal slip κ \[-\] (positive: driving).
+    /// Longitudinal slip κ [-] (positive: driving).
     pub kappa: f32,
-    /// Slip angle α \[rad\] (ISO-W: positive gives a negative Fy on a tyre without offsets).
+    /// Slip angle α [rad] (ISO-W: positive gives a negative Fy on a tyre without offsets).
     pub alpha: f32,
-    /// Inclination (camber) angle γ \[rad\].
+    /// Inclination (camber) angle γ [rad].
     pub gamma: f32,
-    /// Turn slip φt \[1/m\] (used with use_mode xx2 only).
+    /// Turn slip φt [1/m] (used with use_mode xx2 only).
     pub phit: f32,
-    /// Forward speed of the wheel centre Vx \[m/s\].
+    /// Forward speed of the wheel centre Vx [m/s].
     pub vx: f32,
-    /// Inflation pressure p \[Pa\]; 0: the file's INFLPRES.
+    /// Inflation pressure p [Pa]; 0: the file's INFLPRES.
     pub p: f32,
 }
 
@@ -360,19 +360,19 @@ pub struct gough_mf_input_t {
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Default)]
 pub struct gough_mf_input_f64_t {
-    /// Vertical load Fz \[N\].
+    /// Vertical load Fz [N].
     pub fz: f64,
-    /// Longitudinal slip κ \[-\].
+    /// Longitudinal slip κ [-].
     pub kappa: f64,
-    /// Slip angle α \[rad\].
+    /// Slip angle α [rad].
     pub alpha: f64,
-    /// Inclination angle γ \[rad\].
+    /// Inclination angle γ [rad].
     pub gamma: f64,
-    /// Turn slip φt \[1/m\].
+    /// Turn slip φt [1/m].
     pub phit: f64,
-    /// Forward speed Vx \[m/s\].
+    /// Forward speed Vx [m/s].
     pub vx: f64,
-    /// Inflation pressure p \[Pa\]; 0: the file's INFLPRES.
+    /// Inflation pressure p [Pa]; 0: the file's INFLPRES.
     pub p: f64,
 }
 
@@ -381,35 +381,35 @@ pub struct gough_mf_input_f64_t {
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Default)]
 pub struct gough_mf_output_t {
-    /// Longitudinal force Fx \[N\].
+    /// Longitudinal force Fx [N].
     pub fx: f32,
-    /// Lateral force Fy \[N\].
+    /// Lateral force Fy [N].
     pub fy: f32,
-    /// Vertical load Fz \[N\] as used (clipped to FZMIN..FZMAX with limits on).
+    /// Vertical load Fz [N] as used (clipped to FZMIN..FZMAX with limits on).
     pub fz: f32,
-    /// Overturning moment Mx \[N m\].
+    /// Overturning moment Mx [N m].
     pub mx: f32,
-    /// Rolling resistance moment My \[N m\].
+    /// Rolling resistance moment My [N m].
     pub my: f32,
-    /// Self-aligning moment Mz \[N m\].
+    /// Self-aligning moment Mz [N m].
     pub mz: f32,
-    /// Longitudinal friction coefficient μx \[-\].
+    /// Longitudinal friction coefficient μx [-].
     pub mu_x: f32,
-    /// Lateral friction coefficient |μy| \[-\].
+    /// Lateral friction coefficient |μy| [-].
     pub mu_y: f32,
-    /// Longitudinal relaxation length σκ \[m\].
+    /// Longitudinal relaxation length σκ [m].
     pub sigma_x: f32,
-    /// Lateral relaxation length σα \[m\].
+    /// Lateral relaxation length σα [m].
     pub sigma_y: f32,
-    /// Longitudinal slip stiffness Kxκ \[N\].
+    /// Longitudinal slip stiffness Kxκ [N].
     pub k_xk: f32,
-    /// Cornering stiffness Kyα \[N/rad\].
+    /// Cornering stiffness Kyα [N/rad].
     pub k_ya: f32,
-    /// Pneumatic trail t \[m\].
+    /// Pneumatic trail t [m].
     pub t: f32,
-    /// Residual torque Mzr \[N m\].
+    /// Residual torque Mzr [N m].
     pub m_zr: f32,
-    /// The κ used \[-\] (after the limits).
+    /// The κ used [-] (after the limits).
     pub kappa: f32,
     /// Which limits clipped an input (`gough::mf::Flags` bits; 0: none).
     pub flags: u32,
@@ -419,35 +419,35 @@ pub struct gough_mf_output_t {
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Default)]
 pub struct gough_mf_output_f64_t {
-    /// Longitudinal force Fx \[N\].
+    /// Longitudinal force Fx [N].
     pub fx: f64,
-    /// Lateral force Fy \[N\].
+    /// Lateral force Fy [N].
     pub fy: f64,
-    /// Vertical load Fz \[N\] as used.
+    /// Vertical load Fz [N] as used.
     pub fz: f64,
-    /// Overturning moment Mx \[N m\].
+    /// Overturning moment Mx [N m].
     pub mx: f64,
-    /// Rolling resistance moment My \[N m\].
+    /// Rolling resistance moment My [N m].
     pub my: f64,
-    /// Self-aligning moment Mz \[N m\].
+    /// Self-aligning moment Mz [N m].
     pub mz: f64,
-    /// Longitudinal friction coefficient μx \[-\].
+    /// Longitudinal friction coefficient μx [-].
     pub mu_x: f64,
-    /// Lateral friction coefficient |μy| \[-\].
+    /// Lateral friction coefficient |μy| [-].
     pub mu_y: f64,
-    /// Longitudinal relaxation length σκ \[m\].
+    /// Longitudinal relaxation length σκ [m].
     pub sigma_x: f64,
-    /// Lateral relaxation length σα \[m\].
+    /// Lateral relaxation length σα [m].
     pub sigma_y: f64,
-    /// Longitudinal slip stiffness Kxκ \[N\].
+    /// Longitudinal slip stiffness Kxκ [N].
     pub k_xk: f64,
-    /// Cornering stiffness Kyα \[N/rad\].
+    /// Cornering stiffness Kyα [N/rad].
     pub k_ya: f64,
-    /// Pneumatic trail t \[m\].
+    /// Pneumatic trail t [m].
     pub t: f64,
-    /// Residual torque Mzr \[N m\].
+    /// Residual torque Mzr [N m].
     pub m_zr: f64,
-    /// The κ used \[-\].
+    /// The κ used [-].
     pub kappa: f64,
     /// Which limits clipped an input (`gough::mf::Flags` bits; 0: none).
     pub flags: u32,
@@ -587,27 +587,27 @@ pub const GOUGH_HAS_GAMMA: u32 = 64;
 pub struct gough_measurement_t {
     /// Wheel: 0 front left, 1 front right, 2 rear left, 3 rear right.
     pub wheel: u32,
-    /// Timestamp \[µs\], wrapping (only differences between a wheel's samples are used).
+    /// Timestamp [µs], wrapping (only differences between a wheel's samples are used).
     pub t_us: u32,
-    /// Vertical load Fz \[N\].
+    /// Vertical load Fz [N].
     pub fz: f32,
-    /// Measured lateral force Fy \[N\].
+    /// Measured lateral force Fy [N].
     pub fy: f32,
-    /// Measured aligning moment Mz \[N m\].
+    /// Measured aligning moment Mz [N m].
     pub mz: f32,
-    /// Measured longitudinal force Fx \[N\] (`GOUGH_HAS_FX`).
+    /// Measured longitudinal force Fx [N] (`GOUGH_HAS_FX`).
     pub fx: f32,
-    /// Forward speed of the wheel centre Vx \[m/s\] (`GOUGH_HAS_VX`).
+    /// Forward speed of the wheel centre Vx [m/s] (`GOUGH_HAS_VX`).
     pub vx: f32,
-    /// Wheel spin speed ω \[rad/s\] (`GOUGH_HAS_OMEGA`).
+    /// Wheel spin speed ω [rad/s] (`GOUGH_HAS_OMEGA`).
     pub omega: f32,
-    /// Steering angle δ \[rad\] (`GOUGH_HAS_DELTA`).
+    /// Steering angle δ [rad] (`GOUGH_HAS_DELTA`).
     pub delta: f32,
-    /// Slip angle α \[rad\] (`GOUGH_HAS_ALPHA`).
+    /// Slip angle α [rad] (`GOUGH_HAS_ALPHA`).
     pub alpha: f32,
-    /// Longitudinal slip κ \[-\] (`GOUGH_HAS_KAPPA`).
+    /// Longitudinal slip κ [-] (`GOUGH_HAS_KAPPA`).
     pub kappa: f32,
-    /// Inclination angle γ \[rad\] (`GOUGH_HAS_GAMMA`).
+    /// Inclination angle γ [rad] (`GOUGH_HAS_GAMMA`).
     pub gamma: f32,
     /// Which optional fields are present: `GOUGH_HAS_*` bits.
     pub present: u32,
@@ -617,11 +617,11 @@ pub struct gough_measurement_t {
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Default)]
 pub struct gough_forces_t {
-    /// Longitudinal force Fx \[N\].
+    /// Longitudinal force Fx [N].
     pub fx: f32,
-    /// Lateral force Fy \[N\].
+    /// Lateral force Fy [N].
     pub fy: f32,
-    /// Self-aligning moment Mz \[N m\].
+    /// Self-aligning moment Mz [N m].
     pub mz: f32,
     /// Which limits clipped an input (`gough::mf::Flags` bits).
     pub flags: u32,
@@ -642,10 +642,10 @@ pub const GOUGH_EST_NONE: u32 = 2;
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Default)]
 pub struct gough_estimate_t {
-    /// Road friction μ \[-\] on the tyre file's scale (1: the tyre's test surface as fitted,
+    /// Road friction μ [-] on the tyre file's scale (1: the tyre's test surface as fitted,
     /// λμ = 1); the prior in `GOUGH_STATE_FALLBACK`.
     pub mu: f32,
-    /// Standard deviation of μ \[-\].
+    /// Standard deviation of μ [-].
     pub sigma: f32,
     /// `GOUGH_STATE_*`.
     pub state: i32,
@@ -833,21 +833,21 @@ pub unsafe extern "C" fn gough_wheel_step(
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Default)]
 pub struct gough_sample_t {
-    /// Timestamp \[µs\], wrapping: only differences are used.
+    /// Timestamp [µs], wrapping: only differences are used.
     pub t_us: u32,
-    /// Vertical load Fz \[N\].
+    /// Vertical load Fz [N].
     pub fz: f32,
-    /// Measured lateral force Fy \[N\].
+    /// Measured lateral force Fy [N].
     pub fy: f32,
-    /// Measured aligning moment Mz \[N m\].
+    /// Measured aligning moment Mz [N m].
     pub mz: f32,
-    /// Measured longitudinal force Fx \[N\] (`GOUGH_HAS_FX`).
+    /// Measured longitudinal force Fx [N] (`GOUGH_HAS_FX`).
     pub fx: f32,
-    /// Longitudinal slip κ \[-\] (`GOUGH_HAS_KAPPA`).
+    /// Longitudinal slip κ [-] (`GOUGH_HAS_KAPPA`).
     pub kappa: f32,
-    /// Forward speed Vx \[m/s\] (`GOUGH_HAS_VX`).
+    /// Forward speed Vx [m/s] (`GOUGH_HAS_VX`).
     pub vx: f32,
-    /// Inclination angle γ \[rad\] (`GOUGH_HAS_GAMMA`).
+    /// Inclination angle γ [rad] (`GOUGH_HAS_GAMMA`).
     pub gamma: f32,
     /// `GOUGH_HAS_*` bits.
     pub present: u32,
@@ -965,11 +965,11 @@ pub const GOUGH_MAX_FRAMES: usize = 16;
 pub struct gough_settings_t {
     /// Clip inputs to the `.tir` ranges: 1 on, 0 off.
     pub limits: u32,
-    /// μ \[-\] reported in the fallback state.
+    /// μ [-] reported in the fallback state.
     pub fallback_mu: f32,
-    /// Estimator window \[samples\].
+    /// Estimator window [samples].
     pub window: u32,
-    /// Minimum utilisation |F|/(μ·Fz) \[-\].
+    /// Minimum utilisation |F|/(μ·Fz) [-].
     pub min_utilisation: f32,
 }
 
@@ -983,17 +983,17 @@ pub struct gough_msg_t {
     pub measurement: gough_measurement_t,
     /// `GOUGH_MSG_FORCES`, `GOUGH_MSG_ESTIMATE`: wheel 0..3 (FL, FR, RL, RR).
     pub wheel: u32,
-    /// `GOUGH_MSG_FORCES`, `GOUGH_MSG_ESTIMATE`: timestamp of the measurement \[µs\].
+    /// `GOUGH_MSG_FORCES`, `GOUGH_MSG_ESTIMATE`: timestamp of the measurement [µs].
     pub t_us: u32,
     /// `GOUGH_MSG_FORCES`: the forces (ISO-W, contact point; flags are 16 bits on the wire).
     pub forces: gough_forces_t,
     /// `GOUGH_MSG_ESTIMATE`: μ, σ, state (its `flags` are not on the wire: 0).
     pub estimate: gough_estimate_t,
-    /// `GOUGH_MSG_PARAM_BEGIN`: length of the `.tir` text \[bytes\].
+    /// `GOUGH_MSG_PARAM_BEGIN`: length of the `.tir` text [bytes].
     pub param_len: u32,
     /// `GOUGH_MSG_PARAM_BEGIN`, `GOUGH_MSG_PARAM_COMMIT`: CRC-32 of the text.
     pub param_hash: u32,
-    /// `GOUGH_MSG_PARAM_CHUNK`: where the chunk goes in the text \[bytes\].
+    /// `GOUGH_MSG_PARAM_CHUNK`: where the chunk goes in the text [bytes].
     pub param_offset: u32,
     /// `GOUGH_MSG_PARAM_CHUNK`: bytes in `chunk` (≤ `GOUGH_CHUNK_LEN`).
     pub chunk_len: u32,
@@ -1361,7 +1361,7 @@ pub unsafe extern "C" fn gough_rx_init(rx: *mut gough_rx_t) -> i32 {
     GOUGH_OK
 }
 
-/// Feeds one received frame at time `now_ms` \[ms\] (a message whose frames are more than 50 ms
+/// Feeds one received frame at time `now_ms` [ms] (a message whose frames are more than 50 ms
 /// apart is dropped). `*out` gets the message when this frame completes one, else
 /// `kind = GOUGH_MSG_NONE`. `GOUGH_E_PROTO`: the frame or the message was dropped (counted).
 #[no_mangle]
