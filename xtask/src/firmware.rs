@@ -11,7 +11,7 @@ fn fw_dir() -> PathBuf {
     root().join("firmware")
 }
 
-fn elf(bin: &str) -> PathBuf {
+pub fn elf(bin: &str) -> PathBuf {
     fw_dir()
         .join("target")
         .join(TARGET)
@@ -25,7 +25,7 @@ fn fw_cargo() -> Command {
     c
 }
 
-fn build_mps2() -> Result<(), String> {
+pub fn build_mps2() -> Result<(), String> {
     step("firmware: build every mps2-an386 binary (thumbv7em-none-eabihf, release)");
     run(fw_cargo().args(["build", "--release", "--bins"]))
 }

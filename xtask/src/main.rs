@@ -5,11 +5,18 @@
 //! - `test-all`: installs the embedded targets, builds the core for thumbv7em-none-eabihf and
 //!   thumbv6m-none-eabi, checks formatting and lints, runs every host test (core unit and
 //!   property tests, doc tests, the MFeval oracle, the CLI), builds the firmware and runs it
-//!   under QEMU (installing `qemu-system-arm` with apt-get when it is missing and we may).
+//!   under QEMU (installing `qemu-system-arm` with apt-get when it is missing and we may);
+//!   then the C API (`capi/`): header current, static library for the host and the devices,
+//!   the host C test, the C example firmware under QEMU against the Rust firmware (installing
+//!   `gcc-arm-none-eabi` and `libnewlib-arm-none-eabi` the same way).
 //! - `qemu-check`: only ensures QEMU is present.
+//! - `capi`: only the C API's steps of `test-all` (builds the firmware's `capi_ref` first).
+//! - `header [--check]`: writes `capi/include/gough.h` with cbindgen (or checks it is current).
 //! - `snapshot [--overwrite]`: runs the firmware selftest under QEMU and compares its output with
 //!   `firmware/golden/selftest.out` (or rewrites it).
+mod capi;
 mod firmware;
+mod header;
 
 use std::io::{BufRead, BufReader};
 use std::process::{Command, ExitCode, Stdio};
@@ -25,10 +32,14 @@ fn main() -> ExitCode {
     let result = match task.as_str() {
         "test-all" => test_all(),
         "qemu-check" => ensure_qemu(),
+        "header" => header::header(std::env::args().any(|a| a == "--check")),
+        "capi" => ensure_qemu()
+            .and_then(|()| firmware::build_mps2())
+            .and_then(|()| capi::test_all(&firmware::elf("capi_ref"), &mut 0)),
         "snapshot" => ensure_qemu()
             .and_then(|()| firmware::snapshot(std::env::args().any(|a| a == "--overwrite"))),
         _ => Err(format!(
-            "unknown task '{task}'; tasks: test-all, qemu-check, snapshot [--overwrite]"
+            "unknown task '{task}'; tasks: test-all, qemu-check, snapshot [--overwrite], header [--check], capi"
         )),
     };
     match result {
@@ -122,17 +133,21 @@ fn ensure_targets() -> Result<(), String> {
     }
 }
 
+/// Are we root (and may install packages)?
+fn is_root() -> bool {
+    Command::new("id")
+        .arg("-u")
+        .output()
+        .map(|o| o.stdout.starts_with(b"0"))
+        .unwrap_or(false)
+}
+
 fn ensure_qemu() -> Result<(), String> {
     step("qemu-system-arm");
     if have("qemu-system-arm") {
         return Ok(());
     }
-    let is_root = Command::new("id")
-        .arg("-u")
-        .output()
-        .map(|o| o.stdout.starts_with(b"0"))
-        .unwrap_or(false);
-    if is_root && have("apt-get") {
+    if is_root() && have("apt-get") {
         eprintln!("qemu-system-arm is missing: installing it with apt-get");
         let _ = run(Command::new("apt-get").arg("update").stdout(Stdio::null()));
         run(Command::new("apt-get").args([
@@ -185,12 +200,23 @@ fn test_all() -> Result<(), String> {
     ]))?;
     step("API docs build without warnings (broken or private intra-doc links; every feature)");
     run(cargo()
-        .args(["doc", "--workspace", "--no-deps", "--lib", "--all-features"])
+        // gough-capi's library is also named `gough` (libgough.a): rustdoc would write over the
+        // core's pages. Its documentation is capi/include/gough.h and docs/c-api.md.
+        .args([
+            "doc",
+            "--workspace",
+            "--exclude",
+            "gough-capi",
+            "--no-deps",
+            "--lib",
+            "--all-features",
+        ])
         .env("RUSTDOCFLAGS", "-D warnings"))?;
     step("host tests: core unit + property + doc tests, MFeval oracle, CLI");
     cargo_test(&["--workspace"], &mut passed, &mut failed)?;
     ensure_qemu()?;
     firmware::test_all(&mut passed)?;
+    capi::test_all(&firmware::elf("capi_ref"), &mut passed)?;
     println!("\ntest-all: {passed} passed, {failed} failed");
     Ok(())
 }

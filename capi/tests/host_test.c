@@ -1,0 +1,405 @@
+/* The C API on the host (issue 41), compiled with `cc` and run by `cargo xtask test-all`:
+ *  1. every MFeval 4.0 oracle sweep in host-tests/data/oracle through gough_mf_eval_f64 and
+ *     gough_mf_eval, within the budgets of host-tests/src/tolerance.rs (f64: 1e-6 FNOMIN for
+ *     forces, times R0 for moments; f32: 1e-4 FNOMIN), the columns and deliberate differences
+ *     of host-tests/tests/oracle.rs (|muy| compared; NaN oracle values counted, not compared);
+ *  2. bad .tir text, NaN inputs, null pointers, unknown use_mode, uninitialised storage:
+ *     the documented error codes;
+ *  3. the protocol: a measurement through gough_msg_encode and gough_rx_feed comes back equal;
+ *     a corrupted frame is dropped.
+ * Usage: host_test ROOT (the repository). Exit 0 = pass. */
+#define _POSIX_C_SOURCE 200809L
+#include "gough.h"
+
+#include <dirent.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+static int failures = 0;
+
+#define CHECK(cond, ...)                                                                         \
+    do {                                                                                         \
+        if (!(cond)) {                                                                           \
+            failures++;                                                                          \
+            fprintf(stderr, "FAIL %s:%d: ", __FILE__, __LINE__);                                 \
+            fprintf(stderr, __VA_ARGS__);                                                        \
+            fprintf(stderr, "\n");                                                               \
+        }                                                                                        \
+    } while (0)
+
+static char *slurp(const char *path, size_t *len) {
+    FILE *f = fopen(path, "rb");
+    if (!f) return NULL;
+    fseek(f, 0, SEEK_END);
+    long n = ftell(f);
+    fseek(f, 0, SEEK_SET);
+    char *buf = malloc((size_t)n + 1);
+    if (buf && fread(buf, 1, (size_t)n, f) != (size_t)n) {
+        free(buf);
+        buf = NULL;
+    }
+    fclose(f);
+    if (buf) {
+        buf[n] = 0;
+        *len = (size_t)n;
+    }
+    return buf;
+}
+
+/* Columns compared, as host-tests/tests/oracle.rs: 0 force, 1 moment, 2 mu, 3 length. */
+enum { FORCE, MOMENT, MU, LENGTH };
+static const struct {
+    const char *name;
+    int unit;
+} COLUMNS[] = {
+    {"out_Fx", FORCE},     {"out_Fy", FORCE},  {"out_Mx", MOMENT},    {"out_My", MOMENT},
+    {"out_Mz", MOMENT},    {"out_kappa", MU},  {"out_t", LENGTH},     {"out_mux", MU},
+    {"out_muy", MU},       {"out_Mzr", MOMENT}, {"out_Kya", FORCE},   {"out_Kxk", FORCE},
+    {"out_sigmax", LENGTH}, {"out_sigmay", LENGTH},
+};
+#define NCOL (sizeof COLUMNS / sizeof COLUMNS[0])
+
+static double ours64(const gough_mf_output_f64_t *o, int k) {
+    const double v[] = {o->fx, o->fy, o->mx, o->my, o->mz, o->kappa, o->t,
+                        o->mu_x, o->mu_y, o->m_zr, o->k_ya, o->k_xk, o->sigma_x, o->sigma_y};
+    return v[k];
+}
+
+static double ours32(const gough_mf_output_t *o, int k) {
+    const float v[] = {o->fx, o->fy, o->mx, o->my, o->mz, o->kappa, o->t,
+                       o->mu_x, o->mu_y, o->m_zr, o->k_ya, o->k_xk, o->sigma_x, o->sigma_y};
+    return (double)v[k];
+}
+
+static long rows_total = 0, nan_total = 0, files_total = 0;
+
+/* One oracle file: `stem__sweep__modeNNN.csv`. */
+static void sweep(const char *root, const char *fname) {
+    char stem[256], path[1024];
+    const char *sep = strstr(fname, "__");
+    const char *mode_s = strstr(fname, "__mode");
+    if (!sep || !mode_s) return;
+    size_t n = (size_t)(sep - fname);
+    memcpy(stem, fname, n);
+    stem[n] = 0;
+    char *m40 = strstr(stem, "_mfeval40");
+    if (m40 && m40[9] == 0) *m40 = 0;
+    unsigned mode = (unsigned)atoi(mode_s + 6);
+
+    snprintf(path, sizeof path, "%s/host-tests/data/tyres/%s.tir", root, stem);
+    size_t len = 0;
+    char *text = slurp(path, &len);
+    CHECK(text != NULL, "%s: cannot read", path);
+    if (!text) return;
+    static gough_params_t p;
+    uint32_t line = 99;
+    int32_t rc = gough_tir_parse(text, len, &p, &line);
+    free(text);
+    CHECK(rc == GOUGH_OK && line == 0, "%s: parse %d line %u", path, rc, line);
+    if (rc) return;
+    gough_params_info_t info;
+    CHECK(gough_params_info(&p, &info) == GOUGH_OK, "info");
+
+    snprintf(path, sizeof path, "%s/host-tests/data/oracle/%s", root, fname);
+    char *csv = slurp(path, &len);
+    CHECK(csv != NULL, "%s: cannot read", path);
+    if (!csv) return;
+    /* Header: find the input columns and the compared ones. */
+    char *save = NULL;
+    char *hdr = strtok_r(csv, "\n", &save);
+    int in_idx[7], col_idx[NCOL];
+    const char *in_names[7] = {"in_Fz", "in_kappa", "in_alpha", "in_gamma",
+                               "in_phit", "in_Vx", "in_P"};
+    for (int i = 0; i < 7; i++) in_idx[i] = -1;
+    for (size_t k = 0; k < NCOL; k++) col_idx[k] = -1;
+    {
+        int c = 0;
+        char *s2 = NULL;
+        for (char *tok = strtok_r(hdr, ",\r", &s2); tok; tok = strtok_r(NULL, ",\r", &s2), c++) {
+            for (int i = 0; i < 7; i++)
+                if (!strcmp(tok, in_names[i])) in_idx[i] = c;
+            for (size_t k = 0; k < NCOL; k++)
+                if (!strcmp(tok, COLUMNS[k].name)) col_idx[k] = c;
+        }
+    }
+    for (int i = 0; i < 7; i++) CHECK(in_idx[i] >= 0, "%s: no column %s", fname, in_names[i]);
+    for (size_t k = 0; k < NCOL; k++)
+        CHECK(col_idx[k] >= 0, "%s: no column %s", fname, COLUMNS[k].name);
+    double worst64 = 0, worst32 = 0;
+    long rows = 0;
+    for (char *row = strtok_r(NULL, "\n", &save); row; row = strtok_r(NULL, "\n", &save)) {
+        double v[64];
+        int c = 0;
+        char *p2 = row;
+        while (c < 64) {
+            char *end;
+            v[c++] = strtod(p2, &end);
+            if (*end != ',') break;
+            p2 = end + 1;
+        }
+        gough_mf_input_f64_t in64 = {v[in_idx[0]], v[in_idx[1]], v[in_idx[2]], v[in_idx[3]],
+                                     v[in_idx[4]], v[in_idx[5]], v[in_idx[6]]};
+        gough_mf_input_t in32 = {(float)in64.fz,   (float)in64.kappa, (float)in64.alpha,
+                                 (float)in64.gamma, (float)in64.phit, (float)in64.vx,
+                                 (float)in64.p};
+        gough_mf_output_f64_t o64;
+        gough_mf_output_t o32;
+        int32_t r64 = gough_mf_eval_f64(&p, &in64, mode, &o64);
+        int32_t r32 = gough_mf_eval(&p, &in32, mode, &o32);
+        CHECK(r64 == GOUGH_OK && r32 == GOUGH_OK, "%s row %ld: %d %d", fname, rows, r64, r32);
+        if (r64 || r32) continue;
+        for (size_t k = 0; k < NCOL; k++) {
+            double want = v[col_idx[k]];
+            if (!isfinite(want)) {
+                nan_total++;
+                continue;
+            }
+            double g64 = ours64(&o64, (int)k), g32 = ours32(&o32, (int)k);
+            if (!strcmp(COLUMNS[k].name, "out_muy")) {
+                want = fabs(want);
+                g64 = fabs(g64);
+                g32 = fabs(g32);
+            }
+            double f64tol = 1e-6 * info.fnomin, f32tol = 1e-4 * info.fnomin;
+            double scale = 1.0;
+            switch (COLUMNS[k].unit) {
+            case MOMENT: scale = info.unloaded_radius; break;
+            case MU: scale = 1.0 / info.fnomin; break;
+            case LENGTH: scale = info.unloaded_radius / info.fnomin; break;
+            default: break;
+            }
+            double e64 = fabs(g64 - want), e32 = fabs(g32 - want);
+            CHECK(e64 <= f64tol * scale, "%s row %ld %s f64: ours %.9e oracle %.9e", fname, rows,
+                  COLUMNS[k].name, g64, want);
+            CHECK(e32 <= f32tol * scale, "%s row %ld %s f32: ours %.9e oracle %.9e", fname, rows,
+                  COLUMNS[k].name, g32, want);
+            if (e64 / (f64tol * scale) > worst64) worst64 = e64 / (f64tol * scale);
+            if (e32 / (f32tol * scale) > worst32) worst32 = e32 / (f32tol * scale);
+        }
+        rows++;
+    }
+    free(csv);
+    CHECK(rows > 0, "%s: no rows", fname);
+    rows_total += rows;
+    files_total++;
+    printf("%s: %ld rows; worst error / budget: f64 %.3f, f32 %.3f\n", fname, rows, worst64,
+           worst32);
+}
+
+static int cmp(const void *a, const void *b) {
+    return strcmp(*(char *const *)a, *(char *const *)b);
+}
+
+static void errors(const char *root) {
+    char path[1024];
+    size_t len = 0;
+    snprintf(path, sizeof path, "%s/host-tests/data/tyres/MagicFormula61_Parameters.tir", root);
+    char *text = slurp(path, &len);
+    CHECK(text != NULL, "%s", path);
+    if (!text) return;
+    static gough_params_t p, bad;
+    uint32_t line = 0;
+    CHECK(gough_tir_parse(text, len, &p, &line) == GOUGH_OK, "good tir");
+
+    /* Bad .tir text: the parse error and its line; the storage stays unusable. */
+    const char *bad_text = "[MODEL]\nFITTYP = 61\nLONGVL = not-a-number\n";
+    line = 0;
+    CHECK(gough_tir_parse(bad_text, strlen(bad_text), &bad, &line) == GOUGH_E_PARSE,
+          "bad text parses");
+    CHECK(line == 3, "bad text: line %u, want 3", line);
+    gough_mf_input_t in = {4000.0f, 0.05f, 0.04f, 0.0f, 0.0f, 16.6f, 0.0f};
+    gough_mf_output_t out;
+    CHECK(gough_mf_eval(&bad, &in, 111, &out) == GOUGH_E_UNINIT, "eval on a failed parse");
+    const char *empty = "";
+    CHECK(gough_tir_parse(empty, 0, &bad, NULL) == GOUGH_E_PARSE, "empty text");
+    const char binary[] = {'[', 'M', '\n', (char)0xff, (char)0xfe, 0};
+    line = 0;
+    CHECK(gough_tir_parse(binary, 5, &bad, &line) == GOUGH_E_PARSE && line == 2,
+          "non-UTF-8 text: line %u", line);
+    /* Truncated good text: an error, not a crash. */
+    CHECK(gough_tir_parse(text, len / 3, &bad, &line) == GOUGH_E_PARSE, "truncated text");
+
+    /* NaN and infinite inputs. */
+    gough_mf_input_t nan_in = in;
+    nan_in.alpha = NAN;
+    CHECK(gough_mf_eval(&p, &nan_in, 111, &out) == GOUGH_E_NONFINITE, "NaN alpha (f32)");
+    nan_in = in;
+    nan_in.fz = INFINITY;
+    CHECK(gough_mf_eval(&p, &nan_in, 111, &out) == GOUGH_E_NONFINITE, "inf Fz (f32)");
+    gough_mf_input_f64_t in64 = {4000.0, 0.05, 0.04, 0.0, 0.0, 16.6, 0.0};
+    gough_mf_output_f64_t out64;
+    gough_mf_input_f64_t nan64 = in64;
+    nan64.kappa = NAN;
+    CHECK(gough_mf_eval_f64(&p, &nan64, 211, &out64) == GOUGH_E_NONFINITE, "NaN kappa (f64)");
+    CHECK(gough_mf_eval_f64(&p, &in64, 111, &out64) == GOUGH_OK && isfinite(out64.fy), "f64 ok");
+    CHECK(gough_mf_eval(&p, &in, 111, &out) == GOUGH_OK && isfinite(out.fy), "f32 ok");
+    CHECK(fabs((double)out.fy - out64.fy) < 0.4, "f32 %g vs f64 %g", (double)out.fy, out64.fy);
+
+    /* Unknown use modes. */
+    CHECK(gough_mf_eval(&p, &in, 0, &out) == GOUGH_E_ARG, "use_mode 0");
+    CHECK(gough_mf_eval(&p, &in, 311, &out) == GOUGH_E_ARG, "use_mode 311");
+    CHECK(gough_mf_eval(&p, &in, 70111, &out) == GOUGH_E_ARG, "use_mode 70111");
+
+    /* Null pointers, one argument at a time. */
+    CHECK(gough_tir_parse(NULL, len, &bad, &line) == GOUGH_E_NULL, "null text");
+    CHECK(gough_tir_parse(text, len, NULL, &line) == GOUGH_E_NULL, "null params");
+    CHECK(gough_mf_eval(NULL, &in, 111, &out) == GOUGH_E_NULL, "null params");
+    CHECK(gough_mf_eval(&p, NULL, 111, &out) == GOUGH_E_NULL, "null input");
+    CHECK(gough_mf_eval(&p, &in, 111, NULL) == GOUGH_E_NULL, "null output");
+    CHECK(gough_mf_eval_f64(NULL, &in64, 111, &out64) == GOUGH_E_NULL, "null params f64");
+    CHECK(gough_mf_eval_f64(&p, NULL, 111, &out64) == GOUGH_E_NULL, "null input f64");
+    CHECK(gough_mf_eval_f64(&p, &in64, 111, NULL) == GOUGH_E_NULL, "null output f64");
+    CHECK(gough_params_info(NULL, NULL) == GOUGH_E_NULL, "null info");
+    static gough_table_t table;
+    static gough_wheel_t wheel, wheel0;
+    static gough_estimator_t est, est0;
+    static gough_rx_t rx, rx0;
+    CHECK(gough_table_build(NULL, &table) == GOUGH_E_NULL, "null table params");
+    CHECK(gough_table_build(&p, NULL) == GOUGH_E_NULL, "null table");
+    CHECK(gough_wheel_init(NULL, &p, NULL) == GOUGH_E_NULL, "null wheel");
+    CHECK(gough_wheel_init(&wheel, NULL, NULL) == GOUGH_E_NULL, "null wheel params");
+    CHECK(gough_wheel_init(&wheel, &p, &table) == GOUGH_E_UNINIT, "unbuilt table");
+    CHECK(gough_estimator_init(NULL, &p) == GOUGH_E_NULL, "null estimator");
+    CHECK(gough_estimator_init(&est, NULL) == GOUGH_E_NULL, "null estimator params");
+    CHECK(gough_rx_init(NULL) == GOUGH_E_NULL, "null rx");
+
+    /* The wheel: forces and estimate; errors. */
+    CHECK(gough_table_build(&p, &table) == GOUGH_OK, "table");
+    CHECK(gough_wheel_init(&wheel, &p, &table) == GOUGH_OK, "wheel");
+    gough_measurement_t m = {0};
+    m.wheel = 1;
+    m.t_us = 1000;
+    m.fz = 4000.0f;
+    m.fy = -1500.0f;
+    m.mz = -40.0f;
+    m.vx = 20.0f;
+    m.alpha = 0.03f;
+    m.present = GOUGH_HAS_VX | GOUGH_HAS_ALPHA;
+    gough_forces_t f;
+    gough_estimate_t e;
+    CHECK(gough_wheel_step(&wheel, &m, &f, &e) == GOUGH_OK && f.fy < 0.0f && isfinite(e.mu),
+          "wheel step: Fy %g mu %g", (double)f.fy, (double)e.mu);
+    CHECK(gough_wheel_step(NULL, &m, &f, &e) == GOUGH_E_NULL, "null wheel step");
+    CHECK(gough_wheel_step(&wheel, NULL, &f, &e) == GOUGH_E_NULL, "null measurement");
+    CHECK(gough_wheel_step(&wheel, &m, NULL, &e) == GOUGH_E_NULL, "null forces");
+    CHECK(gough_wheel_step(&wheel, &m, &f, NULL) == GOUGH_E_NULL, "null estimate");
+    CHECK(gough_wheel_step(&wheel0, &m, &f, &e) == GOUGH_E_UNINIT, "uninitialised wheel");
+    gough_measurement_t mn = m;
+    mn.fy = NAN;
+    CHECK(gough_wheel_step(&wheel, &mn, &f, &e) == GOUGH_E_NONFINITE, "NaN Fy");
+    mn = m;
+    mn.alpha = INFINITY;
+    CHECK(gough_wheel_step(&wheel, &mn, &f, &e) == GOUGH_E_NONFINITE, "inf alpha");
+    mn = m;
+    mn.alpha = NAN;
+    mn.present = GOUGH_HAS_VX; /* an absent field may hold anything */
+    mn.t_us = 2000;
+    CHECK(gough_wheel_step(&wheel, &mn, &f, &e) == GOUGH_E_NOSLIP && f.fx == 0.0f,
+          "no slip");
+    mn = m;
+    mn.wheel = 4;
+    CHECK(gough_wheel_step(&wheel, &mn, &f, &e) == GOUGH_E_ARG, "wheel 4");
+    CHECK(gough_wheel_init(&wheel0, &p, NULL) == GOUGH_OK, "wheel without estimator");
+    CHECK(gough_wheel_step(&wheel0, &m, &f, &e) == GOUGH_OK && (e.flags & GOUGH_EST_NONE) &&
+              e.state == GOUGH_STATE_FALLBACK,
+          "no estimator: flags %u", e.flags);
+
+    /* The estimator alone. */
+    CHECK(gough_estimator_init(&est, &p) == GOUGH_OK, "estimator");
+    gough_sample_t s = {1000, 4000.0f, -1500.0f, -40.0f, 0.0f, 0.0f, 20.0f, 0.0f,
+                        GOUGH_HAS_VX};
+    CHECK(gough_estimator_update(&est, &s, &e) == GOUGH_OK && e.state == GOUGH_STATE_FALLBACK,
+          "first sample: state %d", e.state);
+    CHECK(gough_estimator_update(&est0, &s, &e) == GOUGH_E_UNINIT, "uninitialised estimator");
+    CHECK(gough_estimator_update(NULL, &s, &e) == GOUGH_E_NULL, "null estimator update");
+    CHECK(gough_estimator_update(&est, NULL, &e) == GOUGH_E_NULL, "null sample");
+    CHECK(gough_estimator_update(&est, &s, NULL) == GOUGH_E_NULL, "null estimate");
+    s.mz = NAN;
+    CHECK(gough_estimator_update(&est, &s, &e) == GOUGH_E_NONFINITE, "NaN Mz");
+
+    /* The protocol. */
+    gough_msg_t msg, got;
+    memset(&msg, 0, sizeof msg);
+    msg.kind = GOUGH_MSG_MEASUREMENT;
+    msg.measurement = m;
+    gough_frame_t frames[GOUGH_MAX_FRAMES];
+    size_t nf = 0;
+    CHECK(gough_msg_encode(&msg, 7, frames, GOUGH_MAX_FRAMES, &nf) == GOUGH_OK && nf > 1,
+          "encode: %zu frames", nf);
+    CHECK(frames[0].id == 0x300, "measurement id 0x%x", frames[0].id);
+    size_t nf2 = 0;
+    CHECK(gough_msg_encode(&msg, 7, frames, 1, &nf2) == GOUGH_E_BUFFER && nf2 == nf,
+          "encode into 1 frame");
+    CHECK(gough_msg_encode(NULL, 7, frames, 4, &nf2) == GOUGH_E_NULL, "null msg");
+    CHECK(gough_msg_encode(&msg, 7, NULL, 4, &nf2) == GOUGH_E_NULL, "null frames");
+    CHECK(gough_msg_encode(&msg, 7, frames, 4, NULL) == GOUGH_E_NULL, "null count");
+    gough_msg_t badmsg = msg;
+    badmsg.kind = 99;
+    CHECK(gough_msg_encode(&badmsg, 7, frames, GOUGH_MAX_FRAMES, &nf2) == GOUGH_E_ARG,
+          "unknown kind");
+    badmsg = msg;
+    badmsg.measurement.fz = NAN;
+    CHECK(gough_msg_encode(&badmsg, 7, frames, GOUGH_MAX_FRAMES, &nf2) == GOUGH_E_NONFINITE,
+          "NaN in a message");
+    CHECK(gough_msg_encode(&msg, 7, frames, GOUGH_MAX_FRAMES, &nf) == GOUGH_OK, "encode");
+    CHECK(gough_rx_init(&rx) == GOUGH_OK, "rx");
+    int done = 0;
+    for (size_t i = 0; i < nf; i++) {
+        int32_t rc = gough_rx_feed(&rx, &frames[i], 0, &got);
+        CHECK(rc == GOUGH_OK, "feed frame %zu: %d", i, rc);
+        if (got.kind != GOUGH_MSG_NONE) done++;
+    }
+    CHECK(done == 1 && got.kind == GOUGH_MSG_MEASUREMENT, "one message back: %d", done);
+    CHECK(!memcmp(&got.measurement, &m, sizeof m), "measurement round trip");
+    CHECK(gough_rx_feed(&rx0, &frames[0], 0, &got) == GOUGH_E_UNINIT, "uninitialised rx");
+    CHECK(gough_rx_feed(&rx, NULL, 0, &got) == GOUGH_E_NULL, "null frame");
+    CHECK(gough_rx_feed(&rx, &frames[0], 0, NULL) == GOUGH_E_NULL, "null message out");
+    /* A corrupted message: dropped at its last frame (CRC). */
+    CHECK(gough_msg_encode(&msg, 8, frames, GOUGH_MAX_FRAMES, &nf) == GOUGH_OK, "encode");
+    frames[1].data[3] ^= 0x40;
+    int32_t last = GOUGH_OK;
+    for (size_t i = 0; i < nf; i++) last = gough_rx_feed(&rx, &frames[i], 1, &got);
+    CHECK(last == GOUGH_E_PROTO && got.kind == GOUGH_MSG_NONE, "corrupted: %d", last);
+    gough_frame_t empty_frame = {0x300, 0, {0}};
+    CHECK(gough_rx_feed(&rx, &empty_frame, 2, &got) == GOUGH_E_ARG, "empty frame");
+    free(text);
+    printf("errors, null pointers, NaN inputs, wheel, estimator and protocol checked\n");
+}
+
+int main(int argc, char **argv) {
+    if (argc < 2) {
+        fprintf(stderr, "usage: %s ROOT\n", argv[0]);
+        return 2;
+    }
+    const char *root = argv[1];
+    printf("sizes: params %d, table %d, wheel %d, estimator %d, rx %d bytes\n",
+           GOUGH_PARAMS_SIZE, GOUGH_TABLE_SIZE, GOUGH_WHEEL_SIZE, GOUGH_ESTIMATOR_SIZE,
+           GOUGH_RX_SIZE);
+    char dirpath[1024];
+    snprintf(dirpath, sizeof dirpath, "%s/host-tests/data/oracle", root);
+    DIR *d = opendir(dirpath);
+    CHECK(d != NULL, "%s", dirpath);
+    char *names[512];
+    int n = 0;
+    if (d) {
+        struct dirent *de;
+        while ((de = readdir(d)) && n < 512) {
+            size_t l = strlen(de->d_name);
+            if (l > 4 && !strcmp(de->d_name + l - 4, ".csv")) names[n++] = strdup(de->d_name);
+        }
+        closedir(d);
+    }
+    qsort(names, (size_t)n, sizeof names[0], cmp);
+    for (int i = 0; i < n; i++) {
+        sweep(root, names[i]);
+        free(names[i]);
+    }
+    CHECK(files_total >= 70, "oracle files: %ld", files_total);
+    errors(root);
+    printf("c host test: %ld oracle files, %ld rows through gough_mf_eval_f64 and gough_mf_eval "
+           "(%ld NaN oracle values not compared); %d failures\n",
+           files_total, rows_total, nan_total, failures);
+    return failures ? 1 : 0;
+}
