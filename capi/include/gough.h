@@ -85,7 +85,7 @@
 /**
  * Bytes of a `gough_estimator_t` (one wheel's bank estimator, `gough::mu::bank::Bank`).
  */
-#define GOUGH_ESTIMATOR_SIZE 1792
+#define GOUGH_ESTIMATOR_SIZE 1536
 
 /**
  * Bytes of a `gough_rx_t` (a reassembler of one CAN identifier's messages).

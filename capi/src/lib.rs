@@ -84,7 +84,7 @@ pub const GOUGH_TABLE_SIZE: usize = 128704;
 /// Bytes of a `gough_wheel_t` (one wheel's transient filter, estimator and clock).
 pub const GOUGH_WHEEL_SIZE: usize = 512;
 /// Bytes of a `gough_estimator_t` (one wheel's bank estimator, `gough::mu::bank::Bank`).
-pub const GOUGH_ESTIMATOR_SIZE: usize = 1792;
+pub const GOUGH_ESTIMATOR_SIZE: usize = 1536;
 /// Bytes of a `gough_rx_t` (a reassembler of one CAN identifier's messages).
 pub const GOUGH_RX_SIZE: usize = 256;
 
