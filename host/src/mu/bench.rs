@@ -596,7 +596,8 @@ pub struct Case {
     pub road: String,
 }
 
-/// The suite: every manoeuvre on μ = 1.0, 0.7, 0.5, 0.3, 0.1, plus surface changes.
+/// The suite: every manoeuvre on μ = 1.0, 0.7, 0.5, 0.3, 0.1, plus surface changes, plus the
+/// straight ABS stop (the `abs-split` manoeuvre on one surface) on each μ.
 pub fn suite() -> Vec<Case> {
     let mut v = Vec::new();
     for m in [
@@ -629,6 +630,13 @@ pub fn suite() -> Vec<Case> {
         manoeuvre: "constant-radius",
         road: "mu=0.9+patch=0.3@-5..5".into(),
     });
+    // Straight ABS stops (the μ-split stop's braking on one surface): μ from Fx against κ.
+    for mu in ["1.0", "0.7", "0.5", "0.3", "0.1"] {
+        v.push(Case {
+            manoeuvre: "abs-split",
+            road: format!("mu={mu}"),
+        });
+    }
     v
 }
 
