@@ -1073,21 +1073,22 @@ pub fn plot_mu(
 }
 
 /// The Gough plot: the model's Fy–Mz family for μ = 0.1…1.0 at the wheel's mean load, and the
-/// wheel's simulated trajectory.
+/// wheel's simulated trajectory, as one [`crate::plot::gough`] panel.
 pub fn plot_gough(p: &Params<f64>, log: &Log, w: usize, path: &Path) -> Result<(), String> {
+    use crate::plot::{self, GoughSeries};
     use gough::mf::{self, Input, Options};
     use plotters::prelude::*;
-    crate::plot::font()?;
-    let e = |x: &dyn std::fmt::Display| format!("{}: {x}", path.display());
+    plot::font()?;
+    let e = plot::err(path);
     let fz_mean =
         log.records.iter().map(|r| r.wheels[w].fz).sum::<f64>() / log.records.len().max(1) as f64;
     let mu0 = log.mu_y0;
     let mut curves = Vec::new();
-    for mu in [0.1, 0.3, 0.5, 0.7, 1.0] {
+    for (k, mu) in [0.1, 0.3, 0.5, 0.7, 1.0].into_iter().enumerate() {
         let mut q = p.clone();
         q.lmux = mu / mu0;
         q.lmuy = mu / mu0;
-        let pts: Vec<(f64, f64)> = (-120..=120)
+        let points = (-120..=120)
             .filter_map(|i| {
                 let a = i as f64 * 0.0025;
                 mf::eval::<f64, Libm>(
@@ -1107,59 +1108,35 @@ pub fn plot_gough(p: &Params<f64>, log: &Log, w: usize, path: &Path) -> Result<(
                 .map(|o| (o.mz, o.fy))
             })
             .collect();
-        curves.push((mu, pts));
-    }
-    let (mut mz_lo, mut mz_hi, mut fy_lo, mut fy_hi) = (0.0f64, 0.0f64, 0.0f64, 0.0f64);
-    for (_, pts) in &curves {
-        for &(m, f) in pts {
-            mz_lo = mz_lo.min(m);
-            mz_hi = mz_hi.max(m);
-            fy_lo = fy_lo.min(f);
-            fy_hi = fy_hi.max(f);
-        }
-    }
-    let root = BitMapBackend::new(path, (700, 600)).into_drawing_area();
-    root.fill(&WHITE).map_err(|x| e(&x))?;
-    let mut ch = ChartBuilder::on(&root)
-        .caption(
-            format!("Gough plot: model family at Fz = {fz_mean:.0} N, and the wheel's trajectory"),
-            ("sans-serif", 16),
-        )
-        .margin(10)
-        .x_label_area_size(35)
-        .y_label_area_size(55)
-        .build_cartesian_2d(mz_lo * 1.1..mz_hi * 1.1, fy_lo * 1.1..fy_hi * 1.1)
-        .map_err(|x| e(&x))?;
-    ch.configure_mesh()
-        .x_desc("Mz [N·m]")
-        .y_desc("Fy [N]")
-        .label_style(("sans-serif", 12))
-        .draw()
-        .map_err(|x| e(&x))?;
-    for (k, (mu, pts)) in curves.iter().enumerate() {
-        let c = Palette99::pick(k);
-        ch.draw_series(LineSeries::new(pts.iter().copied(), c.stroke_width(2)))
-            .map_err(|x| e(&x))?
-            .label(format!("μ = {mu}"))
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 15, y)], Palette99::pick(k)));
+        let c = Palette99::pick(k).to_rgba();
+        curves.push(GoughSeries {
+            label: format!("μ = {mu}"),
+            colour: RGBColor(c.0, c.1, c.2),
+            points,
+        });
     }
     let step = (log.records.len() / 3000).max(1);
-    ch.draw_series(
-        log.records
+    let trajectory = GoughSeries {
+        label: "simulated wheel".into(),
+        colour: BLACK,
+        points: log
+            .records
             .iter()
             .step_by(step)
-            .map(|r| Circle::new((r.wheels[w].mz, r.wheels[w].fy), 1, BLACK.filled())),
+            .map(|r| (r.wheels[w].mz, r.wheels[w].fy))
+            .collect(),
+    };
+    let root = BitMapBackend::new(path, (700, 600)).into_drawing_area();
+    root.fill(&WHITE).map_err(&e)?;
+    plot::gough(
+        &root,
+        &format!("Gough plot: model family at Fz = {fz_mean:.0} N, and the wheel's trajectory"),
+        &curves,
+        &[trajectory],
+        None,
     )
-    .map_err(|x| e(&x))?
-    .label("simulated wheel")
-    .legend(|(x, y)| Circle::new((x + 7, y), 3, BLACK.filled()));
-    ch.configure_series_labels()
-        .background_style(WHITE.mix(0.8))
-        .border_style(BLACK)
-        .label_font(("sans-serif", 12))
-        .draw()
-        .map_err(|x| e(&x))?;
-    root.present().map_err(|x| e(&x))?;
+    .map_err(&e)?;
+    root.present().map_err(&e)?;
     Ok(())
 }
 

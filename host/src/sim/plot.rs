@@ -4,7 +4,7 @@
 //! Fonts, ranges and labels: [`crate::plot`].
 
 use super::{Log, Record, WHEELS};
-use crate::plot::{err, font, range, tick};
+use crate::plot::{self, err, font, range, tick, GoughSeries};
 use plotters::prelude::*;
 use std::path::Path;
 
@@ -128,7 +128,8 @@ pub fn signals(log: &Log, title: &str, path: &Path, (w, h): (u32, u32)) -> Resul
     Ok(())
 }
 
-/// Draws the Gough plot (Fy against Mz, the paper's figure) of each wheel into `path`.
+/// Draws the Gough plot (Fy against Mz, the paper's figure) of each wheel into `path`: one
+/// [`crate::plot::gough`] panel per wheel, on shared axes.
 pub fn gough(log: &Log, title: &str, path: &Path, (w, h): (u32, u32)) -> Result<(), String> {
     font()?;
     let stride = log.records.len().div_ceil(MAX_POINTS).max(1);
@@ -138,38 +139,27 @@ pub fn gough(log: &Log, title: &str, path: &Path, (w, h): (u32, u32)) -> Result<
     root.fill(&WHITE).map_err(&e)?;
     let root = root.titled(title, ("sans-serif", 22)).map_err(&e)?;
     let areas = root.split_evenly((2, 2));
-    let (mlo, mhi) = range(recs.iter().flat_map(|r| r.wheels.iter().map(|w| w.mz)));
-    let (flo, fhi) = range(
-        recs.iter()
-            .flat_map(|r| r.wheels.iter().map(|w| w.fy / 1e3)),
+    let ranges = (
+        range(recs.iter().flat_map(|r| r.wheels.iter().map(|w| w.mz))),
+        range(recs.iter().flat_map(|r| r.wheels.iter().map(|w| w.fy))),
     );
     for (i, area) in areas.iter().enumerate() {
-        let mut chart = ChartBuilder::on(area)
-            .caption(format!("{}: Fy against Mz", WHEELS[i]), ("sans-serif", 15))
-            .margin(8)
-            .x_label_area_size(34)
-            .y_label_area_size(52)
-            .build_cartesian_2d(mlo..mhi, flo..fhi)
-            .map_err(&e)?;
-        chart
-            .configure_mesh()
-            .x_labels(5)
-            .y_labels(5)
-            .x_label_formatter(&|v| tick(*v, mhi - mlo))
-            .y_label_formatter(&|v| tick(*v, fhi - flo))
-            .x_desc("Mz [N·m]")
-            .y_desc("Fy [kN]")
-            .label_style(("sans-serif", 11))
-            .axis_desc_style(("sans-serif", 13))
-            .light_line_style(WHITE)
-            .draw()
-            .map_err(&e)?;
-        chart
-            .draw_series(LineSeries::new(
-                recs.iter().map(|r| (r.wheels[i].mz, r.wheels[i].fy / 1e3)),
-                WHEEL_COLOURS[i],
-            ))
-            .map_err(&e)?;
+        let trajectory = GoughSeries {
+            label: String::new(),
+            colour: WHEEL_COLOURS[i],
+            points: recs
+                .iter()
+                .map(|r| (r.wheels[i].mz, r.wheels[i].fy))
+                .collect(),
+        };
+        plot::gough(
+            area,
+            &format!("{}: Fy against Mz", WHEELS[i]),
+            &[],
+            &[trajectory],
+            Some(ranges),
+        )
+        .map_err(&e)?;
     }
     root.present().map_err(&e)?;
     Ok(())
