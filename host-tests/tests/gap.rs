@@ -282,6 +282,15 @@ fn bad_logs_give_one_line_errors_naming_file_line_and_column() {
             format!("{head}{}", good.replacen("220000", "-5", 1)),
             &["line 2", "column p"],
         ),
+        (
+            "nan.csv",
+            format!(
+                "{head}{}{}",
+                row(0.0),
+                "0.01,20,0.01,0,0,4000,0,NaN,10,220000\n"
+            ),
+            &["line 3", "column fy"],
+        ),
         ("empty.csv", String::new(), &["empty"]),
         (
             "ragged.csv",

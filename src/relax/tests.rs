@@ -495,3 +495,193 @@ fn fixed_point_filter_and_forces_track_f64() {
     assert!(peak > 3000.0, "the run reaches large forces: {peak}");
     assert!(worst_f <= 0.005 * peak, "{worst_f} N of {peak} N");
 }
+
+/// Constant inputs: the first-order hold is the held step (one sub-step, weights summing to φ1).
+#[test]
+fn hold_with_constant_inputs_is_the_held_step() {
+    for damping in [DampingSpeed::Forward, DampingSpeed::Rolling] {
+        for dt in [1e-5, 1e-3, 1e-2, 0.5] {
+            let k = Kinematics {
+                vx: 17.0,
+                vsx: 0.9,
+                vsy: -1.3,
+            };
+            let smp = Sample {
+                kin: k,
+                sigma: SIGMA,
+            };
+            let (mut a, mut b) = (Transient::new(0.0), Transient::new(0.0));
+            for _ in 0..20 {
+                let x = a.step::<Libm>(&cfg(damping), dt, &k, &SIGMA).unwrap();
+                let y = b.step_hold::<Libm>(&cfg(damping), dt, &smp, &smp).unwrap();
+                assert!((x.alpha - y.alpha).abs() < 1e-12, "{dt}: {x:?} {y:?}");
+                assert!((x.kappa - y.kappa).abs() < 1e-12, "{dt}: {x:?} {y:?}");
+            }
+        }
+    }
+}
+
+/// A slip speed rising linearly from 0 (σ constant): v(t) = (c/a)·(t − (1 − e^(−a·t))/a) with
+/// a = Vx/σα, exactly at every sample, for 1 kHz and 100 Hz steps.
+#[test]
+fn hold_is_exact_for_a_ramp() {
+    let (vx, c) = (12.0, 4.0); // Vsy = c·t [m/s]
+    let a = vx / SIGMA.sigma_alpha;
+    for dt in [1e-3, 1e-2] {
+        let mut tr = Transient::new(0.0);
+        let smp = |t: f64| Sample {
+            kin: Kinematics {
+                vx,
+                vsx: 0.0,
+                vsy: c * t,
+            },
+            sigma: SIGMA,
+        };
+        for i in 1..=30 {
+            let (t0, t1) = ((i - 1) as f64 * dt, i as f64 * dt);
+            let s = tr
+                .step_hold::<Libm>(&cfg(DampingSpeed::Forward), dt, &smp(t0), &smp(t1))
+                .unwrap();
+            let v = c / a * (t1 - (1.0 - (-a * t1).exp()) / a);
+            assert!((tr.v - v).abs() < 1e-13, "dt {dt} t {t1}: {} vs {v}", tr.v);
+            assert!((s.alpha.tan() - v / SIGMA.sigma_alpha).abs() < 1e-12);
+        }
+    }
+}
+
+/// Fy of a `TransientTyre` at α = 4° under Fz = Fz0·(1 + amp·sin 2πft), sampled every `dt`
+/// (the step's end is the sample), as (t, Fy) from t = 0 on.
+fn fy_under_load(
+    p: &Params<f64>,
+    f: f64,
+    amp: f64,
+    vx: f64,
+    dt: f64,
+    hold: bool,
+    t_end: f64,
+) -> Vec<(f64, f64)> {
+    let opts = Options {
+        transient: true,
+        ..Options::default()
+    };
+    let mut tyre = TransientTyre::new(p);
+    tyre.config.damping = DampingSpeed::Forward;
+    tyre.hold = hold;
+    let tan_a = 4f64.to_radians().tan();
+    let n = (t_end / dt).round() as usize;
+    let mut out = Vec::with_capacity(n + 1);
+    for i in 0..=n {
+        let t = i as f64 * dt;
+        // The held step samples the load at the step's midpoint (its best choice), the hold
+        // step at its end.
+        let tl = if hold || i == 0 { t } else { t - dt / 2.0 };
+        let fz = p.fnomin * (1.0 + amp * (2.0 * core::f64::consts::PI * f * tl).sin());
+        let op = Operating {
+            kin: Kinematics {
+                vx,
+                vsx: 0.0,
+                vsy: tan_a * vx,
+            },
+            fz,
+            gamma: 0.0,
+            p: None,
+        };
+        let o = tyre.step::<Libm>(p, &opts, dt, &op).unwrap();
+        out.push((t, o.fy));
+    }
+    out
+}
+
+/// The paper's situation of Figs. 13–14 (Fz ±30 % at 8 Hz, α = 4°) sampled at 100 Hz and 1 kHz:
+/// the first-order hold matches a 10 kHz run of the same model to a small fraction of the force
+/// swing at both rates; the held step with the previous step's σ does not at 100 Hz (the error
+/// this replaces). Figures print with `--nocapture`.
+#[test]
+fn hold_at_the_log_rate_matches_the_continuous_model_under_load_oscillation() {
+    let p = tyre61();
+    let (f, amp, t_end, settle) = (8.0, 0.3, 2.0, 1.0);
+    for vx in [10.0, 25.0] {
+        let reference = fy_under_load(&p, f, amp, vx, 1e-4, true, t_end);
+        let swing = {
+            let tail = reference.iter().filter(|r| r.0 >= settle);
+            let (lo, hi) = tail.fold((f64::MAX, f64::MIN), |a, r| (a.0.min(r.1), a.1.max(r.1)));
+            hi - lo
+        };
+        let err = |dt: f64, hold: bool| {
+            let run = fy_under_load(&p, f, amp, vx, dt, hold, t_end);
+            let every = (dt / 1e-4).round() as usize;
+            let (mut s2, mut n) = (0.0, 0.0);
+            for (i, r) in run.iter().enumerate() {
+                if r.0 >= settle {
+                    let d = r.1 - reference[i * every].1;
+                    s2 += d * d;
+                    n += 1.0;
+                }
+            }
+            (s2 / n).sqrt() / swing
+        };
+        let (h100, h1k, o100, o1k) = (
+            err(1e-2, true),
+            err(1e-3, true),
+            err(1e-2, false),
+            err(1e-3, false),
+        );
+        std::println!(
+            "vx {vx}: rms error / Fy swing: hold 100 Hz {h100:.2e}, 1 kHz {h1k:.2e}; held step 100 Hz {o100:.2e}, 1 kHz {o1k:.2e}"
+        );
+        assert!(h100 < 5e-3 && h1k < 5e-4, "hold: {h100} {h1k}");
+        assert!(
+            o100 > 4.0 * h100,
+            "held step at 100 Hz: {o100} vs hold {h100}"
+        );
+    }
+}
+
+/// Fig. 14's dynamic side-force loss (mean |Fy| below the mean of the steady-state curve over the
+/// load cycle, per Fy at the mean load) from a 100 Hz first-order-hold run equals the 10 kHz one.
+#[test]
+fn dynamic_side_force_loss_from_a_100_hz_run_is_the_continuous_one() {
+    let p = tyre61();
+    let (f, amp, vx, settle, t_end) = (8.0, 0.3, 10.0, 1.0, 3.0);
+    let opts = Options {
+        transient: true,
+        ..Options::default()
+    };
+    let steady = |t: f64| {
+        let fz = p.fnomin * (1.0 + amp * (2.0 * core::f64::consts::PI * f * t).sin());
+        let inp = Input {
+            fz,
+            alpha: 4f64.to_radians(),
+            vx,
+            ..Input::default()
+        };
+        mf::eval::<f64, Libm>(&p, &inp, &opts).unwrap().fy.abs()
+    };
+    let fy_mean = mf::eval::<f64, Libm>(
+        &p,
+        &Input {
+            fz: p.fnomin,
+            alpha: 4f64.to_radians(),
+            vx,
+            ..Input::default()
+        },
+        &opts,
+    )
+    .unwrap()
+    .fy
+    .abs();
+    let loss = |dt: f64, hold: bool| {
+        let run = fy_under_load(&p, f, amp, vx, dt, hold, t_end);
+        let (mut d, mut q, mut n) = (0.0, 0.0, 0.0);
+        for r in run.iter().filter(|r| r.0 >= settle && r.0 < t_end - 1e-9) {
+            d += r.1.abs();
+            q += steady(r.0);
+            n += 1.0;
+        }
+        (q - d) / n / fy_mean
+    };
+    let (cont, l100, old100) = (loss(1e-4, true), loss(1e-2, true), loss(1e-2, false));
+    std::println!("Fig. 14 loss at 8 Hz ±30 %, 10 m/s: continuous {cont:.4}, hold 100 Hz {l100:.4}, held step 100 Hz {old100:.4}");
+    assert!(cont > 0.005, "a loss to measure: {cont}");
+    assert!((l100 - cont).abs() < 0.05 * cont, "{l100} vs {cont}");
+}

@@ -83,6 +83,9 @@ pub enum GapCmd {
         /// No `phit` column (no turn slip).
         #[arg(long)]
         no_phit: bool,
+        /// Load oscillation bursts: Fz ±30 % at 2, 4, 8 Hz in the second half of every 5 s.
+        #[arg(long)]
+        load_oscillation: bool,
     },
 }
 
@@ -200,6 +203,7 @@ pub fn run(cmd: GapCmd) -> Result<(), String> {
             mu,
             no_p,
             no_phit,
+            load_oscillation,
         } => {
             let truth = effect_arg(&effect)?;
             if rows < crate::gap::log::MIN_ROWS {
@@ -227,6 +231,7 @@ pub fn run(cmd: GapCmd) -> Result<(), String> {
                     mu,
                     p: !no_p,
                     phit: !no_phit,
+                    load_oscillation,
                 },
             )?;
             crate::gap::log::write(&out, &g.log)

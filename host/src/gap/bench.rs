@@ -56,6 +56,9 @@ pub struct GenConfig {
     pub p: bool,
     /// Log (and vary) the turn slip; without, the log has no `phit` column (φt = 0).
     pub phit: bool,
+    /// Load oscillation bursts (the situation of the paper's Figs. 13–14): in the second half
+    /// of every 5 s, Fz × (1 + 0.3·w·sin 2πft) with w a sin² window and f = 2, 4, 8 Hz in turn.
+    pub load_oscillation: bool,
 }
 
 impl Default for GenConfig {
@@ -70,6 +73,7 @@ impl Default for GenConfig {
             mu: false,
             p: true,
             phit: true,
+            load_oscillation: false,
         }
     }
 }
@@ -120,9 +124,22 @@ pub fn inputs(p: &Params<f64>, cfg: &GenConfig) -> Log {
     } else {
         3.0 * p.fnomin
     };
+    let osc = |t: f64| {
+        if !cfg.load_oscillation {
+            return 1.0;
+        }
+        let seg = (t / 5.0).floor();
+        let ts = t - 5.0 * seg;
+        if ts < 2.5 {
+            return 1.0;
+        }
+        let f = [2.0, 4.0, 8.0][(seg as usize) % 3];
+        let w = (std::f64::consts::PI * (ts - 2.5) / 2.5).sin().powi(2);
+        1.0 + 0.3 * w * (std::f64::consts::TAU * f * t).sin()
+    };
     let fz = (0..n)
         .map(|i| {
-            (p.fnomin * (1.0 + 0.25 * f1[i] + 0.08 * f2[i]))
+            (p.fnomin * (1.0 + 0.25 * f1[i] + 0.08 * f2[i]) * osc(t[i]))
                 .clamp(0.2 * p.fnomin, (1.9 * p.fnomin).min(0.95 * fzmax))
         })
         .collect();
@@ -391,8 +408,10 @@ pub struct BenchConfig {
     pub none_seeds: u64,
     /// Rows per log.
     pub rows: usize,
-    /// Sample rate \[Hz\].
-    pub rate: f64,
+    /// Sample rates \[Hz\], taken in turn over tyres, noise levels, magnitudes and seeds.
+    pub rates: Vec<f64>,
+    /// Load oscillation bursts in every log ([`GenConfig::load_oscillation`]).
+    pub load_oscillation: bool,
     /// Worker threads.
     pub jobs: usize,
     /// Show a progress bar.
@@ -498,34 +517,42 @@ pub fn run(cfg: &BenchConfig) -> Result<Vec<CaseResult>, String> {
         tyres.push((nm, ty.params));
     }
     let mut cases: Vec<(usize, GenConfig)> = Vec::new();
+    let rate = |k: usize| {
+        cfg.rates
+            .get(k % cfg.rates.len().max(1))
+            .copied()
+            .unwrap_or(200.0)
+    };
     for (ti, _) in tyres.iter().enumerate() {
-        for &noise in &cfg.noises {
+        for (ni, &noise) in cfg.noises.iter().enumerate() {
             for s in 0..cfg.none_seeds {
                 cases.push((
                     ti,
                     GenConfig {
                         rows: cfg.rows,
-                        rate: cfg.rate,
+                        rate: rate(ti + ni + s as usize),
                         seed: 1000 + s,
                         truth: None,
                         magnitude: 0.0,
                         noise,
+                        load_oscillation: cfg.load_oscillation,
                         ..GenConfig::default()
                     },
                 ));
             }
             for e in ALL {
-                for &m in &cfg.magnitudes {
+                for (mi, &m) in cfg.magnitudes.iter().enumerate() {
                     for s in 0..cfg.seeds {
                         cases.push((
                             ti,
                             GenConfig {
                                 rows: cfg.rows,
-                                rate: cfg.rate,
+                                rate: rate(ti + ni + mi + s as usize),
                                 seed: 1 + s,
                                 truth: Some(e),
                                 magnitude: m,
                                 noise,
+                                load_oscillation: cfg.load_oscillation,
                                 ..GenConfig::default()
                             },
                         ));
@@ -636,11 +663,16 @@ pub fn table(cfg: &BenchConfig, res: &[CaseResult]) -> String {
     let secs: Vec<f64> = res.iter().map(|r| r.seconds).collect();
     let _ = writeln!(
         s,
-        "{} logs of {} rows at {} Hz: tyres {}; magnitudes {:?}; noise {:?} of each channel's RMS; \
+        "{} logs of {} rows at {:?} Hz (in turn){}: tyres {}; magnitudes {:?}; noise {:?} of each channel's RMS; \
          {} seed(s) per effect case, {} per none case. Diagnosis time per log: median {:.2} s, max {:.2} s.\n",
         res.len(),
         cfg.rows,
-        cfg.rate,
+        cfg.rates,
+        if cfg.load_oscillation {
+            ", load oscillation bursts of ±30 % at 2, 4, 8 Hz"
+        } else {
+            ""
+        },
         tyres.join(", "),
         cfg.magnitudes,
         cfg.noises,
@@ -758,7 +790,8 @@ pub fn default_config(data: &Path, quick: bool) -> BenchConfig {
             seeds: 1,
             none_seeds: 2,
             rows: 3000,
-            rate: 200.0,
+            rates: vec![100.0, 200.0],
+            load_oscillation: true,
             jobs: 1,
             progress: true,
         }
@@ -770,7 +803,8 @@ pub fn default_config(data: &Path, quick: bool) -> BenchConfig {
             seeds: 1,
             none_seeds: 4,
             rows: 6000,
-            rate: 200.0,
+            rates: vec![100.0, 200.0],
+            load_oscillation: true,
             jobs: 1,
             progress: true,
         }

@@ -11,7 +11,7 @@
 //! σc the noise floor: the held-out reduction of the gap in units of each channel's noise.
 //! Its standard error is that of the K per-block shrinks (sd/√K).
 
-use super::effects::{resid, spec, Ctx, Effect, Spec};
+use super::effects::{spec, Ctx, Effect, Spec};
 use super::sim::Out;
 use super::stats;
 
@@ -146,21 +146,26 @@ pub fn score(ctx: &Ctx, effect: Effect, fit_rows: usize, tick: &mut dyn FnMut())
     };
     let max = if effect.cheap() { usize::MAX } else { fit_rows };
     let mut held = base_r.clone();
+    let settled = |rows: Vec<usize>| -> Vec<usize> {
+        rows.into_iter()
+            .filter(|&i| ctx.settled.get(i).copied().unwrap_or(true))
+            .collect()
+    };
     for f in 0..K {
-        let rows = train_rows(n, Some(f), max);
+        let rows = settled(train_rows(n, Some(f), max));
         let theta = sp
             .fit(ctx, &rows)
             .map(|fit| fit.theta)
             .unwrap_or_else(|| sp.starts[0].clone());
         // Exact run with the fold's parameters; a failure keeps the sim's prediction.
         if let Some(pred) = sp.predict(ctx, &theta, None) {
-            let r = resid(log, &pred);
+            let r = ctx.resid(&pred);
             held[block(n, f)].copy_from_slice(&r[block(n, f)]);
         }
         sc.theta_folds.push(theta);
         tick();
     }
-    let rows = train_rows(n, None, max);
+    let rows = settled(train_rows(n, None, max));
     sc.theta = sp
         .fit(ctx, &rows)
         .map(|fit| fit.theta)

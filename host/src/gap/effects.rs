@@ -98,7 +98,9 @@ impl Effect {
             Effect::TurnSlip => {
                 "turn-slip reductions re-fitted (MF 6.x), or a linear spin force and moment"
             }
-            Effect::CombinedSlip => "combined-slip slopes rbx1, rby1 and the Fx arm ssz1",
+            Effect::CombinedSlip => {
+                "combined-slip slopes rbx1, rby1, shape factors rcx1, rcy1 and the Fx arm ssz1"
+            }
             Effect::RelaxationLength => "σ times s·(1 + c·dfz)",
             Effect::SpeedDependentFriction => "λμ = (1 + b·(|Vx|−V0)/V0)/(1 + a·Vs/V0)",
             Effect::Thermal => "λμ = exp(−k·T), τ·dT/dt + T = slip power/(Fz0·V0)",
@@ -134,7 +136,15 @@ pub struct Ctx<'a> {
     pub dfz: Vec<f64>,
     /// Reference pressure of the MF 5.x pressure extension: the log's median p \[Pa\].
     pub p_ref: f64,
+    /// Rows that are scored and fitted: all but those within [`SETTLE_SIGMAS`] relaxation
+    /// lengths of travel after a gap in time, where the filter restarted in a steady state that
+    /// the tyre was not in (see `sim`'s "Gaps").
+    pub settled: Vec<bool>,
 }
+
+/// Travel after a restart, in relaxation lengths (the larger of σκ, σα at the restart), over
+/// which rows are left out of fits and scores: e^(−3) ≈ 5 % of the restart's error is left.
+pub const SETTLE_SIGMAS: f64 = 3.0;
 
 impl<'a> Ctx<'a> {
     /// Runs the baseline and prepares the per-row quantities.
@@ -168,11 +178,25 @@ impl<'a> Ctx<'a> {
             .as_ref()
             .map(|p| super::stats::median(p))
             .unwrap_or(0.0);
+        let mut settled = vec![true; n];
+        let restarts = log.restarts();
+        let mut travel = f64::INFINITY;
+        let mut need = 0.0;
+        for i in 0..n {
+            if i > 0 && restarts[i] {
+                travel = 0.0;
+                need = SETTLE_SIGMAS * base.sigma[i][0].max(base.sigma[i][1]);
+            } else if i > 0 {
+                travel += 0.5 * (log.vx[i].abs() + log.vx[i - 1].abs()) * (log.t[i] - log.t[i - 1]);
+            }
+            settled[i] = travel >= need;
+        }
         Ok(Ctx {
             log,
             sim,
             base,
             noise,
+            settled,
             vs,
             power,
             dfz,
@@ -180,9 +204,20 @@ impl<'a> Ctx<'a> {
         })
     }
 
-    /// Residual of the baseline, row by row.
+    /// Residual of the baseline, row by row (0 on rows not [`Ctx::settled`]).
     pub fn base_resid(&self) -> Vec<Out> {
-        resid(self.log, &self.base.out)
+        self.resid(&self.base.out)
+    }
+
+    /// measured − predicted per row, 0 on rows not [`Ctx::settled`].
+    pub fn resid(&self, pred: &[Out]) -> Vec<Out> {
+        let mut r = resid(self.log, pred);
+        for (x, &ok) in r.iter_mut().zip(&self.settled) {
+            if !ok {
+                *x = [0.0; 3];
+            }
+        }
+        r
     }
 }
 
@@ -218,6 +253,11 @@ pub struct Spec {
     pub starts: Vec<Vec<f64>>,
     /// Bounds and scales.
     pub bounds: Bounds,
+    /// A coarse scan: points whose cost is evaluated before the fit, the best of them added to
+    /// the starting points. Set where the file's values sit on a flat point of the effect (a
+    /// block absent from the file: a combined-slip weight with B = 0 or C = 0 is 1 whatever the
+    /// other coefficient, so its gradient vanishes and a fit from there never leaves).
+    pub scan: Vec<Vec<f64>>,
     variant: Variant,
 }
 
@@ -238,6 +278,8 @@ const KEY_SCALES: &[(&str, f64, Option<f64>)] = &[
     ("QDRP1", 0.5, Some(0.0)),
     ("RBX1", 5.0, Some(0.5)),
     ("RBY1", 5.0, Some(0.5)),
+    ("RCX1", 0.5, Some(0.0)),
+    ("RCY1", 0.5, Some(0.0)),
     ("SSZ1", 0.02, None),
     ("PHY1", 0.003, None),
     ("PVY1", 0.01, None),
@@ -271,6 +313,7 @@ fn keys_spec(effect: Effect, p: &Params<f64>, names: &[&str]) -> Spec {
         names: keys.iter().map(|k| k.name().to_ascii_lowercase()).collect(),
         starts: vec![start],
         bounds: Bounds { lo, hi, scale },
+        scan: Vec::new(),
         variant: Variant::Keys(keys),
     }
 }
@@ -291,6 +334,7 @@ fn simple(
             hi: b[1].to_vec(),
             scale: b[2].to_vec(),
         },
+        scan: Vec::new(),
         variant: v,
     }
 }
@@ -374,7 +418,31 @@ pub fn spec(effect: Effect, ctx: &Ctx) -> Result<Spec, String> {
             if both < 20 {
                 return Err("fewer than 20 rows with both |κ| and |α| > 0.005".into());
             }
-            Ok(keys_spec(effect, p, &["RBX1", "RBY1", "SSZ1"]))
+            // The slopes and the shape factors of the weights Gxα, Gyκ (4.E54, 4.E62) and the
+            // Fx arm of Mz: a file without the block (all zero) must be able to express it.
+            let mut sp = keys_spec(effect, p, &["RBX1", "RBY1", "RCX1", "RCY1", "SSZ1"]);
+            let v = sp.starts[0].clone();
+            if let [rbx1, rby1, rcx1, rcy1, ssz1] = v[..] {
+                if rbx1 * rcx1 == 0.0 || rby1 * rcy1 == 0.0 {
+                    // Flat at the file's values: scan the slopes over the range of tyre files
+                    // (book and bundled files: RBX1 ≈ 5–25, RBY1 ≈ 5–15) with C = 1 where absent.
+                    let cx = if rcx1 != 0.0 { rcx1 } else { 1.0 };
+                    let cy = if rcy1 != 0.0 { rcy1 } else { 1.0 };
+                    let grid = |b: f64| {
+                        if b != 0.0 {
+                            vec![b]
+                        } else {
+                            vec![4.0, 10.0, 20.0]
+                        }
+                    };
+                    for bx in grid(rbx1) {
+                        for by in grid(rby1) {
+                            sp.scan.push(vec![bx, by, cx, cy, ssz1]);
+                        }
+                    }
+                }
+            }
+            Ok(sp)
         }
         Effect::RelaxationLength => {
             let starts = if sim.filters {
@@ -663,6 +731,17 @@ impl Spec {
                 }
                 r.iter().all(|v| v.is_finite()).then_some(r)
             };
+            if round == 0 && !self.scan.is_empty() {
+                let cost = |th: &[f64]| resid(th).map(|r| r.iter().map(|v| v * v).sum::<f64>());
+                let scanned = self
+                    .scan
+                    .iter()
+                    .filter_map(|th| cost(th).map(|c| (c, th)))
+                    .min_by(|a, b| a.0.total_cmp(&b.0));
+                if let Some((_, th)) = scanned {
+                    starts.push(th.clone());
+                }
+            }
             best = None;
             for s in &starts {
                 if let Some(f) = super::fit::levenberg_marquardt(&resid, s, &self.bounds, 12) {

@@ -83,6 +83,38 @@ impl Log {
         a.hypot(b)
     }
 
+    /// Median step between rows \[s\] (0 with fewer than two rows).
+    pub fn median_step(&self) -> f64 {
+        let mut d: Vec<f64> = self.t.windows(2).map(|w| w[1] - w[0]).collect();
+        if d.is_empty() {
+            return 0.0;
+        }
+        d.sort_by(f64::total_cmp);
+        d[d.len() / 2]
+    }
+
+    /// Rows where the relaxation filters (re)start: row 0, and every row after a gap in time —
+    /// a step longer than 1.5 × the median step (at least one dropped row) or than
+    /// `gough::relax::MAX_DT`.
+    pub fn restarts(&self) -> Vec<bool> {
+        let gap = 1.5 * self.median_step();
+        let mut r = Vec::with_capacity(self.len());
+        for i in 0..self.len() {
+            r.push(
+                i == 0 || {
+                    let h = self.t[i] - self.t[i - 1];
+                    h > gap || h > gough::relax::MAX_DT
+                },
+            );
+        }
+        r
+    }
+
+    /// Number of gaps in time (restarts after row 0).
+    pub fn gaps(&self) -> usize {
+        self.restarts().iter().skip(1).filter(|&&g| g).count()
+    }
+
     /// Checks what the diagnosis relies on: equal column lengths, strictly increasing time,
     /// positive pressure, enough rows. `name` is the file for messages.
     pub fn validate(&self, name: &str) -> Result<(), String> {

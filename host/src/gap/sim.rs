@@ -9,23 +9,31 @@
 //! - Turn slip is on when the log has a `phit` column and the file carries turn-slip
 //!   coefficients (MF 6.x); otherwise φt is not used.
 //!
-//! ## First-order hold
+//! ## First-order hold: the continuous model, sampled
 //! A log samples continuous signals, so between two rows the inputs are taken as linear in
-//! time. The core's step holds its kinematics over a step; we feed it the kinematics at the
-//! step's **midpoint** of the linear interpolation (Vx, κ, α at the mean of the two rows). For
-//! the linear equation of eq. (20) with an input that is linear over the step, the midpoint value
-//! makes the exact step's forcing term exact to second order in h (the error is the ramp's
-//! weighting, a·h³/12 relative to b·h), where holding the left sample would add half a sample of
-//! lag. The relaxation length of a step is the one evaluated at the step's start, as in
-//! `TransientTyre` (σ changes with Fz, little over one step). Steps longer than
-//! [`gough::relax::MAX_DT`]/2 are split into sub-steps along the same linear interpolation.
+//! time, and the filter is the core's [`Transient::step_hold`]: the kinematics **and** the
+//! relaxation lengths (σ at each row's load, γ, p) are linear between the two rows, and with them
+//! the damping speed and the decay rate V/σ; the forcing is integrated exactly; the core takes
+//! sub-steps where V/σ moves faster than one step resolves (the load oscillating at several Hz
+//! in a 100 Hz log); the slips of row i are formed with row i's own σ. Until issue 40 the step
+//! held the midpoint kinematics with σ of the step's start and formed α' with that stale σ: on a
+//! 100 Hz log with Fz ±30 % at 8 Hz that missed the continuous model by several times the noise.
+//! σ does not depend on the slips, so each row's σ comes from one extra Magic Formula evaluation
+//! at the log's slips (moments off) before the row's own. Steps longer than
+//! [`gough::relax::MAX_DT`] are gaps.
+//!
+//! ## Gaps
+//! A log with dropped rows has gaps in time; the filter is not bridged over them: after a step
+//! longer than 1.5 × the log's median step ([`Log::restarts`]) it restarts in the steady state
+//! of that row's slips, as at row 0.
 //!
 //! The damping speed is |Vx| ([`DampingSpeed::Forward`], TNO's linear transient model): a
 //! `.tir` file is fitted on steady-state data, and with this choice the transient sim reproduces
 //! that fit exactly in steady state (α' → α, κ' → κ), also under braking.
 //!
-//! The first row starts in steady state (deflections equal to σ·tan α and σ·κ), so a log that
-//! begins mid-manoeuvre does not show a start-up transient that the tyre never had.
+//! The first row (and the first after a gap) starts in steady state (deflections equal to
+//! σ·tan α and σ·κ), so a log that begins mid-manoeuvre does not show a start-up transient that
+//! the tyre never had.
 //!
 //! Nothing of the tyre is re-implemented here. The one formula typed here is the sensor model of
 //! [`lag`] (a first-order low-pass, exact for a first-order hold), which is not the tyre's.
@@ -33,7 +41,7 @@
 use super::log::Log;
 use gough::math::Libm;
 use gough::mf::{self, Input, Options, Params};
-use gough::relax::{Config, DampingSpeed, Kinematics, Sigma, Transient};
+use gough::relax::{Config, DampingSpeed, Kinematics, Sample, Sigma, Transient};
 
 /// Fx, Fy \[N\], Mz \[N·m\] of one row.
 pub type Out = [f64; 3];
@@ -163,52 +171,84 @@ impl Sim {
         }
     }
 
-    /// Advances the deflection states from row `i − 1` to row `i` (first-order hold: the
-    /// kinematics at the midpoint of each (sub-)step) with relaxation lengths `sigma`.
+    /// The inputs of eq. (20) at row `i` with relaxation lengths `sigma` = `[σκ, σα]`.
+    fn sample(log: &Log, i: usize, sigma: [f64; 2]) -> Sample<f64> {
+        let (vsx, vsy) = log.slip_velocity(i);
+        Sample {
+            kin: Kinematics {
+                vx: log.vx[i],
+                vsx,
+                vsy,
+            },
+            sigma: Sigma {
+                sigma_kappa: sigma[0],
+                sigma_alpha: sigma[1],
+            },
+        }
+    }
+
+    /// Advances the deflection states from row `i − 1` to row `i`: the core's first-order hold
+    /// ([`Transient::step_hold`]) between the two rows' kinematics and relaxation lengths `s0`,
+    /// `s1`, sub-stepped by the core where σ moves fast; the slips at row `i` with its own σ.
     fn advance(
         &self,
         st: &mut Transient<f64>,
         log: &Log,
         i: usize,
-        sigma: [f64; 2],
+        s0: [f64; 2],
+        s1: [f64; 2],
     ) -> Result<[f64; 2], RowError> {
         let h = log.t[i] - log.t[i - 1];
-        let n_sub = (h / (0.5 * gough::relax::MAX_DT)).ceil().max(1.0) as usize;
-        let hs = h / n_sub as f64;
-        let sg = Sigma {
-            sigma_kappa: sigma[0],
-            sigma_alpha: sigma[1],
+        let (a, b) = (Sim::sample(log, i - 1, s0), Sim::sample(log, i, s1));
+        let s = st
+            .step_hold::<Libm>(&self.cfg, h, &a, &b)
+            .map_err(|e| (i, format!("relaxation step: {e}")))?;
+        Ok([s.kappa, s.alpha])
+    }
+
+    /// The relaxation lengths `[σκ, σα]` of row `i` under `q` (λ of the row set) and `mods`:
+    /// σ does not depend on the slips, so the Magic Formula runs once at the log's slips,
+    /// without moments, for them (or not at all when they are given).
+    fn sigma_at(
+        &self,
+        log: &Log,
+        q: &Params<f64>,
+        mods: &Mods,
+        i: usize,
+    ) -> Result<[f64; 2], RowError> {
+        if let SigmaMode::Given(g) = mods.sigma {
+            return Ok(g.get(i).copied().unwrap_or([0.0, 0.0]));
+        }
+        let opts = Options {
+            moments: false,
+            ..self.opts
         };
-        let mut slips = [0.0; 2];
-        for k in 0..n_sub {
-            let w = (k as f64 + 0.5) / n_sub as f64; // midpoint of the sub-step
-            let lin = |a: &[f64]| a[i - 1] + w * (a[i] - a[i - 1]);
-            let (vx, kappa, alpha) = (lin(&log.vx), lin(&log.kappa), lin(&log.alpha));
-            let kin = Kinematics {
-                vx,
-                vsx: -kappa * vx.abs(),
-                vsy: alpha.tan() * vx.abs(),
-            };
-            let s = st
-                .step::<Libm>(&self.cfg, hs, &kin, &sg)
-                .map_err(|e| (i, format!("relaxation step: {e}")))?;
-            slips = [s.kappa, s.alpha];
-        }
-        Ok(slips)
+        let inp = self.input(log, i, log.kappa[i], log.alpha[i]);
+        let o = mf::eval::<f64, Libm>(q, &inp, &opts)
+            .map_err(|e| (i, format!("Magic Formula: {e}")))?;
+        Ok(match mods.sigma {
+            SigmaMode::Scaled(m) => {
+                let m = m.get(i).copied().unwrap_or([1.0, 1.0]);
+                [o.sigma_x * m[0], o.sigma_y * m[1]]
+            }
+            _ => [o.sigma_x, o.sigma_y],
+        })
     }
 
-    /// Steady-state deflections at row 0 for relaxation lengths `sigma`.
-    fn init(log: &Log, sigma: [f64; 2]) -> Transient<f64> {
+    /// Steady-state deflections at row `i` for relaxation lengths `sigma`.
+    fn init(log: &Log, i: usize, sigma: [f64; 2]) -> Transient<f64> {
         Transient {
-            v: sigma[1] * log.alpha[0].tan(),
-            u: sigma[0] * log.kappa[0],
+            v: sigma[1] * log.alpha[i].tan(),
+            u: sigma[0] * log.kappa[i],
         }
     }
 
-    /// Runs the whole log with `params` (SIM.tir's or an effect's) and `mods`.
+    /// Runs the whole log with `params` (SIM.tir's or an effect's) and `mods`. The filters
+    /// restart in steady state at row 0 and after every gap in time ([`Log::restarts`]).
     pub fn run(&self, log: &Log, params: &Params<f64>, mods: &Mods) -> Result<Run, RowError> {
         let n = log.len();
         let filters = self.filters || matches!(mods.sigma, SigmaMode::Given(_));
+        let restart = log.restarts();
         let mut q = params.clone();
         let base = [q.lmux, q.lmuy, q.lkx, q.lky];
         let mut run = Run {
@@ -219,30 +259,24 @@ impl Sim {
         let mut st = Transient::new(0.0);
         let mut prev = [0.0; 2];
         for i in 0..n {
-            let slips = if !filters || i == 0 {
-                [log.kappa[i], log.alpha[i]]
-            } else {
-                self.advance(&mut st, log, i, prev)?
-            };
             set_lambda(&mut q, &base, mods, i);
-            let inp = self.input(log, i, slips[0], slips[1]);
-            let o = mf::eval::<f64, Libm>(&q, &inp, &self.opts)
-                .map_err(|e| (i, format!("Magic Formula: {e}")))?;
             let sigma = if filters {
-                match mods.sigma {
-                    SigmaMode::Model => [o.sigma_x, o.sigma_y],
-                    SigmaMode::Scaled(m) => {
-                        let m = m.get(i).copied().unwrap_or([1.0, 1.0]);
-                        [o.sigma_x * m[0], o.sigma_y * m[1]]
-                    }
-                    SigmaMode::Given(g) => g.get(i).copied().unwrap_or([0.0, 0.0]),
-                }
+                self.sigma_at(log, &q, mods, i)?
             } else {
                 [0.0, 0.0]
             };
-            if filters && i == 0 {
-                st = Sim::init(log, sigma);
-            }
+            let fresh = restart.get(i).copied().unwrap_or(true);
+            let slips = if !filters || fresh {
+                if filters {
+                    st = Sim::init(log, i, sigma);
+                }
+                [log.kappa[i], log.alpha[i]]
+            } else {
+                self.advance(&mut st, log, i, prev, sigma)?
+            };
+            let inp = self.input(log, i, slips[0], slips[1]);
+            let o = mf::eval::<f64, Libm>(&q, &inp, &self.opts)
+                .map_err(|e| (i, format!("Magic Formula: {e}")))?;
             prev = sigma;
             let mut out = [o.fx, o.fy, o.mz];
             add(&mut out, mods, i);
@@ -253,18 +287,25 @@ impl Sim {
         Ok(run)
     }
 
-    /// The filters alone with given relaxation lengths per row (`sigma[i]` is used for the step
-    /// from row i to i + 1, as in [`Sim::run`]): the slips `[κ', α']` per row. Without filters
-    /// (`sigma` all zero and the file has none) the log's slips.
+    /// The filters alone with given relaxation lengths per row (the step from row i − 1 to i
+    /// holds `sigma[i − 1]` → `sigma[i]` linearly, as in [`Sim::run`]): the slips `[κ', α']`
+    /// per row; restarts as in [`Sim::run`]. Without filters (`sigma` all zero and the file has
+    /// none) the log's slips.
     pub fn slips(&self, log: &Log, sigma: &[[f64; 2]]) -> Result<Vec<[f64; 2]>, RowError> {
         let n = log.len();
+        let restart = log.restarts();
         let mut out = Vec::with_capacity(n);
-        out.push([log.kappa[0], log.alpha[0]]);
         let s0 = sigma.first().copied().unwrap_or([0.0; 2]);
-        let mut st = Sim::init(log, s0);
-        for i in 1..n {
-            let s = sigma.get(i - 1).copied().unwrap_or(s0);
-            out.push(self.advance(&mut st, log, i, s)?);
+        let mut st = Transient::new(0.0);
+        for i in 0..n {
+            let s = sigma.get(i).copied().unwrap_or(s0);
+            if restart.get(i).copied().unwrap_or(true) {
+                st = Sim::init(log, i, s);
+                out.push([log.kappa[i], log.alpha[i]]);
+            } else {
+                let p = sigma.get(i - 1).copied().unwrap_or(s0);
+                out.push(self.advance(&mut st, log, i, p, s)?);
+            }
         }
         Ok(out)
     }
