@@ -29,8 +29,9 @@ def load(fd):
     return cantools.database.load_string(text, database_format="dbc", strict=True)
 
 
-def frames(fd):
-    out = gough("proto", "frames", "--tir", str(TIR), "--log", str(LOG), *(["--fd"] if fd else []))
+def frames(fd, compact=False):
+    flags = (["--fd"] if fd else []) + (["--compact"] if compact else [])
+    out = gough("proto", "frames", "--tir", str(TIR), "--log", str(LOG), *flags)
     return [json.loads(line) for line in out.splitlines()]
 
 
@@ -49,10 +50,17 @@ def payload(sig, prefix, n_bytes_total):
     return out
 
 
-@pytest.mark.parametrize("fd", [False, True], ids=["classic", "fd"])
-def test_every_frame_decodes_to_the_hosts_values(fd):
+# The compact measurement's physical signals: name in the DBC, field, scale.
+COMPACT = [("Fz", "fz", 0.5), ("Fy", "fy", 1.0), ("Mz", "mz", 0.1), ("Fx", "fx", 1.0),
+           ("vx", "vx", 0.01), ("omega", "omega", 0.01), ("alpha", "alpha", 1e-4),
+           ("kappa", "kappa", 1e-4), ("gamma", "gamma", 1e-4)]
+
+
+@pytest.mark.parametrize("fd,compact", [(False, False), (True, False), (False, True), (True, True)],
+                         ids=["classic", "fd", "classic-compact", "fd-compact"])
+def test_every_frame_decodes_to_the_hosts_values(fd, compact):
     db = load(fd)
-    msgs = frames(fd)
+    msgs = frames(fd, compact)
     assert len(msgs) > 500
     seen = set()
     for m in msgs:
@@ -97,12 +105,26 @@ def test_every_frame_decodes_to_the_hosts_values(fd):
                 assert str(sig["state"]) == want["state"]
             enc = bytes.fromhex(m["encoded"])
             assert sig[f"{pre}_crc"] == int.from_bytes(enc[-4:], "little")
+        if fd and m["type"] == "CompactMeasurement":
+            data = bytes.fromhex(m["frames"][0])
+            sig = dbm.decode(data)
+            raw = dbm.decode(data, scaling=False)
+            want = m["msg"]
+            assert str(sig["wheel"]) == want["wheel"]
+            assert sig["t_us"] == want["t_us"]
+            for s, f, scale in COMPACT:
+                assert raw[s] == want[f], (s, raw[s], want[f])
+                assert sig[s] == pytest.approx(want[f] * scale, rel=1e-12, abs=1e-12)
+            seen.add(("CompactPhysical", False))
     # What the replay puts on the bus: measurements, forces, estimates; continuation frames
     # on classic CAN.
     kinds = {t for t, _ in seen}
-    assert {"Measurement", "Forces", "Estimate"} <= kinds
+    meas = "CompactMeasurement" if compact else "Measurement"
+    assert {meas, "Forces", "Estimate"} <= kinds
     if not fd:
-        assert ("Measurement", True) in seen and ("Estimate", True) in seen
+        assert (meas, True) in seen and ("Estimate", True) in seen
+    if fd and compact:
+        assert ("CompactPhysical", False) in seen
 
 
 def test_fd_estimate_states_are_named():

@@ -23,6 +23,10 @@ fn frame_counts_are_the_segmenters() {
     // (58 bytes: 5 in the first frame, 6 in each of 9 more); without them, 6 (30 bytes).
     assert_eq!(count(&busload::measurement(true), Mtu::Classic), 10);
     assert_eq!(count(&busload::measurement(false), Mtu::Classic), 6);
+    // The compact measurement (29 bytes): 5 classic frames, one FD frame.
+    assert!(matches!(busload::compact(), Msg::CompactMeasurement(_)));
+    assert_eq!(count(&busload::compact(), Mtu::Classic), 5);
+    assert_eq!(count(&busload::compact(), Mtu::Fd), 1);
     // Forces (25 bytes) 5 frames, Estimate (20 bytes) 4; on FD one frame each.
     let r = busload::results();
     assert_eq!(count(&r[0], Mtu::Classic) + count(&r[1], Mtu::Classic), 9);

@@ -16,7 +16,7 @@
 //! other traffic of a vehicle bus and for retransmissions after errors).
 
 use gough::proto::{
-    AckCode, Estimate, EstimateState, Forces, Measurement, Msg, Mtu, Segmenter, Wheel,
+    CompactMeasurement, Estimate, EstimateState, Forces, Measurement, Msg, Mtu, Segmenter, Wheel,
 };
 use std::fmt::Write as _;
 
@@ -151,24 +151,35 @@ pub fn per_sample(msgs: &[Msg], bus: &Bus) -> (usize, f64) {
     })
 }
 
+/// The measurement with every optional field as a [`CompactMeasurement`].
+pub fn compact() -> Msg {
+    match measurement(true) {
+        Msg::Measurement(m) => CompactMeasurement::new(&m)
+            .map(Msg::CompactMeasurement)
+            .unwrap_or(Msg::Measurement(m)),
+        other => other,
+    }
+}
+
 /// One traffic of the table: a name and the messages per wheel-sample.
-pub fn traffics() -> [(&'static str, Vec<Msg>); 5] {
+pub fn traffics() -> [(&'static str, Vec<Msg>); 7] {
     let r = results();
     [
         ("measurement, all fields", vec![measurement(true)]),
         ("measurement, no optional fields", vec![measurement(false)]),
+        ("compact measurement", vec![compact()]),
         ("results (Forces + Estimate)", r.to_vec()),
         ("both ways, all fields", vec![measurement(true), r[0], r[1]]),
         (
             "both ways, no optional fields",
             vec![measurement(false), r[0], r[1]],
         ),
+        ("both ways, compact", vec![compact(), r[0], r[1]]),
     ]
 }
 
 /// The table: frames/s and load per bus, rate and traffic.
 pub fn table(markdown: bool) -> String {
-    let _ = AckCode::Ok;
     let tr = traffics();
     let mut s = String::new();
     let _ = write!(s, "| bus | rate/wheel |");

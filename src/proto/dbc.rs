@@ -10,13 +10,14 @@
 //!   bytes as `next_bytes*`.
 //!
 //! Each identifier has one frame length ([`Mtu::frame_len`]): 8 on classic CAN; 64 on CAN FD, 32
-//! on [`id::RESULT`]. On CAN FD a whole [`super::Forces`] or [`super::Estimate`] fits one frame, and
-//! postcard puts their fields at fixed offsets (one-byte enums, fixed-width integers, `f32`), so
-//! the FD file multiplexes [`id::RESULT`]'s first frames on `msg_type` and gives the bodies as
-//! physical signals: `wheel`, `t_us`, `Fx`, `Fy`, `Mz` and `flags` of `Forces`; `wheel`, `t_us`,
-//! `mu`, `sigma` and `state` (a value table) of `Estimate`; and each message's CRC-32. A bus log
-//! then shows μ per wheel without gough. On classic CAN these messages span several frames, and
-//! only their bytes are signals.
+//! on [`id::RESULT`] and [`id::COMPACT`]. On CAN FD a whole [`super::Forces`],
+//! [`super::Estimate`] or [`super::CompactMeasurement`] fits one frame, and postcard puts their
+//! fields at fixed offsets (one-byte enums, fixed-width integers, `f32`), so the FD file
+//! multiplexes these identifiers' first frames on `msg_type` and gives the bodies as physical
+//! signals: `wheel`, `t_us`, `Fx`, `Fy`, `Mz` and `flags` of `Forces`; `wheel`, `t_us`, `mu`,
+//! `sigma` and `state` (a value table) of `Estimate`; the scaled fields of `CompactMeasurement`;
+//! and each message's CRC-32. A bus log then shows μ per wheel without gough. On classic CAN
+//! these messages span several frames, and only their bytes are signals.
 
 use super::segmenter::Mtu;
 use super::{id, MsgType, PROTO_VERSION};
@@ -56,14 +57,27 @@ fn byte_signals<W: Write>(
     Ok(())
 }
 
-/// One physical signal of a result body: (name, byte offset in the body, bytes, IEEE float,
-/// unit, value table). Offsets follow postcard's encoding of [`super::Forces`] and
-/// [`super::Estimate`] (checked by the tests against encoded messages).
+/// How a body field is encoded.
+#[derive(Clone, Copy, PartialEq)]
+enum Kind {
+    /// Unsigned little-endian integer.
+    U,
+    /// Signed (two's complement) little-endian integer.
+    I,
+    /// IEEE-754 `f32`, little endian.
+    F,
+}
+
+/// One physical signal of a single-frame body on CAN FD: name, byte offset in the body, bytes,
+/// encoding, scale (physical value per count), unit, value table. Offsets follow postcard's
+/// encoding of the message (checked by `host-tests/python/test_dbc.py` against encoded
+/// messages).
 type Field = (
     &'static str,
     usize,
     usize,
-    bool,
+    Kind,
+    f32,
     &'static str,
     &'static [&'static str],
 );
@@ -72,35 +86,61 @@ const WHEELS: &[&str] = &["FrontLeft", "FrontRight", "RearLeft", "RearRight"];
 
 /// `Forces`' body: wheel (1), t_us (4), Fx, Fy, Mz (f32), flags (u16), then the CRC-32.
 const FORCES: [Field; 7] = [
-    ("forces_wheel", 0, 1, false, "", WHEELS),
-    ("forces_t_us", 1, 4, false, "us", &[]),
-    ("Fx", 5, 4, true, "N", &[]),
-    ("Fy", 9, 4, true, "N", &[]),
-    ("Mz", 13, 4, true, "N.m", &[]),
-    ("forces_flags", 17, 2, false, "", &[]),
-    ("forces_crc", 19, 4, false, "", &[]),
+    ("forces_wheel", 0, 1, Kind::U, 1.0, "", WHEELS),
+    ("forces_t_us", 1, 4, Kind::U, 1.0, "us", &[]),
+    ("Fx", 5, 4, Kind::F, 1.0, "N", &[]),
+    ("Fy", 9, 4, Kind::F, 1.0, "N", &[]),
+    ("Mz", 13, 4, Kind::F, 1.0, "N.m", &[]),
+    ("forces_flags", 17, 2, Kind::U, 1.0, "", &[]),
+    ("forces_crc", 19, 4, Kind::U, 1.0, "", &[]),
 ];
 
 /// `Estimate`'s body: wheel (1), t_us (4), μ, σ (f32), state (1), then the CRC-32.
 const ESTIMATE: [Field; 6] = [
-    ("estimate_wheel", 0, 1, false, "", WHEELS),
-    ("estimate_t_us", 1, 4, false, "us", &[]),
-    ("mu", 5, 4, true, "", &[]),
-    ("sigma", 9, 4, true, "", &[]),
+    ("estimate_wheel", 0, 1, Kind::U, 1.0, "", WHEELS),
+    ("estimate_t_us", 1, 4, Kind::U, 1.0, "us", &[]),
+    ("mu", 5, 4, Kind::F, 1.0, "", &[]),
+    ("sigma", 9, 4, Kind::F, 1.0, "", &[]),
     (
         "state",
         13,
         1,
-        false,
+        Kind::U,
+        1.0,
         "",
         &["Identifiable", "NotIdentifiable", "Fallback"],
     ),
-    ("estimate_crc", 14, 4, false, "", &[]),
+    ("estimate_crc", 14, 4, Kind::U, 1.0, "", &[]),
 ];
 
-/// The result messages whose bodies are signals on CAN FD.
-const RESULTS: [(MsgType, &[Field]); 2] =
-    [(MsgType::Forces, &FORCES), (MsgType::Estimate, &ESTIMATE)];
+/// `CompactMeasurement`'s body: wheel (1), t_us (4), then i16 counts (u16 for Fz), then the
+/// CRC-32. A count of −32768 marks an absent optional field.
+const COMPACT: [Field; 12] = [
+    ("wheel", 0, 1, Kind::U, 1.0, "", WHEELS),
+    ("t_us", 1, 4, Kind::U, 1.0, "us", &[]),
+    ("Fz", 5, 2, Kind::U, 0.5, "N", &[]),
+    ("Fy", 7, 2, Kind::I, 1.0, "N", &[]),
+    ("Mz", 9, 2, Kind::I, 0.1, "N.m", &[]),
+    ("Fx", 11, 2, Kind::I, 1.0, "N", &[]),
+    ("vx", 13, 2, Kind::I, 0.01, "m/s", &[]),
+    ("omega", 15, 2, Kind::I, 0.01, "rad/s", &[]),
+    ("alpha", 17, 2, Kind::I, 1e-4, "rad", &[]),
+    ("kappa", 19, 2, Kind::I, 1e-4, "", &[]),
+    ("gamma", 21, 2, Kind::I, 1e-4, "rad", &[]),
+    ("crc", 23, 4, Kind::U, 1.0, "", &[]),
+];
+
+/// The single-frame messages whose bodies are signals on CAN FD, by identifier.
+const BODIES: [(u16, MsgType, &[Field]); 3] = [
+    (id::COMPACT, MsgType::CompactMeasurement, &COMPACT),
+    (id::RESULT, MsgType::Forces, &FORCES),
+    (id::RESULT, MsgType::Estimate, &ESTIMATE),
+];
+
+/// `true` when identifier `cid` has physical signals on a bus of `mtu`.
+fn has_bodies(mtu: Mtu, cid: u16) -> bool {
+    mtu == Mtu::Fd && BODIES.iter().any(|b| b.0 == cid)
+}
 
 /// Writes the DBC text for classic CAN ([`Mtu::Classic`]) or CAN FD ([`Mtu::Fd`]).
 pub fn write<W: Write>(w: &mut W, mtu: Mtu) -> fmt::Result {
@@ -123,7 +163,7 @@ pub fn write<W: Write>(w: &mut W, mtu: Mtu) -> fmt::Result {
             ("GOUGH", "HOST")
         };
         let len = mtu.frame_len(cid);
-        let signals = fd && cid == id::RESULT;
+        let signals = has_bodies(mtu, cid);
         writeln!(w)?;
         writeln!(w, "BO_ {cid} {name}: {len} {tx}")?;
         writeln!(w, " SG_ frame_index M : 0|6@1+ (1,0) [0|63] \"\" {rx}")?;
@@ -134,18 +174,13 @@ pub fn write<W: Write>(w: &mut W, mtu: Mtu) -> fmt::Result {
         writeln!(w, " SG_ proto_version m0 : 24|8@1+ (1,0) [0|255] \"\" {rx}")?;
         if signals {
             writeln!(w, " SG_ msg_type m0M : 32|8@1+ (1,0) [0|255] \"\" {rx}")?;
-            for (t, fields) in RESULTS {
-                for (name, off, n, float, unit, _) in fields.iter() {
-                    let (lo, hi) = if *float {
-                        ("-3.4E+038", "3.4E+038")
-                    } else {
-                        ("0", "0")
-                    };
-                    let sign = if *float { '-' } else { '+' };
+            for (_, t, fields) in BODIES.iter().filter(|b| b.0 == cid) {
+                for (name, off, n, kind, scale, unit, _) in fields.iter() {
+                    let sign = if *kind == Kind::U { '+' } else { '-' };
                     writeln!(
                         w,
-                        " SG_ {name} m{} : {}|{}@1{sign} (1,0) [{lo}|{hi}] \"{unit}\" {rx}",
-                        t as u8,
+                        " SG_ {name} m{} : {}|{}@1{sign} ({scale},0) [0|0] \"{unit}\" {rx}",
+                        *t as u8,
                         (BODY + off) * 8,
                         n * 8
                     )?;
@@ -189,18 +224,18 @@ pub fn write<W: Write>(w: &mut W, mtu: Mtu) -> fmt::Result {
         writeln!(w, " ;")?;
     }
     if fd {
-        for (_, fields) in RESULTS {
-            for (name, _, _, _, _, table) in fields.iter().filter(|f| !f.5.is_empty()) {
-                write!(w, "VAL_ {} {name}", id::RESULT)?;
+        for (cid, _, fields) in BODIES {
+            for (name, .., table) in fields.iter().filter(|f| !f.6.is_empty()) {
+                write!(w, "VAL_ {cid} {name}")?;
                 for (i, v) in table.iter().enumerate() {
                     write!(w, " {i} \"{v}\"")?;
                 }
                 writeln!(w, " ;")?;
             }
         }
-        for (_, fields) in RESULTS {
-            for (name, ..) in fields.iter().filter(|f| f.3) {
-                writeln!(w, "SIG_VALTYPE_ {} {name} : 1;", id::RESULT)?;
+        for (cid, _, fields) in BODIES {
+            for (name, ..) in fields.iter().filter(|f| f.3 == Kind::F) {
+                writeln!(w, "SIG_VALTYPE_ {cid} {name} : 1;")?;
             }
         }
     }
@@ -214,14 +249,14 @@ pub fn write<W: Write>(w: &mut W, mtu: Mtu) -> fmt::Result {
             }
             writeln!(w, " frame_index 1-63;")?;
         }
-        if fd && cid == id::RESULT {
+        if has_bodies(mtu, cid) {
             // Two multiplexers: every multiplexed signal names its multiplexer here.
             for name in ["msg_len", "proto_version", "msg_type"] {
                 writeln!(w, "SG_MUL_VAL_ {cid} {name} frame_index 0-0;")?;
             }
-            for (t, fields) in RESULTS {
+            for (_, t, fields) in BODIES.iter().filter(|b| b.0 == cid) {
                 for (name, ..) in fields.iter() {
-                    writeln!(w, "SG_MUL_VAL_ {cid} {name} msg_type {0}-{0};", t as u8)?;
+                    writeln!(w, "SG_MUL_VAL_ {cid} {name} msg_type {0}-{0};", *t as u8)?;
                 }
             }
         }

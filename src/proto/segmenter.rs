@@ -30,13 +30,14 @@ impl Mtu {
     /// Length of every frame on identifier `cid` \[bytes\]: each identifier has one fixed
     /// data length (as bus tools and DBC files expect), and a frame that carries fewer message
     /// bytes is padded with 0x00 (receivers ignore padding after the announced length).
-    /// Classic CAN: 8 on every identifier. CAN FD: 32 on [`id::RESULT`] (a whole
-    /// [`Msg::Forces`] or [`Msg::Estimate`] fits one frame), 64 on the others.
+    /// Classic CAN: 8 on every identifier. CAN FD: 32 on [`id::RESULT`] and [`id::COMPACT`] (a
+    /// whole [`Msg::Forces`], [`Msg::Estimate`] or [`Msg::CompactMeasurement`] fits one frame),
+    /// 64 on the others.
     pub const fn frame_len(self, cid: u16) -> usize {
         match self {
             Mtu::Classic => 8,
             Mtu::Fd => {
-                if cid == id::RESULT {
+                if cid == id::RESULT || cid == id::COMPACT {
                     32
                 } else {
                     64
@@ -46,6 +47,9 @@ impl Mtu {
     }
 }
 
+// A `CompactMeasurement` is 29 bytes encoded, one 32-byte frame; postcard's `MaxSize` counts its
+// fixed-width fields as varints (2 bytes more per i16), so that bound is checked by a test
+// (`proto::tests::compact_measurement`), not here.
 const _: () = assert!(
     3 + 2 + super::Forces::POSTCARD_MAX_SIZE + 4 <= Mtu::Fd.frame_len(id::RESULT)
         && 3 + 2 + super::Estimate::POSTCARD_MAX_SIZE + 4 <= Mtu::Fd.frame_len(id::RESULT)

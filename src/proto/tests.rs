@@ -57,6 +57,11 @@ pub(crate) fn largest() -> Vec<Msg> {
             ..Settings::default()
         }),
         Msg::Command(Command::Stop),
+        Msg::CompactMeasurement(CompactMeasurement {
+            t_us: u32::MAX,
+            fz: u16::MAX,
+            ..CompactMeasurement::default()
+        }),
         Msg::Forces(Forces {
             flags: u16::MAX,
             ..Forces::default()
@@ -197,8 +202,81 @@ fn round_trip_classic_and_fd() {
             assert_eq!(got, Some(m));
         }
         assert_eq!(r.counters().dropped(), 0);
-        assert_eq!(r.counters().messages, 10);
+        assert_eq!(r.counters().messages, 11);
     }
+}
+
+#[test]
+fn compact_measurement() {
+    let m = meas();
+    let c = CompactMeasurement::new(&m).unwrap();
+    let back = c.measurement();
+    assert_eq!(back.delta, None);
+    assert!((back.fz - m.fz).abs() <= 0.25);
+    assert!((back.fy - m.fy).abs() <= 0.5);
+    assert!((back.mz - m.mz).abs() <= 0.05 + 1e-4);
+    assert!((back.alpha.unwrap() - m.alpha.unwrap()).abs() <= 0.5e-4 + 1e-7);
+    assert_eq!(back.fx.is_some(), m.fx.is_some());
+    // Every field at the end of its range: 29 bytes, 5 classic frames, one 32-byte FD frame.
+    let big = CompactMeasurement {
+        wheel: Wheel::RearRight,
+        t_us: u32::MAX,
+        fz: u16::MAX,
+        fy: i16::MAX,
+        mz: i16::MIN,
+        fx: -1,
+        vx: i16::MAX,
+        omega: i16::MAX,
+        alpha: i16::MAX,
+        kappa: i16::MAX,
+        gamma: i16::MAX,
+    };
+    let msg = Msg::CompactMeasurement(big);
+    let mut b = [0u8; MSG_BUF];
+    assert_eq!(msg.encode(&mut b).unwrap(), 29);
+    assert_eq!(frames(&msg, 0, Mtu::Classic).len(), 5);
+    let fd = frames(&msg, 0, Mtu::Fd);
+    assert_eq!((fd.len(), fd[0].len()), (1, 32));
+    assert_eq!(id::of(msg.msg_type()), id::COMPACT);
+    // Out of range or not finite: refused, never clamped.
+    for bad in [
+        Measurement { fz: -1.0, ..m },
+        Measurement { fz: 40_000.0, ..m },
+        Measurement { fy: f32::NAN, ..m },
+        Measurement { mz: 5000.0, ..m },
+        Measurement {
+            alpha: Some(3.3),
+            ..m
+        },
+        Measurement {
+            vx: Some(f32::INFINITY),
+            ..m
+        },
+    ] {
+        assert_eq!(CompactMeasurement::new(&bad), None, "{bad:?}");
+    }
+    // Absent stays absent.
+    let none = Measurement {
+        fx: None,
+        vx: None,
+        omega: None,
+        alpha: None,
+        kappa: None,
+        gamma: None,
+        ..m
+    };
+    let c = CompactMeasurement::new(&none).unwrap();
+    assert_eq!(c.fx, CompactMeasurement::ABSENT);
+    assert_eq!(
+        c.measurement(),
+        Measurement {
+            fz: c.measurement().fz,
+            fy: c.measurement().fy,
+            mz: c.measurement().mz,
+            delta: None,
+            ..none
+        }
+    );
 }
 
 #[test]

@@ -2,7 +2,9 @@
 use crate::replay::{self, Answer, Backend32};
 use crate::tyre;
 use clap::Subcommand;
-use gough::proto::{id, Ack, Feed, Msg, MsgType, Mtu, Reassembler, Segmenter, MSG_BUF};
+use gough::proto::{
+    id, Ack, CompactMeasurement, Feed, Msg, MsgType, Mtu, Reassembler, Segmenter, MSG_BUF,
+};
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
@@ -34,6 +36,10 @@ pub enum ProtoCmd {
         /// CAN FD frames instead of classic CAN.
         #[arg(long)]
         fd: bool,
+        /// Send each measurement as a `CompactMeasurement` (the pipeline then runs on the
+        /// values it carries).
+        #[arg(long)]
+        compact: bool,
         /// Write to this file instead of stdout.
         #[arg(long)]
         out: Option<PathBuf>,
@@ -67,14 +73,33 @@ pub fn run(cmd: ProtoCmd) -> Result<(), String> {
             gough::proto::dbc::write(&mut s, mtu).map_err(|e| e.to_string())?;
             emit(&s, out)
         }
-        ProtoCmd::Frames { tir, log, fd, out } => {
+        ProtoCmd::Frames {
+            tir,
+            log,
+            fd,
+            compact,
+            out,
+        } => {
             let t = tyre::load(&tir)?;
-            let rows = replay::read_log(&log).map_err(|e| e.to_string())?;
+            let mut rows = replay::read_log(&log).map_err(|e| e.to_string())?;
+            let mut sent: Vec<Msg> = rows.iter().map(|m| Msg::Measurement(*m)).collect();
+            if compact {
+                for (i, (m, s)) in rows.iter_mut().zip(&mut sent).enumerate() {
+                    let c = CompactMeasurement::new(m).ok_or_else(|| {
+                        format!(
+                            "row {}: a value out of the compact measurement's range",
+                            i + 1
+                        )
+                    })?;
+                    *m = c.measurement();
+                    *s = Msg::CompactMeasurement(c);
+                }
+            }
             let mtu = if fd { Mtu::Fd } else { Mtu::Classic };
             let replies = replay::host_f32(&t.params.cast::<f32>(), &rows, Backend32::Fast);
             let mut msgs = Vec::new();
-            for (m, r) in rows.iter().zip(&replies) {
-                msgs.push(Msg::Measurement(*m));
+            for (m, r) in sent.iter().zip(&replies) {
+                msgs.push(*m);
                 msgs.push(match r.answer {
                     Answer::Forces(f) => Msg::Forces(f),
                     Answer::Ack(code) => Msg::Ack(Ack {
@@ -88,8 +113,8 @@ pub fn run(cmd: ProtoCmd) -> Result<(), String> {
                 }
             }
             let mut s = String::new();
-            let mut seq = [0u8; 4];
-            let mut rx: [Reassembler<MSG_BUF>; 4] = Default::default();
+            let mut seq = [0u8; 5];
+            let mut rx: [Reassembler<MSG_BUF>; 5] = Default::default();
             for m in &msgs {
                 let cid = id::of(m.msg_type());
                 let k = id::ALL.iter().position(|x| x.0 == cid).unwrap_or(0);
@@ -144,6 +169,16 @@ fn frames_json(
         ),
         Msg::Estimate(x) => ("Estimate", serde_json::to_value(x), Some(x.t_us), None),
         Msg::Ack(x) => ("Ack", serde_json::to_value(x), None, None),
+        Msg::CompactMeasurement(x) => (
+            "CompactMeasurement",
+            Ok(serde_json::json!({
+                "wheel": serde_json::to_value(x.wheel).map_err(|e| e.to_string())?,
+                "fz": x.fz, "fy": x.fy, "mz": x.mz, "fx": x.fx, "vx": x.vx,
+                "omega": x.omega, "alpha": x.alpha, "kappa": x.kappa, "gamma": x.gamma,
+            })),
+            Some(x.t_us),
+            None,
+        ),
         other => return Err(format!("unexpected message {other:?}")),
     };
     let mut body = body.map_err(|e| e.to_string())?;
