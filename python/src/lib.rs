@@ -11,7 +11,7 @@ use gough_host::mfrun::{self, Precision};
 use gough_host::mu::{self, peers::Row, Method};
 use numpy::{IntoPyArray, PyArray1, PyReadonlyArray1};
 use pyo3::create_exception;
-use pyo3::exceptions::{PyValueError};
+use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
@@ -155,6 +155,13 @@ impl Tyre {
     }
 }
 
+/// μ, σ and the state names of an estimator run.
+type Estimates<'py> = (
+    Bound<'py, PyArray1<f64>>,
+    Bound<'py, PyArray1<f64>>,
+    Vec<&'static str>,
+);
+
 /// `gough mu estimate` on columns (NaN = not logged; `has_fx` says whether Fx was logged).
 /// Returns (mu, sigma, state names).
 #[pyfunction]
@@ -175,7 +182,7 @@ fn _estimate_mu<'py>(
     has_fx: bool,
     method: &str,
     precision: &str,
-) -> PyResult<(Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<f64>>, Vec<&'static str>)> {
+) -> PyResult<Estimates<'py>> {
     let method = match method {
         "gough" => Method::Gough,
         "hsu-gerdes" => Method::HsuGerdes,
@@ -189,15 +196,30 @@ fn _estimate_mu<'py>(
     let prec = match precision {
         "f64" => mu::Precision::F64,
         "f32" => mu::Precision::F32,
-        p => return Err(PyValueError::new_err(format!("precision '{p}': expected f64 or f32"))),
+        p => {
+            return Err(PyValueError::new_err(format!(
+                "precision '{p}': expected f64 or f32"
+            )))
+        }
     };
     let arr = |a: &PyReadonlyArray1<'py, f64>| -> PyResult<Vec<f64>> {
-        Ok(a.as_slice().map_err(|e| PyValueError::new_err(e.to_string()))?.to_vec())
+        Ok(a.as_slice()
+            .map_err(|e| PyValueError::new_err(e.to_string()))?
+            .to_vec())
     };
     let (t, fz, fy, mz) = (arr(&t)?, arr(&fz)?, arr(&fy)?, arr(&mz)?);
-    let (fx, vx, kappa, alpha, gamma) = (arr(&fx)?, arr(&vx)?, arr(&kappa)?, arr(&alpha)?, arr(&gamma)?);
+    let (fx, vx, kappa, alpha, gamma) = (
+        arr(&fx)?,
+        arr(&vx)?,
+        arr(&kappa)?,
+        arr(&alpha)?,
+        arr(&gamma)?,
+    );
     let n = t.len();
-    if [&fz, &fy, &mz, &fx, &vx, &kappa, &alpha, &gamma].iter().any(|c| c.len() != n) {
+    if [&fz, &fy, &mz, &fx, &vx, &kappa, &alpha, &gamma]
+        .iter()
+        .any(|c| c.len() != n)
+    {
         return Err(PyValueError::new_err("columns of different lengths"));
     }
     let mut last = f64::NEG_INFINITY;
@@ -205,7 +227,9 @@ fn _estimate_mu<'py>(
     for i in 0..n {
         for (name, v) in [("t", t[i]), ("fz", fz[i]), ("fy", fy[i]), ("mz", mz[i])] {
             if !v.is_finite() {
-                return Err(PyValueError::new_err(format!("row {i}, column {name}: not a finite number ({v})")));
+                return Err(PyValueError::new_err(format!(
+                    "row {i}, column {name}: not a finite number ({v})"
+                )));
             }
         }
         if t[i] <= last {
@@ -215,7 +239,16 @@ fn _estimate_mu<'py>(
             )));
         }
         last = t[i];
-        rows.push(Row { t: t[i], fz: fz[i], fy: fy[i], mz: mz[i], fx: fx[i], vx: vx[i], kappa: kappa[i], alpha: alpha[i] });
+        rows.push(Row {
+            t: t[i],
+            fz: fz[i],
+            fy: fy[i],
+            mz: mz[i],
+            fx: fx[i],
+            vx: vx[i],
+            kappa: kappa[i],
+            alpha: alpha[i],
+        });
     }
     let params = &tyre.params;
     let (est, _) = py
@@ -244,10 +277,14 @@ fn _diagnose_gap(
     fit_rows: Option<usize>,
 ) -> PyResult<String> {
     let v = |a: &PyReadonlyArray1<'_, f64>| -> PyResult<Vec<f64>> {
-        Ok(a.as_slice().map_err(|e| PyValueError::new_err(e.to_string()))?.to_vec())
+        Ok(a.as_slice()
+            .map_err(|e| PyValueError::new_err(e.to_string()))?
+            .to_vec())
     };
     if cols.len() != gap::log::REQUIRED.len() {
-        return Err(PyValueError::new_err("expected the columns t,vx,alpha,kappa,gamma,fz,fx,fy,mz"));
+        return Err(PyValueError::new_err(
+            "expected the columns t,vx,alpha,kappa,gamma,fz,fx,fy,mz",
+        ));
     }
     let c: Vec<Vec<f64>> = cols.iter().map(v).collect::<PyResult<_>>()?;
     let n = c[0].len();
@@ -276,7 +313,11 @@ fn _diagnose_gap(
                 &log,
                 tir_name,
                 log_name,
-                &gap::Options { progress: false, plots: None, fit_rows },
+                &gap::Options {
+                    progress: false,
+                    plots: None,
+                    fit_rows,
+                },
             )
         })
         .map_err(PyValueError::new_err)?;

@@ -176,6 +176,33 @@ pub fn venv() -> Result<std::path::PathBuf, String> {
     Ok(py)
 }
 
+/// Builds the Python package (python/) into the venv with `maturin develop` (the dev profile:
+/// a quick build; docs/python.md measures the release build that `pip install ./python` makes).
+fn python_package() -> Result<(), String> {
+    let py = venv()?;
+    run(Command::new(&py)
+        .args([
+            "-m",
+            "pip",
+            "install",
+            "--quiet",
+            "--disable-pip-version-check",
+            "-r",
+        ])
+        .arg(root().join("python/requirements-test.txt")))?;
+    let venv = root().join(".venv");
+    run(Command::new(venv.join("bin/maturin"))
+        .current_dir(root().join("python"))
+        .args(["develop", "--quiet"])
+        .env("VIRTUAL_ENV", &venv)
+        .env("PATH", {
+            let mut p = std::ffi::OsString::from(venv.join("bin"));
+            p.push(":");
+            p.push(std::env::var_os("PATH").unwrap_or_default());
+            p
+        }))
+}
+
 /// Runs pytest on `tests` in the venv with `GOUGH` = the debug `gough` binary, echoing its
 /// output, and adds up its closing line ("N passed, M failed").
 fn pytest(tests: &[&str], passed: &mut u64, failed: &mut u64) -> Result<(), String> {
@@ -253,6 +280,9 @@ fn test_all() -> Result<(), String> {
     cargo_test(&["--workspace"], &mut passed, &mut failed)?;
     step("DBC files decoded by cantools (strict) against the host's frames (pytest in .venv)");
     pytest(&["host-tests/python/test_dbc.py"], &mut passed, &mut failed)?;
+    step("Python package python/ (maturin develop, dev profile, into .venv): oracle sweeps, CLI equality, fleet on a dask LocalCluster");
+    python_package()?;
+    pytest(&["python/tests"], &mut passed, &mut failed)?;
     ensure_qemu()?;
     firmware::test_all(&mut passed)?;
     println!("\ntest-all: {passed} passed, {failed} failed");
