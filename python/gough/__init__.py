@@ -16,7 +16,8 @@ import numpy as np
 
 from . import _gough
 
-__all__ = ["Tyre", "TirError", "estimate_mu", "diagnose_gap", "read_log", "OUTPUT_COLUMNS"]
+__all__ = ["Tyre", "TirError", "estimate_mu", "diagnose_gap", "simulate", "read_log",
+           "OUTPUT_COLUMNS"]
 
 #: The columns `Tyre.eval` returns: those of `gough mf eval` after its inputs.
 OUTPUT_COLUMNS = tuple(_gough.OUTPUT_COLUMNS)
@@ -170,3 +171,24 @@ def diagnose_gap(tyre: Tyre, log, tir_name: str = "<tyre>", log_name: str | None
     opt = [_col(cols, c, required=False) for c in ("p", "phit", "mu")]
     text = _gough._diagnose_gap(tyre._inner, req, *opt, tir_name, log_name, fit_rows)
     return json.loads(text)
+
+
+def simulate(tyre: Tyre, manoeuvre: str, road: str | None = None, speed: float | None = None,
+             duration: float | None = None, dt: float | None = None, steer: float | None = None,
+             radius: float | None = None, decel: float | None = None, abs: bool = True,
+             log_every: int | None = None):
+    """The vehicle simulation of `gough sim` (the same tyre at every wheel): a manoeuvre
+    (step-steer, sine-dwell, brake-in-turn, abs-split, constant-radius, slalom, coast-down) on a
+    road (`gough sim --road` syntax, e.g. 'mu=0.9', 'split=0.9/0.2'; None: the tyre file's own
+    surface). speed [m/s], duration [s], dt [s], steer [deg of steering wheel], radius [m],
+    decel [m/s²], as the CLI's flags. Returns the log as a DataFrame with the columns of the
+    CLI's log.csv. Raises ValueError for a bad argument, naming its flag."""
+    import pandas as pd
+
+    def txt(x):
+        return None if x is None else repr(float(x))
+
+    cols, data = _gough._simulate(
+        tyre._inner, manoeuvre, road, txt(speed), txt(duration), txt(dt), txt(steer),
+        txt(radius), txt(decel), not abs, None if log_every is None else str(int(log_every)))
+    return pd.DataFrame(data, columns=cols)

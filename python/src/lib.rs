@@ -324,12 +324,59 @@ fn _diagnose_gap(
     serde_json::to_string(&d.report).map_err(|e| PyValueError::new_err(e.to_string()))
 }
 
+/// `gough sim` without files: the manoeuvre's log as (column names, rows × columns array).
+/// Numbers come as text, parsed by the CLI's own argument code (`gough_host::cli::sim::config`).
+#[pyfunction]
+#[allow(clippy::too_many_arguments)]
+#[pyo3(signature = (tyre, manoeuvre, road=None, speed=None, duration=None, dt=None, steer=None, radius=None, decel=None, no_abs=false, log_every=None))]
+fn _simulate<'py>(
+    py: Python<'py>,
+    tyre: &Tyre,
+    manoeuvre: String,
+    road: Option<String>,
+    speed: Option<String>,
+    duration: Option<String>,
+    dt: Option<String>,
+    steer: Option<String>,
+    radius: Option<String>,
+    decel: Option<String>,
+    no_abs: bool,
+    log_every: Option<String>,
+) -> PyResult<(Vec<String>, Bound<'py, numpy::PyArray2<f64>>)> {
+    let args = gough_host::cli::sim::SimArgs {
+        manoeuvre: Some(manoeuvre),
+        tir: None,
+        road,
+        speed,
+        duration,
+        dt,
+        steer,
+        radius,
+        decel,
+        no_abs,
+        log_every,
+        no_plots: true,
+        plot_size: None,
+        out: None,
+    };
+    let cfg = gough_host::cli::sim::config(&args).map_err(PyValueError::new_err)?;
+    let params = &tyre.params;
+    let log = py
+        .detach(|| gough_host::sim::simulate(&cfg, params, false))
+        .map_err(PyValueError::new_err)?;
+    let rows: Vec<Vec<f64>> = log.records.iter().map(gough_host::sim::Log::row).collect();
+    let a =
+        numpy::PyArray2::from_vec2(py, &rows).map_err(|e| PyValueError::new_err(e.to_string()))?;
+    Ok((gough_host::sim::columns(), a))
+}
+
 /// The extension module.
 #[pymodule]
 fn _gough(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<Tyre>()?;
     m.add_function(wrap_pyfunction!(_estimate_mu, m)?)?;
     m.add_function(wrap_pyfunction!(_diagnose_gap, m)?)?;
+    m.add_function(wrap_pyfunction!(_simulate, m)?)?;
     m.add("TirError", m.py().get_type::<TirError>())?;
     m.add("OUTPUT_COLUMNS", mfrun::OUTPUT_COLUMNS.to_vec())?;
     Ok(())
