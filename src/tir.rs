@@ -94,6 +94,19 @@ pub enum ErrorKind {
     Invalid(Key, Invalid),
 }
 
+impl ErrorKind {
+    /// The key the error concerns, if it concerns one.
+    pub const fn key(&self) -> Option<Key> {
+        match self {
+            ErrorKind::MissingKey(k)
+            | ErrorKind::BadNumber(k)
+            | ErrorKind::DuplicateKey(k)
+            | ErrorKind::Invalid(k, _) => Some(*k),
+            _ => None,
+        }
+    }
+}
+
 /// Why a parameter value is unusable (see [`validate`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]

@@ -1151,6 +1151,11 @@ fn to_c(m: &Msg) -> gough_msg_t {
             o.kind = GOUGH_MSG_MEASUREMENT;
             o.measurement = to_c_meas(x);
         }
+        // A compact measurement reaches C as the measurement it stands for.
+        Msg::CompactMeasurement(x) => {
+            o.kind = GOUGH_MSG_MEASUREMENT;
+            o.measurement = to_c_meas(&x.measurement());
+        }
         Msg::ParamBegin(x) => {
             o.kind = GOUGH_MSG_PARAM_BEGIN;
             o.param_len = x.len;

@@ -109,6 +109,7 @@ pub struct App {
     text: [u8; MAX_TIR_LEN],
     rx_meas: Reassembler<MSG_BUF>,
     rx_cfg: Reassembler<MSG_BUF>,
+    rx_compact: Reassembler<MSG_BUF>,
     queue: heapless::Deque<(Measurement, u8), QUEUE>,
     settings: Settings,
     eval_errors: u32,
@@ -151,6 +152,7 @@ impl App {
             text: [0; MAX_TIR_LEN],
             rx_meas: Reassembler::new(),
             rx_cfg: Reassembler::new(),
+            rx_compact: Reassembler::new(),
             queue: heapless::Deque::new(),
             settings: Settings {
                 limits: true,
@@ -271,6 +273,7 @@ impl App {
     pub fn status(&self) -> Status {
         let mut rx = *self.rx_meas.counters();
         rx.add(self.rx_cfg.counters());
+        rx.add(self.rx_compact.counters());
         Status {
             firmware: crate::VERSION,
             proto: proto::PROTO_VERSION,
@@ -315,6 +318,7 @@ impl App {
         self.now_ms = now_ms;
         let _ = self.rx_meas.poll(now_ms);
         let _ = self.rx_cfg.poll(now_ms);
+        let _ = self.rx_compact.poll(now_ms);
         for _ in 0..RX_BUDGET {
             let frame = match can.receive() {
                 Ok(f) => f,
@@ -330,6 +334,7 @@ impl App {
             let fed = match link::standard_id(&frame) {
                 Some(id::MEASUREMENT) => self.rx_meas.feed(data, now_ms),
                 Some(id::CONFIG) => self.rx_cfg.feed(data, now_ms),
+                Some(id::COMPACT) => self.rx_compact.feed(data, now_ms),
                 _ => continue, // other traffic on the bus
             };
             match fed {
@@ -351,6 +356,11 @@ impl App {
         msg: Msg,
         seq: u8,
     ) -> Option<Event> {
+        let msg = match msg {
+            // The same pipeline, on the measurement it stands for.
+            Msg::CompactMeasurement(c) => Msg::Measurement(c.measurement()),
+            other => other,
+        };
         match msg {
             Msg::Measurement(m) => {
                 if self.queue.push_back((m, seq)).is_err() {
@@ -458,6 +468,7 @@ impl App {
             }
             // Device → host messages on our receive identifiers: not for us.
             Msg::Forces(_) | Msg::Estimate(_) | Msg::Status(_) | Msg::Ack(_) => {}
+            Msg::CompactMeasurement(_) => {} // turned into a Measurement above
         }
         None
     }

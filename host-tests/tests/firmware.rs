@@ -2,7 +2,7 @@
 //! firmware (`cargo build --release` in firmware/), so the tests are `#[ignore]`d in a plain
 //! `cargo test`; `cargo xtask test-all` builds the firmware and runs them with `--ignored`
 //! (and fails, never skips, when QEMU is missing).
-use gough::proto::{Command, Measurement, Msg, Wheel};
+use gough::proto::{Command, CompactMeasurement, Measurement, Msg, Wheel};
 use gough_host::device::{self, Device, Qemu, SlcanTcp};
 use std::path::Path;
 use std::process::Command as Proc;
@@ -129,6 +129,55 @@ fn garbage_on_the_uart_is_counted_and_harmless() {
         "bad frames are counted"
     );
     assert!(after.rx.frames >= before.rx.frames + 200);
+    dev.send(&Msg::Command(Command::Stop)).unwrap();
+    assert_eq!(q.wait(Duration::from_secs(20)), Some(0));
+}
+
+#[test]
+#[ignore = "needs QEMU and the release firmware; run by `cargo xtask test-all`"]
+fn compact_measurement_is_answered_like_the_measurement_it_stands_for() {
+    let mut q = Qemu::start(
+        &device::firmware_elf("gough-firmware"),
+        &root().join("target/qemu-compact"),
+        true,
+        None,
+    )
+    .unwrap();
+    let mut dev = Device::new(SlcanTcp::connect(q.port, Duration::from_secs(20)).unwrap());
+    let m = Measurement {
+        wheel: Wheel::FrontRight,
+        t_us: 7,
+        fz: 4321.3,
+        fy: -1234.4,
+        mz: 21.37,
+        alpha: Some(0.0312),
+        kappa: Some(-0.0207),
+        vx: Some(19.99),
+        ..Measurement::default()
+    };
+    let c = CompactMeasurement::new(&m).unwrap();
+    let forces = |dev: &mut Device, msg: Msg| {
+        dev.send(&msg).unwrap();
+        loop {
+            match dev.recv(Duration::from_secs(10)).unwrap() {
+                Msg::Forces(f) => break f,
+                _ => continue,
+            }
+        }
+    };
+    let a = forces(&mut dev, Msg::CompactMeasurement(c));
+    let b = forces(&mut dev, Msg::Measurement(c.measurement()));
+    let raw = forces(&mut dev, Msg::Measurement(m));
+    assert_eq!((a.wheel, a.t_us), (Wheel::FrontRight, 7));
+    assert_eq!((a.fx, a.fy, a.mz, a.flags), (b.fx, b.fy, b.mz, b.flags));
+    // Within the rounding of the counts (α, κ to 0.5e-4): a few newtons.
+    assert!(
+        (a.fy - raw.fy).abs() < 10.0 && (a.fx - raw.fx).abs() < 10.0,
+        "{a:?} {raw:?}"
+    );
+    assert!(a.fy != 0.0);
+    let st = dev.status(Duration::from_secs(10)).unwrap();
+    assert_eq!(st.rx.dropped(), 0);
     dev.send(&Msg::Command(Command::Stop)).unwrap();
     assert_eq!(q.wait(Duration::from_secs(20)), Some(0));
 }

@@ -11,6 +11,7 @@
 //! - [`plot`] — fonts, ranges and labels of every PNG.
 //! - [`csvio`], [`tyre`] — reading logs and tyre files with one-line errors; [`rng`] — the
 //!   seeded random generator.
+pub mod busload;
 pub mod cli;
 pub mod csvio;
 pub mod device;

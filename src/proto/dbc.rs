@@ -1,20 +1,157 @@
-//! The bus description as a DBC file (`gough proto dbc`), generated from the tables of this
-//! module so it cannot drift from the code.
+//! The bus description as a DBC file (`gough proto dbc`, `gough proto dbc --fd`), generated
+//! from the tables of this module so it cannot drift from the code.
 //!
-//! What a DBC can show of this protocol: per identifier, the frame header (first/last flags,
-//! frame index, message sequence number) and, in first frames (multiplexed on the frame index
-//! 0), the message length, the protocol version and the message type with its name. Message
-//! bodies are postcard-encoded and segmented across frames, so their fields are not DBC
-//! signals: decode them with `gough` or a client of this protocol.
+//! Every frame of the protocol decodes against it, also in strict decoders (cantools: exact
+//! data length, a signal set for every value of a multiplexer). Per identifier:
+//! - the frame header: `frame_index` (the multiplexer), `last_frame`, `first_frame`, `msg_seq`;
+//! - first frames (`frame_index` 0): `msg_len`, `proto_version`, `msg_type` (with its names) and
+//!   the message bytes that follow as `first_bytes*` (little-endian integers of ≤ 8 bytes);
+//! - continuation frames (`frame_index` 1..=63, an extended-multiplexing range): the message
+//!   bytes as `next_bytes*`.
+//!
+//! Each identifier has one frame length ([`Mtu::frame_len`]): 8 on classic CAN; 64 on CAN FD, 32
+//! on [`id::RESULT`] and [`id::COMPACT`]. On CAN FD a whole [`super::Forces`],
+//! [`super::Estimate`] or [`super::CompactMeasurement`] fits one frame, and postcard puts their
+//! fields at fixed offsets (one-byte enums, fixed-width integers, `f32`), so the FD file
+//! multiplexes these identifiers' first frames on `msg_type` and gives the bodies as physical
+//! signals: `wheel`, `t_us`, `Fx`, `Fy`, `Mz` and `flags` of `Forces`; `wheel`, `t_us`, `mu`,
+//! `sigma` and `state` (a value table) of `Estimate`; the scaled fields of `CompactMeasurement`;
+//! and each message's CRC-32. A bus log then shows μ per wheel without gough. On classic CAN
+//! these messages span several frames, and only their bytes are signals.
 
+use super::segmenter::Mtu;
 use super::{id, MsgType, PROTO_VERSION};
 use core::fmt::{self, Write};
 
-/// Writes the DBC text.
-pub fn write<W: Write>(w: &mut W) -> fmt::Result {
+/// Byte offset in a first frame where the message body starts: frame header (3), then the
+/// message's version and type bytes.
+const BODY: usize = 5;
+
+/// Writes `name` (or `name_0`, `name_1`, ..) signals over bytes `from..to` of a frame, ≤ 8
+/// bytes each (little-endian unsigned), multiplexed by `mux`.
+fn byte_signals<W: Write>(
+    w: &mut W,
+    name: &str,
+    mux: &str,
+    (from, to): (usize, usize),
+    rx: &str,
+) -> fmt::Result {
+    let mut start = from;
+    let mut k = 0;
+    while start < to {
+        let n = (to - start).min(8);
+        let max = u64::MAX >> (64 - 8 * n);
+        write!(w, " SG_ {name}")?;
+        if to - from > 8 {
+            write!(w, "_{k}")?;
+        }
+        writeln!(
+            w,
+            " {mux} : {}|{}@1+ (1,0) [0|{max}] \"\" {rx}",
+            start * 8,
+            n * 8
+        )?;
+        start += n;
+        k += 1;
+    }
+    Ok(())
+}
+
+/// How a body field is encoded.
+#[derive(Clone, Copy, PartialEq)]
+enum Kind {
+    /// Unsigned little-endian integer.
+    U,
+    /// Signed (two's complement) little-endian integer.
+    I,
+    /// IEEE-754 `f32`, little endian.
+    F,
+}
+
+/// One physical signal of a single-frame body on CAN FD: name, byte offset in the body, bytes,
+/// encoding, scale (physical value per count), unit, value table. Offsets follow postcard's
+/// encoding of the message (checked by `host-tests/python/test_dbc.py` against encoded
+/// messages).
+type Field = (
+    &'static str,
+    usize,
+    usize,
+    Kind,
+    f32,
+    &'static str,
+    &'static [&'static str],
+);
+
+const WHEELS: &[&str] = &["FrontLeft", "FrontRight", "RearLeft", "RearRight"];
+
+/// `Forces`' body: wheel (1), t_us (4), Fx, Fy, Mz (f32), flags (u16), then the CRC-32.
+const FORCES: [Field; 7] = [
+    ("forces_wheel", 0, 1, Kind::U, 1.0, "", WHEELS),
+    ("forces_t_us", 1, 4, Kind::U, 1.0, "us", &[]),
+    ("Fx", 5, 4, Kind::F, 1.0, "N", &[]),
+    ("Fy", 9, 4, Kind::F, 1.0, "N", &[]),
+    ("Mz", 13, 4, Kind::F, 1.0, "N.m", &[]),
+    ("forces_flags", 17, 2, Kind::U, 1.0, "", &[]),
+    ("forces_crc", 19, 4, Kind::U, 1.0, "", &[]),
+];
+
+/// `Estimate`'s body: wheel (1), t_us (4), μ, σ (f32), state (1), then the CRC-32.
+const ESTIMATE: [Field; 6] = [
+    ("estimate_wheel", 0, 1, Kind::U, 1.0, "", WHEELS),
+    ("estimate_t_us", 1, 4, Kind::U, 1.0, "us", &[]),
+    ("mu", 5, 4, Kind::F, 1.0, "", &[]),
+    ("sigma", 9, 4, Kind::F, 1.0, "", &[]),
+    (
+        "state",
+        13,
+        1,
+        Kind::U,
+        1.0,
+        "",
+        &["Identifiable", "NotIdentifiable", "Fallback"],
+    ),
+    ("estimate_crc", 14, 4, Kind::U, 1.0, "", &[]),
+];
+
+/// `CompactMeasurement`'s body: wheel (1), t_us (4), then i16 counts (u16 for Fz), then the
+/// CRC-32. A count of −32768 marks an absent optional field.
+const COMPACT: [Field; 12] = [
+    ("wheel", 0, 1, Kind::U, 1.0, "", WHEELS),
+    ("t_us", 1, 4, Kind::U, 1.0, "us", &[]),
+    ("Fz", 5, 2, Kind::U, 0.5, "N", &[]),
+    ("Fy", 7, 2, Kind::I, 1.0, "N", &[]),
+    ("Mz", 9, 2, Kind::I, 0.1, "N.m", &[]),
+    ("Fx", 11, 2, Kind::I, 1.0, "N", &[]),
+    ("vx", 13, 2, Kind::I, 0.01, "m/s", &[]),
+    ("omega", 15, 2, Kind::I, 0.01, "rad/s", &[]),
+    ("alpha", 17, 2, Kind::I, 1e-4, "rad", &[]),
+    ("kappa", 19, 2, Kind::I, 1e-4, "", &[]),
+    ("gamma", 21, 2, Kind::I, 1e-4, "rad", &[]),
+    ("crc", 23, 4, Kind::U, 1.0, "", &[]),
+];
+
+/// The single-frame messages whose bodies are signals on CAN FD, by identifier.
+const BODIES: [(u16, MsgType, &[Field]); 3] = [
+    (id::COMPACT, MsgType::CompactMeasurement, &COMPACT),
+    (id::RESULT, MsgType::Forces, &FORCES),
+    (id::RESULT, MsgType::Estimate, &ESTIMATE),
+];
+
+/// `true` when identifier `cid` has physical signals on a bus of `mtu`.
+fn has_bodies(mtu: Mtu, cid: u16) -> bool {
+    mtu == Mtu::Fd && BODIES.iter().any(|b| b.0 == cid)
+}
+
+/// Writes the DBC text for classic CAN ([`Mtu::Classic`]) or CAN FD ([`Mtu::Fd`]).
+pub fn write<W: Write>(w: &mut W, mtu: Mtu) -> fmt::Result {
+    let fd = mtu == Mtu::Fd;
     writeln!(w, "VERSION \"gough-proto-{PROTO_VERSION}\"")?;
     writeln!(w)?;
     writeln!(w, "NS_ :")?;
+    writeln!(
+        w,
+        "\tBA_DEF_\n\tBA_DEF_DEF_\n\tBA_\n\tSIG_VALTYPE_\n\tSG_MUL_VAL_"
+    )?;
     writeln!(w)?;
     writeln!(w, "BS_:")?;
     writeln!(w)?;
@@ -25,15 +162,35 @@ pub fn write<W: Write>(w: &mut W) -> fmt::Result {
         } else {
             ("GOUGH", "HOST")
         };
+        let len = mtu.frame_len(cid);
+        let signals = has_bodies(mtu, cid);
         writeln!(w)?;
-        writeln!(w, "BO_ {cid} {name}: 8 {tx}")?;
+        writeln!(w, "BO_ {cid} {name}: {len} {tx}")?;
         writeln!(w, " SG_ frame_index M : 0|6@1+ (1,0) [0|63] \"\" {rx}")?;
         writeln!(w, " SG_ last_frame : 6|1@1+ (1,0) [0|1] \"\" {rx}")?;
         writeln!(w, " SG_ first_frame : 7|1@1+ (1,0) [0|1] \"\" {rx}")?;
         writeln!(w, " SG_ msg_seq : 8|8@1+ (1,0) [0|255] \"\" {rx}")?;
         writeln!(w, " SG_ msg_len m0 : 16|8@1+ (1,0) [6|255] \"byte\" {rx}")?;
         writeln!(w, " SG_ proto_version m0 : 24|8@1+ (1,0) [0|255] \"\" {rx}")?;
-        writeln!(w, " SG_ msg_type m0 : 32|8@1+ (1,0) [0|255] \"\" {rx}")?;
+        if signals {
+            writeln!(w, " SG_ msg_type m0M : 32|8@1+ (1,0) [0|255] \"\" {rx}")?;
+            for (_, t, fields) in BODIES.iter().filter(|b| b.0 == cid) {
+                for (name, off, n, kind, scale, unit, _) in fields.iter() {
+                    let sign = if *kind == Kind::U { '+' } else { '-' };
+                    writeln!(
+                        w,
+                        " SG_ {name} m{} : {}|{}@1{sign} ({scale},0) [0|0] \"{unit}\" {rx}",
+                        *t as u8,
+                        (BODY + off) * 8,
+                        n * 8
+                    )?;
+                }
+            }
+        } else {
+            writeln!(w, " SG_ msg_type m0 : 32|8@1+ (1,0) [0|255] \"\" {rx}")?;
+            byte_signals(w, "first_bytes", "m0", (BODY, len), rx)?;
+        }
+        byte_signals(w, "next_bytes", "m1", (2, len), rx)?;
     }
     writeln!(w)?;
     for (cid, _, dir) in id::ALL {
@@ -46,12 +203,63 @@ pub fn write<W: Write>(w: &mut W) -> fmt::Result {
         }
         writeln!(w, "\";")?;
     }
+    if fd {
+        writeln!(w, "BA_DEF_ BO_ \"VFrameFormat\" ENUM \"StandardCAN\",\"ExtendedCAN\",\"reserved\",\"J1939PG\",\"reserved\",\"reserved\",\"reserved\",\"reserved\",\"reserved\",\"reserved\",\"reserved\",\"reserved\",\"reserved\",\"reserved\",\"StandardCAN_FD\",\"ExtendedCAN_FD\";")?;
+        writeln!(w, "BA_DEF_ BO_ \"CANFD_BRS\" ENUM \"0\",\"1\";")?;
+        writeln!(w, "BA_DEF_ \"BusType\" STRING ;")?;
+        writeln!(w, "BA_DEF_DEF_ \"VFrameFormat\" \"StandardCAN\";")?;
+        writeln!(w, "BA_DEF_DEF_ \"CANFD_BRS\" \"1\";")?;
+        writeln!(w, "BA_DEF_DEF_ \"BusType\" \"CAN FD\";")?;
+        writeln!(w, "BA_ \"BusType\" \"CAN FD\";")?;
+        for (cid, _, _) in id::ALL {
+            writeln!(w, "BA_ \"VFrameFormat\" BO_ {cid} 14;")?;
+            writeln!(w, "BA_ \"CANFD_BRS\" BO_ {cid} 1;")?;
+        }
+    }
     for (cid, _, _) in id::ALL {
         write!(w, "VAL_ {cid} msg_type")?;
         for t in MsgType::ALL.iter().filter(|t| id::of(**t) == cid) {
             write!(w, " {} \"{}\"", *t as u8, t.name())?;
         }
         writeln!(w, " ;")?;
+    }
+    if fd {
+        for (cid, _, fields) in BODIES {
+            for (name, .., table) in fields.iter().filter(|f| !f.6.is_empty()) {
+                write!(w, "VAL_ {cid} {name}")?;
+                for (i, v) in table.iter().enumerate() {
+                    write!(w, " {i} \"{v}\"")?;
+                }
+                writeln!(w, " ;")?;
+            }
+        }
+        for (cid, _, fields) in BODIES {
+            for (name, ..) in fields.iter().filter(|f| f.3 == Kind::F) {
+                writeln!(w, "SIG_VALTYPE_ {cid} {name} : 1;")?;
+            }
+        }
+    }
+    for (cid, _, _) in id::ALL {
+        let len = mtu.frame_len(cid);
+        let n = (len - 2).div_ceil(8);
+        for k in 0..n {
+            write!(w, "SG_MUL_VAL_ {cid} next_bytes")?;
+            if n > 1 {
+                write!(w, "_{k}")?;
+            }
+            writeln!(w, " frame_index 1-63;")?;
+        }
+        if has_bodies(mtu, cid) {
+            // Two multiplexers: every multiplexed signal names its multiplexer here.
+            for name in ["msg_len", "proto_version", "msg_type"] {
+                writeln!(w, "SG_MUL_VAL_ {cid} {name} frame_index 0-0;")?;
+            }
+            for (_, t, fields) in BODIES.iter().filter(|b| b.0 == cid) {
+                for (name, ..) in fields.iter() {
+                    writeln!(w, "SG_MUL_VAL_ {cid} {name} msg_type {0}-{0};", *t as u8)?;
+                }
+            }
+        }
     }
     Ok(())
 }

@@ -72,6 +72,7 @@ pub const FRAME_TIMEOUT_MS: u32 = 50;
 /// |---|---|---|
 /// | `0x300` | host → device | [`Msg::Measurement`] |
 /// | `0x301` | host → device | [`Msg::ParamBegin`], [`Msg::ParamChunk`], [`Msg::ParamCommit`], [`Msg::Settings`], [`Msg::Command`] |
+/// | `0x302` | host → device | [`Msg::CompactMeasurement`] |
 /// | `0x310` | device → host | [`Msg::Forces`], [`Msg::Estimate`] |
 /// | `0x311` | device → host | [`Msg::Status`], [`Msg::Ack`] |
 pub mod id {
@@ -79,14 +80,18 @@ pub mod id {
     pub const MEASUREMENT: u16 = 0x300;
     /// Configuration and commands, host → device.
     pub const CONFIG: u16 = 0x301;
+    /// Compact measurements, host → device (its own identifier: one frame length per
+    /// identifier, 32 bytes on CAN FD).
+    pub const COMPACT: u16 = 0x302;
     /// Results (predicted forces, friction estimates), device → host.
     pub const RESULT: u16 = 0x310;
     /// Status and acknowledgements, device → host.
     pub const STATUS: u16 = 0x311;
     /// Every identifier with its name and direction, in the order of the table above.
-    pub const ALL: [(u16, &str, &str); 4] = [
+    pub const ALL: [(u16, &str, &str); 5] = [
         (MEASUREMENT, "GOUGH_MEASUREMENT", "host to device"),
         (CONFIG, "GOUGH_CONFIG", "host to device"),
+        (COMPACT, "GOUGH_COMPACT", "host to device"),
         (RESULT, "GOUGH_RESULT", "device to host"),
         (STATUS, "GOUGH_STATUS", "device to host"),
     ];
@@ -95,6 +100,7 @@ pub mod id {
         use super::MsgType as T;
         match t {
             T::Measurement => MEASUREMENT,
+            T::CompactMeasurement => COMPACT,
             T::ParamBegin | T::ParamChunk | T::ParamCommit | T::Settings | T::Command => CONFIG,
             T::Forces | T::Estimate => RESULT,
             T::Status | T::Ack => STATUS,

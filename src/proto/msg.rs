@@ -40,6 +40,8 @@ pub enum MsgType {
     Settings = 0x05,
     /// [`Msg::Command`]
     Command = 0x06,
+    /// [`Msg::CompactMeasurement`]
+    CompactMeasurement = 0x07,
     /// [`Msg::Forces`]
     Forces = 0x81,
     /// [`Msg::Estimate`]
@@ -52,13 +54,14 @@ pub enum MsgType {
 
 impl MsgType {
     /// Every type, in code order.
-    pub const ALL: [MsgType; 10] = [
+    pub const ALL: [MsgType; 11] = [
         MsgType::Measurement,
         MsgType::ParamBegin,
         MsgType::ParamChunk,
         MsgType::ParamCommit,
         MsgType::Settings,
         MsgType::Command,
+        MsgType::CompactMeasurement,
         MsgType::Forces,
         MsgType::Estimate,
         MsgType::Status,
@@ -77,6 +80,7 @@ impl MsgType {
             MsgType::ParamCommit => "ParamCommit",
             MsgType::Settings => "Settings",
             MsgType::Command => "Command",
+            MsgType::CompactMeasurement => "CompactMeasurement",
             MsgType::Forces => "Forces",
             MsgType::Estimate => "Estimate",
             MsgType::Status => "Status",
@@ -182,6 +186,131 @@ impl Measurement {
             fx: self.fx,
             vx: self.vx,
             gamma: self.gamma,
+        }
+    }
+}
+
+/// A [`Measurement`] in scaled integers: 29 bytes encoded instead of 30 to 58, so 5 classic
+/// frames instead of 6 to 10, and one 32-byte CAN FD frame on its own identifier
+/// ([`super::id::COMPACT`]) instead of a 64-byte one. Every field is a fixed-width little-endian
+/// integer at a fixed offset (postcard `fixint`), so the FD DBC shows it as physical signals.
+///
+/// | field | type | unit per count | range |
+/// |---|---|---|---|
+/// | `fz` | u16 | 0.5 N | 0 ..= 32 767.5 N |
+/// | `fy`, `fx` | i16 | 1 N | ±32 767 N |
+/// | `mz` | i16 | 0.1 N·m | ±3 276.7 N·m |
+/// | `vx` | i16 | 0.01 m/s | ±327.67 m/s |
+/// | `omega` | i16 | 0.01 rad/s | ±327.67 rad/s |
+/// | `alpha`, `kappa`, `gamma` | i16 | 1e-4 rad (κ: 1e-4) | ±3.2767 |
+///
+/// Optional fields are absent when [`CompactMeasurement::ABSENT`] (`i16::MIN`). The steering
+/// angle δ is not carried (the device's pipeline does not use it). [`CompactMeasurement::new`]
+/// refuses a value outside its range or not finite (no silent clamp); values are rounded to the
+/// nearest count, so the device sees the measurement within half a count.
+#[derive(Serialize, Deserialize, MaxSize, Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct CompactMeasurement {
+    /// The wheel.
+    pub wheel: Wheel,
+    /// Sample time \[µs\], sender's clock, wrapping.
+    #[serde(with = "postcard::fixint::le")]
+    pub t_us: u32,
+    /// Fz \[0.5 N\].
+    #[serde(with = "postcard::fixint::le")]
+    pub fz: u16,
+    /// Fy \[N\].
+    #[serde(with = "postcard::fixint::le")]
+    pub fy: i16,
+    /// Mz \[0.1 N·m\].
+    #[serde(with = "postcard::fixint::le")]
+    pub mz: i16,
+    /// Fx \[N\] or [`CompactMeasurement::ABSENT`].
+    #[serde(with = "postcard::fixint::le")]
+    pub fx: i16,
+    /// Vx \[0.01 m/s\] or absent.
+    #[serde(with = "postcard::fixint::le")]
+    pub vx: i16,
+    /// ω \[0.01 rad/s\] or absent.
+    #[serde(with = "postcard::fixint::le")]
+    pub omega: i16,
+    /// α \[1e-4 rad\] or absent.
+    #[serde(with = "postcard::fixint::le")]
+    pub alpha: i16,
+    /// κ \[1e-4\] or absent.
+    #[serde(with = "postcard::fixint::le")]
+    pub kappa: i16,
+    /// γ \[1e-4 rad\] or absent.
+    #[serde(with = "postcard::fixint::le")]
+    pub gamma: i16,
+}
+
+/// `x / unit` rounded, if it is finite and fits an i16 other than `i16::MIN`.
+fn count_i16(x: f32, unit: f32) -> Option<i16> {
+    let c = libm::roundf(x / unit);
+    if c.is_finite() && c > f32::from(i16::MIN) && c <= f32::from(i16::MAX) {
+        Some(c as i16)
+    } else {
+        None
+    }
+}
+
+impl CompactMeasurement {
+    /// The count that marks an optional field as absent.
+    pub const ABSENT: i16 = i16::MIN;
+    /// Fz per count \[N\].
+    pub const FZ: f32 = 0.5;
+    /// Fx, Fy per count \[N\].
+    pub const F: f32 = 1.0;
+    /// Mz per count \[N·m\].
+    pub const MZ: f32 = 0.1;
+    /// Vx per count \[m/s\], ω per count \[rad/s\].
+    pub const SPEED: f32 = 0.01;
+    /// α, γ per count \[rad\], κ per count \[-\].
+    pub const ANGLE: f32 = 1e-4;
+
+    /// The compact form of `m`, or `None` when a value is not finite or out of range (then
+    /// send the [`Measurement`]). δ is dropped.
+    pub fn new(m: &Measurement) -> Option<CompactMeasurement> {
+        let opt = |x: Option<f32>, unit: f32| match x {
+            None => Some(Self::ABSENT),
+            Some(v) => count_i16(v, unit),
+        };
+        let fz = libm::roundf(m.fz / Self::FZ);
+        if !(fz.is_finite() && (0.0..=f32::from(u16::MAX)).contains(&fz)) {
+            return None;
+        }
+        Some(CompactMeasurement {
+            wheel: m.wheel,
+            t_us: m.t_us,
+            fz: fz as u16,
+            fy: count_i16(m.fy, Self::F)?,
+            mz: count_i16(m.mz, Self::MZ)?,
+            fx: opt(m.fx, Self::F)?,
+            vx: opt(m.vx, Self::SPEED)?,
+            omega: opt(m.omega, Self::SPEED)?,
+            alpha: opt(m.alpha, Self::ANGLE)?,
+            kappa: opt(m.kappa, Self::ANGLE)?,
+            gamma: opt(m.gamma, Self::ANGLE)?,
+        })
+    }
+
+    /// The measurement it stands for (δ absent). Device and host both use this.
+    pub fn measurement(&self) -> Measurement {
+        let opt = |c: i16, unit: f32| (c != Self::ABSENT).then(|| f32::from(c) * unit);
+        Measurement {
+            wheel: self.wheel,
+            t_us: self.t_us,
+            fz: f32::from(self.fz) * Self::FZ,
+            fy: f32::from(self.fy) * Self::F,
+            mz: f32::from(self.mz) * Self::MZ,
+            fx: opt(self.fx, Self::F),
+            vx: opt(self.vx, Self::SPEED),
+            omega: opt(self.omega, Self::SPEED),
+            delta: None,
+            alpha: opt(self.alpha, Self::ANGLE),
+            kappa: opt(self.kappa, Self::ANGLE),
+            gamma: opt(self.gamma, Self::ANGLE),
         }
     }
 }
@@ -476,6 +605,8 @@ pub enum Msg {
     Settings(Settings),
     /// Host → device: reset, status request, stop.
     Command(Command),
+    /// Host → device: a per-wheel sample in scaled integers.
+    CompactMeasurement(CompactMeasurement),
     /// Device → host: predicted forces.
     Forces(Forces),
     /// Device → host: friction estimate.
@@ -503,6 +634,7 @@ impl Msg {
             Msg::ParamCommit(_) => MsgType::ParamCommit,
             Msg::Settings(_) => MsgType::Settings,
             Msg::Command(_) => MsgType::Command,
+            Msg::CompactMeasurement(_) => MsgType::CompactMeasurement,
             Msg::Forces(_) => MsgType::Forces,
             Msg::Estimate(_) => MsgType::Estimate,
             Msg::Status(_) => MsgType::Status,
@@ -522,6 +654,7 @@ impl Msg {
             Msg::ParamCommit(m) => postcard::to_slice(m, rest),
             Msg::Settings(m) => postcard::to_slice(m, rest),
             Msg::Command(m) => postcard::to_slice(m, rest),
+            Msg::CompactMeasurement(m) => postcard::to_slice(m, rest),
             Msg::Forces(m) => postcard::to_slice(m, rest),
             Msg::Estimate(m) => postcard::to_slice(m, rest),
             Msg::Status(m) => postcard::to_slice(m, rest),
@@ -562,6 +695,7 @@ impl Msg {
             MsgType::ParamCommit => Msg::ParamCommit(body(b)?),
             MsgType::Settings => Msg::Settings(body(b)?),
             MsgType::Command => Msg::Command(body(b)?),
+            MsgType::CompactMeasurement => Msg::CompactMeasurement(body(b)?),
             MsgType::Forces => Msg::Forces(body(b)?),
             MsgType::Estimate => Msg::Estimate(body(b)?),
             MsgType::Status => Msg::Status(body(b)?),

@@ -1,7 +1,12 @@
 //! Message → frames.
+//!
+//! Every frame on one identifier has the same length ([`Mtu::frame_len`]): the last frame of a
+//! message (and a single frame) is padded with 0x00. A DBC file gives each identifier one data
+//! length, and strict decoders (cantools) reject frames of another length.
 
 use super::frame::{Frame, FrameRepr, Position};
-use super::{Error, Msg, MAX_MSG_LEN};
+use super::{id, Error, Msg, MAX_MSG_LEN};
+use postcard::experimental::max_size::MaxSize;
 
 /// Largest frame of the bus.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -9,8 +14,7 @@ use super::{Error, Msg, MAX_MSG_LEN};
 pub enum Mtu {
     /// Classic CAN: 8 data bytes.
     Classic,
-    /// CAN FD: 64 data bytes; a last frame is padded with 0x00 to a valid FD length
-    /// (0..=8, 12, 16, 20, 24, 32, 48, 64).
+    /// CAN FD: 64 data bytes.
     Fd,
 }
 
@@ -22,7 +26,34 @@ impl Mtu {
             Mtu::Fd => 64,
         }
     }
+
+    /// Length of every frame on identifier `cid` \[bytes\]: each identifier has one fixed
+    /// data length (as bus tools and DBC files expect), and a frame that carries fewer message
+    /// bytes is padded with 0x00 (receivers ignore padding after the announced length).
+    /// Classic CAN: 8 on every identifier. CAN FD: 32 on [`id::RESULT`] and [`id::COMPACT`] (a
+    /// whole [`Msg::Forces`], [`Msg::Estimate`] or [`Msg::CompactMeasurement`] fits one frame),
+    /// 64 on the others.
+    pub const fn frame_len(self, cid: u16) -> usize {
+        match self {
+            Mtu::Classic => 8,
+            Mtu::Fd => {
+                if cid == id::RESULT || cid == id::COMPACT {
+                    32
+                } else {
+                    64
+                }
+            }
+        }
+    }
 }
+
+// A `CompactMeasurement` is 29 bytes encoded, one 32-byte frame; postcard's `MaxSize` counts its
+// fixed-width fields as varints (2 bytes more per i16), so that bound is checked by a test
+// (`proto::tests::compact_measurement`), not here.
+const _: () = assert!(
+    3 + 2 + super::Forces::POSTCARD_MAX_SIZE + 4 <= Mtu::Fd.frame_len(id::RESULT)
+        && 3 + 2 + super::Estimate::POSTCARD_MAX_SIZE + 4 <= Mtu::Fd.frame_len(id::RESULT)
+);
 
 /// The smallest valid CAN FD data length ≥ `n` (n ≤ 64).
 pub const fn fd_len(n: usize) -> usize {
@@ -47,6 +78,7 @@ pub struct Segmenter {
     index: u8,
     seq: u8,
     mtu: Mtu,
+    frame_len: usize,
 }
 
 impl Segmenter {
@@ -62,12 +94,18 @@ impl Segmenter {
             index: 0,
             seq,
             mtu,
+            frame_len: mtu.frame_len(id::of(msg.msg_type())),
         })
     }
 
     /// The encoded message.
     pub fn encoded(&self) -> &[u8] {
         self.buf.get(..self.len).unwrap_or(&[])
+    }
+
+    /// Length of each of its frames \[bytes\] ([`Mtu::frame_len`]).
+    pub fn frame_len(&self) -> usize {
+        self.frame_len
     }
 
     /// Number of frames the message takes.
@@ -102,10 +140,7 @@ impl Segmenter {
             },
             last,
         };
-        let mut frame_len = repr.buffer_len(n);
-        if last && self.mtu == Mtu::Fd {
-            frame_len = fd_len(frame_len);
-        }
+        let frame_len = self.frame_len.max(repr.buffer_len(n));
         let fb = out.get_mut(..frame_len)?;
         fb.fill(0);
         let mut f = Frame::new_unchecked(&mut *fb);

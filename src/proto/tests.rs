@@ -57,6 +57,11 @@ pub(crate) fn largest() -> Vec<Msg> {
             ..Settings::default()
         }),
         Msg::Command(Command::Stop),
+        Msg::CompactMeasurement(CompactMeasurement {
+            t_us: u32::MAX,
+            fz: u16::MAX,
+            ..CompactMeasurement::default()
+        }),
         Msg::Forces(Forces {
             flags: u16::MAX,
             ..Forces::default()
@@ -183,9 +188,8 @@ fn round_trip_classic_and_fd() {
             let fs = frames(&m, i as u8, mtu);
             for f in &fs {
                 assert!(f.len() <= mtu.bytes());
-                if mtu == Mtu::Fd {
-                    assert_eq!(segmenter::fd_len(f.len()), f.len());
-                }
+                assert_eq!(f.len(), mtu.frame_len(id::of(m.msg_type())));
+                assert_eq!(segmenter::fd_len(f.len()), f.len());
             }
             let mut got = None;
             for (k, f) in fs.iter().enumerate() {
@@ -198,8 +202,81 @@ fn round_trip_classic_and_fd() {
             assert_eq!(got, Some(m));
         }
         assert_eq!(r.counters().dropped(), 0);
-        assert_eq!(r.counters().messages, 10);
+        assert_eq!(r.counters().messages, 11);
     }
+}
+
+#[test]
+fn compact_measurement() {
+    let m = meas();
+    let c = CompactMeasurement::new(&m).unwrap();
+    let back = c.measurement();
+    assert_eq!(back.delta, None);
+    assert!((back.fz - m.fz).abs() <= 0.25);
+    assert!((back.fy - m.fy).abs() <= 0.5);
+    assert!((back.mz - m.mz).abs() <= 0.05 + 1e-4);
+    assert!((back.alpha.unwrap() - m.alpha.unwrap()).abs() <= 0.5e-4 + 1e-7);
+    assert_eq!(back.fx.is_some(), m.fx.is_some());
+    // Every field at the end of its range: 29 bytes, 5 classic frames, one 32-byte FD frame.
+    let big = CompactMeasurement {
+        wheel: Wheel::RearRight,
+        t_us: u32::MAX,
+        fz: u16::MAX,
+        fy: i16::MAX,
+        mz: i16::MIN,
+        fx: -1,
+        vx: i16::MAX,
+        omega: i16::MAX,
+        alpha: i16::MAX,
+        kappa: i16::MAX,
+        gamma: i16::MAX,
+    };
+    let msg = Msg::CompactMeasurement(big);
+    let mut b = [0u8; MSG_BUF];
+    assert_eq!(msg.encode(&mut b).unwrap(), 29);
+    assert_eq!(frames(&msg, 0, Mtu::Classic).len(), 5);
+    let fd = frames(&msg, 0, Mtu::Fd);
+    assert_eq!((fd.len(), fd[0].len()), (1, 32));
+    assert_eq!(id::of(msg.msg_type()), id::COMPACT);
+    // Out of range or not finite: refused, never clamped.
+    for bad in [
+        Measurement { fz: -1.0, ..m },
+        Measurement { fz: 40_000.0, ..m },
+        Measurement { fy: f32::NAN, ..m },
+        Measurement { mz: 5000.0, ..m },
+        Measurement {
+            alpha: Some(3.3),
+            ..m
+        },
+        Measurement {
+            vx: Some(f32::INFINITY),
+            ..m
+        },
+    ] {
+        assert_eq!(CompactMeasurement::new(&bad), None, "{bad:?}");
+    }
+    // Absent stays absent.
+    let none = Measurement {
+        fx: None,
+        vx: None,
+        omega: None,
+        alpha: None,
+        kappa: None,
+        gamma: None,
+        ..m
+    };
+    let c = CompactMeasurement::new(&none).unwrap();
+    assert_eq!(c.fx, CompactMeasurement::ABSENT);
+    assert_eq!(
+        c.measurement(),
+        Measurement {
+            fz: c.measurement().fz,
+            fy: c.measurement().fy,
+            mz: c.measurement().mz,
+            delta: None,
+            ..none
+        }
+    );
 }
 
 #[test]
@@ -210,14 +287,24 @@ fn known_frames() {
     let crc = crc32(&[1, 6, 1]).to_le_bytes();
     assert_eq!(fs.len(), 2);
     assert_eq!(fs[0], [0x80, 5, 7, 1, 6, 1, crc[0], crc[1]]);
-    assert_eq!(fs[1], [0x41, 5, crc[2], crc[3]]);
+    assert_eq!(fs[1], [0x41, 5, crc[2], crc[3], 0, 0, 0, 0]);
     let fd = frames(&m, 5, Mtu::Fd);
-    assert_eq!(
-        fd,
-        [vec![
-            0xc0, 5, 7, 1, 6, 1, crc[0], crc[1], crc[2], crc[3], 0, 0
-        ]]
-    );
+    let mut one = vec![0xc0, 5, 7, 1, 6, 1, crc[0], crc[1], crc[2], crc[3]];
+    one.resize(64, 0);
+    assert_eq!(fd, [one]);
+    // An estimate on CAN FD: one 32-byte frame on RESULT.
+    let e = Msg::Estimate(Estimate {
+        wheel: Wheel::RearLeft,
+        t_us: 7,
+        mu: 0.5,
+        sigma: 0.25,
+        state: EstimateState::Identifiable,
+    });
+    let fd = frames(&e, 1, Mtu::Fd);
+    assert_eq!(fd.len(), 1);
+    assert_eq!(fd[0].len(), 32);
+    assert_eq!(fd[0][..7], [0xc0, 1, 20, 1, 0x82, 2, 7]);
+    assert_eq!(fd[0][10..14], 0.5f32.to_le_bytes());
 }
 
 #[test]
@@ -251,10 +338,14 @@ fn lost_duplicated_reordered_truncated() {
     seq.swap(1, 2);
     let out = feed_all(&mut r, &seq);
     assert!(!out.iter().any(|f| matches!(f, Feed::Done(_))));
-    // truncated last frame: the message is dropped
+    // truncated last frame (cut inside the message, not only its padding): dropped
     let mut r = Reassembler::<MSG_BUF>::new();
     let mut last = fs.last().unwrap().clone();
-    last.pop();
+    let mut enc = [0u8; MSG_BUF];
+    let n = m.encode(&mut enc).unwrap();
+    let left = (n - 5) % 6;
+    let left = if left == 0 { 6 } else { left };
+    last.truncate(2 + left - 1);
     let mut seq: Vec<&Vec<u8>> = fs[..fs.len() - 1].iter().collect();
     seq.push(&last);
     let out = feed_all(&mut r, &seq);
@@ -285,10 +376,15 @@ fn lost_duplicated_reordered_truncated() {
 #[test]
 fn dbc_lists_every_identifier() {
     let mut s = std::string::String::new();
-    dbc::write(&mut s).unwrap();
+    dbc::write(&mut s, Mtu::Classic).unwrap();
     for (cid, name, _) in id::ALL {
         assert!(s.contains(&format!("BO_ {cid} {name}: 8")));
     }
+    let mut f = std::string::String::new();
+    dbc::write(&mut f, Mtu::Fd).unwrap();
+    assert!(f.contains(&format!("BO_ {} GOUGH_RESULT: 32", id::RESULT)));
+    assert!(f.contains(&format!("BO_ {} GOUGH_STATUS: 64", id::STATUS)));
+    assert!(f.contains("SIG_VALTYPE_ 784 mu : 1;"));
     assert!(s.contains("\"Measurement\""));
 }
 

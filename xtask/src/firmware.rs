@@ -155,22 +155,7 @@ fn report_size(what: &str, path: &Path) -> Result<(), String> {
 
 fn python_client() -> Result<(), String> {
     step("python-can client (independent protocol implementation) against the firmware");
-    let venv = root().join(".venv");
-    let py = venv.join("bin/python");
-    let req = root().join("host-tests/python/requirements.txt");
-    if !py.exists() {
-        run(Command::new("python3").arg("-m").arg("venv").arg(&venv))?;
-    }
-    run(Command::new(&py)
-        .args([
-            "-m",
-            "pip",
-            "install",
-            "--quiet",
-            "--disable-pip-version-check",
-            "-r",
-        ])
-        .arg(&req))?;
+    let py = crate::venv()?;
     let port = std::net::TcpListener::bind("127.0.0.1:0")
         .and_then(|l| l.local_addr())
         .map_err(|e| e.to_string())?

@@ -5,7 +5,8 @@
 //! - `test-all`: installs the embedded targets, builds the core for thumbv7em-none-eabihf and
 //!   thumbv6m-none-eabi, checks formatting and lints, runs every host test (core unit and
 //!   property tests, doc tests, the MFeval oracle, the CLI), builds the firmware and runs it
-//!   under QEMU (installing `qemu-system-arm` with apt-get when it is missing and we may);
+//!   under QEMU (installing `qemu-system-arm` with apt-get when it is missing and we may); the
+//!   Python tests run in `.venv` (created here, with `host-tests/python/requirements.txt`);
 //!   then the C API (`capi/`): header current, static library for the host and the devices,
 //!   the host C test, the C example firmware under QEMU against the Rust firmware (installing
 //!   `gcc-arm-none-eabi` and `libnewlib-arm-none-eabi` the same way).
@@ -168,6 +169,94 @@ fn ensure_qemu() -> Result<(), String> {
     }
 }
 
+/// The project's Python venv (`.venv`, created when missing) with
+/// `host-tests/python/requirements.txt` installed; returns its interpreter.
+pub fn venv() -> Result<std::path::PathBuf, String> {
+    let venv = root().join(".venv");
+    let py = venv.join("bin/python");
+    let req = root().join("host-tests/python/requirements.txt");
+    if !py.exists() {
+        run(Command::new("python3").arg("-m").arg("venv").arg(&venv))?;
+    }
+    run(Command::new(&py)
+        .args([
+            "-m",
+            "pip",
+            "install",
+            "--quiet",
+            "--disable-pip-version-check",
+            "-r",
+        ])
+        .arg(&req))?;
+    Ok(py)
+}
+
+/// Builds the Python package (python/) into the venv with `maturin develop` (the dev profile:
+/// a quick build; docs/python.md measures the release build that `pip install ./python` makes).
+fn python_package() -> Result<(), String> {
+    let py = venv()?;
+    run(Command::new(&py)
+        .args([
+            "-m",
+            "pip",
+            "install",
+            "--quiet",
+            "--disable-pip-version-check",
+            "-r",
+        ])
+        .arg(root().join("python/requirements-test.txt")))?;
+    let venv = root().join(".venv");
+    run(Command::new(venv.join("bin/maturin"))
+        .current_dir(root().join("python"))
+        .args(["develop", "--quiet"])
+        .env("VIRTUAL_ENV", &venv)
+        .env("PATH", {
+            let mut p = std::ffi::OsString::from(venv.join("bin"));
+            p.push(":");
+            p.push(std::env::var_os("PATH").unwrap_or_default());
+            p
+        }))
+}
+
+/// Runs pytest on `tests` in the venv with `GOUGH` = the debug `gough` binary, echoing its
+/// output, and adds up its closing line ("N passed, M failed").
+fn pytest(tests: &[&str], passed: &mut u64, failed: &mut u64) -> Result<(), String> {
+    let py = venv()?;
+    run(cargo().args(["build", "-p", "gough-host", "--bin", "gough"]))?;
+    let target = std::env::var_os("CARGO_TARGET_DIR")
+        .map(std::path::PathBuf::from)
+        .unwrap_or_else(|| root().join("target"));
+    let mut c = Command::new(&py);
+    c.current_dir(root())
+        .args(["-m", "pytest", "-q", "-p", "no:cacheprovider"])
+        .args(tests)
+        .env("GOUGH", target.join("debug/gough"))
+        .stdout(Stdio::piped());
+    let shown = format!("{c:?}");
+    let mut child = c.spawn().map_err(|e| format!("{shown}: {e}"))?;
+    if let Some(out) = child.stdout.take() {
+        for line in BufReader::new(out).lines().map_while(Result::ok) {
+            println!("{line}");
+            for part in line.trim_matches('=').split(',') {
+                let mut it = part.split_whitespace();
+                if let (Some(n), Some(what)) = (it.next(), it.next()) {
+                    match (n.parse::<u64>(), what) {
+                        (Ok(n), "passed") => *passed += n,
+                        (Ok(n), "failed") => *failed += n,
+                        _ => {}
+                    }
+                }
+            }
+        }
+    }
+    let status = child.wait().map_err(|e| format!("{shown}: {e}"))?;
+    if status.success() {
+        Ok(())
+    } else {
+        Err(format!("{shown} exited with {status}"))
+    }
+}
+
 fn test_all() -> Result<(), String> {
     let (mut passed, mut failed) = (0u64, 0u64);
     ensure_targets()?;
@@ -214,6 +303,11 @@ fn test_all() -> Result<(), String> {
         .env("RUSTDOCFLAGS", "-D warnings"))?;
     step("host tests: core unit + property + doc tests, MFeval oracle, CLI");
     cargo_test(&["--workspace"], &mut passed, &mut failed)?;
+    step("DBC files decoded by cantools (strict) against the host's frames (pytest in .venv)");
+    pytest(&["host-tests/python/test_dbc.py"], &mut passed, &mut failed)?;
+    step("Python package python/ (maturin develop, dev profile, into .venv): oracle sweeps, CLI equality, fleet on a dask LocalCluster");
+    python_package()?;
+    pytest(&["python/tests"], &mut passed, &mut failed)?;
     ensure_qemu()?;
     firmware::test_all(&mut passed)?;
     capi::test_all(&firmware::elf("capi_ref"), &mut passed)?;

@@ -1,5 +1,11 @@
-//! `gough proto ...`: the CAN protocol's description.
+//! `gough proto ...`: the CAN protocol's description, its frames, and its bus load.
+use crate::replay::{self, Answer, Backend32};
+use crate::tyre;
 use clap::Subcommand;
+use gough::proto::{
+    id, Ack, CompactMeasurement, Feed, Msg, MsgType, Mtu, Reassembler, Segmenter, MSG_BUF,
+};
+use std::fmt::Write as _;
 use std::path::PathBuf;
 
 /// `gough proto ...`
@@ -7,17 +13,48 @@ use std::path::PathBuf;
 pub enum ProtoCmd {
     /// Print the DBC description of the bus (identifiers, frame header, message types).
     Dbc {
+        /// Describe the CAN FD bus (64-byte frames; `Forces` and `Estimate` as physical
+        /// signals) instead of classic CAN.
+        #[arg(long)]
+        fd: bool,
         /// Write to this file instead of stdout.
         #[arg(long)]
         out: Option<PathBuf>,
     },
+    /// The frames of a replay as the bus carries them: each measurement of a log, and the
+    /// forces (or acknowledgement) and estimate the device's pipeline answers (run on the host
+    /// in f32, as `gough replay --check` does). One JSON object per message: identifier,
+    /// frames (hex), the encoded message (hex) and the message as the host's reassembler
+    /// decodes it from those frames.
+    Frames {
+        /// Tyre property file.
+        #[arg(long)]
+        tir: PathBuf,
+        /// Measurement log (as for `gough replay`).
+        #[arg(long)]
+        log: PathBuf,
+        /// CAN FD frames instead of classic CAN.
+        #[arg(long)]
+        fd: bool,
+        /// Send each measurement as a `CompactMeasurement` (the pipeline then runs on the
+        /// values it carries).
+        #[arg(long)]
+        compact: bool,
+        /// Write to this file instead of stdout.
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
+    /// Bus load of four wheels streaming measurements and their results: frames per second and
+    /// load for classic CAN and CAN FD at 100, 500 and 1000 Hz, from the real frames (the
+    /// segmenter's) with worst-case bit stuffing.
+    Load {
+        /// Print the table as Markdown (docs/protocol.md).
+        #[arg(long)]
+        markdown: bool,
+    },
 }
 
-/// `gough proto dbc`
-pub fn run(cmd: ProtoCmd) -> Result<(), String> {
-    let ProtoCmd::Dbc { out } = cmd;
-    let mut s = String::new();
-    gough::proto::dbc::write(&mut s).map_err(|e| e.to_string())?;
+fn emit(s: &str, out: Option<PathBuf>) -> Result<(), String> {
     match out {
         Some(p) => std::fs::write(&p, s).map_err(|e| format!("{}: {e}", p.display())),
         None => {
@@ -25,4 +62,140 @@ pub fn run(cmd: ProtoCmd) -> Result<(), String> {
             Ok(())
         }
     }
+}
+
+/// `gough proto ...`
+pub fn run(cmd: ProtoCmd) -> Result<(), String> {
+    match cmd {
+        ProtoCmd::Dbc { fd, out } => {
+            let mtu = if fd { Mtu::Fd } else { Mtu::Classic };
+            let mut s = String::new();
+            gough::proto::dbc::write(&mut s, mtu).map_err(|e| e.to_string())?;
+            emit(&s, out)
+        }
+        ProtoCmd::Frames {
+            tir,
+            log,
+            fd,
+            compact,
+            out,
+        } => {
+            let t = tyre::load(&tir)?;
+            let mut rows = replay::read_log(&log).map_err(|e| e.to_string())?;
+            let mut sent: Vec<Msg> = rows.iter().map(|m| Msg::Measurement(*m)).collect();
+            if compact {
+                for (i, (m, s)) in rows.iter_mut().zip(&mut sent).enumerate() {
+                    let c = CompactMeasurement::new(m).ok_or_else(|| {
+                        format!(
+                            "row {}: a value out of the compact measurement's range",
+                            i + 1
+                        )
+                    })?;
+                    *m = c.measurement();
+                    *s = Msg::CompactMeasurement(c);
+                }
+            }
+            let mtu = if fd { Mtu::Fd } else { Mtu::Classic };
+            let replies = replay::host_f32(&t.params.cast::<f32>(), &rows, Backend32::Fast);
+            let mut msgs = Vec::new();
+            for (m, r) in sent.iter().zip(&replies) {
+                msgs.push(*m);
+                msgs.push(match r.answer {
+                    Answer::Forces(f) => Msg::Forces(f),
+                    Answer::Ack(code) => Msg::Ack(Ack {
+                        of: MsgType::Measurement as u8,
+                        seq: 0,
+                        code,
+                    }),
+                });
+                if let Some(e) = r.estimate {
+                    msgs.push(Msg::Estimate(e));
+                }
+            }
+            let mut s = String::new();
+            let mut seq = [0u8; 5];
+            let mut rx: [Reassembler<MSG_BUF>; 5] = Default::default();
+            for m in &msgs {
+                let cid = id::of(m.msg_type());
+                let k = id::ALL.iter().position(|x| x.0 == cid).unwrap_or(0);
+                let line = frames_json(m, cid, seq[k], mtu, &mut rx[k])?;
+                seq[k] = seq[k].wrapping_add(1);
+                writeln!(s, "{line}").map_err(|e| e.to_string())?;
+            }
+            emit(&s, out)
+        }
+        ProtoCmd::Load { markdown } => emit(&crate::busload::table(markdown), None),
+    }
+}
+
+fn hex(b: &[u8]) -> String {
+    b.iter().fold(String::new(), |mut s, x| {
+        let _ = write!(s, "{x:02x}");
+        s
+    })
+}
+
+/// One message as a JSON line: its frames from the core's segmenter, and the message the
+/// core's reassembler makes of them.
+fn frames_json(
+    m: &Msg,
+    cid: u16,
+    seq: u8,
+    mtu: Mtu,
+    rx: &mut Reassembler<MSG_BUF>,
+) -> Result<String, String> {
+    let mut seg = Segmenter::new(m, seq, mtu).map_err(|e| e.to_string())?;
+    let encoded = hex(seg.encoded());
+    let mut buf = [0u8; 64];
+    let mut frames = Vec::new();
+    let mut decoded = None;
+    while let Some(f) = seg.next_frame(&mut buf) {
+        frames.push(serde_json::Value::String(hex(f)));
+        match rx.feed(f, 0) {
+            Feed::Done(d) => decoded = Some(d),
+            Feed::Pending => {}
+            Feed::Dropped(e) => return Err(format!("the host's reassembler dropped a frame: {e}")),
+        }
+    }
+    let d = decoded.ok_or("the host's reassembler delivered no message")?;
+    // Fixed-width integers serialise as byte arrays through serde: give them as numbers.
+    let (kind, body, t_us, flags) = match d {
+        Msg::Measurement(x) => ("Measurement", serde_json::to_value(x), Some(x.t_us), None),
+        Msg::Forces(x) => (
+            "Forces",
+            serde_json::to_value(x),
+            Some(x.t_us),
+            Some(x.flags),
+        ),
+        Msg::Estimate(x) => ("Estimate", serde_json::to_value(x), Some(x.t_us), None),
+        Msg::Ack(x) => ("Ack", serde_json::to_value(x), None, None),
+        Msg::CompactMeasurement(x) => (
+            "CompactMeasurement",
+            Ok(serde_json::json!({
+                "wheel": serde_json::to_value(x.wheel).map_err(|e| e.to_string())?,
+                "fz": x.fz, "fy": x.fy, "mz": x.mz, "fx": x.fx, "vx": x.vx,
+                "omega": x.omega, "alpha": x.alpha, "kappa": x.kappa, "gamma": x.gamma,
+            })),
+            Some(x.t_us),
+            None,
+        ),
+        other => return Err(format!("unexpected message {other:?}")),
+    };
+    let mut body = body.map_err(|e| e.to_string())?;
+    if let Some(o) = body.as_object_mut() {
+        if let Some(t) = t_us {
+            o.insert("t_us".into(), t.into());
+        }
+        if let Some(f) = flags {
+            o.insert("flags".into(), f.into());
+        }
+    }
+    let v = serde_json::json!({
+        "id": cid,
+        "type": kind,
+        "frames": frames,
+        "encoded": encoded,
+        "msg": body,
+    });
+    Ok(v.to_string())
 }

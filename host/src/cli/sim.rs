@@ -65,16 +65,16 @@ fn number(flag: &str, s: &Option<String>) -> Result<Option<f64>, String> {
     }
 }
 
-/// Runs `gough sim`.
-pub fn run(a: SimArgs) -> Result<(), String> {
+/// The simulation's configuration from the arguments (manoeuvre, road, speed, duration, step,
+/// steer, radius, deceleration, ABS, logging); `gough sim` and the Python package's
+/// `gough.simulate` both build it here. `--tir` and `--out` are not read.
+pub fn config(a: &SimArgs) -> Result<SimConfig, String> {
     let name = a.manoeuvre.as_deref().ok_or_else(|| {
         format!(
             "--manoeuvre NAME is required (one of: {})",
             MANOEUVRES.join(", ")
         )
     })?;
-    let tir = a.tir.as_ref().ok_or("--tir FILE is required")?;
-    let out = a.out.as_ref().ok_or("--out DIR is required")?;
     let o = Overrides {
         speed: number("--speed", &a.speed)?,
         steer_sw: number("--steer", &a.steer)?.map(f64::to_radians),
@@ -105,6 +105,15 @@ pub fn run(a: SimArgs) -> Result<(), String> {
     } else {
         cfg.abs = Some(AbsParams::default());
     }
+    Ok(cfg)
+}
+
+/// Runs `gough sim`.
+pub fn run(a: SimArgs) -> Result<(), String> {
+    let cfg = config(&a)?;
+    let man = cfg.manoeuvre;
+    let tir = a.tir.as_ref().ok_or("--tir FILE is required")?;
+    let out = a.out.as_ref().ok_or("--out DIR is required")?;
     let (pw, ph) = match &a.plot_size {
         None => (1800, 1350),
         Some(s) => s

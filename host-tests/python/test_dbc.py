@@ -1,0 +1,135 @@
+"""The DBC files of `gough proto dbc` (classic) and `gough proto dbc --fd`, read by cantools in
+strict mode, decode every frame that the host's encoder (the core's segmenter) puts on the bus
+for a replay, into the values the host's reassembler decodes from the same frames.
+
+Run by `cargo xtask test-all` in the project's venv:
+    GOUGH=target/debug/gough python -m pytest host-tests/python/test_dbc.py
+"""
+import json
+import os
+import struct
+import subprocess
+from pathlib import Path
+
+import cantools
+import pytest
+
+ROOT = Path(__file__).resolve().parents[2]
+GOUGH = os.environ.get("GOUGH", str(ROOT / "target/debug/gough"))
+TIR = ROOT / "host-tests/data/tyres/MagicFormula61_Parameters.tir"
+LOG = ROOT / "examples/replay_log.csv"
+
+
+def gough(*args):
+    return subprocess.run([GOUGH, *args], check=True, capture_output=True, text=True).stdout
+
+
+def load(fd):
+    text = gough("proto", "dbc", *(["--fd"] if fd else []))
+    return cantools.database.load_string(text, database_format="dbc", strict=True)
+
+
+def frames(fd, compact=False):
+    flags = (["--fd"] if fd else []) + (["--compact"] if compact else [])
+    out = gough("proto", "frames", "--tir", str(TIR), "--log", str(LOG), *flags)
+    return [json.loads(line) for line in out.splitlines()]
+
+
+def f32(x):
+    """A JSON number (an f32 printed as f64) as the f32 it was."""
+    return struct.unpack("<f", struct.pack("<f", x))[0]
+
+
+def payload(sig, prefix, n_bytes_total):
+    """The message bytes of `prefix*` byte signals (little-endian integers of ≤ 8 bytes)."""
+    keys = sorted((k for k in sig if k.startswith(prefix)), key=lambda k: int(k.rsplit("_", 1)[1]) if k != prefix else 0)
+    out = b""
+    for k in keys:
+        n = min(8, n_bytes_total - len(out))
+        out += int(sig[k]).to_bytes(n, "little")
+    return out
+
+
+# The compact measurement's physical signals: name in the DBC, field, scale.
+COMPACT = [("Fz", "fz", 0.5), ("Fy", "fy", 1.0), ("Mz", "mz", 0.1), ("Fx", "fx", 1.0),
+           ("vx", "vx", 0.01), ("omega", "omega", 0.01), ("alpha", "alpha", 1e-4),
+           ("kappa", "kappa", 1e-4), ("gamma", "gamma", 1e-4)]
+
+
+@pytest.mark.parametrize("fd,compact", [(False, False), (True, False), (False, True), (True, True)],
+                         ids=["classic", "fd", "classic-compact", "fd-compact"])
+def test_every_frame_decodes_to_the_hosts_values(fd, compact):
+    db = load(fd)
+    msgs = frames(fd, compact)
+    assert len(msgs) > 500
+    seen = set()
+    for m in msgs:
+        dbm = db.get_message_by_frame_id(m["id"])
+        assert dbm.is_fd == fd
+        got = b""
+        for k, h in enumerate(m["frames"]):
+            data = bytes.fromhex(h)
+            assert len(data) == dbm.length
+            sig = dbm.decode(data)  # strict: exact length, every multiplexer value known
+            assert sig["frame_index"] == k
+            assert sig["first_frame"] == (k == 0)
+            assert sig["last_frame"] == (k == len(m["frames"]) - 1)
+            if k == 0:
+                assert sig["msg_len"] == len(m["encoded"]) // 2
+                assert sig["proto_version"] == 1
+                assert str(sig["msg_type"]) == m["type"]
+                if any(s.startswith("first_bytes") for s in sig):
+                    raw = dbm.decode(data, decode_choices=False)
+                    got = bytes([raw["proto_version"], raw["msg_type"]])
+                    got += payload(raw, "first_bytes", dbm.length - 5)
+                else:  # FD results: the body as physical signals, checked below
+                    got = data[3:]
+            else:
+                got += payload(sig, "next_bytes", dbm.length - 2)
+            seen.add((m["type"], k > 0))
+        # The byte signals carry the message exactly (what the host encoded and decoded).
+        assert got[: len(m["encoded"]) // 2] == bytes.fromhex(m["encoded"])
+        if fd and m["type"] in ("Forces", "Estimate"):
+            sig = dbm.decode(bytes.fromhex(m["frames"][0]))
+            want = m["msg"]
+            pre = m["type"].lower()
+            assert str(sig[f"{pre}_wheel"]) == want["wheel"]
+            assert sig[f"{pre}_t_us"] == want["t_us"]
+            if m["type"] == "Forces":
+                for s, f in (("Fx", "fx"), ("Fy", "fy"), ("Mz", "mz")):
+                    assert sig[s] == f32(want[f]), (s, sig[s], want[f])
+                assert sig["forces_flags"] == want["flags"]
+            else:
+                assert sig["mu"] == f32(want["mu"])
+                assert sig["sigma"] == f32(want["sigma"])
+                assert str(sig["state"]) == want["state"]
+            enc = bytes.fromhex(m["encoded"])
+            assert sig[f"{pre}_crc"] == int.from_bytes(enc[-4:], "little")
+        if fd and m["type"] == "CompactMeasurement":
+            data = bytes.fromhex(m["frames"][0])
+            sig = dbm.decode(data)
+            raw = dbm.decode(data, scaling=False)
+            want = m["msg"]
+            assert str(sig["wheel"]) == want["wheel"]
+            assert sig["t_us"] == want["t_us"]
+            for s, f, scale in COMPACT:
+                assert raw[s] == want[f], (s, raw[s], want[f])
+                assert sig[s] == pytest.approx(want[f] * scale, rel=1e-12, abs=1e-12)
+            seen.add(("CompactPhysical", False))
+    # What the replay puts on the bus: measurements, forces, estimates; continuation frames
+    # on classic CAN.
+    kinds = {t for t, _ in seen}
+    meas = "CompactMeasurement" if compact else "Measurement"
+    assert {meas, "Forces", "Estimate"} <= kinds
+    if not fd:
+        assert (meas, True) in seen and ("Estimate", True) in seen
+    if fd and compact:
+        assert ("CompactPhysical", False) in seen
+
+
+def test_fd_estimate_states_are_named():
+    db = load(True)
+    states = {str(m["msg"]["state"]) for m in frames(True) if m["type"] == "Estimate"}
+    assert len(states) >= 2, states
+    choices = {str(v) for v in db.get_message_by_name("GOUGH_RESULT").get_signal_by_name("state").choices.values()}
+    assert choices == {"Identifiable", "NotIdentifiable", "Fallback"}

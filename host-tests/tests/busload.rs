@@ -1,0 +1,85 @@
+//! `gough proto load`: the bus-load table's frame counts are the segmenter's, and its rows
+//! follow from them (frames/s = frames per wheel-sample × rate × 4 wheels).
+use gough::proto::{Msg, Mtu, Segmenter};
+use gough_host::busload::{self, BUSES, RATES, WHEELS};
+use gough_host_tests::gough_bin;
+use std::process::Command;
+
+/// Frames the core's segmenter writes for `m`, counted one by one.
+fn count(m: &Msg, mtu: Mtu) -> usize {
+    let mut s = Segmenter::new(m, 0, mtu).unwrap();
+    let mut b = [0u8; 64];
+    let mut n = 0;
+    while s.next_frame(&mut b).is_some() {
+        n += 1;
+    }
+    assert_eq!(n, s.frame_count());
+    n
+}
+
+#[test]
+fn frame_counts_are_the_segmenters() {
+    // The figure: a measurement with every optional field takes 10 classic frames
+    // (58 bytes: 5 in the first frame, 6 in each of 9 more); without them, 6 (30 bytes).
+    assert_eq!(count(&busload::measurement(true), Mtu::Classic), 10);
+    assert_eq!(count(&busload::measurement(false), Mtu::Classic), 6);
+    // The compact measurement (29 bytes): 5 classic frames, one FD frame.
+    assert!(matches!(busload::compact(), Msg::CompactMeasurement(_)));
+    assert_eq!(count(&busload::compact(), Mtu::Classic), 5);
+    assert_eq!(count(&busload::compact(), Mtu::Fd), 1);
+    // Forces (25 bytes) 5 frames, Estimate (20 bytes) 4; on FD one frame each.
+    let r = busload::results();
+    assert_eq!(count(&r[0], Mtu::Classic) + count(&r[1], Mtu::Classic), 9);
+    assert_eq!(count(&r[0], Mtu::Fd) + count(&r[1], Mtu::Fd), 2);
+    for bus in &BUSES {
+        for (_, msgs) in busload::traffics() {
+            let n: usize = msgs.iter().map(|m| count(m, bus.mtu)).sum();
+            assert_eq!(busload::per_sample(&msgs, bus).0, n);
+        }
+    }
+}
+
+#[test]
+fn cli_table_rows_follow_from_the_frame_counts() {
+    let out = Command::new(gough_bin())
+        .args(["proto", "load", "--markdown"])
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    let text = String::from_utf8(out.stdout).unwrap();
+    let tr = busload::traffics();
+    let mut rows = 0;
+    for bus in &BUSES {
+        for rate in RATES {
+            let head = format!("| {} | {rate} Hz |", bus.name);
+            let line = text.lines().find(|l| l.starts_with(&head)).expect(&head);
+            let cells: Vec<&str> = line[head.len()..].split('|').map(str::trim).collect();
+            for (k, (_, msgs)) in tr.iter().enumerate() {
+                let n: usize = msgs.iter().map(|m| count(m, bus.mtu)).sum();
+                let fps = n as f64 * rate * WHEELS;
+                assert!(
+                    cells[k].starts_with(&format!("{fps:.0} f/s")),
+                    "{head} {}: {} != {fps}",
+                    tr[k].0,
+                    cells[k]
+                );
+                let load: f64 = cells[k]
+                    .split(", ")
+                    .nth(1)
+                    .unwrap()
+                    .split(' ')
+                    .next()
+                    .unwrap()
+                    .parse()
+                    .unwrap();
+                let fits = !cells[k].contains('✗');
+                assert_eq!(fits, load <= 60.0, "{line}");
+            }
+            rows += 1;
+        }
+    }
+    assert_eq!(rows, 12);
+    // Classic 1 Mbit/s, 1 kHz, all fields both ways: 4 × 1000 × (10 + 9) frames of 135 bits
+    // or fewer: does not fit.
+    assert!(text.contains("| classic 1 Mbit/s | 1000 Hz | 40000 f/s"));
+}

@@ -1,0 +1,194 @@
+"""gough for numpy and pandas: the Magic Formula, the road-friction estimator and the
+sim-to-real gap diagnosis of the gough project, on arrays and DataFrames.
+
+Everything is computed by the Rust core (`gough`) and host library (`gough-host`) through the
+extension module `gough._gough`: `Tyre.eval` runs what `gough mf eval` runs, `estimate_mu` what
+`gough mu estimate` runs, `diagnose_gap` what `gough gap diagnose` runs. Units SI, angles in
+radians, forces and moments ISO-W at the contact point.
+"""
+from __future__ import annotations
+
+import json
+import os
+from typing import Any, Mapping
+
+import numpy as np
+
+from . import _gough
+
+__all__ = ["Tyre", "TirError", "estimate_mu", "diagnose_gap", "simulate", "read_log",
+           "OUTPUT_COLUMNS"]
+
+#: The columns `Tyre.eval` returns: those of `gough mf eval` after its inputs.
+OUTPUT_COLUMNS = tuple(_gough.OUTPUT_COLUMNS)
+
+
+class TirError(ValueError):
+    """A `.tir` file gough cannot read. `line` is 1-based (0: the file as a whole); `key` is
+    the parameter's name ('' when the error concerns no key)."""
+
+    def __init__(self, message: str, line: int, key: str):
+        super().__init__(message)
+        self.line = line
+        self.key = key
+
+
+def _tir(fn, arg):
+    try:
+        return fn(arg)
+    except _gough.TirError as e:
+        msg, line, key = e.args
+        raise TirError(msg, line, key) from None
+
+
+def _f64(x, name: str) -> np.ndarray:
+    try:
+        return np.asarray(x, dtype=np.float64)
+    except (TypeError, ValueError) as e:
+        raise ValueError(f"{name}: not numbers ({e})") from None
+
+
+class Tyre:
+    """A tyre: the parameters of one `.tir` file."""
+
+    def __init__(self, inner: "_gough.Tyre"):
+        self._inner = inner
+
+    @classmethod
+    def from_tir(cls, path: str | os.PathLike) -> "Tyre":
+        """Reads a `.tir` file; raises `TirError` with the line and key of a problem."""
+        return cls(_tir(_gough.Tyre.from_tir, os.fspath(path)))
+
+    @classmethod
+    def from_text(cls, text: str) -> "Tyre":
+        """Parses `.tir` text; raises `TirError` with the line and key of a problem."""
+        return cls(_tir(_gough.Tyre.from_text, text))
+
+    @property
+    def warnings(self) -> list[str]:
+        """The reader's warnings (`line N: ...`)."""
+        return list(self._inner.warnings)
+
+    @property
+    def fnomin(self) -> float:
+        """FNOMIN [N]."""
+        return self._inner.fnomin
+
+    @property
+    def unloaded_radius(self) -> float:
+        """UNLOADED_RADIUS R0 [m]."""
+        return self._inner.unloaded_radius
+
+    @property
+    def longvl(self) -> float:
+        """LONGVL [m/s]."""
+        return self._inner.longvl
+
+    def eval(self, fz, kappa, alpha, gamma=0.0, vx=None, p=None, phit=0.0, mode=111,
+             precision="f64") -> dict[str, np.ndarray]:
+        """The Magic Formula, vectorised: the inputs broadcast against each other (numpy rules)
+        and every output has the broadcast shape.
+
+        fz [N], kappa [-], alpha [rad], gamma [rad], vx [m/s] (None: the tyre's LONGVL),
+        p [Pa] (None: INFLPRES), phit [1/m]; mode is MFeval's useMode (111: limits on, α* off,
+        no turn slip). Returns a dict with the columns of `gough mf eval`: Fx, Fy, Mz, Mx, My,
+        mux, muy, Kya, Kxk, t, Mzr, sigmax, sigmay. Raises ValueError for a point the core
+        rejects (e.g. not finite), naming its flat index.
+        """
+        if precision not in ("f64", "f32"):
+            raise ValueError(f"precision '{precision}': expected f64 or f32")
+        vx = self.longvl if vx is None else vx
+        p = 0.0 if p is None else p
+        arrs = np.broadcast_arrays(*(_f64(x, n) for x, n in (
+            (fz, "fz"), (kappa, "kappa"), (alpha, "alpha"), (gamma, "gamma"),
+            (phit, "phit"), (vx, "vx"), (p, "p"))))
+        shape = arrs[0].shape
+        flat = [np.ascontiguousarray(a).ravel() for a in arrs]
+        out = self._inner._eval(*flat, int(mode), precision == "f32")
+        return {k: v.reshape(shape) for k, v in out.items()}
+
+
+def _columns(log) -> Mapping[str, Any]:
+    """A DataFrame, a dict of arrays, or a path to a CSV or Parquet file, as columns."""
+    if isinstance(log, (str, os.PathLike)):
+        return read_log(log)
+    if hasattr(log, "columns") and hasattr(log, "__getitem__"):
+        return {str(c): log[c].to_numpy() for c in log.columns}
+    if isinstance(log, Mapping):
+        return log
+    raise TypeError("log: expected a pandas DataFrame, a dict of arrays or a path")
+
+
+def read_log(path: str | os.PathLike):
+    """A CSV (with '#' comment lines, as gough writes them) or Parquet log as a DataFrame."""
+    import pandas as pd
+
+    path = os.fspath(path)
+    if path.endswith(".parquet") or path.endswith(".pq"):
+        return pd.read_parquet(path)
+    return pd.read_csv(path, comment="#")
+
+
+def _col(cols: Mapping[str, Any], name: str, n: int | None = None, required=True) -> np.ndarray | None:
+    if name not in cols:
+        if required:
+            raise ValueError(f"log: missing column '{name}'")
+        return None if n is None else np.full(n, np.nan)
+    a = np.asarray(cols[name], dtype=np.float64)
+    if a.ndim != 1:
+        raise ValueError(f"log: column '{name}' is not one-dimensional")
+    return np.ascontiguousarray(a)
+
+
+def estimate_mu(tyre: Tyre, log, method: str = "bank", precision: str = "f64"):
+    """The friction estimator of `gough mu estimate` over a log (a DataFrame, a dict of arrays
+    or a CSV/Parquet path) with its columns: t [s], fz, fy [N], mz [N·m] required; fx [N],
+    vx [m/s], kappa, alpha, gamma [rad] optional. Returns a DataFrame t, mu, sigma, state
+    (identifiable, not_identifiable, fallback)."""
+    import pandas as pd
+
+    cols = _columns(log)
+    t = _col(cols, "t")
+    n = len(t)
+    req = [_col(cols, c) for c in ("fz", "fy", "mz")]
+    opt = [_col(cols, c, n, required=False) for c in ("fx", "vx", "kappa", "alpha", "gamma")]
+    mu, sigma, state = _gough._estimate_mu(tyre._inner, t, *req, *opt, "fx" in cols, method, precision)
+    return pd.DataFrame({"t": t, "mu": mu, "sigma": sigma, "state": state})
+
+
+_GAP_REQUIRED = ("t", "vx", "alpha", "kappa", "gamma", "fz", "fx", "fy", "mz")
+
+
+def diagnose_gap(tyre: Tyre, log, tir_name: str = "<tyre>", log_name: str | None = None,
+                 fit_rows: int | None = None) -> dict:
+    """The sim-to-real gap diagnosis of `gough gap diagnose`: the report as a dict (the JSON
+    the CLI writes). The log has the columns t, vx, alpha, kappa, gamma, fz, fx, fy, mz and
+    optionally p, phit, mu. `tir_name` and `log_name` name the inputs in the report."""
+    if log_name is None:
+        log_name = os.fspath(log) if isinstance(log, (str, os.PathLike)) else "<log>"
+    cols = _columns(log)
+    req = [_col(cols, c) for c in _GAP_REQUIRED]
+    opt = [_col(cols, c, required=False) for c in ("p", "phit", "mu")]
+    text = _gough._diagnose_gap(tyre._inner, req, *opt, tir_name, log_name, fit_rows)
+    return json.loads(text)
+
+
+def simulate(tyre: Tyre, manoeuvre: str, road: str | None = None, speed: float | None = None,
+             duration: float | None = None, dt: float | None = None, steer: float | None = None,
+             radius: float | None = None, decel: float | None = None, abs: bool = True,
+             log_every: int | None = None):
+    """The vehicle simulation of `gough sim` (the same tyre at every wheel): a manoeuvre
+    (step-steer, sine-dwell, brake-in-turn, abs-split, constant-radius, slalom, coast-down) on a
+    road (`gough sim --road` syntax, e.g. 'mu=0.9', 'split=0.9/0.2'; None: the tyre file's own
+    surface). speed [m/s], duration [s], dt [s], steer [deg of steering wheel], radius [m],
+    decel [m/s²], as the CLI's flags. Returns the log as a DataFrame with the columns of the
+    CLI's log.csv. Raises ValueError for a bad argument, naming its flag."""
+    import pandas as pd
+
+    def txt(x):
+        return None if x is None else repr(float(x))
+
+    cols, data = _gough._simulate(
+        tyre._inner, manoeuvre, road, txt(speed), txt(duration), txt(dt), txt(steer),
+        txt(radius), txt(decel), not abs, None if log_every is None else str(int(log_every)))
+    return pd.DataFrame(data, columns=cols)

@@ -1,0 +1,384 @@
+//! `gough._gough`: the extension module under the Python package `gough` (python/gough/).
+//!
+//! It wraps, never re-implements: `.tir` text goes through `gough::tir::parse`, each point of
+//! `Tyre.eval` through `gough_host::mfrun::eval_row` (what `gough mf eval` runs), a friction
+//! log through `gough_host::mu::estimate` (what `gough mu estimate` runs), a gap log through
+//! `gough_host::gap::diagnose` (what `gough gap diagnose` runs). The pure-Python layer does the
+//! broadcasting and the pandas conversions; this module takes and returns flat `float64` arrays.
+use gough::mf::{Options, Params};
+use gough_host::gap;
+use gough_host::mfrun::{self, Precision};
+use gough_host::mu::{self, peers::Row, Method};
+use numpy::{IntoPyArray, PyArray1, PyReadonlyArray1};
+use pyo3::create_exception;
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+
+create_exception!(
+    _gough,
+    TirError,
+    PyValueError,
+    "A `.tir` file that gough cannot read: args are (message, line, key); line 0 means the file as a whole."
+);
+
+/// A tyre: the parameters of one `.tir` file (f64).
+#[pyclass(module = "gough._gough", frozen)]
+pub struct Tyre {
+    params: Params<f64>,
+    /// The reader's warnings (`line N: ...`).
+    #[pyo3(get)]
+    warnings: Vec<String>,
+}
+
+fn tir_error(name: &str, e: gough::tir::Error) -> PyErr {
+    let key = match e.kind.key() {
+        Some(k) => k.name().to_string(),
+        None => String::new(),
+    };
+    TirError::new_err((format!("{name}: {e}"), e.line, key))
+}
+
+fn parse(text: &str, name: &str) -> PyResult<Tyre> {
+    let t = gough::tir::parse(text).map_err(|e| tir_error(name, e))?;
+    let mut warnings: Vec<String> = t.warnings.iter().map(|w| w.to_string()).collect();
+    if t.warnings_dropped > 0 {
+        warnings.push(format!("... and {} more warnings", t.warnings_dropped));
+    }
+    Ok(Tyre {
+        params: t.params,
+        warnings,
+    })
+}
+
+#[pymethods]
+impl Tyre {
+    /// Reads a `.tir` file. Raises `TirError` (a `ValueError`) naming the line and key.
+    #[staticmethod]
+    fn from_tir(path: std::path::PathBuf) -> PyResult<Tyre> {
+        let text = std::fs::read_to_string(&path).map_err(|e| {
+            pyo3::exceptions::PyOSError::new_err(format!("{}: cannot read: {e}", path.display()))
+        })?;
+        parse(&text, &path.display().to_string())
+    }
+
+    /// Parses `.tir` text.
+    #[staticmethod]
+    fn from_text(text: &str) -> PyResult<Tyre> {
+        parse(text, "<text>")
+    }
+
+    /// FNOMIN \[N\].
+    #[getter]
+    fn fnomin(&self) -> f64 {
+        self.params.fnomin
+    }
+
+    /// UNLOADED_RADIUS R0 \[m\].
+    #[getter]
+    fn unloaded_radius(&self) -> f64 {
+        self.params.unloaded_radius
+    }
+
+    /// LONGVL \[m/s\].
+    #[getter]
+    fn longvl(&self) -> f64 {
+        self.params.longvl
+    }
+
+    /// The Magic Formula at each point of equal-length 1-D float64 arrays (the Python layer
+    /// broadcasts). `p` = 0 means INFLPRES. Returns `{column: array}` with the columns of
+    /// `gough mf eval` after its inputs. Raises `ValueError` naming the first point that the
+    /// core rejects.
+    #[allow(clippy::too_many_arguments)]
+    fn _eval<'py>(
+        &self,
+        py: Python<'py>,
+        fz: PyReadonlyArray1<'py, f64>,
+        kappa: PyReadonlyArray1<'py, f64>,
+        alpha: PyReadonlyArray1<'py, f64>,
+        gamma: PyReadonlyArray1<'py, f64>,
+        phit: PyReadonlyArray1<'py, f64>,
+        vx: PyReadonlyArray1<'py, f64>,
+        p: PyReadonlyArray1<'py, f64>,
+        mode: u16,
+        f32: bool,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let opts = Options::from_use_mode(mode).ok_or_else(|| {
+            PyValueError::new_err(format!(
+                "mode {mode}: expected 3 digits, each 1 or 2 (e.g. 111, 211, 121, 221, 112)"
+            ))
+        })?;
+        let cols = [&fz, &kappa, &alpha, &gamma, &phit, &vx, &p].map(|a| a.as_slice());
+        let mut s: Vec<&[f64]> = Vec::with_capacity(7);
+        for c in cols {
+            s.push(c.map_err(|e| PyValueError::new_err(e.to_string()))?);
+        }
+        let n = s[0].len();
+        if s.iter().any(|c| c.len() != n) {
+            return Err(PyValueError::new_err("inputs of different lengths"));
+        }
+        let p32 = self.params.cast::<f32>();
+        let prec = if f32 { Precision::F32 } else { Precision::F64 };
+        let mut out = vec![vec![0.0f64; n]; mfrun::OUTPUT_COLUMNS.len()];
+        let params = &self.params;
+        let err = py.detach(|| {
+            for i in 0..n {
+                let row = mfrun::InputRow {
+                    fz: s[0][i],
+                    kappa: s[1][i],
+                    alpha: s[2][i],
+                    gamma: s[3][i],
+                    phit: s[4][i],
+                    vx: s[5][i],
+                    p: s[6][i],
+                };
+                match mfrun::eval_row(params, &p32, &row.input(), &opts, prec) {
+                    Ok(o) => {
+                        for (c, v) in out.iter_mut().zip(mfrun::output_values(&o)) {
+                            c[i] = v;
+                        }
+                    }
+                    Err(e) => return Some(format!("point {i}: {e}")),
+                }
+            }
+            None
+        });
+        if let Some(e) = err {
+            return Err(PyValueError::new_err(e));
+        }
+        let d = PyDict::new(py);
+        for (name, col) in mfrun::OUTPUT_COLUMNS.iter().zip(out) {
+            d.set_item(*name, col.into_pyarray(py))?;
+        }
+        Ok(d)
+    }
+}
+
+/// μ, σ and the state names of an estimator run.
+type Estimates<'py> = (
+    Bound<'py, PyArray1<f64>>,
+    Bound<'py, PyArray1<f64>>,
+    Vec<&'static str>,
+);
+
+/// `gough mu estimate` on columns (NaN = not logged; `has_fx` says whether Fx was logged).
+/// Returns (mu, sigma, state names).
+#[pyfunction]
+#[allow(clippy::too_many_arguments)]
+#[pyo3(signature = (tyre, t, fz, fy, mz, fx, vx, kappa, alpha, gamma, has_fx, method="gough", precision="f64"))]
+fn _estimate_mu<'py>(
+    py: Python<'py>,
+    tyre: &Tyre,
+    t: PyReadonlyArray1<'py, f64>,
+    fz: PyReadonlyArray1<'py, f64>,
+    fy: PyReadonlyArray1<'py, f64>,
+    mz: PyReadonlyArray1<'py, f64>,
+    fx: PyReadonlyArray1<'py, f64>,
+    vx: PyReadonlyArray1<'py, f64>,
+    kappa: PyReadonlyArray1<'py, f64>,
+    alpha: PyReadonlyArray1<'py, f64>,
+    gamma: PyReadonlyArray1<'py, f64>,
+    has_fx: bool,
+    method: &str,
+    precision: &str,
+) -> PyResult<Estimates<'py>> {
+    let method = match method {
+        "bank" => Method::Bank,
+        "gough" => Method::Gough,
+        "hsu-gerdes" => Method::HsuGerdes,
+        "slip-slope" => Method::SlipSlope,
+        m => {
+            return Err(PyValueError::new_err(format!(
+                "method '{m}': expected bank, gough, hsu-gerdes or slip-slope"
+            )))
+        }
+    };
+    let prec = match precision {
+        "f64" => mu::Precision::F64,
+        "f32" => mu::Precision::F32,
+        p => {
+            return Err(PyValueError::new_err(format!(
+                "precision '{p}': expected f64 or f32"
+            )))
+        }
+    };
+    let arr = |a: &PyReadonlyArray1<'py, f64>| -> PyResult<Vec<f64>> {
+        Ok(a.as_slice()
+            .map_err(|e| PyValueError::new_err(e.to_string()))?
+            .to_vec())
+    };
+    let (t, fz, fy, mz) = (arr(&t)?, arr(&fz)?, arr(&fy)?, arr(&mz)?);
+    let (fx, vx, kappa, alpha, gamma) = (
+        arr(&fx)?,
+        arr(&vx)?,
+        arr(&kappa)?,
+        arr(&alpha)?,
+        arr(&gamma)?,
+    );
+    let n = t.len();
+    if [&fz, &fy, &mz, &fx, &vx, &kappa, &alpha, &gamma]
+        .iter()
+        .any(|c| c.len() != n)
+    {
+        return Err(PyValueError::new_err("columns of different lengths"));
+    }
+    let mut last = f64::NEG_INFINITY;
+    let mut rows = Vec::with_capacity(n);
+    for i in 0..n {
+        for (name, v) in [("t", t[i]), ("fz", fz[i]), ("fy", fy[i]), ("mz", mz[i])] {
+            if !v.is_finite() {
+                return Err(PyValueError::new_err(format!(
+                    "row {i}, column {name}: not a finite number ({v})"
+                )));
+            }
+        }
+        if t[i] <= last {
+            return Err(PyValueError::new_err(format!(
+                "row {i}, column t: time does not increase ({} after {last})",
+                t[i]
+            )));
+        }
+        last = t[i];
+        rows.push(Row {
+            t: t[i],
+            fz: fz[i],
+            fy: fy[i],
+            mz: mz[i],
+            fx: fx[i],
+            vx: vx[i],
+            kappa: kappa[i],
+            alpha: alpha[i],
+        });
+    }
+    let params = &tyre.params;
+    let (est, _) = py
+        .detach(|| mu::estimate(params, &rows, has_fx, &gamma, method, prec))
+        .map_err(PyValueError::new_err)?;
+    let m: Vec<f64> = est.iter().map(|e| e.mu).collect();
+    let s: Vec<f64> = est.iter().map(|e| e.sigma).collect();
+    let st: Vec<&'static str> = est.iter().map(|e| e.state.name()).collect();
+    Ok((m.into_pyarray(py), s.into_pyarray(py), st))
+}
+
+/// `gough gap diagnose` on columns: returns the report as JSON text (the Python layer makes it
+/// a dict). `opt` holds the optional columns p, phit, mu (None when not logged).
+#[pyfunction]
+#[allow(clippy::too_many_arguments)]
+#[pyo3(signature = (tyre, cols, p, phit, mu, tir_name, log_name, fit_rows=None))]
+fn _diagnose_gap(
+    py: Python<'_>,
+    tyre: &Tyre,
+    cols: Vec<PyReadonlyArray1<'_, f64>>,
+    p: Option<PyReadonlyArray1<'_, f64>>,
+    phit: Option<PyReadonlyArray1<'_, f64>>,
+    mu: Option<PyReadonlyArray1<'_, f64>>,
+    tir_name: &str,
+    log_name: &str,
+    fit_rows: Option<usize>,
+) -> PyResult<String> {
+    let v = |a: &PyReadonlyArray1<'_, f64>| -> PyResult<Vec<f64>> {
+        Ok(a.as_slice()
+            .map_err(|e| PyValueError::new_err(e.to_string()))?
+            .to_vec())
+    };
+    if cols.len() != gap::log::REQUIRED.len() {
+        return Err(PyValueError::new_err(
+            "expected the columns t,vx,alpha,kappa,gamma,fz,fx,fy,mz",
+        ));
+    }
+    let c: Vec<Vec<f64>> = cols.iter().map(v).collect::<PyResult<_>>()?;
+    let n = c[0].len();
+    if c.iter().any(|x| x.len() != n) {
+        return Err(PyValueError::new_err("columns of different lengths"));
+    }
+    let log = gap::log::Log {
+        t: c[0].clone(),
+        vx: c[1].clone(),
+        alpha: c[2].clone(),
+        kappa: c[3].clone(),
+        gamma: c[4].clone(),
+        fz: c[5].clone(),
+        meas: (0..n).map(|i| [c[6][i], c[7][i], c[8][i]]).collect(),
+        p: p.as_ref().map(v).transpose()?,
+        phit: phit.as_ref().map(v).transpose()?,
+        mu: mu.as_ref().map(v).transpose()?,
+        lines: (0..n).map(|i| i + 2).collect(),
+    };
+    log.validate(log_name).map_err(PyValueError::new_err)?;
+    let params = tyre.params.clone();
+    let d = py
+        .detach(|| {
+            gap::diagnose(
+                params,
+                &log,
+                tir_name,
+                log_name,
+                &gap::Options {
+                    progress: false,
+                    plots: None,
+                    fit_rows,
+                },
+            )
+        })
+        .map_err(PyValueError::new_err)?;
+    serde_json::to_string(&d.report).map_err(|e| PyValueError::new_err(e.to_string()))
+}
+
+/// `gough sim` without files: the manoeuvre's log as (column names, rows × columns array).
+/// Numbers come as text, parsed by the CLI's own argument code (`gough_host::cli::sim::config`).
+#[pyfunction]
+#[allow(clippy::too_many_arguments)]
+#[pyo3(signature = (tyre, manoeuvre, road=None, speed=None, duration=None, dt=None, steer=None, radius=None, decel=None, no_abs=false, log_every=None))]
+fn _simulate<'py>(
+    py: Python<'py>,
+    tyre: &Tyre,
+    manoeuvre: String,
+    road: Option<String>,
+    speed: Option<String>,
+    duration: Option<String>,
+    dt: Option<String>,
+    steer: Option<String>,
+    radius: Option<String>,
+    decel: Option<String>,
+    no_abs: bool,
+    log_every: Option<String>,
+) -> PyResult<(Vec<String>, Bound<'py, numpy::PyArray2<f64>>)> {
+    let args = gough_host::cli::sim::SimArgs {
+        manoeuvre: Some(manoeuvre),
+        tir: None,
+        road,
+        speed,
+        duration,
+        dt,
+        steer,
+        radius,
+        decel,
+        no_abs,
+        log_every,
+        no_plots: true,
+        plot_size: None,
+        out: None,
+    };
+    let cfg = gough_host::cli::sim::config(&args).map_err(PyValueError::new_err)?;
+    let params = &tyre.params;
+    let log = py
+        .detach(|| gough_host::sim::simulate(&cfg, params, false))
+        .map_err(PyValueError::new_err)?;
+    let rows: Vec<Vec<f64>> = log.records.iter().map(gough_host::sim::Log::row).collect();
+    let a =
+        numpy::PyArray2::from_vec2(py, &rows).map_err(|e| PyValueError::new_err(e.to_string()))?;
+    Ok((gough_host::sim::columns(), a))
+}
+
+/// The extension module.
+#[pymodule]
+fn _gough(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<Tyre>()?;
+    m.add_function(wrap_pyfunction!(_estimate_mu, m)?)?;
+    m.add_function(wrap_pyfunction!(_diagnose_gap, m)?)?;
+    m.add_function(wrap_pyfunction!(_simulate, m)?)?;
+    m.add("TirError", m.py().get_type::<TirError>())?;
+    m.add("OUTPUT_COLUMNS", mfrun::OUTPUT_COLUMNS.to_vec())?;
+    Ok(())
+}

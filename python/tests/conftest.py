@@ -1,0 +1,23 @@
+"""Paths shared by the tests: the repository's data and the `gough` CLI (GOUGH, set by
+`cargo xtask test-all`; else target/debug/gough)."""
+import os
+import subprocess
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[2]
+DATA = ROOT / "host-tests" / "data"
+EXAMPLES = ROOT / "examples"
+TIR61 = DATA / "tyres" / "MagicFormula61_Parameters.tir"
+
+
+@pytest.fixture(scope="session")
+def gough_cli():
+    exe = os.environ.get("GOUGH", str(ROOT / "target" / "debug" / "gough"))
+    assert Path(exe).exists(), f"{exe}: build it with `cargo build -p gough-host --bin gough`"
+
+    def run(*args):
+        return subprocess.run([exe, *map(str, args)], check=True, capture_output=True, text=True)
+
+    return run

@@ -1,0 +1,76 @@
+"""`estimate_mu` and `diagnose_gap` give what the CLI gives on the bundled examples (the same
+host library functions run underneath); bad logs raise."""
+import json
+
+import numpy as np
+import pandas as pd
+import pytest
+
+import gough
+from conftest import EXAMPLES, TIR61
+
+LOGS = [EXAMPLES / "gap_camber.csv", EXAMPLES / "gap_thermal_mu.csv"]
+
+
+@pytest.mark.parametrize("log", LOGS, ids=lambda p: p.stem)
+def test_estimate_mu_equals_cli(log, gough_cli, tmp_path):
+    out = tmp_path / "est.csv"
+    gough_cli("mu", "estimate", "--tir", TIR61, "--log", log, "--out", out)
+    cli = pd.read_csv(out)
+    tyre = gough.Tyre.from_tir(TIR61)
+    df = pd.read_csv(log, comment="#")
+    for got in (gough.estimate_mu(tyre, df), gough.estimate_mu(tyre, {c: df[c].to_numpy() for c in df}),
+                gough.estimate_mu(tyre, log)):
+        assert list(got.columns) == ["t", "mu", "sigma", "state"]
+        assert len(got) == len(cli)
+        np.testing.assert_array_equal(got.t.to_numpy(), cli.t.to_numpy())
+        # The CLI prints 6 decimals.
+        assert np.abs(got.mu.to_numpy() - cli.mu.to_numpy()).max() <= 5.1e-7
+        assert np.abs(got.sigma.to_numpy() - cli.sigma.to_numpy()).max() <= 5.1e-7
+        assert (got.state.to_numpy() == cli.state.to_numpy()).all()
+    assert (cli.state == "identifiable").any()
+
+
+@pytest.mark.parametrize("log", LOGS, ids=lambda p: p.stem)
+def test_diagnose_gap_equals_cli(log, gough_cli, tmp_path):
+    rep = tmp_path / "r.json"
+    gough_cli("gap", "diagnose", "--tir", TIR61, "--log", log, "--report", rep)
+    cli = json.loads(rep.read_text())
+    tyre = gough.Tyre.from_tir(TIR61)
+    got = gough.diagnose_gap(tyre, pd.read_csv(log, comment="#"), tir_name=str(TIR61), log_name=str(log))
+    assert got == cli
+    assert got["verdict"]["effect"]
+
+
+def test_bad_logs_raise():
+    tyre = gough.Tyre.from_tir(TIR61)
+    with pytest.raises(ValueError, match="missing column 'fy'"):
+        gough.estimate_mu(tyre, {"t": [0.0, 1.0], "fz": [1.0, 1.0], "mz": [0.0, 0.0]})
+    with pytest.raises(ValueError, match="time does not increase"):
+        gough.estimate_mu(tyre, {"t": [0.0, 0.0], "fz": [4e3, 4e3], "fy": [0.0, 0.0], "mz": [0.0, 0.0]})
+    with pytest.raises(ValueError, match="not a finite number"):
+        gough.estimate_mu(tyre, {"t": [0.0, 1.0], "fz": [4e3, np.nan], "fy": [0.0, 0.0], "mz": [0.0, 0.0]})
+    with pytest.raises(ValueError, match="method"):
+        gough.estimate_mu(tyre, {"t": [0.0], "fz": [4e3], "fy": [0.0], "mz": [0.0]}, method="magic")
+    with pytest.raises(TypeError):
+        gough.estimate_mu(tyre, 42)
+    df = pd.read_csv(LOGS[0], comment="#").head(50)
+    with pytest.raises(ValueError, match="100"):
+        gough.diagnose_gap(tyre, df)
+
+
+def test_simulate_equals_cli(gough_cli, tmp_path):
+    args = dict(manoeuvre="step-steer", road="mu=0.8", speed=20.0, duration=1.5, log_every=10)
+    gough_cli("sim", "--manoeuvre", "step-steer", "--tir", TIR61, "--road", "mu=0.8", "--speed", "20",
+              "--duration", "1.5", "--log-every", "10", "--no-plots", "--out", tmp_path)
+    cli = pd.read_csv(tmp_path / "log.csv", comment="#")
+    got = gough.simulate(gough.Tyre.from_tir(TIR61), **args)
+    assert list(got.columns) == list(cli.columns)
+    assert len(got) == len(cli) > 10
+    # The CLI writes its CSV with enough digits to round-trip f64 (csvio); allow the last digit.
+    np.testing.assert_allclose(got.to_numpy(), cli.to_numpy(), rtol=1e-12, atol=1e-12)
+    assert got.ay.abs().max() > 1.0  # it turned
+    with pytest.raises(ValueError, match="manoeuvre|one of"):
+        gough.simulate(gough.Tyre.from_tir(TIR61), "moonwalk")
+    with pytest.raises(ValueError, match="--dt"):
+        gough.simulate(gough.Tyre.from_tir(TIR61), "step-steer", dt=float("nan"))
