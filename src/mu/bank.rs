@@ -1243,6 +1243,36 @@ mod tests {
         assert!((last.mu - 0.5).abs() < 0.05, "{last:?}");
     }
 
+    #[test]
+    fn a_config_without_a_grid_or_a_batch_is_refused() {
+        let p = tyre();
+        for cfg in [
+            Config {
+                batch: 0,
+                ..Config::default()
+            },
+            Config {
+                mu_step: 0.0,
+                ..Config::default()
+            },
+            Config {
+                mu_lo: f64::NAN,
+                ..Config::default()
+            },
+        ] {
+            assert_eq!(
+                Bank::new::<Libm>(&p, None, cfg).err(),
+                Some(BuildError::BadConfig)
+            );
+        }
+        let mut flat = p.clone();
+        flat.lmuy = 0.0;
+        assert_eq!(
+            Bank::new::<Libm>(&flat, None, Config::default()).err(),
+            Some(BuildError::NoFriction)
+        );
+    }
+
     proptest! {
         #![proptest_config(ProptestConfig::with_cases(48))]
         #[test]
