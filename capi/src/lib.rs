@@ -156,7 +156,9 @@ struct WheelIn {
 }
 
 struct EstIn {
-    bank: Bank<'static, f32>,
+    bank: Bank<f32>,
+    /// The tyre the bank was built for (the caller keeps it alive, documented).
+    params: &'static ParamsIn,
 }
 
 macro_rules! fits {
@@ -873,7 +875,7 @@ pub unsafe extern "C" fn gough_estimator_init(
         let bank = Bank::new::<Fast>(&params.p32, None, bank::Config::default())
             .map_err(|_| GOUGH_E_MODEL)?;
         // SAFETY: non-null, GOUGH_ESTIMATOR_SIZE bytes aligned to 8.
-        unsafe { put(e, MAGIC_EST, EstIn { bank }) };
+        unsafe { put(e, MAGIC_EST, EstIn { bank, params }) };
         Ok(())
     })
 }
@@ -909,7 +911,7 @@ pub unsafe extern "C" fn gough_estimator_update(
         if !finite(&[s.fz, s.fy, s.mz]) || given.iter().flatten().any(|x| !x.is_finite()) {
             return Err(GOUGH_E_NONFINITE);
         }
-        let r = est.bank.update::<Fast>(&sample);
+        let r = est.bank.update::<Fast>(&est.params.p32, &sample);
         let state = match r.state {
             bank::State::Identifiable => GOUGH_STATE_IDENTIFIABLE,
             bank::State::NotIdentifiable => GOUGH_STATE_NOT_IDENTIFIABLE,

@@ -51,7 +51,7 @@ fuzz_target!(|data: &[u8]| {
             vx: opt(4, v[5]),
             gamma: opt(8, v[6]),
         };
-        let e = e32.update::<Fast>(&s);
+        let e = e32.update::<Fast>(p32, &s);
         assert!(e.mu.is_finite() && e.sigma.is_finite() && e.sigma >= 0.0, "{e:?}");
         let d = |x: f32| f64::from(x);
         let s64 = Sample {
@@ -64,7 +64,7 @@ fuzz_target!(|data: &[u8]| {
             vx: s.vx.map(d),
             gamma: s.gamma.map(d),
         };
-        let e = e64.update::<Libm>(&s64);
+        let e = e64.update::<Libm>(p64, &s64);
         assert!(e.mu.is_finite() && e.sigma.is_finite() && e.sigma >= 0.0, "{e:?}");
     }
 });

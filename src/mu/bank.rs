@@ -332,8 +332,11 @@ struct Batch<F> {
 /// One wheel's friction estimator. A few hundred bytes of state and a reference to the tyre's
 /// parameters; no allocation; bounded work per sample.
 #[derive(Debug, Clone)]
-pub struct Bank<'p, F> {
-    params: &'p Params<F>,
+pub struct Bank<F> {
+    /// FNOMIN \[N\] and the file's λμx, λμy, of the parameters the bank was built for.
+    fnomin: F,
+    lmux: F,
+    lmuy: F,
     /// The Magic Formula's load stage at the pending batch's Fz, γ, Vx.
     prep: Option<Prepared<F>>,
     opts: Options,
@@ -374,11 +377,15 @@ pub struct Bank<'p, F> {
     bad: u32,
 }
 
-impl<'p, F: Float> Bank<'p, F> {
+impl<F: Float> Bank<F> {
     /// An estimator for a wheel with tyre `params` mounted on `side` (mirrored as `mf::eval`
     /// mirrors with `Options::mounted`; `None`: as the file describes it).
+    ///
+    /// The bank keeps no reference to `params`: [`Bank::update`] takes them with each sample
+    /// (so that a device can own its parameters and its estimators side by side). Pass the same
+    /// parameters every time; after loading others, build a new bank.
     pub fn new<M: Backend<F>>(
-        params: &'p Params<F>,
+        params: &Params<F>,
         side: Option<Side>,
         cfg: Config<F>,
     ) -> Result<Self, BuildError> {
@@ -402,7 +409,9 @@ impl<'p, F: Float> Bank<'p, F> {
             damp: F::from_f64(0.02),
         };
         Ok(Bank {
-            params,
+            fnomin: params.fnomin,
+            lmux: params.lmux,
+            lmuy: params.lmuy,
             prep: None,
             opts,
             mu_y0,
@@ -469,8 +478,9 @@ impl<'p, F: Float> Bank<'p, F> {
         self.cfg.mu_lo + self.cfg.mu_step * F::from_index(k as u16)
     }
 
-    /// Takes one sample and returns the current estimate.
-    pub fn update<M: Backend<F>>(&mut self, s: &Sample<F>) -> Estimate<F> {
+    /// Takes one sample of a wheel with tyre `params` (those the bank was built with) and
+    /// returns the current estimate.
+    pub fn update<M: Backend<F>>(&mut self, params: &Params<F>, s: &Sample<F>) -> Estimate<F> {
         self.est.change = false;
         // Spread the pending batch's fit over this sample.
         self.work::<M>();
@@ -484,7 +494,7 @@ impl<'p, F: Float> Bank<'p, F> {
             Some(t0) => s.t_us.wrapping_sub(t0),
         };
         let advancing = self.last_t.is_none() || (dt_us > 0 && dt_us < 0x8000_0000);
-        let fz0 = self.params.fnomin;
+        let fz0 = self.fnomin;
         if !finite
             || !advancing
             || s.fz <= self.cfg.fz_min_rel * fz0
@@ -576,13 +586,13 @@ impl<'p, F: Float> Bank<'p, F> {
             };
             self.select(&b);
             self.prep = if self.n_active > 0 {
-                Prepared::new::<M>(self.params, &op, &self.opts).ok()
+                Prepared::new::<M>(params, &op, &self.opts).ok()
             } else {
                 None
             };
             if let Some(pr) = &self.prep {
                 let (sx, _) =
-                    mf::sigma::sigma::<F, M>(self.params, pr.conditioned(), pr.k_xk(), pr.k_ya());
+                    mf::sigma::sigma::<F, M>(params, pr.conditioned(), pr.k_xk(), pr.k_ya());
                 if sx.is_finite() && sx > F::ZERO {
                     self.sigma_kappa_len = sx;
                 }
@@ -723,7 +733,7 @@ impl<'p, F: Float> Bank<'p, F> {
             return F::ZERO;
         };
         // The friction stage of this surface: λμx = λμy = μ/μy0 times the file's (architecture.md).
-        let mu = prep.with_mu(self.params.lmux * lambda, self.params.lmuy * lambda);
+        let mu = prep.with_mu(self.lmux * lambda, self.lmuy * lambda);
         let (r0, jac) = match self.residuals::<M>(&mu, b, cell.alpha, cell.kappa, true) {
             Some(x) => x,
             None => return self.cfg.chi2_cap,
@@ -1130,7 +1140,7 @@ mod tests {
 
     fn run(p: &Params<f64>, s: &[Sample<f64>]) -> Vec<Estimate<f64>> {
         let mut e = Bank::new::<Libm>(p, None, Config::default()).unwrap();
-        s.iter().map(|x| e.update::<Libm>(x)).collect()
+        s.iter().map(|x| e.update::<Libm>(p, x)).collect()
     }
 
     /// Adds the bench's sensor noise (forces 1 % of Fz, Mz 2 N·m, κ 0.005 rms; a fixed LCG).
@@ -1234,7 +1244,7 @@ mod tests {
             if i % 83 == 0 {
                 x.mz = f64::INFINITY;
             }
-            let est = e.update::<Libm>(x);
+            let est = e.update::<Libm>(&p, x);
             assert!(est.mu.is_finite() && est.sigma.is_finite());
             last = Some(est);
         }
@@ -1287,7 +1297,7 @@ mod tests {
             let mut t = 0u32;
             for (dt, fz, fy, mz, fx, k, vx, g) in rows {
                 t = t.wrapping_add(dt);
-                let est = e.update::<Libm>(&Sample { t_us: t, fz, fy, mz, fx: Some(fx), kappa: Some(k), vx: Some(vx), gamma: Some(g) });
+                let est = e.update::<Libm>(&p, &Sample { t_us: t, fz, fy, mz, fx: Some(fx), kappa: Some(k), vx: Some(vx), gamma: Some(g) });
                 prop_assert!(est.mu.is_finite() && est.sigma.is_finite() && est.sigma >= 0.0);
                 prop_assert!(est.mu_min.is_finite());
             }

@@ -403,7 +403,7 @@ fn bank_figures<M: Backend<f32>>(
                 vx: m.vx,
                 gamma: m.gamma,
             };
-            match est.update::<M>(&s).state {
+            match est.update::<M>(p, &s).state {
                 bank::State::Identifiable => State::Identifiable,
                 bank::State::NotIdentifiable => State::NotIdentifiable,
                 bank::State::Fallback => State::Fallback,
@@ -416,7 +416,7 @@ fn bank_figures<M: Backend<f32>>(
         stream_name,
         e.mean,
         e.max,
-        size_of::<Bank<'_, f32>>()
+        size_of::<Bank<f32>>()
     );
 }
 

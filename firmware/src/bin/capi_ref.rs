@@ -247,7 +247,7 @@ fn main() -> ! {
             vx: m.vx,
             gamma: m.gamma,
         };
-        let e = bank.update::<Math>(&s);
+        let e = bank.update::<Math>(p, &s);
         let state = match e.state {
             bank::State::Identifiable => 0,
             bank::State::NotIdentifiable => 1,

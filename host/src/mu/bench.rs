@@ -344,7 +344,7 @@ pub fn run_bank(p: &Params<f64>, w: usize, tr: &WheelTrace) -> Vec<Estimate<f64>
             let mut r = tr.rows[i];
             r.kappa = tr.kappa_meas.get(i).copied().unwrap_or(f64::NAN);
             let s = super::bank_sample(&r, true, true, tr.gamma.get(i).copied());
-            super::bank_estimate(e.update::<Libm>(&s))
+            super::bank_estimate(e.update::<Libm>(p, &s))
         })
         .collect()
 }

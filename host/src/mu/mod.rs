@@ -152,7 +152,7 @@ pub fn estimate(
                         rows.iter()
                             .enumerate()
                             .map(|(i, r)| {
-                                bank_estimate(est.update::<Libm>(&bank_sample(
+                                bank_estimate(est.update::<Libm>(p, &bank_sample(
                                     r,
                                     has_fx,
                                     has_kappa,
@@ -173,7 +173,7 @@ pub fn estimate(
                             .map(|(i, r)| {
                                 let s = bank_sample(r, has_fx, has_kappa, g_of(i));
                                 let c = |x: f64| x as f32;
-                                let e = est.update::<Libm>(&bank::Sample {
+                                let e = est.update::<Libm>(&p32, &bank::Sample {
                                     t_us: s.t_us,
                                     fz: c(s.fz),
                                     fy: c(s.fy),
