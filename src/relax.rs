@@ -264,6 +264,78 @@ fn exact_step<F: Float, M: Backend<F>>(y: F, a: F, b: F, h: F) -> F {
     y * M::exp(-x) + b * h * phi1::<F, M>(x)
 }
 
+/// Checks a step's inputs: all finite, 0 < dt ≤ [`MAX_DT`].
+fn check_step<F: Float>(dt: F, inputs: &[F]) -> Result<(), StepError> {
+    if !(dt.is_finite() && inputs.iter().all(|x| x.is_finite())) {
+        return Err(StepError::NonFinite);
+    }
+    if dt <= F::ZERO || dt > F::from_f64(MAX_DT) {
+        return Err(StepError::BadStep);
+    }
+    Ok(())
+}
+
+impl<F: Float> Config<F> {
+    /// |σ| with the floor `sigma_min` (flagged).
+    fn floor(&self, s: F, flags: &mut StepFlags) -> F {
+        let s = s.abs();
+        if s < self.sigma_min {
+            flags.0 |= StepFlags::SIGMA_FLOOR.0;
+            self.sigma_min.max(F::from_f64(1e-6))
+        } else {
+            s
+        }
+    }
+
+    /// The damping speed of eq. (20) for kinematics `k`.
+    fn speed(&self, k: &Kinematics<F>) -> F {
+        match self.damping {
+            DampingSpeed::Rolling => (k.vx - k.vsx).abs(),
+            DampingSpeed::Forward => k.vx.abs(),
+        }
+    }
+
+    /// The deflections clamped to `max_tan_alpha·σα`, `max_kappa·σκ` (flagged).
+    fn clamp(&self, v: F, u: F, s_a: F, s_k: F, flags: &mut StepFlags) -> (F, F) {
+        let (v_max, u_max) = (self.max_tan_alpha * s_a, self.max_kappa * s_k);
+        let (v, fv) = v.clamp_flag(-v_max, v_max);
+        let (u, fu) = u.clamp_flag(-u_max, u_max);
+        if fv {
+            flags.0 |= StepFlags::ALPHA_CLAMPED.0;
+        }
+        if fu {
+            flags.0 |= StepFlags::KAPPA_CLAMPED.0;
+        }
+        (v, u)
+    }
+
+    /// α', κ' of eq. (21) from the deflections and σ, with the low-speed damping (Pacejka's
+    /// kVlow, faded in below VXLOW) of kinematics `k`.
+    fn slips<M: Backend<F>>(
+        &self,
+        v: F,
+        u: F,
+        s_a: F,
+        s_k: F,
+        k: &Kinematics<F>,
+        mut flags: StepFlags,
+    ) -> Slips<F> {
+        let mut tan_a = v / s_a; // (21)
+        let mut kappa = u / s_k;
+        if self.damp_vlow > F::ZERO && self.vxlow > F::ZERO && k.vx.abs() < self.vxlow {
+            let w = F::HALF * (F::ONE + M::cos(F::PI * k.vx.abs() / self.vxlow));
+            tan_a += self.damp_vlow * w * k.vsy / s_a;
+            kappa -= self.damp_vlow * w * k.vsx / s_k;
+            flags.0 |= StepFlags::LOW_SPEED.0;
+        }
+        Slips {
+            kappa,
+            alpha: M::atan(tan_a),
+            flags,
+        }
+    }
+}
+
 impl<F: Float> Transient<F> {
     /// At rest, undeflected.
     pub const fn new(zero: F) -> Self {
@@ -279,61 +351,21 @@ impl<F: Float> Transient<F> {
         k: &Kinematics<F>,
         sigma: &Sigma<F>,
     ) -> Result<Slips<F>, StepError> {
-        let finite = [dt, k.vx, k.vsx, k.vsy, sigma.sigma_alpha, sigma.sigma_kappa]
-            .iter()
-            .all(|x| x.is_finite());
-        if !finite {
-            return Err(StepError::NonFinite);
-        }
-        if dt <= F::ZERO || dt > F::from_f64(MAX_DT) {
-            return Err(StepError::BadStep);
-        }
+        check_step(
+            dt,
+            &[k.vx, k.vsx, k.vsy, sigma.sigma_alpha, sigma.sigma_kappa],
+        )?;
         let mut flags = StepFlags::default();
-        let mut floor = |s: F| {
-            if s < cfg.sigma_min {
-                flags.0 |= StepFlags::SIGMA_FLOOR.0;
-                cfg.sigma_min.max(F::from_f64(1e-6))
-            } else {
-                s
-            }
-        };
-        let s_a = floor(sigma.sigma_alpha.abs());
-        let s_k = floor(sigma.sigma_kappa.abs());
-        let speed = match cfg.damping {
-            DampingSpeed::Rolling => (k.vx - k.vsx).abs(),
-            DampingSpeed::Forward => k.vx.abs(),
-        };
+        let s_a = cfg.floor(sigma.sigma_alpha, &mut flags);
+        let s_k = cfg.floor(sigma.sigma_kappa, &mut flags);
+        let speed = cfg.speed(k);
         // (20): dv/dt = −(Vr/σα)·v + Vsy;  du/dt = −(Vr/σκ)·u − Vsx.
-        let mut v = exact_step::<F, M>(self.v, speed / s_a, k.vsy, dt);
-        let mut u = exact_step::<F, M>(self.u, speed / s_k, -k.vsx, dt);
-        let v_max = cfg.max_tan_alpha * s_a;
-        let u_max = cfg.max_kappa * s_k;
-        let (cv, fv) = v.clamp_flag(-v_max, v_max);
-        let (cu, fu) = u.clamp_flag(-u_max, u_max);
-        v = cv;
-        u = cu;
-        if fv {
-            flags.0 |= StepFlags::ALPHA_CLAMPED.0;
-        }
-        if fu {
-            flags.0 |= StepFlags::KAPPA_CLAMPED.0;
-        }
+        let v = exact_step::<F, M>(self.v, speed / s_a, k.vsy, dt);
+        let u = exact_step::<F, M>(self.u, speed / s_k, -k.vsx, dt);
+        let (v, u) = cfg.clamp(v, u, s_a, s_k, &mut flags);
         self.v = v;
         self.u = u;
-        let mut tan_a = v / s_a; // (21)
-        let mut kappa = u / s_k;
-        // Low-speed damping (Pacejka's kVlow), faded in below VXLOW.
-        if cfg.damp_vlow > F::ZERO && cfg.vxlow > F::ZERO && k.vx.abs() < cfg.vxlow {
-            let w = F::HALF * (F::ONE + M::cos(F::PI * k.vx.abs() / cfg.vxlow));
-            tan_a += cfg.damp_vlow * w * k.vsy / s_a;
-            kappa -= cfg.damp_vlow * w * k.vsx / s_k;
-            flags.0 |= StepFlags::LOW_SPEED.0;
-        }
-        Ok(Slips {
-            kappa,
-            alpha: M::atan(tan_a),
-            flags,
-        })
+        Ok(cfg.slips::<M>(v, u, s_a, s_k, k, flags))
     }
 }
 
@@ -358,49 +390,31 @@ impl<F: Float> Transient<F> {
         s0: &Sample<F>,
         s1: &Sample<F>,
     ) -> Result<Slips<F>, StepError> {
-        let finite = [
+        check_step(
             dt,
-            s0.kin.vx,
-            s0.kin.vsx,
-            s0.kin.vsy,
-            s0.sigma.sigma_alpha,
-            s0.sigma.sigma_kappa,
-            s1.kin.vx,
-            s1.kin.vsx,
-            s1.kin.vsy,
-            s1.sigma.sigma_alpha,
-            s1.sigma.sigma_kappa,
-        ]
-        .iter()
-        .all(|x| x.is_finite());
-        if !finite {
-            return Err(StepError::NonFinite);
-        }
-        if dt <= F::ZERO || dt > F::from_f64(MAX_DT) {
-            return Err(StepError::BadStep);
-        }
+            &[
+                s0.kin.vx,
+                s0.kin.vsx,
+                s0.kin.vsy,
+                s0.sigma.sigma_alpha,
+                s0.sigma.sigma_kappa,
+                s1.kin.vx,
+                s1.kin.vsx,
+                s1.kin.vsy,
+                s1.sigma.sigma_alpha,
+                s1.sigma.sigma_kappa,
+            ],
+        )?;
         let mut flags = StepFlags::default();
-        let mut floor = |s: F| {
-            if s < cfg.sigma_min {
-                flags.0 |= StepFlags::SIGMA_FLOOR.0;
-                cfg.sigma_min.max(F::from_f64(1e-6))
-            } else {
-                s
-            }
-        };
         let (sa0, sk0) = (
-            floor(s0.sigma.sigma_alpha.abs()),
-            floor(s0.sigma.sigma_kappa.abs()),
+            cfg.floor(s0.sigma.sigma_alpha, &mut flags),
+            cfg.floor(s0.sigma.sigma_kappa, &mut flags),
         );
         let (sa1, sk1) = (
-            floor(s1.sigma.sigma_alpha.abs()),
-            floor(s1.sigma.sigma_kappa.abs()),
+            cfg.floor(s1.sigma.sigma_alpha, &mut flags),
+            cfg.floor(s1.sigma.sigma_kappa, &mut flags),
         );
-        let speed = |k: &Kinematics<F>| match cfg.damping {
-            DampingSpeed::Rolling => (k.vx - k.vsx).abs(),
-            DampingSpeed::Forward => k.vx.abs(),
-        };
-        let (v0, v1) = (speed(&s0.kin), speed(&s1.kin));
+        let (v0, v1) = (cfg.speed(&s0.kin), cfg.speed(&s1.kin));
         // Sub-steps: relative change of each decay rate over the step, weighted by min(1, a·h).
         let rel = |s_0: F, s_1: F| {
             let (a0, a1) = (v0 / s_0, v1 / s_1);
@@ -437,37 +451,19 @@ impl<F: Float> Transient<F> {
                 -lin(s0.kin.vsx, s1.kin.vsx, wa),
                 -lin(s0.kin.vsx, s1.kin.vsx, wb),
             );
-            v = v * ea + h * (by0 * psa + by1 * (p1a - psa));
-            u = u * ek + h * (bx0 * psk + bx1 * (p1k - psk));
-            let (v_max, u_max) = (cfg.max_tan_alpha * sa_b, cfg.max_kappa * sk_b);
-            let (cv, fv) = v.clamp_flag(-v_max, v_max);
-            let (cu, fu) = u.clamp_flag(-u_max, u_max);
-            v = cv;
-            u = cu;
-            if fv {
-                flags.0 |= StepFlags::ALPHA_CLAMPED.0;
-            }
-            if fu {
-                flags.0 |= StepFlags::KAPPA_CLAMPED.0;
-            }
+            (v, u) = cfg.clamp(
+                v * ea + h * (by0 * psa + by1 * (p1a - psa)),
+                u * ek + h * (bx0 * psk + bx1 * (p1k - psk)),
+                sa_b,
+                sk_b,
+                &mut flags,
+            );
             j += 1;
         }
         self.v = v;
         self.u = u;
-        let k = &s1.kin;
-        let mut tan_a = v / sa1; // (21), at the end's own σ
-        let mut kappa = u / sk1;
-        if cfg.damp_vlow > F::ZERO && cfg.vxlow > F::ZERO && k.vx.abs() < cfg.vxlow {
-            let w = F::HALF * (F::ONE + M::cos(F::PI * k.vx.abs() / cfg.vxlow));
-            tan_a += cfg.damp_vlow * w * k.vsy / sa1;
-            kappa -= cfg.damp_vlow * w * k.vsx / sk1;
-            flags.0 |= StepFlags::LOW_SPEED.0;
-        }
-        Ok(Slips {
-            kappa,
-            alpha: M::atan(tan_a),
-            flags,
-        })
+        // (21) at the end's own σ.
+        Ok(cfg.slips::<M>(v, u, sa1, sk1, &s1.kin, flags))
     }
 }
 
