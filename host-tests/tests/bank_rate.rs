@@ -128,7 +128,9 @@ fn batch_1_at_100_hz_is_the_1_khz_estimator() {
             c.err_max[1],
         );
         // The same estimator: identifiable together most of the time, the same value to a
-        // fraction of the ±0.1 target where both are.
+        // fraction of the ±0.1 target where both are. (Not its largest difference: on ice, the
+        // 1 kHz run reports μ 1.1–1.3 as identifiable for about 0.2 s of the second period, near
+        // t = 1.55–1.75 s; the 100 Hz run does not. Both are printed.)
         assert!(c.both >= 0.8, "{name}: both identifiable {:.2}", c.both);
         assert!(c.d_med <= 0.01, "{name}: median |Δμ| {}", c.d_med);
         // The 100 Hz run meets the accuracy target wherever it is identifiable.
@@ -148,7 +150,7 @@ fn fixed_point_bank_at_100_hz() {
         let b = run::<f32, Fast>(&p, config(), stream(&p32, mu, camber));
         let c = compare(&a, &b, f64::from(mu));
         println!(
-            "| {name} | {:.1} % | {:.4} / {:.4} / {:.4} | {:.1} % | {} / {} | {:.4} / {:.4} | {:.3} / {:.3} |",
+            "| {name} | {:.1} % | {:.1e} / {:.1e} / {:.1e} | {:.1} % | {} / {} | {:.4} / {:.4} | {:.3} / {:.3} |",
             100.0 * c.both,
             c.d_med,
             c.d_p95,
@@ -161,6 +163,16 @@ fn fixed_point_bank_at_100_hz() {
             c.err_max[0],
             c.err_max[1],
         );
-        assert!(c.ident[0] > 0, "{name}: the fixed-point bank never identifiable");
+        // The normal equations are scaled into Q31.32's range (bank.rs, `fit_cell`): the
+        // fixed-point bank then follows the f32 one (unscaled, its determinant saturated on
+        // most steps and it strayed by up to 0.1).
+        assert!(c.d_max <= 0.01, "{name}: max |Δμ| Fix vs f32 {}", c.d_max);
+        assert!(
+            c.ident[0].abs_diff(c.ident[1]) <= 4,
+            "{name}: identifiable Fix {} vs f32 {}",
+            c.ident[0],
+            c.ident[1]
+        );
+        assert!(c.err_p95[0] <= 0.08, "{name}: Fix p95 error {}", c.err_p95[0]);
     }
 }
