@@ -5,8 +5,8 @@
 //! tyre) and of its transient-filter stream (κ', α'), written to `$OUT_DIR/reference.rs` with the
 //! tyre's parameters as `gough::tir::parse` reads them (f64; the bench casts them at boot); and
 //! the outcome the friction estimator (`gough::mu::bank::Bank` at 100 Hz, one sample per batch)
-//! must reproduce on the device for each bench stream (`$OUT_DIR/estimator.rs`: f32 with
-//! `math::Fast` with feature `fast`, Q31.32 with `FixMath` with feature `fix`).
+//! must reproduce on the device for each bench stream (`$OUT_DIR/estimator.rs`, with feature
+//! `mu`: f32 with `math::Fast` with feature `fast`, Q31.32 with `FixMath` with feature `fix`).
 use gough::math::{Backend, Float, Libm};
 use gough::mf::{self, Options};
 use gough::mu::bank::{Bank, State};
@@ -21,7 +21,12 @@ use gough_workloads::streams::{bank_sample, config, hash, stream, Feed, HASH0, S
 /// μ_min, state, change flag —, the identifiable samples, the last μ's hash). The device must
 /// reproduce them bit for bit (IEEE f32 on both with no FMA contraction; Q31.32 is integer
 /// arithmetic). Rust source of a `static` named `name`.
-fn bank<F: Float + Feed, M: Backend<F>>(p: &gough::mf::Params<f64>, name: &str, how: &str) -> String {
+#[allow(dead_code)]
+fn bank<F: Float + Feed, M: Backend<F>>(
+    p: &gough::mf::Params<f64>,
+    name: &str,
+    how: &str,
+) -> String {
     let pf = p.cast::<F>();
     let p32 = p.cast::<f32>();
     let mut s = format!(
@@ -29,7 +34,8 @@ fn bank<F: Float + Feed, M: Backend<F>>(p: &gough::mf::Params<f64>, name: &str, 
          /// run by build.rs on the host.\npub static {name}: [(u32, u32, u32); STREAMS.len()] = [\n"
     );
     for &(mu, camber, _, _) in STREAMS.iter() {
-        let mut est = Bank::new::<M>(&pf, None, config::<F>()).expect("a bank for the bundled tyre");
+        let mut est =
+            Bank::new::<M>(&pf, None, config::<F>()).expect("a bank for the bundled tyre");
         let (mut h, mut seen, mut last) = (HASH0, 0u32, 0u32);
         for m in stream(&p32, mu, camber) {
             let e = est.update::<M>(&pf, &bank_sample::<F>(&m));
@@ -126,14 +132,15 @@ fn main() {
     s.push_str("];\n");
     fs::write(out.join("reference.rs"), s).expect("write reference.rs");
     // The bank's expected outcomes, for the number formats this build runs.
+    #[allow(unused_mut)] // nothing is added without feature `mu`
     let mut est = String::new();
-    #[cfg(feature = "fast")]
+    #[cfg(all(feature = "mu", feature = "fast"))]
     est.push_str(&bank::<f32, gough::math::Fast>(
         &p,
         "EXPECT",
         "Bank::<f32>::update::<math::Fast>",
     ));
-    #[cfg(feature = "fix")]
+    #[cfg(all(feature = "mu", feature = "fix"))]
     est.push_str(&bank::<gough::fixed::Fix, gough::fixed::FixMath>(
         &p,
         "EXPECT_FIX",

@@ -134,7 +134,11 @@ fn batch_1_at_100_hz_is_the_1_khz_estimator() {
         assert!(c.both >= 0.8, "{name}: both identifiable {:.2}", c.both);
         assert!(c.d_med <= 0.01, "{name}: median |Δμ| {}", c.d_med);
         // The 100 Hz run meets the accuracy target wherever it is identifiable.
-        assert!(c.err_p95[0] <= 0.08, "{name}: 100 Hz p95 error {}", c.err_p95[0]);
+        assert!(
+            c.err_p95[0] <= 0.08,
+            "{name}: 100 Hz p95 error {}",
+            c.err_p95[0]
+        );
     }
 }
 
@@ -173,6 +177,10 @@ fn fixed_point_bank_at_100_hz() {
             c.ident[0],
             c.ident[1]
         );
-        assert!(c.err_p95[0] <= 0.08, "{name}: Fix p95 error {}", c.err_p95[0]);
+        assert!(
+            c.err_p95[0] <= 0.08,
+            "{name}: Fix p95 error {}",
+            c.err_p95[0]
+        );
     }
 }

@@ -28,9 +28,7 @@ pub const HASH0: u32 = 0x811c_9dc5;
 /// The 100 Hz stream on a road of friction `mu` with roll camber amplitude `camber`: every
 /// [`DECIMATE`]th sample of [`Slalom`] (the first at t = 0), [`SAMPLES`] of them.
 pub fn stream(p: &Params<f32>, mu: f32, camber: f32) -> impl Iterator<Item = Measurement> {
-    Slalom::new(p, mu, camber)
-        .step_by(DECIMATE)
-        .take(SAMPLES)
+    Slalom::new(p, mu, camber).step_by(DECIMATE).take(SAMPLES)
 }
 
 /// The bank's settings at 100 Hz: the defaults with one sample per batch.

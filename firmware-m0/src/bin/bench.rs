@@ -2,7 +2,8 @@
 //! friction estimator at 100 Hz (`mu::bank::Bank`, one 10 ms sample per batch) on a Cortex-M0
 //! without FPU (QEMU's `microbit`, an nRF51822) and on a Cortex-M3 without FPU (`--target
 //! thumbv7m-none-eabi`, QEMU's `mps2-an385`), soft-float f32 with `math::Fast` (feature `fast`)
-//! against Q31.32 fixed point (`fixed::Fix` + `fixed::FixMath`, feature `fix`). Under
+//! against Q31.32 fixed point (`fixed::Fix` + `fixed::FixMath`, feature `fix`); the estimator
+//! with feature `mu`. Under
 //! QEMU with `-icount shift=0`: one instruction = 1 ns of virtual time, SysTick counts the core
 //! clock (16 MHz on the M0: 62.5 instructions per count; 25 MHz on the M3: 40), calibrated below
 //! on a loop of known length, as in `firmware/src/bin/bench.rs`.
@@ -30,7 +31,7 @@ use gough::mf::{self, Input, Options, Params};
 use gough_workloads::filter_point;
 use gough_workloads::marks::{bench_start, bench_stop};
 use gough_workloads::points::{input, N};
-#[cfg(any(feature = "fast", feature = "fix"))]
+#[cfg(feature = "mu")]
 use gough_workloads::streams::{bank_sample, config, hash, stream, Feed, HASH0, SAMPLES, STREAMS};
 include!(concat!(env!("OUT_DIR"), "/reference.rs"));
 include!(concat!(env!("OUT_DIR"), "/estimator.rs"));
@@ -223,7 +224,7 @@ impl Errors {
 /// `bench: mu_bank_<core>_<backend>_100hz_<stream> mean=<n> worst=<n> ram=<bytes>` line per
 /// stream (instructions per sample; `ram`: the bank's state, `size_of::<Bank<F>>()`). Returns
 /// whether all streams matched.
-#[cfg(any(feature = "fast", feature = "fix"))]
+#[cfg(feature = "mu")]
 #[inline(never)]
 fn bank<F: Float + Feed, M: Backend<F>>(
     id: u32,
@@ -385,7 +386,7 @@ fn main() -> ! {
             overhead,
         );
     }
-    #[cfg(feature = "fast")]
+    #[cfg(all(feature = "mu", feature = "fast"))]
     {
         ok &= bank::<f32, gough::math::Fast>(
             30,
@@ -406,7 +407,7 @@ fn main() -> ! {
             overhead,
         );
     }
-    #[cfg(feature = "fix")]
+    #[cfg(all(feature = "mu", feature = "fix"))]
     {
         use gough::fixed::{Fix, FixMath};
         ok &= bank::<Fix, FixMath>(
