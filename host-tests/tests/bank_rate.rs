@@ -113,6 +113,20 @@ fn batch_1_at_100_hz_is_the_1_khz_estimator() {
         );
         let b: Vec<_> = fine.iter().step_by(DECIMATE).copied().collect();
         let c = compare(&a, &b, f64::from(mu));
+        // Where the two differ by more than 0.05 while both are identifiable [s].
+        let apart: Vec<f64> = a
+            .iter()
+            .zip(&b)
+            .enumerate()
+            .filter(|(_, (x, y))| x.1 && y.1 && (x.0 - y.0).abs() > 0.05)
+            .map(|(i, _)| i as f64 * 0.01)
+            .collect();
+        if let (Some(first), Some(last)) = (apart.first(), apart.last()) {
+            println!(
+                "{name}: apart by more than 0.05 at {} instants, t = {first:.2} … {last:.2} s",
+                apart.len()
+            );
+        }
         println!(
             "| {name} | {:.1} % | {:.4} / {:.4} / {:.4} | {:.1} % | {} / {} | {:.4} / {:.4} | {:.3} / {:.3} |",
             100.0 * c.both,
