@@ -4,111 +4,43 @@
 //! outputs (Fx, Fy, Mz) of the bench's points (`mf::eval::<f64, Libm>` on the bundled MF 6.1
 //! tyre) and of its transient-filter stream (κ', α'), written to `$OUT_DIR/reference.rs` with the
 //! tyre's parameters as `gough::tir::parse` reads them (f64; the bench casts them at boot); and
-//! the friction estimator's table for that tyre as a `static` in flash (`$OUT_DIR/estimator.rs`:
-//! f32 with feature `mu`, Q31.32 with `mu-fix`), with the outcome the estimator must reproduce on
-//! the device for each bench stream.
-use gough::fixed::Fix;
-#[cfg(feature = "mu-fix")]
-use gough::fixed::FixMath;
-use gough::math::{Backend, Fast, Float, Libm};
+//! the outcome the friction estimator (`gough::mu::bank::Bank` at 100 Hz, one sample per batch)
+//! must reproduce on the device for each bench stream (`$OUT_DIR/estimator.rs`, with feature
+//! `mu`: f32 with `math::Fast` with feature `fast`, Q31.32 with `FixMath` with feature `fix`).
+use gough::math::{Backend, Float, Libm};
 use gough::mf::{self, Options};
-use gough::mu::{table::Curve, Config, GoughTable, MuEstimator};
+use gough::mu::bank::{Bank, State};
 use std::{env, fmt::Write as _, fs, path::PathBuf};
 
+use gough_workloads::filter_point;
 use gough_workloads::points::{input, N};
-use gough_workloads::streams::{cast_sample, hash, Feed, HASH0, SAMPLES, STREAMS};
-use gough_workloads::{filter_point, slalom as workload};
+use gough_workloads::streams::{bank_sample, config, hash, stream, Feed, HASH0, STREAMS};
 
-/// A table value as a Rust literal of its bits (exact, NaN and infinities included).
-trait Lit: Copy {
-    fn lit(self) -> String;
-}
-
-impl Lit for f32 {
-    fn lit(self) -> String {
-        format!("b(0x{:08x})", self.to_bits())
-    }
-}
-
-impl Lit for Fix {
-    fn lit(self) -> String {
-        format!("x({})", self.to_bits())
-    }
-}
-
-fn list(xs: impl IntoIterator<Item = String>) -> String {
-    format!("[{}]", xs.into_iter().collect::<Vec<_>>().join(", "))
-}
-
-fn curve<F: Lit>(c: &Curve<F>) -> String {
-    format!(
-        "gough::mu::table::Curve {{ f: {}, rise: {}, tau0: {}, sat: {}, anchor: {}, x_sat: {}, x_floor: {}, len: {}, rise_len: {}, peak: {}, f_top: {}, band_scale: {}, fx_free: {}, band: {} }}",
-        list(c.f.iter().map(|&x| x.lit())),
-        list(c.rise.iter().map(|&(f, t)| format!("({}, {})", f.lit(), t.lit()))),
-        c.tau0.lit(),
-        list(c.sat.iter().map(|&x| x.lit())),
-        c.anchor.lit(),
-        c.x_sat.lit(),
-        c.x_floor.lit(),
-        c.len,
-        c.rise_len,
-        c.peak,
-        c.f_top.lit(),
-        c.band_scale.lit(),
-        list(c.fx_free.iter().map(|&x| x.lit())),
-        list(c.band.iter().map(|x| list(x.iter().map(|&v| v.lit())))),
-    )
-}
-
-/// The estimator's table in `F` as a `static` named `name` (Rust source), and the expected
-/// outcome of each stream (`expect`): a hash of every estimate (μ, σ, state) the estimator
-/// gives on the host, which the device must reproduce bit for bit (IEEE f32 on both with no FMA
-/// contraction; Q31.32 is integer arithmetic).
-fn estimator<F: Float + Lit + Feed, M: Backend<F>>(
+/// The expected outcome of the bank (`Bank<F>` with backend `M`, [`config`]) on each of
+/// [`STREAMS`], run here on the host as the device runs it: (a hash of every estimate — μ, σ,
+/// μ_min, state, change flag —, the identifiable samples, the last μ's hash). The device must
+/// reproduce them bit for bit (IEEE f32 on both with no FMA contraction; Q31.32 is integer
+/// arithmetic). Rust source of a `static` named `name`.
+#[allow(dead_code)]
+fn bank<F: Float + Feed, M: Backend<F>>(
     p: &gough::mf::Params<f64>,
     name: &str,
-    expect: &str,
     how: &str,
 ) -> String {
     let pf = p.cast::<F>();
-    // On the heap: the Q31.32 table is twice the f32 one, too large for a thread's stack.
-    let mut t = Box::new(GoughTable::<F>::zeroed());
-    t.for_wheel_into::<M>(&pf, None)
-        .expect("a usable Gough table");
-    let ty = core::any::type_name::<F>();
-    let mut s = format!(
-        "/// The friction estimator's table for the bundled tyre, built on the host by build.rs\n\
-         /// (`{how}`), in flash.\n\
-         pub static {name}: gough::mu::GoughTable<{ty}> = gough::mu::GoughTable {{\n",
-    );
-    let curves = list(t.curves.iter().map(|g| {
-        list(
-            g.iter()
-                .map(|j| list(j.iter().map(|side| list(side.iter().map(curve))))),
-        )
-    }));
-    writeln!(
-        s,
-        "    fz: {},\n    lam: {},\n    cam: {},\n    curves: {},\n    fy_sign: {},\n    mu0: {},\n    mu_ratio: {},\n    mirrored: {},\n}};",
-        list(t.fz.iter().map(|&x| x.lit())),
-        list(t.lam.iter().map(|&x| x.lit())),
-        list(t.cam.iter().map(|&x| x.lit())),
-        curves,
-        t.fy_sign.lit(),
-        t.mu0.lit(),
-        t.mu_ratio.lit(),
-        t.mirrored
-    )
-    .expect("write");
-    writeln!(s, "/// Expected (hash, identifiable samples, last μ hash) per stream of [`STREAMS`].\npub static {expect}: [(u32, u32, u32); STREAMS.len()] = [").expect("write");
     let p32 = p.cast::<f32>();
-    for &(mu, camber, _) in STREAMS.iter() {
-        let mut est = MuEstimator::for_tyre(&t, &pf, Config::default());
+    let mut s = format!(
+        "/// Expected (hash, identifiable samples, last μ hash) per stream of [`STREAMS`]: `{how}`\n\
+         /// run by build.rs on the host.\npub static {name}: [(u32, u32, u32); STREAMS.len()] = [\n"
+    );
+    for &(mu, camber, _, _) in STREAMS.iter() {
+        let mut est =
+            Bank::new::<M>(&pf, None, config::<F>()).expect("a bank for the bundled tyre");
         let (mut h, mut seen, mut last) = (HASH0, 0u32, 0u32);
-        for m in workload::Slalom::new(&p32, mu, camber).take(SAMPLES) {
-            let e = est.update::<M>(&cast_sample(&m.sample(m.t_us as f32 / 1.0e6)));
+        for m in stream(&p32, mu, camber) {
+            let e = est.update::<M>(&pf, &bank_sample::<F>(&m));
             h = hash(h, &e);
-            seen += u32::from(e.state == gough::mu::State::Identifiable);
+            seen += u32::from(e.state == State::Identifiable);
             last = e.mu.feed(HASH0);
         }
         writeln!(s, "    (0x{h:08x}, {seen}, 0x{last:08x}),").expect("write");
@@ -163,6 +95,7 @@ fn main() {
         "M3"
     };
     println!("cargo:rustc-env=GOUGH_CORE={core}");
+    println!("cargo:rustc-env=GOUGH_CORE_LC={}", core.to_lowercase());
     println!("cargo:rustc-link-search={}", out.display());
 
     let tir_path = dir.join("../host-tests/data/tyres/MagicFormula61_Parameters.tir");
@@ -198,31 +131,21 @@ fn main() {
     }
     s.push_str("];\n");
     fs::write(out.join("reference.rs"), s).expect("write reference.rs");
-    // The estimator's tables, for the builds that run it: f32 (feature `mu`) and Q31.32
-    // (feature `mu-fix`: a Cortex-M3 with 4 MB, not the nRF51822).
-    let mut est = String::from(
-        "#[allow(dead_code)]\nconst fn b(x: u32) -> f32 {\n    f32::from_bits(x)\n}\n",
-    );
-    if cfg!(feature = "mu") {
-        est.push_str(&estimator::<f32, Fast>(
-            &p,
-            "TABLE",
-            "EXPECT",
-            "GoughTable::<f32>::for_tyre::<math::Fast>",
-        ));
-    }
-    #[cfg(feature = "mu-fix")]
-    {
-        est.push_str(
-            "#[allow(dead_code)]\nconst fn x(v: i64) -> gough::fixed::Fix {\n    gough::fixed::Fix::from_bits(v)\n}\n",
-        );
-        est.push_str(&estimator::<Fix, FixMath>(
-            &p,
-            "TABLE_FIX",
-            "EXPECT_FIX",
-            "GoughTable::<Fix>::for_tyre::<FixMath>",
-        ));
-    }
+    // The bank's expected outcomes, for the number formats this build runs.
+    #[allow(unused_mut)] // nothing is added without feature `mu`
+    let mut est = String::new();
+    #[cfg(all(feature = "mu", feature = "fast"))]
+    est.push_str(&bank::<f32, gough::math::Fast>(
+        &p,
+        "EXPECT",
+        "Bank::<f32>::update::<math::Fast>",
+    ));
+    #[cfg(all(feature = "mu", feature = "fix"))]
+    est.push_str(&bank::<gough::fixed::Fix, gough::fixed::FixMath>(
+        &p,
+        "EXPECT_FIX",
+        "Bank::<Fix>::update::<FixMath>",
+    ));
     fs::write(out.join("estimator.rs"), est).expect("write estimator.rs");
     println!("cargo:rerun-if-changed={}", tir_path.display());
     println!("cargo:rerun-if-changed=memory-microbit.x");

@@ -755,6 +755,20 @@ impl<F: Float> Bank<F> {
         let reg = F::from_f64(1e-6);
         h00 = h00 * (F::ONE + reg) + eps;
         h11 = h11 * (F::ONE + reg) + eps;
+        // Scaled by a power of two that brings the largest entry to at most 1 (at most 32
+        // halvings by 16): exact in floating point, so the step is the same to the bit, and it
+        // keeps the determinant and the numerators (up to ~1e14 unscaled at 100 Hz) inside
+        // Q31.32's range (2³¹), where they would saturate.
+        let sixteenth = F::from_f64(0.0625);
+        let (mut m, mut s) = (h00.max(h11), F::ONE);
+        for _ in 0..32 {
+            if m <= F::ONE {
+                break;
+            }
+            m *= sixteenth;
+            s *= sixteenth;
+        }
+        let (h00, h01, h11, g0, g1) = (h00 * s, h01 * s, h11 * s, g0 * s, g1 * s);
         let det = h00 * h11 - h01 * h01;
         let mut next = cell;
         let mut chi = chi0;

@@ -4,7 +4,8 @@
 //!
 //! - [`points`] — the Magic Formula bench's grid of inputs.
 //! - [`slalom`] — the friction estimator's measurement stream (a noisy slalom).
-//! - [`streams`] — the estimator streams of the no-FPU bench and the hash of their estimates.
+//! - [`streams`] — the estimator streams of the no-FPU bench (the slalom at 100 Hz), the bank's
+//!   100 Hz settings and the hash of its estimates.
 //! - [`filter_point`] — the transient-filter bench's stream.
 //! - [`marks`] (feature `marks`) — `bench_start`/`bench_stop`, the markers outside counters find.
 //!

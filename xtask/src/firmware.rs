@@ -262,11 +262,14 @@ pub fn test_all(passed: &mut u64) -> Result<(), String> {
     Ok(())
 }
 
-/// The Cortex-M0 bench (`firmware-m0/`, QEMU microbit): flash of each configuration, then both
-/// number formats in one run, then f32 with the friction estimator (table in flash; its estimates
-/// must equal the host's bit for bit).
+/// The Cortex-M0 bench (`firmware-m0/`, QEMU microbit): the flash of the Magic Formula and
+/// filter workloads in both number formats (the default build, the one to profile); then each
+/// format with the friction estimator (feature `mu`; both formats with it do not fit the
+/// nRF51822's 256 KiB) in an image of its own, its flash and its run; then both formats with the
+/// estimator in one image on a Cortex-M3 (QEMU mps2-an385). Each run checks the Magic Formula
+/// and the filter against f64 and the estimator's estimates against the host's, bit for bit.
 fn bench_m0() -> Result<(), String> {
-    step("bench: instructions on the M0 (QEMU microbit, -icount shift=0): combined MF evaluation and transient-filter step (each checked against the f64 reference), soft-float f32 (math::Fast) vs Q31.32 fixed point; the friction estimator in f32 (table in flash); flash of each; then all of them, the Q31.32 estimator too, on a Cortex-M3 (QEMU mps2-an385)");
+    step("bench: instructions on the M0 (QEMU microbit, -icount shift=0): combined MF evaluation and transient-filter step (each checked against f64) and the friction estimator at 100 Hz (mu::bank::Bank, batch 1; estimates equal to the host's bit for bit), soft-float f32 (math::Fast) and Q31.32 fixed point, one image each with its flash; then both in one image on a Cortex-M3 (QEMU mps2-an385)");
     let dir = root().join("firmware-m0");
     let elf = dir.join("target/thumbv6m-none-eabi/release/bench");
     let m0_cargo = || {
@@ -274,7 +277,15 @@ fn bench_m0() -> Result<(), String> {
         c.current_dir(&dir).env_remove("CARGO_TARGET_DIR");
         c
     };
-    for (feature, what) in [("fast", "f32 math::Fast"), ("fix", "Q31.32 Fix")] {
+    run(m0_cargo().args(["build", "--release", "--bin", "bench"]))?;
+    report_size(
+        "microbit bench, Magic Formula and filter in both formats (no estimator)",
+        &elf,
+    )?;
+    for (features, what) in [
+        ("fast,mu", "f32 math::Fast with the estimator"),
+        ("fix,mu", "Q31.32 Fix with the estimator"),
+    ] {
         run(m0_cargo().args([
             "build",
             "--release",
@@ -282,27 +293,13 @@ fn bench_m0() -> Result<(), String> {
             "bench",
             "--no-default-features",
             "--features",
-            feature,
+            features,
         ]))?;
-        report_size(&format!("microbit bench, {what} only"), &elf)?;
-    }
-    // Both number formats in one run; then f32 with the friction estimator (its table in flash
-    // leaves no room for the fixed-point code; `report_size` prints the flash used).
-    for (features, what) in [
-        (None, "both"),
-        (Some("mu"), "f32 math::Fast with the estimator"),
-    ] {
-        let mut c = m0_cargo();
-        c.args(["build", "--release", "--bin", "bench"]);
-        if let Some(f) = features {
-            c.args(["--no-default-features", "--features", f]);
-        }
-        run(&mut c)?;
         report_size(&format!("microbit bench, {what}"), &elf)?;
         no_fpu_bench(&qemu::MICROBIT, &elf).map_err(|e| format!("M0 bench ({what}) {e}"))?;
     }
-    // The same bench on a Cortex-M3 without FPU (QEMU mps2-an385, 4 MB): every workload, the
-    // Q31.32 estimator too (its table does not fit the nRF51822's flash).
+    // Both number formats with the estimator in one image on a Cortex-M3 without FPU (QEMU
+    // mps2-an385).
     run(m0_cargo().args([
         "build",
         "--release",
@@ -311,10 +308,10 @@ fn bench_m0() -> Result<(), String> {
         "--target",
         "thumbv7m-none-eabi",
         "--features",
-        "mu,mu-fix",
+        "mu",
     ]))?;
     let elf_m3 = dir.join("target/thumbv7m-none-eabi/release/bench");
-    report_size("mps2-an385 (Cortex-M3) bench, all workloads", &elf_m3)?;
+    report_size("mps2-an385 (Cortex-M3) bench, every workload", &elf_m3)?;
     no_fpu_bench(&qemu::MPS2_AN385, &elf_m3).map_err(|e| format!("M3 bench {e}"))
 }
 

@@ -1,8 +1,9 @@
-//! Instruction counts of the combined-slip Magic Formula and of one transient-filter step on a
-//! Cortex-M0 without FPU (QEMU's `microbit`, an nRF51822), soft-float f32 with `math::Fast`
-//! against Q31.32 fixed point (`fixed::Fix` + `fixed::FixMath`), and of the friction estimator
-//! on a table in flash: in f32 (feature `mu`) and in Q31.32 (feature `mu-fix`, whose table
-//! needs the Cortex-M3 build: `--target thumbv7m-none-eabi`, QEMU's `mps2-an385`). Under
+//! Instruction counts of the combined-slip Magic Formula, of one transient-filter step and of the
+//! friction estimator at 100 Hz (`mu::bank::Bank`, one 10 ms sample per batch) on a Cortex-M0
+//! without FPU (QEMU's `microbit`, an nRF51822) and on a Cortex-M3 without FPU (`--target
+//! thumbv7m-none-eabi`, QEMU's `mps2-an385`), soft-float f32 with `math::Fast` (feature `fast`)
+//! against Q31.32 fixed point (`fixed::Fix` + `fixed::FixMath`, feature `fix`); the estimator
+//! with feature `mu`. Under
 //! QEMU with `-icount shift=0`: one instruction = 1 ns of virtual time, SysTick counts the core
 //! clock (16 MHz on the M0: 62.5 instructions per count; 25 MHz on the M3: 40), calibrated below
 //! on a loop of known length, as in `firmware/src/bin/bench.rs`.
@@ -30,11 +31,8 @@ use gough::mf::{self, Input, Options, Params};
 use gough_workloads::filter_point;
 use gough_workloads::marks::{bench_start, bench_stop};
 use gough_workloads::points::{input, N};
-#[cfg(any(feature = "mu", feature = "mu-fix"))]
-use gough_workloads::{
-    slalom as workload,
-    streams::{cast_sample, hash, Feed, HASH0, SAMPLES, STREAMS},
-};
+#[cfg(feature = "mu")]
+use gough_workloads::streams::{bank_sample, config, hash, stream, Feed, HASH0, SAMPLES, STREAMS};
 include!(concat!(env!("OUT_DIR"), "/reference.rs"));
 include!(concat!(env!("OUT_DIR"), "/estimator.rs"));
 
@@ -218,36 +216,42 @@ impl Errors {
     }
 }
 
-/// Workload `id`: the friction estimator (`MuEstimator::update` in `F` with backend `M`) over
-/// each of [`STREAMS`], on a table build.rs placed in flash, each sample timed alone (SysTick:
-/// ±1 count per sample, exact on the mean); the stream is generated between the samples, outside
-/// the clock. Every estimate is hashed and compared with the host's (`expect`): the device must
-/// reproduce them bit for bit. Returns whether all streams matched.
-#[cfg(any(feature = "mu", feature = "mu-fix"))]
+/// Workload `id`: the friction estimator (`mu::bank::Bank::update` in `F` with backend `M`) at
+/// 100 Hz ([`config`]: one 10 ms sample per batch) over each of [`STREAMS`], each sample timed
+/// alone (SysTick: ±1 count per sample, exact on the mean); the stream is generated between the
+/// samples, outside the clock. Every estimate is hashed and compared with the host's (`expect`,
+/// from build.rs): the device must reproduce them bit for bit. Prints a
+/// `bench: mu_bank_<core>_<backend>_100hz_<stream> mean=<n> worst=<n> ram=<bytes>` line per
+/// stream (instructions per sample; `ram`: the bank's state, `size_of::<Bank<F>>()`). Returns
+/// whether all streams matched.
+#[cfg(feature = "mu")]
 #[inline(never)]
-fn estimator<F: Float + Feed, M: Backend<F>>(
+fn bank<F: Float + Feed, M: Backend<F>>(
     id: u32,
     what: &str,
-    table: &gough::mu::GoughTable<F>,
+    short: &str,
     expect: &[(u32, u32, u32)],
     per_count: f64,
     overhead: u64,
 ) -> bool {
-    use gough::mu::{Config, MuEstimator, State};
+    use gough::mu::bank::{Bank, State};
     let p = params::<F>();
     let p32 = params::<f32>();
     let mut ok = true;
-    for (k, (&(mu, camber, name), &(want, want_seen, want_last))) in
+    for (k, (&(mu, camber, stream_name, desc), &(want, want_seen, want_last))) in
         STREAMS.iter().zip(expect.iter()).enumerate()
     {
-        let mut est = MuEstimator::for_tyre(table, &p, Config::default());
+        let Ok(mut est) = Bank::new::<M>(&p, None, config::<F>()) else {
+            hprintln!("{}: no bank for the bundled tyre", what);
+            return false;
+        };
         let (mut sum, mut worst, mut h, mut seen) = (0u64, 0u64, HASH0, 0u32);
         let (mut last, mut last_mu) = (0u32, 0f64);
         bench_start(id + k as u32);
-        for m in workload::Slalom::new(&p32, mu, camber).take(SAMPLES) {
-            let s = cast_sample::<F>(&m.sample(m.t_us as f32 / 1.0e6));
+        for m in stream(&p32, mu, camber) {
+            let s = bank_sample::<F>(&m);
             let t0 = now();
-            let e = est.update::<M>(core::hint::black_box(&s));
+            let e = est.update::<M>(&p, core::hint::black_box(&s));
             let t1 = now();
             let c = (t1 - t0).saturating_sub(overhead);
             sum += c;
@@ -259,17 +263,28 @@ fn estimator<F: Float + Feed, M: Backend<F>>(
         }
         bench_stop(id + k as u32);
         let same = (h, seen, last) == (want, want_seen, want_last);
+        let mean = (sum as f64 * per_count / SAMPLES as f64) as u32;
+        let worst = (worst as f64 * per_count) as u32;
         hprintln!(
-            "{}: estimator (MuEstimator::update), {}: {} instructions per wheel per sample (mean over {} samples; worst sample {}, ±{}); {} identifiable; last μ {:.4}; estimates {} the host's",
+            "{}: estimator at 100 Hz (Bank::update, batch 1), {}: {} instructions per wheel per sample (mean over {} samples; worst sample {}, ±{}); {} identifiable; last μ {:.4}; estimates {} the host's",
             what,
-            name,
-            (sum as f64 * per_count / SAMPLES as f64) as u32,
+            desc,
+            mean,
             SAMPLES,
-            (worst as f64 * per_count) as u32,
+            worst,
             (per_count + 0.5) as u32,
             seen,
             last_mu,
             if same { "identical to" } else { "DIFFER from" }
+        );
+        hprintln!(
+            "bench: mu_bank_{}_{}_100hz_{} mean={} worst={} ram={}",
+            env!("GOUGH_CORE_LC"),
+            short,
+            stream_name,
+            mean,
+            worst,
+            core::mem::size_of::<Bank<F>>()
         );
         ok &= same && seen > 0;
     }
@@ -371,12 +386,12 @@ fn main() -> ! {
             overhead,
         );
     }
-    #[cfg(feature = "mu")]
+    #[cfg(all(feature = "mu", feature = "fast"))]
     {
-        ok &= estimator::<f32, gough::math::Fast>(
+        ok &= bank::<f32, gough::math::Fast>(
             30,
             concat!(env!("GOUGH_CORE"), " soft-float f32, math::Fast"),
-            &TABLE,
+            "fast",
             &EXPECT,
             per_count,
             overhead,
@@ -392,23 +407,23 @@ fn main() -> ! {
             overhead,
         );
     }
-    #[cfg(feature = "mu-fix")]
+    #[cfg(all(feature = "mu", feature = "fix"))]
     {
         use gough::fixed::{Fix, FixMath};
-        ok &= estimator::<Fix, FixMath>(
+        ok &= bank::<Fix, FixMath>(
             40,
             concat!(env!("GOUGH_CORE"), " Q31.32 fixed::Fix + FixMath"),
-            &TABLE_FIX,
+            "fix",
             &EXPECT_FIX,
             per_count,
             overhead,
         );
     }
     hprintln!(
-        "stack peak {} bytes; Params<f32> {} bytes; MuEstimator<f32> {} bytes (its table in flash)",
+        "stack peak {} bytes; Params<f32> {} bytes; Bank<f32> {} bytes",
         stack_peak(),
         core::mem::size_of::<Params<f32>>(),
-        core::mem::size_of::<gough::mu::MuEstimator<'static, f32>>()
+        core::mem::size_of::<gough::mu::bank::Bank<f32>>()
     );
     exit(ok)
 }
