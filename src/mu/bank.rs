@@ -802,15 +802,13 @@ impl<F: Float> Bank<F> {
             let (sa, sk) = self.best;
             let sk = b.kappa.map_or(sk, |(k, _)| k);
             self.scan = self.scan.wrapping_add(1);
-            let sa = if self.scan.is_multiple_of(2) {
-                sa
-            } else {
-                let i = (self.scan / 2) % SCAN.len();
-                let a = F::from_f64(SCAN.get(i).copied().unwrap_or(0.0));
-                if b.fy.0 > F::ZERO {
-                    -a
-                } else {
-                    a
+            let side = |a: F| if b.fy.0 > F::ZERO { -a } else { a };
+            let sa = match self.scan % 3 {
+                0 => sa,
+                1 => side(self.brush_alpha::<M>(k, b)),
+                _ => {
+                    let i = (self.scan / 3) % SCAN.len();
+                    side(F::from_f64(SCAN.get(i).copied().unwrap_or(0.0)))
                 }
             };
             if let Some((r2, _)) = self.residuals::<M>(&mu, b, sa, sk, false) {
@@ -830,6 +828,28 @@ impl<F: Float> Bank<F> {
         } else {
             self.cfg.chi2_cap
         }
+    }
+
+    /// |α′| at which the brush model (parabolic pressure, one friction coefficient) gives the
+    /// batch's |Fy| on cell `k`'s surface: Fy = μFz·(1 − (1 − θ|α|)³), θ = Kyα/(3μFz), solved
+    /// for |α|; the onset of full sliding (1/θ) when |Fy| ≥ μFz. A seed for a cell that lost
+    /// its slips (e.g. deep in the saturated range after a fast reversal on a slippery road).
+    fn brush_alpha<M: Backend<F>>(&self, k: usize, b: &Batch<F>) -> F {
+        let cap = F::from_f64(SCAN[SCAN.len() - 1]);
+        let mu_fz = self.mu_of(k) * b.fz;
+        let kya = self.prep.as_ref().map_or(F::ZERO, |p| p.k_ya().abs());
+        if !(mu_fz > F::ZERO && kya > F::ZERO) {
+            return F::from_f64(SCAN[0]);
+        }
+        let theta = kya / (F::from_f64(3.0) * mu_fz);
+        let u = (b.fy.0.abs() / mu_fz).min(F::ONE);
+        let rest = F::ONE - u;
+        let cbrt = if rest > F::ZERO {
+            M::exp(M::ln(rest) / F::from_f64(3.0))
+        } else {
+            F::ZERO
+        };
+        ((F::ONE - cbrt) / theta).min(cap)
     }
 
     /// The normalised residuals (measured − model)/σ of (Fx, Fy, Mz, κ′) at slips (α′, κ′) on
