@@ -319,7 +319,7 @@ pub fn slips<F: Float, G: Lift<F>, M: Backend<G>>(
     mut alpha: G,
 ) -> Slips<G> {
     let l = |x: F| G::lift(x);
-    let vx = l(c.vx);
+    let vx = c.vx;
     let mut flags = Flags::default();
     let mut kappa_out = kappa;
     // tan α, reused below (computed again only if α is reduced or clipped).
@@ -327,17 +327,15 @@ pub fn slips<F: Float, G: Lift<F>, M: Backend<G>>(
     let mut tan_alpha = M::tan(alpha);
     if c.limits {
         if c.low_speed {
-            let red_linear = l(c.red_linear);
-            kappa_out = kappa * red_linear;
+            kappa_out = kappa * c.red_linear;
             if !c.transient {
-                kappa *= red_linear;
+                kappa = kappa * c.red_linear;
             }
         }
         // α fades when the total speed |Vx| + |Vsy| falls below VXLOW (Vsy = tan(α)·Vx).
-        let vxlow = l(c.vxlow);
-        let speed_sum = vx.abs() + (tan_alpha * vx).abs();
-        if speed_sum < vxlow && !c.transient {
-            alpha *= speed_sum / vxlow;
+        let speed_sum = (tan_alpha * vx).abs() + vx.abs();
+        if speed_sum < l(c.vxlow) && !c.transient {
+            alpha = alpha * (speed_sum / c.vxlow);
         }
         let (a, fa) = alpha.clamp_flag(l(c.alpmin), l(c.alpmax));
         alpha = a;
@@ -363,9 +361,9 @@ pub fn slips<F: Float, G: Lift<F>, M: Backend<G>>(
     };
     // (4.E6), (4.E6a): Vc' = Vc + ε·sign(Vc), with Vsy = tan(α)·|Vx| and Vcy = Vsy.
     let vsy = tan_alpha * vx.abs();
-    let vc = M::sqrt(vx * vx + vsy * vsy);
-    let vc_prime = vc + G::from_f64(EPS) * vc.sign_nz();
-    let cos_alpha_prime = vx / vc_prime;
+    let vc = M::sqrt(vsy * vsy + vx * vx);
+    let vc_prime = vc + F::from_f64(EPS) * vc.value().sign_nz();
+    let cos_alpha_prime = l(vx) / vc_prime;
     Slips {
         kappa,
         kappa_out,

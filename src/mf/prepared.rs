@@ -471,14 +471,12 @@ impl<F: Float> View<'_, F> {
 
     /// The slip stage, computed in `G` from the load stage (`F`) and a friction stage (`H`).
     #[inline(always)]
-    pub(crate) fn slip<H: Float, G: Lift<F> + Lift<H>, M: Backend<G>>(
+    pub(crate) fn slip<H: Lift<F>, G: Lift<F> + Lift<H>, M: Backend<G>>(
         &self,
         mu: &Mu<H>,
         kappa: G,
         alpha: G,
     ) -> Forces<G> {
-        let f = |x: F| <G as Lift<F>>::lift(x);
-        let h = |x: H| <G as Lift<H>>::lift(x);
         let c = &self.c;
         let alpha = if self.mirrored { -alpha } else { alpha };
         let s = slips::<F, G, M>(c, kappa, alpha);
@@ -496,22 +494,22 @@ impl<F: Float> View<'_, F> {
         let fy0 = pure::fy0_slip::<F, H, G, M>(self.fy0, &mu.fy0, c, s.alpha_star, &mut flags);
         // t and Mzr at pure slip: (45), (47), (53), (56) / (4.E34), (4.E37), (4.E44), (4.E47).
         let m0 = self.mz0;
-        let alpha_r = s.alpha_star + h(mu.mz0.s_hf); // (47), (4.E37)
-        let alpha_t = s.alpha_star + f(m0.s_ht); // (45), (4.E34)
-        let b_t = h(mu.mz0.b_t);
-        let e_t = f(m0.e_t1) * (G::ONE + f(m0.e_t2) * M::atan(b_t * f(m0.c_t) * alpha_t)); // (53), (4.E44)
+        let alpha_r = s.alpha_star + mu.mz0.s_hf; // (47), (4.E37)
+        let alpha_t = s.alpha_star + m0.s_ht; // (45), (4.E34)
+        let b_t = mu.mz0.b_t;
+        let e_t = (M::atan(alpha_t * (b_t * m0.c_t)) * m0.e_t2 + F::ONE) * m0.e_t1; // (53), (4.E44)
         let e_t = clip_e(e_t, c.limits, &mut flags);
-        let d_r = h(mu.mz0.d_r1) * s.cos_alpha_star + f(m0.zeta8) - G::ONE; // (56), (4.E47)
+        let d_r = s.cos_alpha_star * mu.mz0.d_r1 + m0.zeta8 - F::ONE; // (56), (4.E47)
 
         let fx = combined::fx_slip::<F, G, M>(self.w, s.kappa, s.alpha_star, fx0, &mut flags);
-        let mu_y = h(mu.fy0.mu_y);
-        let fy = combined::fy_slip::<F, G, M>(
+        let mu_y = mu.fy0.mu_y;
+        let fy = combined::fy_slip::<F, H, G, M>(
             self.w,
             c,
             (s.kappa, s.alpha_star),
             fy0,
             mu_y,
-            f(self.fy0.zeta2),
+            self.fy0.zeta2,
             &mut flags,
         );
         // F'y (4.E74): Fy at γ = 0 (MF 6.x); the weighting Gyκ keeps the actual γ* (TNO,
@@ -520,17 +518,17 @@ impl<F: Float> View<'_, F> {
             None => (fy0, mu_y),
             Some(l) => (
                 pure::fy0_slip::<F, H, G, M>(l, &mu.fy0_g0, c, s.alpha_star, &mut flags),
-                h(mu.fy0_g0.mu_y),
+                mu.fy0_g0.mu_y,
             ),
         };
         // The weight and the κ-induced shift of F'y are taken without the turn-slip ζ2
         // (MFeval's `internalParams_sub0`): Gyκ is Fy's own, SVyκ is Fy's per unit μy at
         // μy(γ = 0).
         let fy_arm = match c.version {
-            Version::Delft96 | Version::Mf52 => fy.fy - mu_y_g0 * fy.s_vyk_per_mu,
+            Version::Delft96 | Version::Mf52 => fy.fy - fy.s_vyk_per_mu * mu_y_g0,
             Version::Mf61 | Version::Mf62 => fy.g_yk * fy0_g0, // (4.E74)
         };
-        let mz = combined::mz_slip::<F, G, M>(
+        let mz = combined::mz_slip::<F, H, G, M>(
             self.mz,
             c,
             &MzIn {
@@ -540,7 +538,7 @@ impl<F: Float> View<'_, F> {
                 b_t,
                 e_t,
                 d_r,
-                b_r: h(mu.mz0.b_r),
+                b_r: mu.mz0.b_r,
                 cos_alpha_prime: s.cos_alpha_prime,
                 fx,
                 fy: fy.fy,

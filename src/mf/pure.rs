@@ -148,12 +148,12 @@ pub fn fx0_slip<F: Float, H: Float, G: Lift<F> + Lift<H>, M: Backend<G>>(
     kappa: G,
     flags: &mut Flags,
 ) -> G {
-    let f = |x: F| <G as Lift<F>>::lift(x);
-    let h = |x: H| <G as Lift<H>>::lift(x);
-    let kappa_x = kappa + f(l.s_hx); // (23), (4.E10)
-    let e_x = f(l.e_x1) * (G::ONE - f(l.pex4) * kappa_x.sign()) * f(l.lex); // (27), (4.E14)
+    let kappa_x = kappa + l.s_hx; // (23), (4.E10)
+    // Ex depends on κ through sign(κx) alone (derivative 0): computed in F.
+    let sign_x = <G as Lift<F>>::value(kappa_x.sign());
+    let e_x = l.e_x1 * (F::ONE - l.pex4 * sign_x) * l.lex; // (27), (4.E14)
     let e_x = clip_e(e_x, c.limits, flags);
-    let mut fx0 = magic_sin::<G, M>(h(m.b_x), f(l.c_x), h(m.d_x), e_x, kappa_x) + h(m.s_vx); // (22), (4.E9)
+    let mut fx0 = magic_sin::<G, M, H, F, H, F>(m.b_x, l.c_x, m.d_x, e_x, kappa_x) + m.s_vx; // (22), (4.E9)
     if c.vx < F::ZERO && !c.transient {
         // Running backwards: mirror image (appendix, first paragraph), for steady-state slips
         // defined with κ = −1 locked in both directions. Slips from the transient model
@@ -385,12 +385,12 @@ pub fn fy0_slip<F: Float, H: Float, G: Lift<F> + Lift<H>, M: Backend<G>>(
     alpha_star: G,
     flags: &mut Flags,
 ) -> G {
-    let f = |x: F| <G as Lift<F>>::lift(x);
-    let h = |x: H| <G as Lift<H>>::lift(x);
-    let alpha_y = alpha_star + h(m.s_hy); // (33), (4.E20)
-    let e_y = f(l.e_y1) * (f(l.e_y2) - f(l.e_y3) * alpha_y.sign_nz()) * f(l.ley); // (38), (4.E24)
+    let alpha_y = alpha_star + m.s_hy; // (33), (4.E20)
+    // Ey depends on α through sign(αy) alone (derivative 0): computed in F.
+    let sign_y = <G as Lift<F>>::value(alpha_y.sign_nz());
+    let e_y = l.e_y1 * (l.e_y2 - l.e_y3 * sign_y) * l.ley; // (38), (4.E24)
     let e_y = clip_e(e_y, c.limits, flags);
-    let mut fy0 = magic_sin::<G, M>(h(m.b_y), f(l.c_y), h(m.d_y), e_y, alpha_y) + h(m.s_vy); // (32), (4.E19)
+    let mut fy0 = magic_sin::<G, M, H, F, H, F>(m.b_y, l.c_y, m.d_y, e_y, alpha_y) + m.s_vy; // (32), (4.E19)
     if c.use_alpha_star && c.vx < F::ZERO {
         // With α* = tan(α)·sign(Vx) the force changes sign with Vx; undo it (MFeval, TNO).
         fy0 = -fy0;
