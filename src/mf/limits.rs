@@ -335,7 +335,7 @@ pub fn slips<F: Float, G: Lift<F>, M: Backend<G>>(
         // α fades when the total speed |Vx| + |Vsy| falls below VXLOW (Vsy = tan(α)·Vx).
         let speed_sum = (tan_alpha * vx).abs() + vx.abs();
         if speed_sum < l(c.vxlow) && !c.transient {
-            alpha = alpha * (speed_sum / c.vxlow);
+            alpha *= speed_sum / c.vxlow;
         }
         let (a, fa) = alpha.clamp_flag(l(c.alpmin), l(c.alpmax));
         alpha = a;
