@@ -293,11 +293,13 @@ impl<F: Float, const N: usize> Div<F> for Dual<F, N> {
 impl<F: Float, M: Backend<F>, const N: usize> Backend<Dual<F, N>> for M {
     #[inline]
     fn sin(x: Dual<F, N>) -> Dual<F, N> {
-        x.chain(M::sin(x.v), M::cos(x.v))
+        let (s, c) = M::sin_cos(x.v);
+        x.chain(s, c)
     }
     #[inline]
     fn cos(x: Dual<F, N>) -> Dual<F, N> {
-        x.chain(M::cos(x.v), -M::sin(x.v))
+        let (s, c) = M::sin_cos(x.v);
+        x.chain(c, -s)
     }
     #[inline]
     fn tan(x: Dual<F, N>) -> Dual<F, N> {

@@ -285,6 +285,12 @@ pub trait Backend<F: Float> {
     fn ln(x: F) -> F;
     /// √x for x ≥ 0 — equivalent slip angles (A54), (A55), turn slip (4.77).
     fn sqrt(x: F) -> F;
+    /// (sin x, cos x), equal to [`Backend::sin`] and [`Backend::cos`] — a dual number's sine or
+    /// cosine needs both. A backend may share the argument reduction (`Fast` does).
+    #[inline]
+    fn sin_cos(x: F) -> (F, F) {
+        (Self::sin(x), Self::cos(x))
+    }
 }
 
 /// Reference backend: the `libm` crate (Rust port of musl's libm).
