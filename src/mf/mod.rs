@@ -323,7 +323,8 @@ pub fn eval<F: Float, M: Backend<F>>(
     // the slip stage: the `prepared` module's, so that its results are this function's.
     prepared::stages::<F, M, _>(p, c, mirrored, turn, |prep| {
         let mu = prep.mu_stage::<F>(prep.c.lmux_star, prep.c.lmuy_star);
-        let f = prep.eval_with::<M>(&mu, input.kappa, input.alpha)?;
+        // The slips were checked finite above; the results are, with the rest, below.
+        let f = prep.slip::<F, F, M>(&mu, input.kappa, input.alpha);
         if !prep.contact {
             // No contact: no force, no moment (MFeval gives the same, see the `load` oracle sweep).
             return Ok(Output {
@@ -365,6 +366,11 @@ pub fn eval<F: Float, M: Backend<F>>(
             flags: f.flags,
         };
         let all = [
+            out.fx,
+            out.fy,
+            out.mz,
+            out.t,
+            out.m_zr,
             out.mx,
             out.my,
             out.mu_x,

@@ -274,7 +274,7 @@ impl<F: Float> Prepared<F> {
         alpha: F,
     ) -> Result<Forces<F>, EvalError> {
         check_slips(kappa, alpha)?;
-        self.view().eval_with::<M>(mu, kappa, alpha)
+        finite(self.view().slip::<F, F, M>(mu, kappa, alpha))
     }
 
     /// The slip stage and the slopes ∂/∂κ, ∂/∂α of Fx, Fy, Mz (dual numbers, two directions).
@@ -454,19 +454,6 @@ impl<F: Float> View<'_, F> {
             lmux_star,
             lmuy_star,
         )
-    }
-
-    /// The slip stage in `F` with the friction stage `mu`: `Prepared::eval_with`'s.
-    #[inline(always)]
-    pub(crate) fn eval_with<M: Backend<F>>(
-        &self,
-        mu: &Mu<F>,
-        kappa: F,
-        alpha: F,
-    ) -> Result<Forces<F>, EvalError> {
-        check_slips(kappa, alpha)?;
-        let f = self.slip::<F, F, M>(mu, kappa, alpha);
-        finite(f)
     }
 
     /// The slip stage, computed in `G` from the load stage (`F`) and a friction stage (`H`).
