@@ -141,7 +141,7 @@ pub fn condition<F: Float, M: Backend<F>>(
     opts: &Options,
 ) -> Result<Conditioned<F>, EvalError> {
     check_finite(input)?;
-    let mut c = condition_load::<F, M>(p, input, opts)?;
+    let mut c = condition_load_checked::<F, M>(p, input, opts)?;
     if opts.limits && opts.turn_slip {
         // Turn slip seen by the contact patch shrinks with the slip angle (MFeval "empirically
         // discovered"; TNO behaviour). φt is read by the turn-slip equations only.
@@ -167,6 +167,22 @@ pub fn condition_load<F: Float, M: Backend<F>>(
     input: &Input<F>,
     opts: &Options,
 ) -> Result<Conditioned<F>, EvalError> {
+    check_finite(&Input {
+        kappa: F::ZERO,
+        alpha: F::ZERO,
+        ..*input
+    })?;
+    condition_load_checked::<F, M>(p, input, opts)
+}
+
+/// [`condition_load`] of an input its caller has checked finite ([`check_finite`]): `mf::eval`
+/// checks the whole input once.
+#[inline(always)]
+pub(crate) fn condition_load_checked<F: Float, M: Backend<F>>(
+    p: &Params<F>,
+    input: &Input<F>,
+    opts: &Options,
+) -> Result<Conditioned<F>, EvalError> {
     let Input {
         mut fz,
         mut gamma,
@@ -175,11 +191,6 @@ pub fn condition_load<F: Float, M: Backend<F>>(
         p: p_in,
         ..
     } = *input;
-    check_finite(&Input {
-        kappa: F::ZERO,
-        alpha: F::ZERO,
-        ..*input
-    })?;
     let mut pres = p_in.unwrap_or(p.inflpres);
     let mf6 = p.version.is_mf6();
     if mf6 && pres <= F::ZERO {

@@ -24,7 +24,7 @@
 //! the derivative is the one-sided one of the branch taken.
 
 use super::combined::{self, Arm, MzIn, MzLoad, WeightsLoad};
-use super::limits::{self, condition_load, digressive, slips, Conditioned};
+use super::limits::{self, check_finite, condition_load_checked, digressive, slips, Conditioned};
 use super::pure::{self, Fx0Load, Fx0Mu, Fy0Load, Fy0Mu, Mz0Load, Mz0Mu};
 use super::{clip_e, EvalError, Flags, Input, InputField, Options, Params, Version};
 use crate::math::{Backend, Dual, Float, Lift};
@@ -185,6 +185,7 @@ impl<F: Float> Prepared<F> {
             vx: op.vx,
             p: op.p,
         };
+        check_finite(&input)?;
         let (c, mirrored, _) = for_eval::<F, M>(p, &input, opts)?;
         stages::<F, M, _>(p, c, mirrored, None, |v| Ok(Self::from_view(v)))
     }
@@ -588,7 +589,7 @@ fn split<F: Float, const N: usize>(
 /// What `mf::eval` builds its stages from: the conditioned load (with turn slip: of the whole
 /// point, every stage's load part there), whether mirrored, and with turn slip (κ, α*).
 /// Returned apart from the [`Prepared`] so that `mf::eval` builds that in place (no copy of it
-/// through a `Result`).
+/// through a `Result`). `input` must have been checked finite (`limits::check_finite`).
 #[allow(clippy::type_complexity)]
 #[inline(always)]
 pub(crate) fn for_eval<F: Float, M: Backend<F>>(
@@ -608,7 +609,7 @@ pub(crate) fn for_eval<F: Float, M: Backend<F>>(
             vx: input.vx,
             p: input.p,
         };
-        return Ok((condition_load::<F, M>(p, &load, opts)?, mirrored, None));
+        return Ok((condition_load_checked::<F, M>(p, &load, opts)?, mirrored, None));
     }
     let mut inp = *input;
     inp.alpha = sgn(inp.alpha);
