@@ -317,9 +317,8 @@ pub fn mz_slip<F: Float, H: Float, G: Lift<F> + Lift<H>, M: Backend<G>>(
     } else {
         m.d_r * M::cos(M::atan(alpha_r_eq * m.b_r) * l.c_r)
     };
-    let mut t = magic_cos::<G, M, H, F, G>(m.b_t, l.c_t, m.e_t, alpha_t_eq)
-        * l.d_t
-        * m.cos_alpha_prime; // (70), (4.E73)
+    let mut t =
+        magic_cos::<G, M, H, F, G>(m.b_t, l.c_t, m.e_t, alpha_t_eq) * l.d_t * m.cos_alpha_prime; // (70), (4.E73)
     if c.low_speed {
         t = t * c.red_smooth;
         m_zr = m_zr * c.red_smooth;

@@ -609,7 +609,11 @@ pub(crate) fn for_eval<F: Float, M: Backend<F>>(
             vx: input.vx,
             p: input.p,
         };
-        return Ok((condition_load_checked::<F, M>(p, &load, opts)?, mirrored, None));
+        return Ok((
+            condition_load_checked::<F, M>(p, &load, opts)?,
+            mirrored,
+            None,
+        ));
     }
     let mut inp = *input;
     inp.alpha = sgn(inp.alpha);
