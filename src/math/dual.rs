@@ -202,7 +202,14 @@ impl<F: Float, const N: usize> Float for Dual<F, N> {
     }
     #[inline]
     fn is_finite(self) -> bool {
-        self.v.is_finite() && self.d.iter().all(|x| x.is_finite())
+        self.v.is_finite() && F::all_finite(&self.d)
+    }
+    /// Every value and derivative finite, without a branch per element (`F`'s own
+    /// [`Float::all_finite`] on each derivative array).
+    #[inline]
+    fn all_finite(xs: &[Self]) -> bool {
+        xs.iter()
+            .fold(true, |ok, x| ok & x.v.is_finite() & F::all_finite(&x.d))
     }
     #[inline]
     fn floor_index(self, max: usize) -> usize {
@@ -227,6 +234,58 @@ impl<F: Float, const N: usize> Lift<F> for Dual<F, N> {
     fn lift(x: F) -> Self {
         Self::cst(x)
     }
+    #[inline]
+    fn value(self) -> F {
+        self.v
+    }
+}
+
+// Mixed operations with a constant `F` (derivative 0): the derivative lanes are scaled or
+// kept, never multiplied by the constant's zero lanes.
+impl<F: Float, const N: usize> Add<F> for Dual<F, N> {
+    type Output = Self;
+    #[inline]
+    fn add(self, c: F) -> Self {
+        Dual {
+            v: self.v + c,
+            d: self.d,
+        }
+    }
+}
+
+impl<F: Float, const N: usize> Sub<F> for Dual<F, N> {
+    type Output = Self;
+    #[inline]
+    fn sub(self, c: F) -> Self {
+        Dual {
+            v: self.v - c,
+            d: self.d,
+        }
+    }
+}
+
+impl<F: Float, const N: usize> Mul<F> for Dual<F, N> {
+    type Output = Self;
+    #[inline]
+    fn mul(self, c: F) -> Self {
+        let mut d = self.d;
+        for x in d.iter_mut() {
+            *x *= c;
+        }
+        Dual { v: self.v * c, d }
+    }
+}
+
+impl<F: Float, const N: usize> Div<F> for Dual<F, N> {
+    type Output = Self;
+    #[inline]
+    fn div(self, c: F) -> Self {
+        let mut d = self.d;
+        for x in d.iter_mut() {
+            *x = *x / c;
+        }
+        Dual { v: self.v / c, d }
+    }
 }
 
 /// Every backend of `F` is a backend of `Dual<F, N>`: the value from `M`'s kernel, the
@@ -234,11 +293,13 @@ impl<F: Float, const N: usize> Lift<F> for Dual<F, N> {
 impl<F: Float, M: Backend<F>, const N: usize> Backend<Dual<F, N>> for M {
     #[inline]
     fn sin(x: Dual<F, N>) -> Dual<F, N> {
-        x.chain(M::sin(x.v), M::cos(x.v))
+        let (s, c) = M::sin_cos(x.v);
+        x.chain(s, c)
     }
     #[inline]
     fn cos(x: Dual<F, N>) -> Dual<F, N> {
-        x.chain(M::cos(x.v), -M::sin(x.v))
+        let (s, c) = M::sin_cos(x.v);
+        x.chain(c, -s)
     }
     #[inline]
     fn tan(x: Dual<F, N>) -> Dual<F, N> {

@@ -54,7 +54,7 @@ pub use atan::atan;
 pub use exp::exp;
 pub use ln::ln;
 pub use sqrt::sqrt;
-pub use trig::{cos, sin, tan};
+pub use trig::{cos, sin, sin_cos, tan};
 
 /// The fast pure-`f32` backend (see the [module doc](self) for methods and measured errors).
 ///
@@ -63,8 +63,45 @@ pub use trig::{cos, sin, tan};
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct Fast;
 
-// The kernels above, by name.
-crate::math::impl_backend!(Fast, f32, in_scope);
+// The kernels above, by name (and sin, cos with one reduction for dual numbers).
+impl crate::math::Backend<f32> for Fast {
+    #[inline]
+    fn sin(x: f32) -> f32 {
+        sin(x)
+    }
+    #[inline]
+    fn cos(x: f32) -> f32 {
+        cos(x)
+    }
+    #[inline]
+    fn tan(x: f32) -> f32 {
+        tan(x)
+    }
+    #[inline]
+    fn atan(x: f32) -> f32 {
+        atan(x)
+    }
+    #[inline]
+    fn acos(x: f32) -> f32 {
+        acos(x)
+    }
+    #[inline]
+    fn exp(x: f32) -> f32 {
+        exp(x)
+    }
+    #[inline]
+    fn ln(x: f32) -> f32 {
+        ln(x)
+    }
+    #[inline]
+    fn sqrt(x: f32) -> f32 {
+        sqrt(x)
+    }
+    #[inline]
+    fn sin_cos(x: f32) -> (f32, f32) {
+        sin_cos(x)
+    }
+}
 
 // `f64`: delegates each kernel to `Libm` (see the module doc).
 crate::math::f64_via_libm!(Fast);

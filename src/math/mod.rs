@@ -235,15 +235,33 @@ impl_float!(
 /// A [`Float`] that a value of `F` converts into: `F` itself (the identity, free) and
 /// [`Dual<F, N>`] (a constant). The Magic Formula's slip stage reads its load-stage values
 /// (stored as `F`) through it, so that one generic body computes in `F` or in dual numbers.
-pub trait Lift<F>: Float {
+///
+/// The mixed operations `Self ∘ F` are what the slip stage uses where one side is a load-stage
+/// value: for `F` itself they are `F`'s own; for a dual number they skip the derivative
+/// arithmetic of the constant side (x·c is N + 1 products, where lifting c first made
+/// 2N + 1 products and N sums).
+pub trait Lift<F>:
+    Float
+    + Add<F, Output = Self>
+    + Sub<F, Output = Self>
+    + Mul<F, Output = Self>
+    + Div<F, Output = Self>
+{
     /// `x` as a `Self` (for a dual number: a constant).
     fn lift(x: F) -> Self;
+    /// The value of `self` as an `F` (a dual number's value without its derivatives): for a
+    /// quantity whose derivative is 0 by construction (a sign, a clipped constant).
+    fn value(self) -> F;
 }
 
 impl<F: Float> Lift<F> for F {
     #[inline]
     fn lift(x: F) -> F {
         x
+    }
+    #[inline]
+    fn value(self) -> F {
+        self
     }
 }
 
@@ -267,6 +285,12 @@ pub trait Backend<F: Float> {
     fn ln(x: F) -> F;
     /// √x for x ≥ 0 — equivalent slip angles (A54), (A55), turn slip (4.77).
     fn sqrt(x: F) -> F;
+    /// (sin x, cos x), equal to [`Backend::sin`] and [`Backend::cos`] — a dual number's sine or
+    /// cosine needs both. A backend may share the argument reduction (`Fast` does).
+    #[inline]
+    fn sin_cos(x: F) -> (F, F) {
+        (Self::sin(x), Self::cos(x))
+    }
 }
 
 /// Reference backend: the `libm` crate (Rust port of musl's libm).

@@ -14,17 +14,27 @@ use crate::math::{Backend, Float, Lift};
 /// (4.E51)/(4.E52), (4.E59)/(4.E60), at x = slip + S. A vanishing denominator (only for C > 1
 /// with a large shift S: outside any fitted tyre) returns G = 1 and flags [`Flags::GUARD`].
 /// Without a shift (S = 0) the denominator is cos 0 = 1 exactly and is not evaluated.
+///
+/// Computed in the slips' type `G`; C, E and S are load-stage values (`F`).
 #[inline]
-fn weight<F: Float, M: Backend<F>>(b: F, c: F, e: F, s_h: F, x: F, flags: &mut Flags) -> F {
+fn weight<F: Float, G: Lift<F>, M: Backend<G>>(
+    b: G,
+    c: F,
+    e: F,
+    s_h: F,
+    x: G,
+    flags: &mut Flags,
+) -> G {
     if s_h == F::ZERO {
-        return magic_cos::<F, M>(b, c, e, x);
+        return magic_cos::<G, M, G, F, F>(b, c, e, x);
     }
-    let g0 = magic_cos::<F, M>(b, c, e, s_h);
-    if g0.abs() < F::from_f64(1e-6) {
+    // The denominator's B·S taken as S·B (the same product): S is the load-stage value.
+    let g0 = magic_cos::<G, M, F, F, F>(s_h, c, e, b);
+    if g0.abs() < G::from_f64(1e-6) {
         flags.insert(Flags::GUARD);
-        return F::ONE;
+        return G::ONE;
     }
-    magic_cos::<F, M>(b, c, e, x) / g0
+    magic_cos::<G, M, G, F, F>(b, c, e, x) / g0
 }
 
 /// Load stage of the combined-slip Fx and Fy, (57)–(68) / (4.E50)–(4.E67): the weights'
@@ -109,10 +119,9 @@ pub fn fx_slip<F: Float, G: Lift<F>, M: Backend<G>>(
     fx0: G,
     flags: &mut Flags,
 ) -> G {
-    let f = |x: F| G::lift(x);
-    let b_xa = f(w.b_xa1) * cos_atan::<G, M>(f(w.rbx2) * kappa) * f(w.lxal); // (4.E54)
-    let alpha_s = alpha_star + f(w.s_hxa); // (4.E53)
-    let g_xa = weight::<G, M>(b_xa, f(w.c_xa), f(w.e_xa), f(w.s_hxa), alpha_s, flags); // (4.E51), (4.E52)
+    let b_xa = cos_atan::<G, M>(kappa * w.rbx2) * w.b_xa1 * w.lxal; // (4.E54)
+    let alpha_s = alpha_star + w.s_hxa; // (4.E53)
+    let g_xa = weight::<F, G, M>(b_xa, w.c_xa, w.e_xa, w.s_hxa, alpha_s, flags); // (4.E51), (4.E52)
     g_xa * fx0 // (4.E50)
 }
 
@@ -137,40 +146,39 @@ pub fn g_yk<F: Float, G: Lift<F>, M: Backend<G>>(
     alpha_star: G,
     flags: &mut Flags,
 ) -> G {
-    let f = |x: F| G::lift(x);
-    let b_yk = f(w.b_yk1) * cos_atan::<G, M>(f(w.rby2) * (alpha_star - f(w.rby3))) * f(w.lyka); // (15), (4.E62)
-    let kappa_s = kappa + f(w.s_hyk); // (4.E61)
-    weight::<G, M>(b_yk, f(w.c_yk), f(w.e_yk), f(w.s_hyk), kappa_s, flags) // (14), (4.E59), (4.E60)
+    let b_yk = cos_atan::<G, M>((alpha_star - w.rby3) * w.rby2) * w.b_yk1 * w.lyka; // (15), (4.E62)
+    let kappa_s = kappa + w.s_hyk; // (4.E61)
+    weight::<F, G, M>(b_yk, w.c_yk, w.e_yk, w.s_hyk, kappa_s, flags) // (14), (4.E59), (4.E60)
 }
 
 /// Combined-slip lateral force, eqs. (13)–(16), (63)–(68), (4.E58)–(4.E67): the slip stage,
-/// given Fy0, μy and ζ2.
+/// given Fy0, μy (of the friction stage, `H`) and ζ2.
 #[inline(always)]
-pub fn fy_slip<F: Float, G: Lift<F>, M: Backend<G>>(
+#[allow(clippy::too_many_arguments)]
+pub fn fy_slip<F: Float, H: Lift<F>, G: Lift<F> + Lift<H>, M: Backend<G>>(
     w: &WeightsLoad<F>,
     c: &Conditioned<F>,
     (kappa, alpha_star): (G, G),
     fy0: G,
-    mu_y: G,
-    zeta2: G,
+    mu_y: H,
+    zeta2: F,
     flags: &mut Flags,
 ) -> Fy<G> {
-    let f = |x: F| G::lift(x);
     // (68), (4.E67) DVyκ = μy·Fz·(rVy1 + rVy2·dfz + rVy3·γ*)·cos(atan(rVy4·α*))·ζ2, and
     // (16), (4.E66) SVyκ = DVyκ·sin(rVy5·atan(rVy6·κ))·λVyκ, computed per unit μy·ζ2 (and not
     // at all for a file without the κ-induced side force).
     let mut s_vyk_per_mu = if w.no_vyk {
         G::ZERO
     } else {
-        f(w.d_vyk1)
-            * cos_atan::<G, M>(f(w.rvy4) * alpha_star)
-            * M::sin(f(w.rvy5) * M::atan(f(w.rvy6) * kappa))
-            * f(w.lvyka)
+        cos_atan::<G, M>(alpha_star * w.rvy4)
+            * w.d_vyk1
+            * M::sin(M::atan(kappa * w.rvy6) * w.rvy5)
+            * w.lvyka
     };
     if c.low_speed {
-        s_vyk_per_mu *= f(c.red_smooth);
+        s_vyk_per_mu = s_vyk_per_mu * c.red_smooth;
     }
-    let s_vyk = mu_y * zeta2 * s_vyk_per_mu;
+    let s_vyk = s_vyk_per_mu * (mu_y * zeta2);
     let g_yk = g_yk::<F, G, M>(w, kappa, alpha_star, flags);
     Fy {
         fy: g_yk * fy0 + s_vyk, // (13), (4.E58)
@@ -215,9 +223,8 @@ impl<F: Float> Arm<F> {
     /// [`Arm::s`] computed in `G` (a dual number carries ∂s/∂Fy).
     #[inline]
     pub fn s_at<G: Lift<F>>(&self, fy: G, dfz: F, gamma: F) -> G {
-        let f = |x: F| G::lift(x);
         let [s1, s2, s3, s4] = self.ssz;
-        f(self.r0) * (f(s1) + f(s2) * (fy / f(self.fz0)) + f((s3 + s4 * dfz) * gamma)) * f(self.ls)
+        (fy / self.fz0 * s2 + s1 + (s3 + s4 * dfz) * gamma) * self.r0 * self.ls
     }
 
     /// [`Arm::s`] of the tyre as mounted: a mirrored tyre's arm is the mirror of the file's,
@@ -242,9 +249,10 @@ pub struct Mz<F> {
     pub m_zr: F,
 }
 
-/// What the combined-slip aligning torque takes from the slip stage's earlier results.
+/// What the combined-slip aligning torque takes from the slip stage's earlier results (in the
+/// slips' type `G`) and from the friction stage (`H`).
 #[derive(Debug, Clone, Copy)]
-pub struct MzIn<G> {
+pub struct MzIn<G, H> {
     /// κ (conditioned).
     pub kappa: G,
     /// αt = α* + SHt (45), (4.E34) \[rad\].
@@ -252,13 +260,13 @@ pub struct MzIn<G> {
     /// αr = α* + SHf (47), (4.E37) \[rad\].
     pub alpha_r: G,
     /// Bt (50), (A58).
-    pub b_t: G,
+    pub b_t: H,
     /// Et (53), (4.E44).
     pub e_t: G,
     /// Dr (56), (4.E47) \[N·m\].
     pub d_r: G,
     /// Br (55), (4.E45).
-    pub b_r: G,
+    pub b_r: H,
     /// cos α' (4.E6).
     pub cos_alpha_prime: G,
     /// Combined Fx \[N\].
@@ -289,14 +297,13 @@ pub struct MzLoad<F> {
 // DIFFERS FROM MFeval: MFeval multiplies t by λFz0 (LFZO), which no published equation has;
 // we follow the equations (every bundled file has LFZO = 1, so the oracle cannot tell).
 #[inline(always)]
-pub fn mz_slip<F: Float, G: Lift<F>, M: Backend<G>>(
+pub fn mz_slip<F: Float, H: Float, G: Lift<F> + Lift<H>, M: Backend<G>>(
     l: &MzLoad<F>,
     c: &Conditioned<F>,
-    m: &MzIn<G>,
+    m: &MzIn<G, H>,
 ) -> Mz<G> {
-    let f = |x: F| G::lift(x);
     // (18), (74), (75), (A54), (A55): equivalent slip angles with (Kxκ/Kyα')²κ².
-    let kk = f(l.k_ratio) * m.kappa;
+    let kk = m.kappa * l.k_ratio;
     let kk2 = kk * kk;
     let tan_r = M::tan(m.alpha_r);
     let tan_t = M::tan(m.alpha_t);
@@ -306,15 +313,15 @@ pub fn mz_slip<F: Float, G: Lift<F>, M: Backend<G>>(
     let s = l.arm.s_at::<G>(m.fy, c.dfz, c.gamma);
     // (72), (4.E75); Cr = 1 without turn slip, and cos(atan x) = 1/√(1 + x²) exactly.
     let mut m_zr = if l.c_r == F::ONE {
-        m.d_r * cos_atan::<G, M>(m.b_r * alpha_r_eq)
+        m.d_r * cos_atan::<G, M>(alpha_r_eq * m.b_r)
     } else {
-        m.d_r * M::cos(f(l.c_r) * M::atan(m.b_r * alpha_r_eq))
+        m.d_r * M::cos(M::atan(alpha_r_eq * m.b_r) * l.c_r)
     };
     let mut t =
-        f(l.d_t) * magic_cos::<G, M>(m.b_t, f(l.c_t), m.e_t, alpha_t_eq) * m.cos_alpha_prime; // (70), (4.E73)
+        magic_cos::<G, M, H, F, G>(m.b_t, l.c_t, m.e_t, alpha_t_eq) * l.d_t * m.cos_alpha_prime; // (70), (4.E73)
     if c.low_speed {
-        t *= f(c.red_smooth);
-        m_zr *= f(c.red_smooth);
+        t = t * c.red_smooth;
+        m_zr = m_zr * c.red_smooth;
     }
     // (69)–(71) and MF 5.2: Mz = −t·(Fy − SVyκ) + Mzr + s·Fx; RECONSTRUCTED (69): the scan
     // reads "s·Fz"; eq. (17) of the body has s·Fx. (4.E71), (4.E72): Mz = −t·F'y + Mzr + s·Fx.

@@ -141,7 +141,7 @@ pub fn condition<F: Float, M: Backend<F>>(
     opts: &Options,
 ) -> Result<Conditioned<F>, EvalError> {
     check_finite(input)?;
-    let mut c = condition_load::<F, M>(p, input, opts)?;
+    let mut c = condition_load_checked::<F, M>(p, input, opts)?;
     if opts.limits && opts.turn_slip {
         // Turn slip seen by the contact patch shrinks with the slip angle (MFeval "empirically
         // discovered"; TNO behaviour). φt is read by the turn-slip equations only.
@@ -167,6 +167,22 @@ pub fn condition_load<F: Float, M: Backend<F>>(
     input: &Input<F>,
     opts: &Options,
 ) -> Result<Conditioned<F>, EvalError> {
+    check_finite(&Input {
+        kappa: F::ZERO,
+        alpha: F::ZERO,
+        ..*input
+    })?;
+    condition_load_checked::<F, M>(p, input, opts)
+}
+
+/// [`condition_load`] of an input its caller has checked finite ([`check_finite`]): `mf::eval`
+/// checks the whole input once.
+#[inline(always)]
+pub(crate) fn condition_load_checked<F: Float, M: Backend<F>>(
+    p: &Params<F>,
+    input: &Input<F>,
+    opts: &Options,
+) -> Result<Conditioned<F>, EvalError> {
     let Input {
         mut fz,
         mut gamma,
@@ -175,11 +191,6 @@ pub fn condition_load<F: Float, M: Backend<F>>(
         p: p_in,
         ..
     } = *input;
-    check_finite(&Input {
-        kappa: F::ZERO,
-        alpha: F::ZERO,
-        ..*input
-    })?;
     let mut pres = p_in.unwrap_or(p.inflpres);
     let mf6 = p.version.is_mf6();
     if mf6 && pres <= F::ZERO {
@@ -319,7 +330,7 @@ pub fn slips<F: Float, G: Lift<F>, M: Backend<G>>(
     mut alpha: G,
 ) -> Slips<G> {
     let l = |x: F| G::lift(x);
-    let vx = l(c.vx);
+    let vx = c.vx;
     let mut flags = Flags::default();
     let mut kappa_out = kappa;
     // tan α, reused below (computed again only if α is reduced or clipped).
@@ -327,17 +338,15 @@ pub fn slips<F: Float, G: Lift<F>, M: Backend<G>>(
     let mut tan_alpha = M::tan(alpha);
     if c.limits {
         if c.low_speed {
-            let red_linear = l(c.red_linear);
-            kappa_out = kappa * red_linear;
+            kappa_out = kappa * c.red_linear;
             if !c.transient {
-                kappa *= red_linear;
+                kappa = kappa * c.red_linear;
             }
         }
         // α fades when the total speed |Vx| + |Vsy| falls below VXLOW (Vsy = tan(α)·Vx).
-        let vxlow = l(c.vxlow);
-        let speed_sum = vx.abs() + (tan_alpha * vx).abs();
-        if speed_sum < vxlow && !c.transient {
-            alpha *= speed_sum / vxlow;
+        let speed_sum = (tan_alpha * vx).abs() + vx.abs();
+        if speed_sum < l(c.vxlow) && !c.transient {
+            alpha *= speed_sum / c.vxlow;
         }
         let (a, fa) = alpha.clamp_flag(l(c.alpmin), l(c.alpmax));
         alpha = a;
@@ -363,9 +372,9 @@ pub fn slips<F: Float, G: Lift<F>, M: Backend<G>>(
     };
     // (4.E6), (4.E6a): Vc' = Vc + ε·sign(Vc), with Vsy = tan(α)·|Vx| and Vcy = Vsy.
     let vsy = tan_alpha * vx.abs();
-    let vc = M::sqrt(vx * vx + vsy * vsy);
-    let vc_prime = vc + G::from_f64(EPS) * vc.sign_nz();
-    let cos_alpha_prime = vx / vc_prime;
+    let vc = M::sqrt(vsy * vsy + vx * vx);
+    let vc_prime = vc + F::from_f64(EPS) * vc.value().sign_nz();
+    let cos_alpha_prime = l(vx) / vc_prime;
     Slips {
         kappa,
         kappa_out,

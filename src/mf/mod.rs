@@ -46,6 +46,7 @@ pub mod turnslip;
 pub use params::{Key, Need, Params, Side, Since, Version, IGNORED_KEYS};
 
 use crate::math::{Backend, Float};
+use core::ops::Mul;
 
 /// Small number of the book's signed singularity guards, ε in (4.E6a), (4.E16), (4.E26),
 /// (4.E39) ("ε is a small number ... explained on page 177"); the same value as MFeval and the
@@ -322,7 +323,8 @@ pub fn eval<F: Float, M: Backend<F>>(
     // the slip stage: the `prepared` module's, so that its results are this function's.
     prepared::stages::<F, M, _>(p, c, mirrored, turn, |prep| {
         let mu = prep.mu_stage::<F>(prep.c.lmux_star, prep.c.lmuy_star);
-        let f = prep.eval_with::<M>(&mu, input.kappa, input.alpha)?;
+        // The slips were checked finite above; the results are, with the rest, below.
+        let f = prep.slip::<F, F, M>(&mu, input.kappa, input.alpha);
         if !prep.contact {
             // No contact: no force, no moment (MFeval gives the same, see the `load` oracle sweep).
             return Ok(Output {
@@ -364,6 +366,11 @@ pub fn eval<F: Float, M: Backend<F>>(
             flags: f.flags,
         };
         let all = [
+            out.fx,
+            out.fy,
+            out.mz,
+            out.t,
+            out.m_zr,
             out.mx,
             out.my,
             out.mu_x,
@@ -382,28 +389,47 @@ pub fn eval<F: Float, M: Backend<F>>(
 }
 
 /// The sine version of the Magic Formula, eq. (3): D·sin[C·atan{B·x − E·(B·x − atan(B·x))}].
+///
+/// Computed in the type `G` of the slip x; each coefficient may be a `G` or a plain value
+/// (`B`, `C`, `D`, `E`: a load- or friction-stage coefficient, a constant in dual numbers),
+/// multiplied in as it is (x·B, not B·x: the same product).
 #[inline]
-pub fn magic_sin<F: Float, M: Backend<F>>(b: F, c: F, d: F, e: F, x: F) -> F {
-    d * M::sin(c * M::atan(magic_arg::<F, M>(b, e, x)))
+pub fn magic_sin<G, M, B, C, D, E>(b: B, c: C, d: D, e: E, x: G) -> G
+where
+    G: Float + Mul<B, Output = G> + Mul<C, Output = G> + Mul<D, Output = G> + Mul<E, Output = G>,
+    M: Backend<G>,
+    E: Float,
+{
+    M::sin(M::atan(magic_arg::<G, M, B, E>(b, e, x)) * c) * d
 }
 
 /// B·x − E·(B·x − atan(B·x)), the argument of the outer atan in eqs. (3) and (8); with E = 0
 /// it is B·x exactly, and the inner atan is skipped.
 #[inline]
-fn magic_arg<F: Float, M: Backend<F>>(b: F, e: F, x: F) -> F {
-    let bx = b * x;
-    if e == F::ZERO {
+fn magic_arg<G, M, B, E>(b: B, e: E, x: G) -> G
+where
+    G: Float + Mul<B, Output = G> + Mul<E, Output = G>,
+    M: Backend<G>,
+    E: Float,
+{
+    let bx = x * b;
+    if e == E::ZERO {
         bx
     } else {
-        bx - e * (bx - M::atan(bx))
+        bx - (bx - M::atan(bx)) * e
     }
 }
 
 /// The cosine version of the Magic Formula, eq. (8) without its D: cos[C·atan{B·x − E·(B·x −
-/// atan(B·x))}]. Also the weighting functions G, eq. (12).
+/// atan(B·x))}]. Also the weighting functions G, eq. (12). Coefficients as [`magic_sin`]'s.
 #[inline]
-pub fn magic_cos<F: Float, M: Backend<F>>(b: F, c: F, e: F, x: F) -> F {
-    M::cos(c * M::atan(magic_arg::<F, M>(b, e, x)))
+pub fn magic_cos<G, M, B, C, E>(b: B, c: C, e: E, x: G) -> G
+where
+    G: Float + Mul<B, Output = G> + Mul<C, Output = G> + Mul<E, Output = G>,
+    M: Backend<G>,
+    E: Float,
+{
+    M::cos(M::atan(magic_arg::<G, M, B, E>(b, e, x)) * c)
 }
 
 /// cos(atan(x)) = 1/√(1 + x²), exactly; one square root instead of two trigonometric calls.

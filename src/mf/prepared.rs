@@ -24,7 +24,7 @@
 //! the derivative is the one-sided one of the branch taken.
 
 use super::combined::{self, Arm, MzIn, MzLoad, WeightsLoad};
-use super::limits::{self, condition_load, digressive, slips, Conditioned};
+use super::limits::{self, check_finite, condition_load_checked, digressive, slips, Conditioned};
 use super::pure::{self, Fx0Load, Fx0Mu, Fy0Load, Fy0Mu, Mz0Load, Mz0Mu};
 use super::{clip_e, EvalError, Flags, Input, InputField, Options, Params, Version};
 use crate::math::{Backend, Dual, Float, Lift};
@@ -185,6 +185,7 @@ impl<F: Float> Prepared<F> {
             vx: op.vx,
             p: op.p,
         };
+        check_finite(&input)?;
         let (c, mirrored, _) = for_eval::<F, M>(p, &input, opts)?;
         stages::<F, M, _>(p, c, mirrored, None, |v| Ok(Self::from_view(v)))
     }
@@ -274,7 +275,7 @@ impl<F: Float> Prepared<F> {
         alpha: F,
     ) -> Result<Forces<F>, EvalError> {
         check_slips(kappa, alpha)?;
-        self.view().eval_with::<M>(mu, kappa, alpha)
+        finite(self.view().slip::<F, F, M>(mu, kappa, alpha))
     }
 
     /// The slip stage and the slopes ∂/∂κ, ∂/∂α of Fx, Fy, Mz (dual numbers, two directions).
@@ -456,29 +457,14 @@ impl<F: Float> View<'_, F> {
         )
     }
 
-    /// The slip stage in `F` with the friction stage `mu`: `Prepared::eval_with`'s.
-    #[inline(always)]
-    pub(crate) fn eval_with<M: Backend<F>>(
-        &self,
-        mu: &Mu<F>,
-        kappa: F,
-        alpha: F,
-    ) -> Result<Forces<F>, EvalError> {
-        check_slips(kappa, alpha)?;
-        let f = self.slip::<F, F, M>(mu, kappa, alpha);
-        finite(f)
-    }
-
     /// The slip stage, computed in `G` from the load stage (`F`) and a friction stage (`H`).
     #[inline(always)]
-    pub(crate) fn slip<H: Float, G: Lift<F> + Lift<H>, M: Backend<G>>(
+    pub(crate) fn slip<H: Lift<F>, G: Lift<F> + Lift<H>, M: Backend<G>>(
         &self,
         mu: &Mu<H>,
         kappa: G,
         alpha: G,
     ) -> Forces<G> {
-        let f = |x: F| <G as Lift<F>>::lift(x);
-        let h = |x: H| <G as Lift<H>>::lift(x);
         let c = &self.c;
         let alpha = if self.mirrored { -alpha } else { alpha };
         let s = slips::<F, G, M>(c, kappa, alpha);
@@ -496,22 +482,22 @@ impl<F: Float> View<'_, F> {
         let fy0 = pure::fy0_slip::<F, H, G, M>(self.fy0, &mu.fy0, c, s.alpha_star, &mut flags);
         // t and Mzr at pure slip: (45), (47), (53), (56) / (4.E34), (4.E37), (4.E44), (4.E47).
         let m0 = self.mz0;
-        let alpha_r = s.alpha_star + h(mu.mz0.s_hf); // (47), (4.E37)
-        let alpha_t = s.alpha_star + f(m0.s_ht); // (45), (4.E34)
-        let b_t = h(mu.mz0.b_t);
-        let e_t = f(m0.e_t1) * (G::ONE + f(m0.e_t2) * M::atan(b_t * f(m0.c_t) * alpha_t)); // (53), (4.E44)
+        let alpha_r = s.alpha_star + mu.mz0.s_hf; // (47), (4.E37)
+        let alpha_t = s.alpha_star + m0.s_ht; // (45), (4.E34)
+        let b_t = mu.mz0.b_t;
+        let e_t = (M::atan(alpha_t * (b_t * m0.c_t)) * m0.e_t2 + F::ONE) * m0.e_t1; // (53), (4.E44)
         let e_t = clip_e(e_t, c.limits, &mut flags);
-        let d_r = h(mu.mz0.d_r1) * s.cos_alpha_star + f(m0.zeta8) - G::ONE; // (56), (4.E47)
+        let d_r = s.cos_alpha_star * mu.mz0.d_r1 + m0.zeta8 - F::ONE; // (56), (4.E47)
 
         let fx = combined::fx_slip::<F, G, M>(self.w, s.kappa, s.alpha_star, fx0, &mut flags);
-        let mu_y = h(mu.fy0.mu_y);
-        let fy = combined::fy_slip::<F, G, M>(
+        let mu_y = mu.fy0.mu_y;
+        let fy = combined::fy_slip::<F, H, G, M>(
             self.w,
             c,
             (s.kappa, s.alpha_star),
             fy0,
             mu_y,
-            f(self.fy0.zeta2),
+            self.fy0.zeta2,
             &mut flags,
         );
         // F'y (4.E74): Fy at γ = 0 (MF 6.x); the weighting Gyκ keeps the actual γ* (TNO,
@@ -520,17 +506,17 @@ impl<F: Float> View<'_, F> {
             None => (fy0, mu_y),
             Some(l) => (
                 pure::fy0_slip::<F, H, G, M>(l, &mu.fy0_g0, c, s.alpha_star, &mut flags),
-                h(mu.fy0_g0.mu_y),
+                mu.fy0_g0.mu_y,
             ),
         };
         // The weight and the κ-induced shift of F'y are taken without the turn-slip ζ2
         // (MFeval's `internalParams_sub0`): Gyκ is Fy's own, SVyκ is Fy's per unit μy at
         // μy(γ = 0).
         let fy_arm = match c.version {
-            Version::Delft96 | Version::Mf52 => fy.fy - mu_y_g0 * fy.s_vyk_per_mu,
+            Version::Delft96 | Version::Mf52 => fy.fy - fy.s_vyk_per_mu * mu_y_g0,
             Version::Mf61 | Version::Mf62 => fy.g_yk * fy0_g0, // (4.E74)
         };
-        let mz = combined::mz_slip::<F, G, M>(
+        let mz = combined::mz_slip::<F, H, G, M>(
             self.mz,
             c,
             &MzIn {
@@ -540,7 +526,7 @@ impl<F: Float> View<'_, F> {
                 b_t,
                 e_t,
                 d_r,
-                b_r: h(mu.mz0.b_r),
+                b_r: mu.mz0.b_r,
                 cos_alpha_prime: s.cos_alpha_prime,
                 fx,
                 fy: fy.fy,
@@ -603,7 +589,7 @@ fn split<F: Float, const N: usize>(
 /// What `mf::eval` builds its stages from: the conditioned load (with turn slip: of the whole
 /// point, every stage's load part there), whether mirrored, and with turn slip (κ, α*).
 /// Returned apart from the [`Prepared`] so that `mf::eval` builds that in place (no copy of it
-/// through a `Result`).
+/// through a `Result`). `input` must have been checked finite (`limits::check_finite`).
 #[allow(clippy::type_complexity)]
 #[inline(always)]
 pub(crate) fn for_eval<F: Float, M: Backend<F>>(
@@ -623,7 +609,11 @@ pub(crate) fn for_eval<F: Float, M: Backend<F>>(
             vx: input.vx,
             p: input.p,
         };
-        return Ok((condition_load::<F, M>(p, &load, opts)?, mirrored, None));
+        return Ok((
+            condition_load_checked::<F, M>(p, &load, opts)?,
+            mirrored,
+            None,
+        ));
     }
     let mut inp = *input;
     inp.alpha = sgn(inp.alpha);

@@ -118,18 +118,17 @@ pub fn fx0_mu<F: Float, G: Lift<F>>(
     lmux_star: G,
     lmux_prime: G,
 ) -> Fx0Mu<G> {
-    let f = |x: F| G::lift(x);
-    let fz = f(c.fz);
-    let mut mu_x = f(l.mu_x1) * lmux_star; // (26), (4.E13)
+    // Load-stage values (`F`) meet λμ (`G`) in mixed operations (`Lift<F>`).
+    let mut mu_x = lmux_star * l.mu_x1; // (26), (4.E13)
     if c.fz == F::ZERO {
         mu_x = G::ZERO;
     }
-    let d_x = mu_x * fz * f(l.zeta1); // (25), (4.E12)
-    let eps = G::from_f64(EPS);
-    let b_x = f(l.k_xk) / (f(l.c_x) * d_x + eps * d_x.sign_nz()); // (29), (4.E16) with the signed ε
-    let mut s_vx = f(l.s_vx1) * lmux_prime * f(l.zeta1); // (31), (4.E18)
+    let d_x = mu_x * c.fz * l.zeta1; // (25), (4.E12)
+    let eps = F::from_f64(EPS) * d_x.value().sign_nz();
+    let b_x = G::lift(l.k_xk) / (d_x * l.c_x + eps); // (29), (4.E16) with the signed ε
+    let mut s_vx = lmux_prime * l.s_vx1 * l.zeta1; // (31), (4.E18)
     if c.low_speed {
-        s_vx *= f(c.red_smooth);
+        s_vx = s_vx * c.red_smooth;
     }
     Fx0Mu {
         mu_x,
@@ -148,12 +147,12 @@ pub fn fx0_slip<F: Float, H: Float, G: Lift<F> + Lift<H>, M: Backend<G>>(
     kappa: G,
     flags: &mut Flags,
 ) -> G {
-    let f = |x: F| <G as Lift<F>>::lift(x);
-    let h = |x: H| <G as Lift<H>>::lift(x);
-    let kappa_x = kappa + f(l.s_hx); // (23), (4.E10)
-    let e_x = f(l.e_x1) * (G::ONE - f(l.pex4) * kappa_x.sign()) * f(l.lex); // (27), (4.E14)
+    let kappa_x = kappa + l.s_hx; // (23), (4.E10)
+                                  // Ex depends on κ through sign(κx) alone (derivative 0): computed in F.
+    let sign_x = <G as Lift<F>>::value(kappa_x.sign());
+    let e_x = l.e_x1 * (F::ONE - l.pex4 * sign_x) * l.lex; // (27), (4.E14)
     let e_x = clip_e(e_x, c.limits, flags);
-    let mut fx0 = magic_sin::<G, M>(h(m.b_x), f(l.c_x), h(m.d_x), e_x, kappa_x) + h(m.s_vx); // (22), (4.E9)
+    let mut fx0 = magic_sin::<G, M, H, F, H, F>(m.b_x, l.c_x, m.d_x, e_x, kappa_x) + m.s_vx; // (22), (4.E9)
     if c.vx < F::ZERO && !c.transient {
         // Running backwards: mirror image (appendix, first paragraph), for steady-state slips
         // defined with κ = −1 locked in both directions. Slips from the transient model
@@ -336,37 +335,34 @@ pub fn fy0_mu<F: Float, G: Lift<F>>(
     lmuy_star: G,
     lmuy_prime: G,
 ) -> Fy0Mu<G> {
+    // Load-stage values (`F`) meet λμ (`G`) in mixed operations (`Lift<F>`).
     let f = |x: F| G::lift(x);
-    let eps = G::from_f64(EPS);
-    let zeta2 = f(l.zeta2);
+    let zeta2 = l.zeta2;
     let (mut s_hy, mut s_vy) = match c.version {
         // (41), (42).
-        Version::Delft96 => (f(l.s_hy1), f(l.s_vy1) * lmuy_prime),
-        Version::Mf52 => (
-            f(l.s_hy1),
-            f(l.s_vy1) * lmuy_prime + f(l.s_vyg1) * lmuy_prime,
-        ),
+        Version::Delft96 => (f(l.s_hy1), lmuy_prime * l.s_vy1),
+        Version::Mf52 => (f(l.s_hy1), lmuy_prime * l.s_vy1 + lmuy_prime * l.s_vyg1),
         Version::Mf61 | Version::Mf62 => {
-            let k_ya_prime = f(l.k_ya_prime);
-            let s_vyg = f(l.s_vyg1) * lmuy_prime * zeta2; // (4.E28)
+            let k_ya_prime = l.k_ya_prime;
+            let s_vyg = lmuy_prime * l.s_vyg1 * zeta2; // (4.E28)
             let zeta4 = if l.turn {
                 G::ONE + f(l.s_hyp) - s_vyg / k_ya_prime // (4.84)
             } else {
                 G::ONE
             };
-            let s_hy =
-                f(l.s_hy1) + ((f(l.k_yg) - s_vyg) / k_ya_prime) * f(l.zeta0) + zeta4 - G::ONE; // (4.E27)
-            let s_vy = f(l.s_vy1) * lmuy_prime * zeta2 + s_vyg; // (4.E29)
+            let s_hy = f(l.s_hy1) + ((f(l.k_yg) - s_vyg) / k_ya_prime) * l.zeta0 + zeta4 - G::ONE; // (4.E27)
+            let s_vy = lmuy_prime * l.s_vy1 * zeta2 + s_vyg; // (4.E29)
             (s_hy, s_vy)
         }
     };
     if c.low_speed {
-        s_vy *= f(c.red_smooth);
-        s_hy *= f(c.red_smooth);
+        s_vy = s_vy * c.red_smooth;
+        s_hy = s_hy * c.red_smooth;
     }
-    let mu_y = f(l.mu_y1) * lmuy_star; // (37), (4.E23)
-    let d_y = mu_y * f(c.fz) * zeta2; // (36), (4.E22)
-    let b_y = f(l.k_ya) / (f(l.c_y) * d_y + eps * d_y.sign_nz()); // (40), (4.E26) with the signed ε
+    let mu_y = lmuy_star * l.mu_y1; // (37), (4.E23)
+    let d_y = mu_y * c.fz * zeta2; // (36), (4.E22)
+    let eps = F::from_f64(EPS) * d_y.value().sign_nz();
+    let b_y = f(l.k_ya) / (d_y * l.c_y + eps); // (40), (4.E26) with the signed ε
     Fy0Mu {
         mu_y: if c.fz == F::ZERO { G::ZERO } else { mu_y },
         d_y,
@@ -385,12 +381,12 @@ pub fn fy0_slip<F: Float, H: Float, G: Lift<F> + Lift<H>, M: Backend<G>>(
     alpha_star: G,
     flags: &mut Flags,
 ) -> G {
-    let f = |x: F| <G as Lift<F>>::lift(x);
-    let h = |x: H| <G as Lift<H>>::lift(x);
-    let alpha_y = alpha_star + h(m.s_hy); // (33), (4.E20)
-    let e_y = f(l.e_y1) * (f(l.e_y2) - f(l.e_y3) * alpha_y.sign_nz()) * f(l.ley); // (38), (4.E24)
+    let alpha_y = alpha_star + m.s_hy; // (33), (4.E20)
+                                       // Ey depends on α through sign(αy) alone (derivative 0): computed in F.
+    let sign_y = <G as Lift<F>>::value(alpha_y.sign_nz());
+    let e_y = l.e_y1 * (l.e_y2 - l.e_y3 * sign_y) * l.ley; // (38), (4.E24)
     let e_y = clip_e(e_y, c.limits, flags);
-    let mut fy0 = magic_sin::<G, M>(h(m.b_y), f(l.c_y), h(m.d_y), e_y, alpha_y) + h(m.s_vy); // (32), (4.E19)
+    let mut fy0 = magic_sin::<G, M, H, F, H, F>(m.b_y, l.c_y, m.d_y, e_y, alpha_y) + m.s_vy; // (32), (4.E19)
     if c.use_alpha_star && c.vx < F::ZERO {
         // With α* = tan(α)·sign(Vx) the force changes sign with Vx; undo it (MFeval, TNO).
         fy0 = -fy0;
@@ -542,9 +538,9 @@ pub fn mz0_mu<F: Float, G: Lift<F>>(
 ) -> Mz0Mu<G> {
     let f = |x: F| G::lift(x);
     Mz0Mu {
-        b_t: f(l.b_t1) / lmuy_star,                   // (50), (A58)
-        d_r1: f(l.d_r1) * lmuy_star * f(c.vx.sign()), // (56), (4.E47)
-        b_r: (f(l.b_r1) / lmuy_star + f(l.qbz10) * fy.b_y * f(fy_l.c_y)) * f(l.zeta6), // (55), (4.E45)
-        s_hf: fy.s_hy + fy.s_vy / f(fy_l.k_ya_prime), // (48), (4.E38)
+        b_t: f(l.b_t1) / lmuy_star,             // (50), (A58)
+        d_r1: lmuy_star * l.d_r1 * c.vx.sign(), // (56), (4.E47)
+        b_r: (f(l.b_r1) / lmuy_star + fy.b_y * l.qbz10 * fy_l.c_y) * l.zeta6, // (55), (4.E45)
+        s_hf: fy.s_hy + fy.s_vy / fy_l.k_ya_prime, // (48), (4.E38)
     }
 }

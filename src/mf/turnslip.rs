@@ -126,7 +126,7 @@ pub fn s_hyp<F: Float, M: Backend<F>>(p: &Params<F>, c: &mut Conditioned<F>, k_y
         return F::ZERO; // D_Hyp = 0 (standstill) or no spin shift: SHyp = D_Hyp·sin(..) = 0
     }
     let b_hyp = k_yg0 / den; // (4.88), (4.89)
-    super::magic_sin::<F, M>(b_hyp, c_hyp, d_hyp, e_hyp, r0 * s.phi) * c.vx.sign()
+    super::magic_sin::<F, M, F, F, F, F>(b_hyp, c_hyp, d_hyp, e_hyp, r0 * s.phi) * c.vx.sign()
     // (4.80)
 }
 

@@ -28,6 +28,7 @@ use core::mem::MaybeUninit;
 use core::ptr::addr_of_mut;
 use cortex_m_rt::entry;
 use gough::math::Fast;
+use gough::mf::prepared::{Operating, Prepared};
 use gough::mf::{self, Input, Options};
 use gough::mu::{GoughTable, MuEstimator};
 use gough::proto::{Measurement, Settings};
@@ -88,7 +89,38 @@ fn main() -> ! {
         workload::slalom(&p32, mu, 0.02, stream);
         seen[k] = estimator_stream(2 + k as u32, MuEstimator::for_tyre(t, p, cfg), stream);
     }
-    mps2::exit(failed == 0 && acc.is_finite() && seen.iter().all(|&n| n > 0))
+    // The staged MF's slip stage (issue 38) at the grid's loads: brackets 4 (values), 5 (with
+    // ∂/∂κ, ∂/∂α) and 6 (with ∂/∂λμ too).
+    let preps: [Option<Prepared<f32>>; 16] = core::array::from_fn(|i| {
+        Prepared::new::<Fast>(p, &Operating::from(&ins[i]), &opts).ok()
+    });
+    let staged_ok = (4..7).all(|id| slip_stream(id, &preps, &ins).is_finite());
+    mps2::exit(failed == 0 && acc.is_finite() && seen.iter().all(|&n| n > 0) && staged_ok)
+}
+
+/// Bracket `id` (4, 5, 6): the slip stage at the grid's points (its load from `preps`:
+/// points i and i + 16k share the load), values; with the slopes in κ, α; with ∂/∂λμ too.
+#[inline(never)]
+fn slip_stream(id: u32, preps: &[Option<Prepared<f32>>; 16], ins: &[Input<f32>; N]) -> f32 {
+    let mut acc = 0f32;
+    bench_start(id);
+    for (i, x) in ins.iter().enumerate() {
+        let Some(p) = preps.get(i % 16).and_then(|p| p.as_ref()) else {
+            continue;
+        };
+        let x = core::hint::black_box(x);
+        acc += match id {
+            4 => p.eval::<Fast>(x.kappa, x.alpha).map_or(f32::NAN, |r| r.fy),
+            5 => p
+                .eval_d::<Fast>(p.mu(), x.kappa, x.alpha)
+                .map_or(f32::NAN, |(r, d)| r.fy + d.alpha.fy * 0.0),
+            _ => p
+                .eval_d_mu::<Fast>(1.0, x.kappa, x.alpha)
+                .map_or(f32::NAN, |(r, d)| r.fy + d.lmu.fy * 0.0),
+        };
+    }
+    bench_stop(id);
+    acc
 }
 
 /// Bracket `id`: `MuEstimator::update` over the stream, in a function of its own so that

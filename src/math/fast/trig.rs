@@ -136,6 +136,24 @@ pub fn cos(x: f32) -> f32 {
     }
 }
 
+/// (sin x, cos x), bit for bit [`sin`] and [`cos`]: on the short path (0 < |x| ≤ 8, every
+/// Magic Formula argument) one reduction for both; elsewhere the two kernels.
+#[inline]
+pub fn sin_cos(x: f32) -> (f32, f32) {
+    if x.abs() <= SHORT && x != 0.0 {
+        let (r, q) = reduce_short(x);
+        let (s, c) = (sin_poly(r), cos_poly(r));
+        match q {
+            0 => (s, c),
+            1 => (c, -s),
+            2 => (-s, -c),
+            _ => (-c, s),
+        }
+    } else {
+        (sin(x), cos(x))
+    }
+}
+
 /// tan x \[x in rad\]; max error 4.0e-7 relative for |x| ≤ 2π, next to the poles too (see
 /// tests); odd; NaN and ±∞ → NaN; ±0 → ±0; finite for every finite x (±f32::MAX if the reduced argument is exactly 0 at a
 /// pole; not accurate beyond |x| = 1e5).
@@ -207,6 +225,16 @@ mod tests {
                 assert!((s as f64 - xs.sin()).abs() < 2e-7, "sin({x:e})");
                 assert!((c as f64 - xs.cos()).abs() < 2e-7, "cos({x:e})");
             }
+        }
+    }
+
+    /// sin_cos is sin and cos, bit for bit, on both paths and at the special values.
+    #[test]
+    fn sin_cos_is_sin_and_cos() {
+        for x in linspace(-20.0, 20.0, 400_001).chain(edge_inputs()) {
+            let (s, c) = sin_cos(x);
+            assert_eq!(s.to_bits(), sin(x).to_bits(), "sin {x:e}");
+            assert_eq!(c.to_bits(), cos(x).to_bits(), "cos {x:e}");
         }
     }
 
