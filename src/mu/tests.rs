@@ -37,6 +37,7 @@ fn truth(p: &Params<f64>, mu: f64, mu0: f64, fz: f64, alpha: f64, kappa: f64) ->
     .unwrap()
 }
 
+#[cfg(feature = "fixed")]
 /// `tyre`'s table on the heap, built in place.
 fn boxed_table<F: crate::math::Float, M: crate::math::Backend<F>>(
     tyre: &Params<F>,
