@@ -835,11 +835,11 @@ impl<F: Float> Bank<F> {
     /// for |α|; the onset of full sliding (1/θ) when |Fy| ≥ μFz. A seed for a cell that lost
     /// its slips (e.g. deep in the saturated range after a fast reversal on a slippery road).
     fn brush_alpha<M: Backend<F>>(&self, k: usize, b: &Batch<F>) -> F {
-        let cap = F::from_f64(SCAN[SCAN.len() - 1]);
+        let cap = F::from_f64(SCAN.last().copied().unwrap_or(0.35));
         let mu_fz = self.mu_of(k) * b.fz;
         let kya = self.prep.as_ref().map_or(F::ZERO, |p| p.k_ya().abs());
         if !(mu_fz > F::ZERO && kya > F::ZERO) {
-            return F::from_f64(SCAN[0]);
+            return F::from_f64(SCAN.first().copied().unwrap_or(0.01));
         }
         let theta = kya / (F::from_f64(3.0) * mu_fz);
         let u = (b.fy.0.abs() / mu_fz).min(F::ONE);
