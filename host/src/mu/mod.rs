@@ -152,12 +152,12 @@ pub fn estimate(
                         rows.iter()
                             .enumerate()
                             .map(|(i, r)| {
-                                bank_estimate(est.update::<Libm>(p, &bank_sample(
-                                    r,
-                                    has_fx,
-                                    has_kappa,
-                                    g_of(i),
-                                )))
+                                bank_estimate(
+                                    est.update::<Libm>(
+                                        p,
+                                        &bank_sample(r, has_fx, has_kappa, g_of(i)),
+                                    ),
+                                )
                             })
                             .collect(),
                         Vec::new(),
@@ -173,16 +173,19 @@ pub fn estimate(
                             .map(|(i, r)| {
                                 let s = bank_sample(r, has_fx, has_kappa, g_of(i));
                                 let c = |x: f64| x as f32;
-                                let e = est.update::<Libm>(&p32, &bank::Sample {
-                                    t_us: s.t_us,
-                                    fz: c(s.fz),
-                                    fy: c(s.fy),
-                                    mz: c(s.mz),
-                                    fx: s.fx.map(c),
-                                    kappa: s.kappa.map(c),
-                                    vx: s.vx.map(c),
-                                    gamma: s.gamma.map(c),
-                                });
+                                let e = est.update::<Libm>(
+                                    &p32,
+                                    &bank::Sample {
+                                        t_us: s.t_us,
+                                        fz: c(s.fz),
+                                        fy: c(s.fy),
+                                        mz: c(s.mz),
+                                        fx: s.fx.map(c),
+                                        kappa: s.kappa.map(c),
+                                        vx: s.vx.map(c),
+                                        gamma: s.gamma.map(c),
+                                    },
+                                );
                                 bank_estimate(bank::Estimate {
                                     mu: f64::from(e.mu),
                                     sigma: f64::from(e.sigma),
