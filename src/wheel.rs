@@ -34,7 +34,7 @@
 //! model's forces — with the sample's wrapping `u32` µs timestamp as it is (the bank uses only
 //! wrapping differences, so the estimates do not depend on when the clock started). κ is the
 //! measured κ, or, without it, the one the wheel speed gives as the filter computes it,
-//! (Vx − ω·Re)/|Vx| ([`effective_radius`]).
+//! (ω·Re − Vx)/|Vx| clamped to ±1 ([`effective_radius`]).
 //!
 //! Of the protocol's [`Settings`]: `fallback_mu` is the bank's prior `mu_prior` (the μ of a
 //! `Fallback` estimate; when it is a positive number); `limits` applies to the forces only;

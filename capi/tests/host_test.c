@@ -303,6 +303,29 @@ static void errors(const char *root) {
     mn = m;
     mn.wheel = 4;
     CHECK(gough_wheel_step(&wheel, &mn, &f, &e) == GOUGH_E_ARG, "wheel 4");
+    /* A tyre without lateral friction (LMUY = 0): no estimator can be built; the wheel stays
+     * uninitialised. */
+    {
+        char *flat_text = malloc(len);
+        CHECK(flat_text != NULL, "malloc");
+        if (flat_text) {
+            memcpy(flat_text, text, len);
+            char *k = strstr(flat_text, "\nLMUY");
+            char *one = k ? strchr(k, '=') : NULL;
+            while (one && *one && *one != '1') one++;
+            CHECK(one && *one == '1', "LMUY = 1 in the file");
+            if (one && *one == '1') *one = '0';
+            static gough_params_t flat;
+            CHECK(gough_tir_parse(flat_text, len, &flat, &line) == GOUGH_OK, "LMUY = 0 parses");
+            CHECK(gough_wheel_init(&wheel0, &flat, GOUGH_WHEEL_ESTIMATOR) == GOUGH_E_MODEL,
+                  "no friction: no estimator");
+            CHECK(gough_wheel_step(&wheel0, &m, &f, &e) == GOUGH_E_UNINIT,
+                  "a failed init leaves the wheel unusable");
+            CHECK(gough_wheel_init(&wheel0, &flat, 0) == GOUGH_OK, "no friction: forces only");
+            CHECK(gough_estimator_init(&est0, &flat) == GOUGH_E_MODEL, "no friction: estimator");
+            free(flat_text);
+        }
+    }
     CHECK(gough_wheel_init(&wheel0, &p, 0) == GOUGH_OK, "wheel without estimator");
     CHECK(gough_wheel_step(&wheel0, &m, &f, &e) == GOUGH_OK && (e.flags & GOUGH_EST_NONE) &&
               e.state == GOUGH_STATE_FALLBACK,

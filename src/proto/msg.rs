@@ -174,9 +174,10 @@ impl Measurement {
         })
     }
 
-    /// What the friction estimator reads of this sample, taken at `t` \[s\] on the wheel's
-    /// clock: the forces, speed and camber (ISO-W, SI; never α or κ). Device and host both use
-    /// this.
+    /// What the table estimator ([`crate::mu::MuEstimator`], the bench's peer and the M0 bench's
+    /// estimator) reads of this sample, taken at `t` \[s\] on the wheel's clock: the forces,
+    /// speed and camber (ISO-W, SI; never α or κ). The product's estimator, the bank, reads
+    /// [`crate::wheel::sample`] instead.
     pub fn sample(&self, t: f32) -> Sample<f32> {
         Sample {
             t,
