@@ -27,13 +27,23 @@
 //!   Vx = LONGVL), see [`steady`].
 //!
 //! ## Estimate
-//! [`MuEstimator::update`](crate::mu::MuEstimator::update) on the measured Fz, Fy, Mz, and Fx,
-//! Vx, γ when given — never on the model's forces and never on α. Its time is this wheel's µs
-//! since the estimator started, accumulated from wrapping `u32` differences (an older timestamp
-//! is fed as such: the estimator holds). The prior is `Settings::fallback_mu`.
+//! The friction estimator is the exact-model bank ([`crate::mu::bank::Bank`], `f32`), started
+//! with [`Wheel::start_estimator`] when parameters are loaded (the device does it on every
+//! parameter load and every `Settings`). [`Wheel::estimate`] feeds it what was **measured**: Fz,
+//! Fy, Mz, and Fx, κ, Vx, γ when the sample carries them ([`sample`]) — never α and never the
+//! model's forces — with the sample's wrapping `u32` µs timestamp as it is (the bank uses only
+//! wrapping differences, so the estimates do not depend on when the clock started). κ is the
+//! measured κ, or, without it, the one the wheel speed gives as the filter computes it,
+//! (ω·Re − Vx)/|Vx| clamped to ±1 ([`effective_radius`]).
+//!
+//! Of the protocol's [`Settings`]: `fallback_mu` is the bank's prior `mu_prior` (the μ of a
+//! `Fallback` estimate; when it is a positive number); `limits` applies to the forces only;
+//! `window` and `min_utilisation` (settings of an earlier estimator) have no counterpart in the
+//! bank and are not used ([`estimator_config`]). The tyre is taken as its file describes it on
+//! every wheel (`side` None), as for the forces.
 use crate::math::Backend;
 use crate::mf::{self, Input, Options, Output, Params};
-use crate::mu::{self, GoughTable, MuEstimator};
+use crate::mu::bank::{self, Bank, BuildError};
 use crate::proto::{AckCode, Estimate, EstimateState, Forces, Measurement, Settings};
 use crate::relax::{self, DampingSpeed, Kinematics, Sigma, Transient};
 
@@ -61,26 +71,26 @@ struct Kin {
     tan_alpha: f32,
 }
 
-/// One wheel: transient filter, estimator clock, estimator. A few hundred bytes.
+/// One wheel: transient filter and friction estimator (about 1.5 KB, nearly all of it the
+/// bank). Keeps no reference to the parameters: each call takes them (pass the same ones the
+/// estimator was started with).
 #[derive(Debug, Clone)]
-pub struct Wheel<'t> {
+pub struct Wheel {
     defl: Option<Deflection>,
-    est: Option<MuEstimator<'t, f32>>,
-    /// (last timestamp \[µs\], µs since the estimator started).
-    clock: Option<(u32, i64)>,
+    est: Option<Bank<f32>>,
 }
 
-impl Default for Wheel<'_> {
+impl Default for Wheel {
     fn default() -> Self {
         Self::new()
     }
 }
 
-/// The estimator's settings from the protocol's: the prior is `fallback_mu` (when it is a
-/// positive number); `window` and `min_utilisation` have no counterpart in the Gough estimator
-/// (a Kalman filter gated by the trail's drop) and are not used.
-pub fn estimator_config(s: &Settings) -> mu::Config<f32> {
-    let mut c = mu::Config::default();
+/// The estimator's settings from the protocol's: the bank's defaults with the prior
+/// `mu_prior` = `fallback_mu` (when it is a positive number); `window` and `min_utilisation`
+/// have no counterpart in the bank and are not used.
+pub fn estimator_config(s: &Settings) -> bank::Config<f32> {
+    let mut c = bank::Config::default();
     if s.fallback_mu.is_finite() && s.fallback_mu > 0.0 {
         c.mu_prior = s.fallback_mu;
     }
@@ -135,6 +145,27 @@ fn kinematics<M: Backend<f32>>(p: &Params<f32>, m: &Measurement) -> Option<Kin> 
     })
 }
 
+/// What the estimator reads of a measurement (see the module doc): Fz, Fy, Mz, and Fx, κ, Vx, γ
+/// when measured, at the sample's own timestamp; κ from the wheel speed when only ω is given.
+/// Never α.
+pub fn sample<M: Backend<f32>>(p: &Params<f32>, m: &Measurement) -> bank::Sample<f32> {
+    let kappa = match (m.kappa, m.omega, m.vx) {
+        (Some(k), _, _) => Some(k),
+        (None, Some(_), Some(_)) => kinematics::<M>(p, m).map(|k| k.kappa),
+        _ => None,
+    };
+    bank::Sample {
+        t_us: m.t_us,
+        fz: m.fz,
+        fy: m.fy,
+        mz: m.mz,
+        fx: m.fx,
+        kappa,
+        vx: m.vx,
+        gamma: m.gamma,
+    }
+}
+
 fn eval<M: Backend<f32>>(
     p: &Params<f32>,
     input: &Input<f32>,
@@ -169,13 +200,12 @@ pub fn steady<M: Backend<f32>>(
     eval::<M>(p, &input, &opts).map(|o| forces_of(m, &o))
 }
 
-impl<'t> Wheel<'t> {
+impl Wheel {
     /// No filter state, no estimator.
     pub const fn new() -> Self {
         Wheel {
             defl: None,
             est: None,
-            clock: None,
         }
     }
 
@@ -184,21 +214,26 @@ impl<'t> Wheel<'t> {
         self.defl = None;
     }
 
-    /// (Re)starts the estimator on `table` (it forgets what it learnt).
-    pub fn start_estimator(&mut self, table: &'t GoughTable<f32>, p: &Params<f32>, s: &Settings) {
-        self.est = Some(MuEstimator::for_tyre(table, p, estimator_config(s)));
-        self.clock = None;
+    /// (Re)starts the estimator for tyre `p` with the prior of `s` ([`estimator_config`]); it
+    /// forgets what it learnt. On an error (a tyre without friction) no estimator runs.
+    pub fn start_estimator<M: Backend<f32>>(
+        &mut self,
+        p: &Params<f32>,
+        s: &Settings,
+    ) -> Result<(), BuildError> {
+        self.est = None;
+        self.est = Some(Bank::new::<M>(p, None, estimator_config(s))?);
+        Ok(())
     }
 
-    /// Drops the estimator (and with it the borrow of the table).
+    /// Drops the estimator.
     pub fn stop_estimator(&mut self) {
         self.est = None;
-        self.clock = None;
     }
 
-    /// Is an estimator running?
-    pub fn has_estimator(&self) -> bool {
-        self.est.is_some()
+    /// The estimator, if one runs.
+    pub fn estimator(&self) -> Option<&Bank<f32>> {
+        self.est.as_ref()
     }
 
     /// The filter's deflections (v lateral, u longitudinal) \[m\], if it runs.
@@ -293,43 +328,29 @@ impl<'t> Wheel<'t> {
         Ok(forces_of(m, &o))
     }
 
-    /// The estimator's time for a timestamp \[s\] (see the module doc).
-    fn time(&mut self, t_us: u32) -> f32 {
-        let (last, el) = match self.clock {
-            None => {
-                self.clock = Some((t_us, 0));
-                return 0.0;
-            }
-            Some(c) => c,
-        };
-        let d = i64::from(t_us.wrapping_sub(last) as i32);
-        if d > 0 {
-            self.clock = Some((t_us, el + d));
-        }
-        (el + d) as f32 / 1.0e6
-    }
-
-    /// Runs the estimator on one sample: the estimate, and whether it declared a change of
-    /// surface. `None` when no estimator runs (no table yet).
-    pub fn estimate<M: Backend<f32>>(&mut self, m: &Measurement) -> Option<(Estimate, bool)> {
-        self.est.as_ref()?;
-        let t = self.time(m.t_us);
+    /// Runs the estimator on one sample of tyre `p` (the parameters it was started with): the
+    /// estimate, whose `change` is set on the one estimate at which the estimator declared a
+    /// change of surface. `None` when no estimator runs.
+    pub fn estimate<M: Backend<f32>>(
+        &mut self,
+        p: &Params<f32>,
+        m: &Measurement,
+    ) -> Option<Estimate> {
         let est = self.est.as_mut()?;
-        let e = est.update::<M>(&m.sample(t));
+        let e = est.update::<M>(p, &sample::<M>(p, m));
         let state = match e.state {
-            mu::State::Identifiable => EstimateState::Identifiable,
-            mu::State::NotIdentifiable => EstimateState::NotIdentifiable,
-            mu::State::Fallback => EstimateState::Fallback,
+            bank::State::Identifiable => EstimateState::Identifiable,
+            bank::State::NotIdentifiable => EstimateState::NotIdentifiable,
+            bank::State::Fallback => EstimateState::Fallback,
         };
-        Some((
-            Estimate {
-                wheel: m.wheel,
-                t_us: m.t_us,
-                mu: e.mu,
-                sigma: e.sigma,
-                state,
-            },
-            e.change,
-        ))
+        Some(Estimate {
+            wheel: m.wheel,
+            t_us: m.t_us,
+            mu: e.mu,
+            sigma: e.sigma,
+            state,
+            mu_min: e.mu_min,
+            change: e.change,
+        })
     }
 }

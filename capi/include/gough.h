@@ -47,7 +47,7 @@
 /**
  * The model cannot answer: an evaluation overflowed (limits off, inputs far outside the
  * model's range), turn slip asked of a file without it, or the tyre gives no usable friction
- * (a table or an estimator cannot be built).
+ * (an estimator cannot be built).
  */
 #define GOUGH_E_MODEL -6
 
@@ -73,14 +73,9 @@
 #define GOUGH_PARAMS_SIZE 2624
 
 /**
- * Bytes of a `gough_table_t` (the Gough table of the wheel pipeline's estimator).
+ * Bytes of a `gough_wheel_t` (one wheel's transient filter and bank estimator).
  */
-#define GOUGH_TABLE_SIZE 128704
-
-/**
- * Bytes of a `gough_wheel_t` (one wheel's transient filter, estimator and clock).
- */
-#define GOUGH_WHEEL_SIZE 512
+#define GOUGH_WHEEL_SIZE 1600
 
 /**
  * Bytes of a `gough_estimator_t` (one wheel's bank estimator, `gough::mu::bank::Bank`).
@@ -96,11 +91,6 @@
  * 64-bit words of a `gough_params_t`.
  */
 #define GOUGH_PARAMS_WORDS (GOUGH_PARAMS_SIZE / 8)
-
-/**
- * 64-bit words of a `gough_table_t`.
- */
-#define GOUGH_TABLE_WORDS (GOUGH_TABLE_SIZE / 8)
 
 /**
  * 64-bit words of a `gough_wheel_t`.
@@ -168,14 +158,22 @@
 #define GOUGH_STATE_FALLBACK 2
 
 /**
- * `gough_estimate_t::flags`: a change of surface was declared at this sample.
+ * `gough_estimate_t::flags`: a change of surface was declared at this sample (set on that one
+ * estimate only).
  */
 #define GOUGH_EST_CHANGE 1
 
 /**
- * `flags`: no estimator runs (a wheel initialised without a table): μ is the prior.
+ * `flags`: no estimator runs (a wheel initialised without `GOUGH_WHEEL_ESTIMATOR`): μ is the
+ * prior.
  */
 #define GOUGH_EST_NONE 2
+
+/**
+ * `gough_wheel_init` option: run the friction estimator (the bank) on the wheel's
+ * measurements.
+ */
+#define GOUGH_WHEEL_ESTIMATOR 1
 
 /**
  * `gough_msg_t::kind`: no message (`gough_rx_feed`: not complete yet).
@@ -481,16 +479,7 @@ typedef struct gough_mf_output_f64_t {
 } gough_mf_output_f64_t;
 
 /**
- * The Gough table of a tyre (`gough_table_build`), shared by the wheels of that tyre.
- * Opaque; keeps a pointer to nothing (a copy of what it needs).
- */
-typedef struct gough_table_t {
-  uint64_t _opaque[GOUGH_TABLE_WORDS];
-} gough_table_t;
-
-/**
- * One wheel's pipeline (`gough_wheel_init`). Opaque; points to its `gough_params_t` and
- * `gough_table_t`.
+ * One wheel's pipeline (`gough_wheel_init`). Opaque; points to its `gough_params_t`.
  */
 typedef struct gough_wheel_t {
   uint64_t _opaque[GOUGH_WHEEL_WORDS];
@@ -590,6 +579,11 @@ typedef struct gough_estimate_t {
    * Standard deviation of μ [-].
    */
   float sigma;
+  /**
+   * The lowest μ [-] the evidence has not excluded: a lower bound a controller may rely on
+   * in any state (the lowest hypothesis, 0.1, when nothing is excluded).
+   */
+  float mu_min;
   /**
    * `GOUGH_STATE_*`.
    */
@@ -699,7 +693,8 @@ typedef struct gough_msg_t {
    */
   struct gough_forces_t forces;
   /**
-   * `GOUGH_MSG_ESTIMATE`: μ, σ, state (its `flags` are not on the wire: 0).
+   * `GOUGH_MSG_ESTIMATE`: μ, σ, μ_min, state, and in `flags` the change of surface
+   * (`GOUGH_EST_CHANGE`; `GOUGH_EST_NONE` is not on the wire: ignored when sending).
    */
   struct gough_estimate_t estimate;
   /**
@@ -815,21 +810,15 @@ int32_t gough_mf_eval_f64(const struct gough_params_t *p,
                           struct gough_mf_output_f64_t *out);
 
 /**
- * Builds the Gough table of the wheel pipeline's estimator for tyre `p` into `out` (~10 000
- * Magic Formula evaluations: do it once, at start-up; the wheels of one tyre share it). `out`
- * copies what it needs of `p`.
- */
-int32_t gough_table_build(const struct gough_params_t *p, struct gough_table_t *out);
-
-/**
  * Starts one wheel's pipeline on tyre `p`: the transient filter (relaxation lengths) → the
- * Magic Formula (limits on) → forces, and, when `table` is not NULL, the friction estimator on
- * the measured forces (prior μ 0.3, the protocol's default `Settings`). `p` and `table` must
- * outlive the wheel and stay unchanged while it runs; `table` may be NULL (forces only).
+ * Magic Formula (limits on) → forces, and, with `GOUGH_WHEEL_ESTIMATOR` in `options`, the
+ * friction estimator (the bank, as `gough_estimator_init`, with the prior μ 0.3 of the
+ * protocol's default `Settings`) on the measured Fz, Fy, Mz, Fx, κ (or κ from ω), Vx, γ —
+ * never α. **`p` must outlive the wheel** and stay unchanged while it runs. `GOUGH_E_MODEL`:
+ * the estimator was asked for and the tyre gives no usable friction (the wheel is then not
+ * initialised); `GOUGH_E_ARG`: an unknown option bit.
  */
-int32_t gough_wheel_init(struct gough_wheel_t *w,
-                         const struct gough_params_t *p,
-                         const struct gough_table_t *table);
+int32_t gough_wheel_init(struct gough_wheel_t *w, const struct gough_params_t *p, uint32_t options);
 
 /**
  * One measurement through the wheel's pipeline: `*forces` gets the predicted forces, `*est`

@@ -3,16 +3,16 @@
 //! `cargo xtask test-all` fails when the checked-in header differs from a fresh generation).
 //!
 //! - **No allocation**: every state lives in an opaque, 8-byte aligned storage struct that the
-//!   caller declares (`static`, or on its stack) — `gough_params_t`, `gough_table_t`,
-//!   `gough_wheel_t`, `gough_estimator_t`, `gough_rx_t`; their sizes are the `GOUGH_*_SIZE`
-//!   macros. An `*_init`/`*_parse`/`*_build` call writes a storage and marks it; any other call
-//!   on a storage that was not written so returns `GOUGH_E_UNINIT`.
+//!   caller declares (`static`, or on its stack) — `gough_params_t`, `gough_wheel_t`,
+//!   `gough_estimator_t`, `gough_rx_t`; their sizes are the `GOUGH_*_SIZE` macros. An
+//!   `*_init`/`*_parse` call writes a storage and marks it; any other call on a storage that was
+//!   not written so returns `GOUGH_E_UNINIT`.
 //! - **No panics across the boundary**: the core does not panic; every function returns
 //!   `GOUGH_OK` (0) or a negative `GOUGH_E_*` code. A null pointer is an error
 //!   (`GOUGH_E_NULL`), never a crash; the pointers documented as optional may be null.
-//! - **Borrowed storage**: a table, a wheel and an estimator keep a pointer to the parameter
-//!   storage (and a wheel to the table) they were initialised with: that storage must outlive
-//!   them and must not be rewritten while they are used.
+//! - **Borrowed storage**: a wheel and an estimator keep a pointer to the parameter storage
+//!   they were initialised with: that storage must outlive them and must not be rewritten while
+//!   they are used.
 //! - **Units and axes**: SI units; forces and moments in ISO-W (the wheel's contact point: x
 //!   forward, y left, z up), as `gough::mf`.
 //!
@@ -30,7 +30,6 @@ use core::ptr;
 use core_gough::math::{Fast, Libm};
 use core_gough::mf::{self, EvalError, Input, Options, Params};
 use core_gough::mu::bank::{self, Bank};
-use core_gough::mu::GoughTable;
 use core_gough::proto::{self, Feed, Msg, Mtu, Reassembler, Segmenter, Settings, MSG_BUF};
 use core_gough::wheel::Wheel;
 
@@ -63,7 +62,7 @@ pub const GOUGH_E_PARSE: i32 = -4;
 pub const GOUGH_E_BUFFER: i32 = -5;
 /// The model cannot answer: an evaluation overflowed (limits off, inputs far outside the
 /// model's range), turn slip asked of a file without it, or the tyre gives no usable friction
-/// (a table or an estimator cannot be built).
+/// (an estimator cannot be built).
 pub const GOUGH_E_MODEL: i32 = -6;
 /// A storage struct was used before its `*_init`/`*_parse`/`*_build` call succeeded.
 pub const GOUGH_E_UNINIT: i32 = -7;
@@ -79,10 +78,8 @@ pub const GOUGH_E_PROTO: i32 = -9;
 
 /// Bytes of a `gough_params_t` (a parsed `.tir` file: f64 and f32 parameters).
 pub const GOUGH_PARAMS_SIZE: usize = 2624;
-/// Bytes of a `gough_table_t` (the Gough table of the wheel pipeline's estimator).
-pub const GOUGH_TABLE_SIZE: usize = 128704;
-/// Bytes of a `gough_wheel_t` (one wheel's transient filter, estimator and clock).
-pub const GOUGH_WHEEL_SIZE: usize = 512;
+/// Bytes of a `gough_wheel_t` (one wheel's transient filter and bank estimator).
+pub const GOUGH_WHEEL_SIZE: usize = 1600;
 /// Bytes of a `gough_estimator_t` (one wheel's bank estimator, `gough::mu::bank::Bank`).
 pub const GOUGH_ESTIMATOR_SIZE: usize = 1536;
 /// Bytes of a `gough_rx_t` (a reassembler of one CAN identifier's messages).
@@ -90,8 +87,6 @@ pub const GOUGH_RX_SIZE: usize = 256;
 
 /// 64-bit words of a `gough_params_t`.
 pub const GOUGH_PARAMS_WORDS: usize = GOUGH_PARAMS_SIZE / 8;
-/// 64-bit words of a `gough_table_t`.
-pub const GOUGH_TABLE_WORDS: usize = GOUGH_TABLE_SIZE / 8;
 /// 64-bit words of a `gough_wheel_t`.
 pub const GOUGH_WHEEL_WORDS: usize = GOUGH_WHEEL_SIZE / 8;
 /// 64-bit words of a `gough_estimator_t`.
@@ -105,15 +100,7 @@ pub struct gough_params_t {
     _opaque: [u64; GOUGH_PARAMS_WORDS],
 }
 
-/// The Gough table of a tyre (`gough_table_build`), shared by the wheels of that tyre.
-/// Opaque; keeps a pointer to nothing (a copy of what it needs).
-#[repr(C)]
-pub struct gough_table_t {
-    _opaque: [u64; GOUGH_TABLE_WORDS],
-}
-
-/// One wheel's pipeline (`gough_wheel_init`). Opaque; points to its `gough_params_t` and
-/// `gough_table_t`.
+/// One wheel's pipeline (`gough_wheel_init`). Opaque; points to its `gough_params_t`.
 #[repr(C)]
 pub struct gough_wheel_t {
     _opaque: [u64; GOUGH_WHEEL_WORDS],
@@ -140,7 +127,6 @@ struct Slot<T> {
 }
 
 const MAGIC_PARAMS: u32 = 0x676f_7001;
-const MAGIC_TABLE: u32 = 0x676f_7002;
 const MAGIC_WHEEL: u32 = 0x676f_7003;
 const MAGIC_EST: u32 = 0x676f_7004;
 const MAGIC_RX: u32 = 0x676f_7005;
@@ -152,7 +138,7 @@ struct ParamsIn {
 
 struct WheelIn {
     params: *const Params<f32>,
-    wheel: Wheel<'static>,
+    wheel: Wheel,
 }
 
 struct EstIn {
@@ -168,17 +154,15 @@ macro_rules! fits {
     };
 }
 fits!(ParamsIn, gough_params_t, GOUGH_PARAMS_SIZE);
-fits!(GoughTable<f32>, gough_table_t, GOUGH_TABLE_SIZE);
 fits!(WheelIn, gough_wheel_t, GOUGH_WHEEL_SIZE);
 fits!(EstIn, gough_estimator_t, GOUGH_ESTIMATOR_SIZE);
 fits!(Reassembler<MSG_BUF>, gough_rx_t, GOUGH_RX_SIZE);
 
 /// Bytes each storage needs on this target (what the `GOUGH_*_SIZE` macros round up):
-/// params, table, wheel, estimator, rx. For `docs/c-api.md` and the tests.
-pub fn used_sizes() -> [usize; 5] {
+/// params, wheel, estimator, rx. For `docs/c-api.md` and the tests.
+pub fn used_sizes() -> [usize; 4] {
     [
         size_of::<Slot<ParamsIn>>(),
-        size_of::<Slot<GoughTable<f32>>>(),
         size_of::<Slot<WheelIn>>(),
         size_of::<Slot<EstIn>>(),
         size_of::<Slot<Reassembler<MSG_BUF>>>(),
@@ -635,10 +619,15 @@ pub const GOUGH_STATE_IDENTIFIABLE: i32 = 0;
 pub const GOUGH_STATE_NOT_IDENTIFIABLE: i32 = 1;
 /// `state`: nothing known: μ is the prior.
 pub const GOUGH_STATE_FALLBACK: i32 = 2;
-/// `gough_estimate_t::flags`: a change of surface was declared at this sample.
+/// `gough_estimate_t::flags`: a change of surface was declared at this sample (set on that one
+/// estimate only).
 pub const GOUGH_EST_CHANGE: u32 = 1;
-/// `flags`: no estimator runs (a wheel initialised without a table): μ is the prior.
+/// `flags`: no estimator runs (a wheel initialised without `GOUGH_WHEEL_ESTIMATOR`): μ is the
+/// prior.
 pub const GOUGH_EST_NONE: u32 = 2;
+/// `gough_wheel_init` option: run the friction estimator (the bank) on the wheel's
+/// measurements.
+pub const GOUGH_WHEEL_ESTIMATOR: u32 = 1;
 
 /// A friction estimate.
 #[repr(C)]
@@ -649,6 +638,9 @@ pub struct gough_estimate_t {
     pub mu: f32,
     /// Standard deviation of μ [-].
     pub sigma: f32,
+    /// The lowest μ [-] the evidence has not excluded: a lower bound a controller may rely on
+    /// in any state (the lowest hypothesis, 0.1, when nothing is excluded).
+    pub mu_min: f32,
     /// `GOUGH_STATE_*`.
     pub state: i32,
     /// `GOUGH_EST_*` bits.
@@ -695,46 +687,29 @@ fn state_code(s: proto::EstimateState) -> i32 {
     }
 }
 
-/// Builds the Gough table of the wheel pipeline's estimator for tyre `p` into `out` (~10 000
-/// Magic Formula evaluations: do it once, at start-up; the wheels of one tyre share it). `out`
-/// copies what it needs of `p`.
-#[no_mangle]
-pub unsafe extern "C" fn gough_table_build(
-    p: *const gough_params_t,
-    out: *mut gough_table_t,
-) -> i32 {
-    ret(|| {
-        // SAFETY: a params storage or null.
-        let params: &ParamsIn = unsafe { get(p, MAGIC_PARAMS)? };
-        if out.is_null() {
-            return Err(GOUGH_E_NULL);
-        }
-        let s = out.cast::<Slot<GoughTable<f32>>>();
-        // SAFETY: non-null, GOUGH_TABLE_SIZE bytes aligned to 8. `GoughTable<f32>` holds only
-        // f32, u8 and bool fields, for which all-zero bits are valid (`GoughTable::zeroed`): the
-        // table is built in place, with no table-sized temporary on the stack.
-        let t = unsafe {
-            ptr::addr_of_mut!((*s).magic).write(0);
-            ptr::write_bytes(ptr::addr_of_mut!((*s).val), 0, 1);
-            &mut *ptr::addr_of_mut!((*s).val)
-        };
-        t.for_wheel_into::<Fast>(&params.p32, None)
-            .map_err(|_| GOUGH_E_MODEL)?;
-        // SAFETY: as above.
-        unsafe { ptr::addr_of_mut!((*s).magic).write(MAGIC_TABLE) };
-        Ok(())
-    })
+/// The protocol's estimate as C's (the change flag as `GOUGH_EST_CHANGE`).
+fn estimate_c(e: &proto::Estimate) -> gough_estimate_t {
+    gough_estimate_t {
+        mu: e.mu,
+        sigma: e.sigma,
+        mu_min: e.mu_min,
+        state: state_code(e.state),
+        flags: if e.change { GOUGH_EST_CHANGE } else { 0 },
+    }
 }
 
 /// Starts one wheel's pipeline on tyre `p`: the transient filter (relaxation lengths) → the
-/// Magic Formula (limits on) → forces, and, when `table` is not NULL, the friction estimator on
-/// the measured forces (prior μ 0.3, the protocol's default `Settings`). `p` and `table` must
-/// outlive the wheel and stay unchanged while it runs; `table` may be NULL (forces only).
+/// Magic Formula (limits on) → forces, and, with `GOUGH_WHEEL_ESTIMATOR` in `options`, the
+/// friction estimator (the bank, as `gough_estimator_init`, with the prior μ 0.3 of the
+/// protocol's default `Settings`) on the measured Fz, Fy, Mz, Fx, κ (or κ from ω), Vx, γ —
+/// never α. **`p` must outlive the wheel** and stay unchanged while it runs. `GOUGH_E_MODEL`:
+/// the estimator was asked for and the tyre gives no usable friction (the wheel is then not
+/// initialised); `GOUGH_E_ARG`: an unknown option bit.
 #[no_mangle]
 pub unsafe extern "C" fn gough_wheel_init(
     w: *mut gough_wheel_t,
     p: *const gough_params_t,
-    table: *const gough_table_t,
+    options: u32,
 ) -> i32 {
     ret(|| {
         // SAFETY: a params storage or null; the caller keeps it alive (documented).
@@ -742,11 +717,16 @@ pub unsafe extern "C" fn gough_wheel_init(
         if w.is_null() {
             return Err(GOUGH_E_NULL);
         }
+        if options & !GOUGH_WHEEL_ESTIMATOR != 0 {
+            return Err(GOUGH_E_ARG);
+        }
+        // SAFETY: non-null; unmark, so that a failure leaves it unusable.
+        unsafe { w.cast::<u32>().write(0) };
         let mut wheel = Wheel::new();
-        if !table.is_null() {
-            // SAFETY: a table storage; the caller keeps it alive (documented).
-            let t: &'static GoughTable<f32> = unsafe { get(table, MAGIC_TABLE)? };
-            wheel.start_estimator(t, &params.p32, &Settings::default());
+        if options & GOUGH_WHEEL_ESTIMATOR != 0 {
+            wheel
+                .start_estimator::<Fast>(&params.p32, &Settings::default())
+                .map_err(|_| GOUGH_E_MODEL)?;
         }
         let val = WheelIn {
             params: &params.p32,
@@ -783,16 +763,12 @@ pub unsafe extern "C" fn gough_wheel_step(
         let f = wi
             .wheel
             .forces::<Fast>(p, Settings::default().limits, &meas);
-        let e = match wi.wheel.estimate::<Fast>(&meas) {
-            Some((e, change)) => gough_estimate_t {
-                mu: e.mu,
-                sigma: e.sigma,
-                state: state_code(e.state),
-                flags: if change { GOUGH_EST_CHANGE } else { 0 },
-            },
+        let e = match wi.wheel.estimate::<Fast>(p, &meas) {
+            Some(e) => estimate_c(&e),
             None => gough_estimate_t {
                 mu: Settings::default().fallback_mu,
                 sigma: 1.0,
+                mu_min: 0.0,
                 state: GOUGH_STATE_FALLBACK,
                 flags: GOUGH_EST_NONE,
             },
@@ -922,6 +898,7 @@ pub unsafe extern "C" fn gough_estimator_update(
             out.write(gough_estimate_t {
                 mu: r.mu,
                 sigma: r.sigma,
+                mu_min: r.mu_min,
                 state,
                 flags: if r.change { GOUGH_EST_CHANGE } else { 0 },
             })
@@ -989,7 +966,8 @@ pub struct gough_msg_t {
     pub t_us: u32,
     /// `GOUGH_MSG_FORCES`: the forces (ISO-W, contact point; flags are 16 bits on the wire).
     pub forces: gough_forces_t,
-    /// `GOUGH_MSG_ESTIMATE`: μ, σ, state (its `flags` are not on the wire: 0).
+    /// `GOUGH_MSG_ESTIMATE`: μ, σ, μ_min, state, and in `flags` the change of surface
+    /// (`GOUGH_EST_CHANGE`; `GOUGH_EST_NONE` is not on the wire: ignored when sending).
     pub estimate: gough_estimate_t,
     /// `GOUGH_MSG_PARAM_BEGIN`: length of the `.tir` text [bytes].
     pub param_len: u32,
@@ -1057,6 +1035,7 @@ const ZERO_MSG: gough_msg_t = gough_msg_t {
     estimate: gough_estimate_t {
         mu: 0.0,
         sigma: 0.0,
+        mu_min: 0.0,
         state: 0,
         flags: 0,
     },
@@ -1208,12 +1187,7 @@ fn to_c(m: &Msg) -> gough_msg_t {
             o.kind = GOUGH_MSG_ESTIMATE;
             o.wheel = e.wheel.index() as u32;
             o.t_us = e.t_us;
-            o.estimate = gough_estimate_t {
-                mu: e.mu,
-                sigma: e.sigma,
-                state: state_code(e.state),
-                flags: 0,
-            };
+            o.estimate = estimate_c(e);
         }
         Msg::Status(_) => o.kind = GOUGH_MSG_STATUS,
         Msg::Ack(a) => {
@@ -1282,7 +1256,7 @@ fn from_c(m: &gough_msg_t) -> Result<Msg, i32> {
         }
         GOUGH_MSG_ESTIMATE => {
             let e = &m.estimate;
-            if !finite(&[e.mu, e.sigma]) {
+            if !finite(&[e.mu, e.sigma, e.mu_min]) {
                 return Err(GOUGH_E_NONFINITE);
             }
             Msg::Estimate(proto::Estimate {
@@ -1296,6 +1270,8 @@ fn from_c(m: &gough_msg_t) -> Result<Msg, i32> {
                     GOUGH_STATE_FALLBACK => proto::EstimateState::Fallback,
                     _ => return Err(GOUGH_E_ARG),
                 },
+                mu_min: e.mu_min,
+                change: e.flags & GOUGH_EST_CHANGE != 0,
             })
         }
         GOUGH_MSG_ACK => Msg::Ack(proto::Ack {
@@ -1416,12 +1392,11 @@ mod tests {
         let used = used_sizes();
         let macros = [
             GOUGH_PARAMS_SIZE,
-            GOUGH_TABLE_SIZE,
             GOUGH_WHEEL_SIZE,
             GOUGH_ESTIMATOR_SIZE,
             GOUGH_RX_SIZE,
         ];
-        let names = ["params", "table", "wheel", "estimator", "rx"];
+        let names = ["params", "wheel", "estimator", "rx"];
         for ((u, m), n) in used.iter().zip(macros).zip(names) {
             println!(
                 "{n}: needs {u} bytes on this target, GOUGH_{}_SIZE = {m}",

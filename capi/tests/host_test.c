@@ -252,22 +252,21 @@ static void errors(const char *root) {
     CHECK(gough_mf_eval_f64(&p, NULL, 111, &out64) == GOUGH_E_NULL, "null input f64");
     CHECK(gough_mf_eval_f64(&p, &in64, 111, NULL) == GOUGH_E_NULL, "null output f64");
     CHECK(gough_params_info(NULL, NULL) == GOUGH_E_NULL, "null info");
-    static gough_table_t table;
     static gough_wheel_t wheel, wheel0;
     static gough_estimator_t est, est0;
     static gough_rx_t rx, rx0;
-    CHECK(gough_table_build(NULL, &table) == GOUGH_E_NULL, "null table params");
-    CHECK(gough_table_build(&p, NULL) == GOUGH_E_NULL, "null table");
-    CHECK(gough_wheel_init(NULL, &p, NULL) == GOUGH_E_NULL, "null wheel");
-    CHECK(gough_wheel_init(&wheel, NULL, NULL) == GOUGH_E_NULL, "null wheel params");
-    CHECK(gough_wheel_init(&wheel, &p, &table) == GOUGH_E_UNINIT, "unbuilt table");
+    CHECK(gough_wheel_init(NULL, &p, GOUGH_WHEEL_ESTIMATOR) == GOUGH_E_NULL, "null wheel");
+    CHECK(gough_wheel_init(&wheel, NULL, GOUGH_WHEEL_ESTIMATOR) == GOUGH_E_NULL,
+          "null wheel params");
+    CHECK(gough_wheel_init(&wheel, &bad, GOUGH_WHEEL_ESTIMATOR) == GOUGH_E_UNINIT,
+          "unparsed wheel params");
+    CHECK(gough_wheel_init(&wheel, &p, 2u) == GOUGH_E_ARG, "unknown wheel option");
     CHECK(gough_estimator_init(NULL, &p) == GOUGH_E_NULL, "null estimator");
     CHECK(gough_estimator_init(&est, NULL) == GOUGH_E_NULL, "null estimator params");
     CHECK(gough_rx_init(NULL) == GOUGH_E_NULL, "null rx");
 
     /* The wheel: forces and estimate; errors. */
-    CHECK(gough_table_build(&p, &table) == GOUGH_OK, "table");
-    CHECK(gough_wheel_init(&wheel, &p, &table) == GOUGH_OK, "wheel");
+    CHECK(gough_wheel_init(&wheel, &p, GOUGH_WHEEL_ESTIMATOR) == GOUGH_OK, "wheel");
     gough_measurement_t m = {0};
     m.wheel = 1;
     m.t_us = 1000;
@@ -279,8 +278,11 @@ static void errors(const char *root) {
     m.present = GOUGH_HAS_VX | GOUGH_HAS_ALPHA;
     gough_forces_t f;
     gough_estimate_t e;
-    CHECK(gough_wheel_step(&wheel, &m, &f, &e) == GOUGH_OK && f.fy < 0.0f && isfinite(e.mu),
-          "wheel step: Fy %g mu %g", (double)f.fy, (double)e.mu);
+    CHECK(gough_wheel_step(&wheel, &m, &f, &e) == GOUGH_OK && f.fy < 0.0f && isfinite(e.mu) &&
+              !(e.flags & GOUGH_EST_NONE) && e.state == GOUGH_STATE_FALLBACK &&
+              e.mu_min > 0.0f && e.mu_min <= e.mu,
+          "wheel step: Fy %g mu %g mu_min %g state %d flags %u", (double)f.fy, (double)e.mu,
+          (double)e.mu_min, e.state, e.flags);
     CHECK(gough_wheel_step(NULL, &m, &f, &e) == GOUGH_E_NULL, "null wheel step");
     CHECK(gough_wheel_step(&wheel, NULL, &f, &e) == GOUGH_E_NULL, "null measurement");
     CHECK(gough_wheel_step(&wheel, &m, NULL, &e) == GOUGH_E_NULL, "null forces");
@@ -301,7 +303,30 @@ static void errors(const char *root) {
     mn = m;
     mn.wheel = 4;
     CHECK(gough_wheel_step(&wheel, &mn, &f, &e) == GOUGH_E_ARG, "wheel 4");
-    CHECK(gough_wheel_init(&wheel0, &p, NULL) == GOUGH_OK, "wheel without estimator");
+    /* A tyre without lateral friction (LMUY = 0): no estimator can be built; the wheel stays
+     * uninitialised. */
+    {
+        char *flat_text = malloc(len);
+        CHECK(flat_text != NULL, "malloc");
+        if (flat_text) {
+            memcpy(flat_text, text, len);
+            char *k = strstr(flat_text, "\nLMUY");
+            char *one = k ? strchr(k, '=') : NULL;
+            while (one && *one && *one != '1') one++;
+            CHECK(one && *one == '1', "LMUY = 1 in the file");
+            if (one && *one == '1') *one = '0';
+            static gough_params_t flat;
+            CHECK(gough_tir_parse(flat_text, len, &flat, &line) == GOUGH_OK, "LMUY = 0 parses");
+            CHECK(gough_wheel_init(&wheel0, &flat, GOUGH_WHEEL_ESTIMATOR) == GOUGH_E_MODEL,
+                  "no friction: no estimator");
+            CHECK(gough_wheel_step(&wheel0, &m, &f, &e) == GOUGH_E_UNINIT,
+                  "a failed init leaves the wheel unusable");
+            CHECK(gough_wheel_init(&wheel0, &flat, 0) == GOUGH_OK, "no friction: forces only");
+            CHECK(gough_estimator_init(&est0, &flat) == GOUGH_E_MODEL, "no friction: estimator");
+            free(flat_text);
+        }
+    }
+    CHECK(gough_wheel_init(&wheel0, &p, 0) == GOUGH_OK, "wheel without estimator");
     CHECK(gough_wheel_step(&wheel0, &m, &f, &e) == GOUGH_OK && (e.flags & GOUGH_EST_NONE) &&
               e.state == GOUGH_STATE_FALLBACK,
           "no estimator: flags %u", e.flags);
@@ -353,6 +378,35 @@ static void errors(const char *root) {
     }
     CHECK(done == 1 && got.kind == GOUGH_MSG_MEASUREMENT, "one message back: %d", done);
     CHECK(!memcmp(&got.measurement, &m, sizeof m), "measurement round trip");
+    /* An estimate with the change-of-surface flag and the lower bound, back and forth. */
+    gough_msg_t em;
+    memset(&em, 0, sizeof em);
+    em.kind = GOUGH_MSG_ESTIMATE;
+    em.wheel = 3;
+    em.t_us = 4242;
+    em.estimate.mu = 0.35f;
+    em.estimate.sigma = 0.04f;
+    em.estimate.mu_min = 0.3f;
+    em.estimate.state = GOUGH_STATE_IDENTIFIABLE;
+    em.estimate.flags = GOUGH_EST_CHANGE;
+    CHECK(gough_msg_encode(&em, 9, frames, GOUGH_MAX_FRAMES, &nf) == GOUGH_OK && nf == 5 &&
+              frames[0].id == 0x310,
+          "estimate: %zu frames", nf);
+    for (size_t i = 0; i < nf; i++) gough_rx_feed(&rx, &frames[i], 0, &got);
+    CHECK(got.kind == GOUGH_MSG_ESTIMATE && got.wheel == 3 && got.t_us == 4242 &&
+              got.estimate.mu == 0.35f && got.estimate.mu_min == 0.3f &&
+              got.estimate.state == GOUGH_STATE_IDENTIFIABLE &&
+              got.estimate.flags == GOUGH_EST_CHANGE,
+          "estimate round trip: kind %u flags %u mu_min %g", got.kind, got.estimate.flags,
+          (double)got.estimate.mu_min);
+    em.estimate.flags = 0;
+    CHECK(gough_msg_encode(&em, 10, frames, GOUGH_MAX_FRAMES, &nf) == GOUGH_OK, "estimate");
+    for (size_t i = 0; i < nf; i++) gough_rx_feed(&rx, &frames[i], 0, &got);
+    CHECK(got.kind == GOUGH_MSG_ESTIMATE && got.estimate.flags == 0, "no change: flags %u",
+          got.estimate.flags);
+    em.estimate.mu_min = NAN;
+    CHECK(gough_msg_encode(&em, 11, frames, GOUGH_MAX_FRAMES, &nf) == GOUGH_E_NONFINITE,
+          "NaN mu_min");
     CHECK(gough_rx_feed(&rx0, &frames[0], 0, &got) == GOUGH_E_UNINIT, "uninitialised rx");
     CHECK(gough_rx_feed(&rx, NULL, 0, &got) == GOUGH_E_NULL, "null frame");
     CHECK(gough_rx_feed(&rx, &frames[0], 0, NULL) == GOUGH_E_NULL, "null message out");
@@ -374,9 +428,8 @@ int main(int argc, char **argv) {
         return 2;
     }
     const char *root = argv[1];
-    printf("sizes: params %d, table %d, wheel %d, estimator %d, rx %d bytes\n",
-           GOUGH_PARAMS_SIZE, GOUGH_TABLE_SIZE, GOUGH_WHEEL_SIZE, GOUGH_ESTIMATOR_SIZE,
-           GOUGH_RX_SIZE);
+    printf("sizes: params %d, wheel %d, estimator %d, rx %d bytes\n", GOUGH_PARAMS_SIZE,
+           GOUGH_WHEEL_SIZE, GOUGH_ESTIMATOR_SIZE, GOUGH_RX_SIZE);
     char dirpath[1024];
     snprintf(dirpath, sizeof dirpath, "%s/host-tests/data/oracle", root);
     DIR *d = opendir(dirpath);

@@ -3,19 +3,19 @@
 //! friction estimator). Board independent: a board hands in its CAN driver (any
 //! `embedded_can::nb::Can`) and a millisecond clock.
 //!
-//! ## The estimator's table
-//! The estimators of the four wheels share one [`GoughTable`] (~10 000 Magic Formula
-//! evaluations to build; the `table build` line of the M4F `bench` output gives its size). The App never builds it inside [`App::poll`] or [`App::tick`]:
-//! after a parameter set is loaded it hands out a [`TableJob`] ([`App::table_job`]); the board
-//! builds it — the mps2 board in thread mode while poll and tick run in the SysTick interrupt;
-//! the STM32F405 board between polls of its main loop — and returns it with
-//! [`App::table_built`]. Until then measurements get `Forces` and no `Estimate`; the `Ack` of a
-//! `ParamCommit` is sent once the new tyre's table is built, so a host that waits for it gets
-//! estimates from its first measurement on. A board that never builds leaves
-//! [`App::estimator`] off: commits are acknowledged at once and no `Estimate` is ever sent.
+//! ## The friction estimator
+//! Each wheel runs the exact-model bank ([`gough::mu::bank::Bank`] in `f32`, through
+//! [`gough::wheel::Wheel`]): the App starts the four wheels' estimators whenever a parameter set
+//! is loaded (bundled or uploaded) and whenever `Settings` arrive (their `fallback_mu` is the
+//! prior); the estimators forget what they learnt then. Starting one costs one Magic Formula
+//! evaluation (the tyre's μy0), so the `ParamCommit` is acknowledged at once and estimates
+//! follow from the next measurement on. The bank keeps no reference to the parameters: the App
+//! owns them beside the wheels and hands them to each update. Its work per sample is bounded
+//! (the `bench` output gives mean and worst instructions per wheel per sample); its state,
+//! about 1.5 KB per wheel, lives in the App. A tyre the estimator cannot use (no friction at
+//! FNOMIN) gets forces and no `Estimate`.
 
 use gough::mf::Params;
-use gough::mu::{BuildError, GoughTable};
 use gough::proto::{
     self, crc32, id, link, Ack, AckCode, Command, Estimate, Feed, Forces, Measurement, Msg,
     MsgType, ParamSource, Reassembler, Settings, Status, MAX_TIR_LEN, MSG_BUF,
@@ -54,32 +54,6 @@ pub enum Event {
     Stop,
 }
 
-/// A table to build: the parameter set and its generation (see [`App::table_job`]).
-#[derive(Debug, Clone)]
-pub struct TableJob {
-    /// The tyre.
-    pub params: Params<f32>,
-    /// Generation of the parameter set; hand it back to [`App::table_built`].
-    pub gen: u32,
-}
-
-/// Builds the table of `job` into `slot`, in place (~10 000 Magic Formula evaluations with
-/// [`Math`]; no table-sized temporary on the stack).
-pub fn build_table(
-    job: &TableJob,
-    slot: &'static mut core::mem::MaybeUninit<GoughTable<f32>>,
-) -> Result<&'static GoughTable<f32>, BuildError> {
-    // SAFETY: `GoughTable<f32>` holds only f32, u8 and bool fields (arrays and tuples of them),
-    // for which the all-zero bit pattern is a valid value (`GoughTable::zeroed()`), so after
-    // zeroing the slot is initialised.
-    let t = unsafe {
-        core::ptr::write_bytes(slot.as_mut_ptr(), 0, 1);
-        slot.assume_init_mut()
-    };
-    t.for_wheel_into::<Math>(&job.params, None)?;
-    Ok(t)
-}
-
 #[derive(Debug, Clone, Copy)]
 struct Upload {
     len: usize,
@@ -87,22 +61,11 @@ struct Upload {
     hash: u32,
 }
 
-/// The whole device state. ~35 KiB (the upload buffer is 32 KiB): keep it in a `static`.
+/// The whole device state. ~41 KiB (the upload buffer is 32 KiB, the four wheels' estimators
+/// ~6 KiB): keep it in a `static`.
 pub struct App {
     params: Option<Params<f32>>,
-    /// Generation of `params` (counts every load).
-    gen: u32,
-    wheels: [Wheel<'static>; 4],
-    /// The estimators' table, when built for the current parameters.
-    table: Option<&'static GoughTable<f32>>,
-    /// Generation a table job is out for.
-    building: Option<u32>,
-    /// Generation the last finished build was for (success or not).
-    built: Option<u32>,
-    /// Sequence number of a `ParamCommit` whose `Ack` waits for the table.
-    commit_ack: Option<u8>,
-    /// Whether this board builds tables and runs the estimators (see the module doc).
-    pub estimator: bool,
+    wheels: [Wheel; 4],
     source: ParamSource,
     hash: u32,
     upload: Option<Upload>,
@@ -132,20 +95,14 @@ impl Default for App {
     }
 }
 
-const NO_WHEEL: Wheel<'static> = Wheel::new();
+const NO_WHEEL: Wheel = Wheel::new();
 
 impl App {
-    /// Empty state: no parameters, default settings (`Settings::default()`), estimator off.
+    /// Empty state: no parameters, default settings (`Settings::default()`).
     pub const fn new() -> Self {
         App {
             params: None,
-            gen: 0,
             wheels: [NO_WHEEL; 4],
-            table: None,
-            building: None,
-            built: None,
-            commit_ack: None,
-            estimator: false,
             source: ParamSource::None,
             hash: 0,
             upload: None,
@@ -190,83 +147,38 @@ impl App {
         self.params.as_ref()
     }
 
-    /// Swaps in a parameter set: a new generation; filters restart, estimators stop until the
-    /// new table is built.
+    /// Swaps in a parameter set: the filters restart, the estimators start on it.
     fn set_params(&mut self, p: Params<f32>, hash: u32, source: ParamSource) {
         self.params = Some(p);
         self.hash = hash;
         self.source = source;
-        self.gen = self.gen.wrapping_add(1);
-        self.table = None;
         for w in self.wheels.iter_mut() {
             w.reset_filter();
-            w.stop_estimator();
         }
+        self.start_estimators();
     }
 
-    /// The estimators' table, when one is built for the parameters in use (borrowed from the
-    /// App: the board rewrites the table's storage only after [`App::table_job`]).
-    pub fn table(&self) -> Option<&GoughTable<f32>> {
-        self.table
-    }
-
-    /// A table to build, if one is wanted (estimator on, parameters loaded, no table for them
-    /// and no build out). From here until [`App::table_built`] the App holds no reference to
-    /// any table: the board may write its table storage.
-    pub fn table_job(&mut self) -> Option<TableJob> {
-        if !self.estimator || self.building.is_some() || self.built == Some(self.gen) {
-            return None;
-        }
-        let params = self.params.clone()?;
-        self.table = None;
-        for w in self.wheels.iter_mut() {
-            w.stop_estimator();
-        }
-        self.building = Some(self.gen);
-        Some(TableJob {
-            params,
-            gen: self.gen,
-        })
-    }
-
-    /// A build is done: installs the table and starts the estimators if it is for the
-    /// parameters in use (a stale one is dropped; [`App::table_job`] then asks again), and
-    /// sends the `ParamCommit` acknowledgement that waited for it.
-    pub fn table_built<C: embedded_can::nb::Can>(
-        &mut self,
-        can: &mut C,
-        gen: u32,
-        result: Result<&'static GoughTable<f32>, BuildError>,
-    ) {
-        if self.building == Some(gen) {
-            self.building = None;
-        }
-        if gen != self.gen {
-            return;
-        }
-        self.built = Some(gen);
-        match result {
-            Ok(t) => {
-                self.table = Some(t);
-                self.start_estimators();
-                defmt::info!(
-                    "estimator table built ({} bytes)",
-                    core::mem::size_of_val(t)
-                );
-            }
-            Err(e) => defmt::warn!("no estimator for this tyre: {}", e),
-        }
-        if let Some(seq) = self.commit_ack.take() {
-            self.ack(can, MsgType::ParamCommit, seq, AckCode::Ok);
-        }
-    }
-
+    /// (Re)starts the four wheels' estimators on the parameters in use, with the prior of the
+    /// settings; without parameters (or for a tyre without friction) none runs.
     fn start_estimators(&mut self) {
-        if let (Some(t), Some(p)) = (self.table, self.params.as_ref()) {
-            for w in self.wheels.iter_mut() {
-                w.start_estimator(t, p, &self.settings);
+        let Some(p) = self.params.as_ref() else {
+            return;
+        };
+        let mut failed = None;
+        for w in self.wheels.iter_mut() {
+            if let Err(e) = w.start_estimator::<Math>(p, &self.settings) {
+                failed = Some(e);
             }
         }
+        if let Some(e) = failed {
+            defmt::warn!("no estimator for this tyre: {}", e);
+        }
+    }
+
+    /// Wheel `i`'s estimator (0..=3), if it runs: its state, μy0 of the tyre
+    /// (`Bank::mu0`), its count of refused samples (`Bank::bad_samples`).
+    pub fn estimator(&self, i: usize) -> Option<&gough::mu::bank::Bank<f32>> {
+        self.wheels.get(i).and_then(Wheel::estimator)
     }
 
     /// The status report.
@@ -434,15 +346,8 @@ impl App {
                         }
                     }
                 };
-                if code == AckCode::Ok && self.estimator {
-                    // Acknowledged once the table is built (`table_built`); a commit this one
-                    // supersedes is acknowledged now.
-                    if let Some(old) = self.commit_ack.replace(seq) {
-                        self.ack(can, MsgType::ParamCommit, old, AckCode::Ok);
-                    }
-                } else {
-                    self.ack(can, MsgType::ParamCommit, seq, code);
-                }
+                // The estimators are started on the new tyre already (`set_params`).
+                self.ack(can, MsgType::ParamCommit, seq, code);
             }
             Msg::Settings(s) => {
                 self.settings = s;
@@ -498,16 +403,14 @@ impl App {
         let Some(w) = self.wheels.get_mut(m.wheel.index()) else {
             return (Err(AckCode::EvalError), None);
         };
-        let forces = match self.params.as_ref() {
-            Some(p) => w.forces::<Math>(p, self.settings.limits, m),
-            None => Err(AckCode::NoParams),
+        let Some(p) = self.params.as_ref() else {
+            return (Err(AckCode::NoParams), None);
         };
-        let estimate = w.estimate::<Math>(m).map(|(e, change)| {
-            if change {
-                defmt::info!("wheel {}: change of surface, mu {}", m.wheel, e.mu);
-            }
-            e
-        });
+        let forces = w.forces::<Math>(p, self.settings.limits, m);
+        let estimate = w.estimate::<Math>(p, m);
+        if let Some(e) = estimate.filter(|e| e.change) {
+            defmt::info!("wheel {}: change of surface, mu {}", m.wheel, e.mu);
+        }
         (forces, estimate)
     }
 

@@ -76,7 +76,7 @@ def test_every_frame_decodes_to_the_hosts_values(fd, compact):
             assert sig["last_frame"] == (k == len(m["frames"]) - 1)
             if k == 0:
                 assert sig["msg_len"] == len(m["encoded"]) // 2
-                assert sig["proto_version"] == 1
+                assert sig["proto_version"] == 2
                 assert str(sig["msg_type"]) == m["type"]
                 if any(s.startswith("first_bytes") for s in sig):
                     raw = dbm.decode(data, decode_choices=False)
@@ -103,6 +103,9 @@ def test_every_frame_decodes_to_the_hosts_values(fd, compact):
                 assert sig["mu"] == f32(want["mu"])
                 assert sig["sigma"] == f32(want["sigma"])
                 assert str(sig["state"]) == want["state"]
+                assert sig["mu_min"] == f32(want["mu_min"])
+                raw = dbm.decode(bytes.fromhex(m["frames"][0]), decode_choices=False)
+                assert raw["change"] == int(want["change"])
             enc = bytes.fromhex(m["encoded"])
             assert sig[f"{pre}_crc"] == int.from_bytes(enc[-4:], "little")
         if fd and m["type"] == "CompactMeasurement":
@@ -133,3 +136,5 @@ def test_fd_estimate_states_are_named():
     assert len(states) >= 2, states
     choices = {str(v) for v in db.get_message_by_name("GOUGH_RESULT").get_signal_by_name("state").choices.values()}
     assert choices == {"Identifiable", "NotIdentifiable", "Fallback"}
+    change = db.get_message_by_name("GOUGH_RESULT").get_signal_by_name("change")
+    assert {str(v) for v in change.choices.values()} == {"NoChange", "Change"}

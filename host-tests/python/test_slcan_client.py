@@ -8,8 +8,8 @@ Run by `cargo xtask test-all` against the firmware under QEMU:
     gough firmware run --no-build --port PORT &
     python test_slcan_client.py --port PORT --gough path/to/gough
 
-It waits until the device's friction estimator is up (a measurement answered with an
-Estimate), sends measurements, decodes the predicted forces and checks them against
+It waits until the device answers a measurement with an Estimate (its friction estimators
+start with the parameters, at boot), sends measurements, decodes the predicted forces and checks them against
 `gough mf eval --precision f32` (the host's f32 run of the same core, with libm: the firmware's
 default build runs the `fast` backend, so the check allows 2e-5 of Fz, ten times the measured
 difference between the two backends; a misplaced byte is off by far more), decodes the estimate
@@ -28,7 +28,7 @@ import zlib
 
 import can
 
-PROTO_VERSION = 1
+PROTO_VERSION = 2
 ID_MEASUREMENT, ID_CONFIG, ID_RESULT, ID_STATUS = 0x300, 0x301, 0x310, 0x311
 T_MEASUREMENT, T_COMMAND, T_FORCES, T_ESTIMATE, T_STATUS, T_ACK = 0x01, 0x06, 0x81, 0x82, 0x83, 0x84
 CMD_STATUS_REQUEST, CMD_STOP = 1, 2
@@ -114,11 +114,15 @@ def decode_forces(b):
 
 
 def decode_estimate(b):
+    """wheel u8, t_us u32 LE, mu f32, sigma f32, state varint, mu_min f32, change bool (v2)."""
     wheel = b[0]
     t_us, mu, sigma = struct.unpack("<Iff", b[1:13])
     state, i = varint(b, 13)
-    assert i == len(b), "estimate body length"
-    return wheel, t_us, mu, sigma, state
+    (mu_min,) = struct.unpack("<f", b[i:i + 4])
+    change = b[i + 4]
+    assert change in (0, 1), f"change byte {change}"
+    assert i + 5 == len(b), "estimate body length"
+    return wheel, t_us, mu, sigma, state, mu_min, bool(change)
 
 
 def decode_status(b):
@@ -190,8 +194,9 @@ def main():
         sent += 1
 
     try:
-        # The estimator's table is built after boot: wait until a measurement gets an Estimate.
-        # (No Vx: the steady-state path, so wheel 0's filter starts afresh with case 0.)
+        # Wait until the device is up and a measurement gets an Estimate (the estimators start
+        # with the bundled parameters at boot). (No Vx: the steady-state path, so wheel 0's
+        # filter starts afresh with case 0.)
         ready = False
         for _ in range(100):
             send(ID_MEASUREMENT, measurement(0, 0, 5000.0, 0.0, 0.0, None, 0.0, None))
@@ -226,10 +231,12 @@ def main():
             t, body = rx.recv()
             ok = t == T_ESTIMATE
             if ok:
-                ew, et, mu, sigma, state = decode_estimate(body)
-                ok = (ew, et) == (w, t_us) and state in (0, 1, 2) and 0 < mu < 3 and 0 < sigma < 3
+                ew, et, mu, sigma, state, mu_min, change = decode_estimate(body)
+                ok = ((ew, et) == (w, t_us) and state in (0, 1, 2) and 0 < mu < 3 and 0 < sigma < 3
+                      and 0 < mu_min < 3)
                 print(f"{'ok  ' if ok else 'FAIL'} estimate wheel {ew} t_us {et}: mu {mu:.3g} sigma {sigma:.3g} "
-                      f"state {('identifiable', 'not_identifiable', 'fallback')[state] if state < 3 else state}")
+                      f"state {('identifiable', 'not_identifiable', 'fallback')[state] if state < 3 else state} "
+                      f"mu_min {mu_min:.3g} change {int(change)}")
             else:
                 print(f"FAIL expected an Estimate after the forces, got type {t:#x}")
             fails += not ok

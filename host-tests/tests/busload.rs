@@ -27,9 +27,11 @@ fn frame_counts_are_the_segmenters() {
     assert!(matches!(busload::compact(), Msg::CompactMeasurement(_)));
     assert_eq!(count(&busload::compact(), Mtu::Classic), 5);
     assert_eq!(count(&busload::compact(), Mtu::Fd), 1);
-    // Forces (25 bytes) 5 frames, Estimate (20 bytes) 4; on FD one frame each.
+    // Forces (25 bytes) 5 frames, Estimate (25 bytes since protocol v2: μ_min and the change
+    // flag) 5; on FD one frame each.
     let r = busload::results();
-    assert_eq!(count(&r[0], Mtu::Classic) + count(&r[1], Mtu::Classic), 9);
+    assert_eq!(count(&r[0], Mtu::Classic), 5);
+    assert_eq!(count(&r[1], Mtu::Classic), 5);
     assert_eq!(count(&r[0], Mtu::Fd) + count(&r[1], Mtu::Fd), 2);
     for bus in &BUSES {
         for (_, msgs) in busload::traffics() {
@@ -79,7 +81,7 @@ fn cli_table_rows_follow_from_the_frame_counts() {
         }
     }
     assert_eq!(rows, 12);
-    // Classic 1 Mbit/s, 1 kHz, all fields both ways: 4 × 1000 × (10 + 9) frames of 135 bits
+    // Classic 1 Mbit/s, 1 kHz, all fields both ways: 4 × 1000 × (10 + 10) frames of 135 bits
     // or fewer: does not fit.
     assert!(text.contains("| classic 1 Mbit/s | 1000 Hz | 40000 f/s"));
 }

@@ -39,7 +39,7 @@ fn replay_answers_equal_the_host_f32_run() {
     let mut lines = res.lines();
     assert_eq!(
         lines.next(),
-        Some("t,wheel,fx,fy,mz,flags,ack,mu,sigma,state")
+        Some("t,wheel,fx,fy,mz,flags,ack,mu,sigma,state,mu_min,change")
     );
     let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
     assert_eq!(rows.len(), 200);
@@ -47,10 +47,15 @@ fn replay_answers_equal_the_host_f32_run() {
     // then reads the tyre's own surface (μy0 = 1.018 for this file).
     let mut identifiable = 0;
     for r in &rows {
-        assert_eq!(r.len(), 10, "{r:?}");
+        assert_eq!(r.len(), 12, "{r:?}");
         assert!(r[2].parse::<f32>().is_ok() && r[6].is_empty(), "{r:?}");
         let (mu, sigma): (f32, f32) = (r[7].parse().unwrap(), r[8].parse().unwrap());
+        let mu_min: f32 = r[10].parse().unwrap();
         assert!(mu > 0.0 && sigma > 0.0, "{r:?}");
+        // A lower bound on the grid of surfaces (0.1 ..= 1.3).
+        assert!((0.1..=1.3).contains(&mu_min), "{r:?}");
+        // One surface throughout: no change is declared.
+        assert_eq!(r[11], "0", "{r:?}");
         match r[9] {
             "identifiable" => {
                 identifiable += 1;

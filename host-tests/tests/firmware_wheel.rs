@@ -2,7 +2,7 @@
 //! against the core directly — the replay test only shows that device and host agree.
 use gough::math::Fast;
 use gough::mf::{self, Input, Options, Params};
-use gough::mu::{self, GoughTable, MuEstimator};
+use gough::mu::bank::{self, Bank, BuildError};
 use gough::proto::{AckCode, EstimateState, Measurement, Settings, Wheel as WheelId};
 use gough::wheel::{effective_radius, estimator_config, Wheel};
 
@@ -181,53 +181,168 @@ fn slalom(p: &Params<f32>, t0: u32, n: u32) -> Vec<Measurement> {
         .collect()
 }
 
+/// The bank's sample of a measurement, written out here (not through `wheel::sample`): the
+/// measured Fz, Fy, Mz, Fx, κ, Vx, γ at the measurement's own timestamp.
+fn bank_sample(m: &Measurement) -> bank::Sample<f32> {
+    bank::Sample {
+        t_us: m.t_us,
+        fz: m.fz,
+        fy: m.fy,
+        mz: m.mz,
+        fx: m.fx,
+        kappa: m.kappa,
+        vx: m.vx,
+        gamma: m.gamma,
+    }
+}
+
 #[test]
-fn the_estimate_is_the_core_estimator_on_the_measured_forces() {
+fn the_estimate_is_the_bank_on_the_measured_forces() {
     let p = tyre();
-    let table = Box::new(GoughTable::for_tyre::<Fast>(&p).unwrap());
-    let settings = Settings::default();
+    let settings = Settings {
+        fallback_mu: 0.45,
+        ..Settings::default()
+    };
     let mut w = Wheel::new();
-    w.start_estimator(&table, &p, &settings);
-    let mut direct = MuEstimator::for_tyre(&table, &p, estimator_config(&settings));
-    assert_eq!(estimator_config(&settings).mu_prior, settings.fallback_mu);
-    let log = slalom(&p, 0, 2000);
-    let mut identifiable = 0;
+    w.start_estimator::<Fast>(&p, &settings).unwrap();
+    let cfg = estimator_config(&settings);
+    assert_eq!(cfg.mu_prior, settings.fallback_mu);
+    let mut direct = Bank::new::<Fast>(&p, None, cfg).unwrap();
+    // A braking slalom: κ measured too, camber in the message.
+    let mut log = slalom(&p, 0, 2000);
+    for (i, m) in log.iter_mut().enumerate() {
+        m.kappa = Some(-0.02 * (i as f32 / 2000.0));
+        m.gamma = Some(0.01);
+    }
+    let (mut identifiable, mut fallback) = (0, 0);
     for m in &log {
-        let (e, _) = w.estimate::<Fast>(m).unwrap();
-        let d = direct.update::<Fast>(&m.sample(m.t_us as f32 / 1e6));
-        assert_eq!((e.mu, e.sigma), (d.mu, d.sigma), "t_us {}", m.t_us);
+        let e = w.estimate::<Fast>(&p, m).unwrap();
+        let d = direct.update::<Fast>(&p, &bank_sample(m));
         assert_eq!(
-            e.state == EstimateState::Identifiable,
-            d.state == mu::State::Identifiable
+            (e.mu, e.sigma, e.mu_min, e.change),
+            (d.mu, d.sigma, d.mu_min, d.change),
+            "t_us {}",
+            m.t_us
         );
+        let want = match d.state {
+            bank::State::Identifiable => EstimateState::Identifiable,
+            bank::State::NotIdentifiable => EstimateState::NotIdentifiable,
+            bank::State::Fallback => EstimateState::Fallback,
+        };
+        assert_eq!(e.state, want);
         assert_eq!((e.wheel, e.t_us), (m.wheel, m.t_us));
         identifiable += usize::from(e.state == EstimateState::Identifiable);
+        if e.state == EstimateState::Fallback {
+            fallback += 1;
+            assert_eq!(e.mu, settings.fallback_mu, "the prior is fallback_mu");
+        }
     }
-    assert!(identifiable > 0);
+    assert!(
+        identifiable > 0 && fallback > 0,
+        "{identifiable} {fallback}"
+    );
+}
+
+#[test]
+fn the_estimator_never_reads_alpha_nor_the_model() {
+    let p = tyre();
+    let settings = Settings::default();
+    let log = slalom(&p, 0, 1500);
+    let run = |f: &dyn Fn(&Measurement) -> Measurement| {
+        let mut w = Wheel::new();
+        w.start_estimator::<Fast>(&p, &settings).unwrap();
+        log.iter()
+            .map(|m| {
+                let m = f(m);
+                // The forces path runs first, as on the device (it must not feed the estimator).
+                let _ = w.forces::<Fast>(&p, true, &m);
+                let e = w.estimate::<Fast>(&p, &m).unwrap();
+                (e.mu, e.sigma, e.mu_min, e.state, e.change)
+            })
+            .collect::<Vec<_>>()
+    };
+    let same = run(&|m| *m);
+    // α wrong by a factor of 3, or absent: the same estimates.
+    let tripled = run(&|m| Measurement {
+        alpha: m.alpha.map(|a| 3.0 * a),
+        ..*m
+    });
+    let none = run(&|m| Measurement { alpha: None, ..*m });
+    assert_eq!(same, tripled);
+    assert_eq!(same, none);
+    assert!(same.iter().any(|e| e.3 == EstimateState::Identifiable));
+}
+
+#[test]
+fn without_kappa_the_wheel_speed_gives_the_estimators_slip() {
+    let p = tyre();
+    let m = Measurement {
+        wheel: WheelId::FrontRight,
+        t_us: 5,
+        fz: 5000.0,
+        vx: Some(20.0),
+        omega: Some(20.0 * 0.97 / effective_radius::<Fast>(&p, 5000.0)),
+        ..Measurement::default()
+    };
+    // The wheel turns 3 % slower than it rolls free: braking, κ = −0.03.
+    let k = gough::wheel::sample::<Fast>(&p, &m).kappa.unwrap();
+    assert!((k + 0.03).abs() < 1e-5, "{k}");
+    // A measured κ wins; without ω or Vx there is none.
+    let measured = Measurement {
+        kappa: Some(-0.1),
+        ..m
+    };
+    assert_eq!(
+        gough::wheel::sample::<Fast>(&p, &measured).kappa,
+        Some(-0.1)
+    );
+    assert_eq!(
+        gough::wheel::sample::<Fast>(&p, &Measurement { vx: None, ..m }).kappa,
+        None
+    );
+    assert_eq!(
+        gough::wheel::sample::<Fast>(&p, &Measurement { omega: None, ..m }).kappa,
+        None
+    );
 }
 
 #[test]
 fn the_estimator_runs_on_through_a_timestamp_wrap() {
     let p = tyre();
-    let table = Box::new(GoughTable::for_tyre::<Fast>(&p).unwrap());
     let settings = Settings::default();
     let run = |t0: u32| {
         let mut w = Wheel::new();
-        w.start_estimator(&table, &p, &settings);
+        w.start_estimator::<Fast>(&p, &settings).unwrap();
         slalom(&p, t0, 2000)
             .iter()
-            .map(|m| w.estimate::<Fast>(m).unwrap().0)
-            .map(|e| (e.mu, e.sigma, e.state))
+            .map(|m| w.estimate::<Fast>(&p, m).unwrap())
+            .map(|e| (e.mu, e.sigma, e.mu_min, e.state, e.change))
             .collect::<Vec<_>>()
     };
     // The same stream with its u32 clock wrapping in the middle: the same estimates.
-    assert_eq!(run(0), run(u32::MAX - 999_999));
+    let a = run(0);
+    assert_eq!(a, run(u32::MAX - 999_999));
+    assert!(a.iter().any(|e| e.3 == EstimateState::Identifiable));
 }
 
 #[test]
 fn no_estimator_no_estimate() {
     let p = tyre();
     let mut w = Wheel::new();
-    assert!(w.estimate::<Fast>(&slalom(&p, 0, 1)[0]).is_none());
-    assert!(!w.has_estimator());
+    assert!(w.estimate::<Fast>(&p, &slalom(&p, 0, 1)[0]).is_none());
+    assert!(w.estimator().is_none());
+    // A tyre without friction: no estimator, and the forces still run.
+    let mut flat = p.clone();
+    flat.lmuy = 0.0;
+    assert_eq!(
+        w.start_estimator::<Fast>(&flat, &Settings::default()),
+        Err(BuildError::NoFriction)
+    );
+    assert!(w.estimator().is_none());
+    let m = slalom(&flat, 0, 1)[0];
+    assert!(w.estimate::<Fast>(&flat, &m).is_none());
+    w.start_estimator::<Fast>(&p, &Settings::default()).unwrap();
+    assert!(w.estimator().is_some());
+    w.stop_estimator();
+    assert!(w.estimate::<Fast>(&p, &m).is_none());
 }

@@ -136,6 +136,8 @@ pub fn results() -> [Msg; 2] {
             mu: 0.9,
             sigma: 0.05,
             state: EstimateState::Identifiable,
+            mu_min: 0.75,
+            change: false,
         }),
     ]
 }

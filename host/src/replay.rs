@@ -2,15 +2,15 @@
 //!
 //! LOG columns: `t,fz,fy,mz` required; `fx,vx,alpha,kappa,gamma,wheel,omega` optional (SI, rad,
 //! ISO-W; `t` in s, `wheel` 0..3 = FL, FR, RL, RR, default 0, `omega` the wheel speed in rad/s).
-//! RESULTS columns: `t,wheel,fx,fy,mz,flags,ack` then `mu,sigma,state`. `ack` is empty when the
-//! device answered with forces, else the reason it did not (`NoSlip`, `EvalError`, ...);
-//! `mu,sigma,state` are the device's friction estimate after that sample (state
-//! `identifiable`, `not_identifiable` or `fallback`), empty when it sent none.
+//! RESULTS columns: `t,wheel,fx,fy,mz,flags,ack` then `mu,sigma,state,mu_min,change`. `ack` is
+//! empty when the device answered with forces, else the reason it did not (`NoSlip`,
+//! `EvalError`, ...); `mu,sigma,state,mu_min,change` are the device's friction estimate after
+//! that sample (state `identifiable`, `not_identifiable` or `fallback`; `change` 1 on the
+//! estimate at which a change of surface was declared, else 0), empty when it sent none.
 //!
 //! The check ([`host_f32`], [`compare`]) runs the device's own per-wheel pipeline
-//! ([`gough::wheel`]) on the host, in f32 with the same math
-//! backend, over the same measurement stream: transient filter, Magic Formula, and the core's
-//! `MuEstimator<f32>` on a table built on the host.
+//! ([`gough::wheel`]) on the host, in f32 with the same math backend, over the same measurement
+//! stream: transient filter, Magic Formula, and the friction estimator (`mu::bank::Bank<f32>`).
 use crate::csvio::{self, CsvError, WheelRow};
 use crate::device::Device;
 use gough::math::{Backend, Fast, Libm};
@@ -25,8 +25,8 @@ use std::path::Path;
 use std::time::Duration;
 
 /// Result columns.
-pub const RESULT_COLUMNS: [&str; 10] = [
-    "t", "wheel", "fx", "fy", "mz", "flags", "ack", "mu", "sigma", "state",
+pub const RESULT_COLUMNS: [&str; 12] = [
+    "t", "wheel", "fx", "fy", "mz", "flags", "ack", "mu", "sigma", "state", "mu_min", "change",
 ];
 
 /// The log's rows as the protocol's measurements.
@@ -179,7 +179,7 @@ impl Backend32 {
 
 /// What the device must answer: its per-wheel pipeline run on the host in f32 with backend
 /// `backend`, from the state right after a parameter upload (filters at rest, estimators
-/// fresh with the default settings, table built for `p`).
+/// started on `p` with the default settings).
 pub fn host_f32(p: &Params<f32>, log: &[Measurement], backend: Backend32) -> Vec<Reply> {
     match backend {
         Backend32::Fast => run::<Fast>(p, log),
@@ -189,12 +189,10 @@ pub fn host_f32(p: &Params<f32>, log: &[Measurement], backend: Backend32) -> Vec
 
 fn run<M: Backend<f32>>(p: &Params<f32>, log: &[Measurement]) -> Vec<Reply> {
     let settings = Settings::default();
-    let table = crate::mu::table::<f32, M>(p, None).ok();
-    let mut wheels: [wheel::Wheel<'_>; 4] = Default::default();
-    if let Some(t) = table.as_deref() {
-        for w in &mut wheels {
-            w.start_estimator(t, p, &settings);
-        }
+    let mut wheels: [wheel::Wheel; 4] = Default::default();
+    for w in &mut wheels {
+        // As the device: a tyre without friction gets forces and no estimates.
+        let _ = w.start_estimator::<M>(p, &settings);
     }
     log.iter()
         .map(|m| {
@@ -205,7 +203,7 @@ fn run<M: Backend<f32>>(p: &Params<f32>, log: &[Measurement]) -> Vec<Reply> {
             };
             Reply {
                 answer,
-                estimate: w.estimate::<M>(m).map(|(e, _)| e),
+                estimate: w.estimate::<M>(p, m),
             }
         })
         .collect()
@@ -232,7 +230,7 @@ pub fn ulps(a: f32, b: f32) -> u64 {
 pub struct Worst {
     /// Over Fx, Fy, Mz.
     pub forces: u64,
-    /// Over μ and σ.
+    /// Over μ, σ and μ_min.
     pub estimates: u64,
     /// Rows with an estimate.
     pub n_estimates: usize,
@@ -240,7 +238,7 @@ pub struct Worst {
 
 /// Compares device replies with the host's f32 run ([`host_f32`]); the largest ulp distances,
 /// or an error naming the first row that differs in kind (forces vs none, flags, estimate
-/// present or not, estimator state).
+/// present or not, estimator state, change flag).
 pub fn compare(host: &[Reply], got: &[Reply]) -> Result<Worst, String> {
     let mut w = Worst::default();
     if host.len() != got.len() {
@@ -272,12 +270,13 @@ pub fn compare(host: &[Reply], got: &[Reply]) -> Result<Worst, String> {
         }
         match (h.estimate, d.estimate) {
             (None, None) => {}
-            (Some(h), Some(d)) if h.state == d.state => {
+            (Some(h), Some(d)) if h.state == d.state && h.change == d.change => {
                 w.n_estimates += 1;
                 w.estimates = w
                     .estimates
                     .max(ulps(h.mu, d.mu))
-                    .max(ulps(h.sigma, d.sigma));
+                    .max(ulps(h.sigma, d.sigma))
+                    .max(ulps(h.mu_min, d.mu_min));
             }
             (h, d) => {
                 return Err(format!(
@@ -319,8 +318,16 @@ pub fn write_results(path: &Path, log: &[Measurement], got: &[Reply]) -> std::io
             Answer::Ack(c) => write!(s, "{t},{},,,,,{c:?},", m.wheel.index()),
         };
         let _ = match r.estimate {
-            Some(e) => writeln!(s, "{:e},{:e},{}", e.mu, e.sigma, state_name(e.state)),
-            None => writeln!(s, ",,"),
+            Some(e) => writeln!(
+                s,
+                "{:e},{:e},{},{:e},{}",
+                e.mu,
+                e.sigma,
+                state_name(e.state),
+                e.mu_min,
+                u8::from(e.change)
+            ),
+            None => writeln!(s, ",,,,"),
         };
     }
     if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {

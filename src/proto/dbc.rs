@@ -15,7 +15,8 @@
 //! fields at fixed offsets (one-byte enums, fixed-width integers, `f32`), so the FD file
 //! multiplexes these identifiers' first frames on `msg_type` and gives the bodies as physical
 //! signals: `wheel`, `t_us`, `Fx`, `Fy`, `Mz` and `flags` of `Forces`; `wheel`, `t_us`, `mu`,
-//! `sigma` and `state` (a value table) of `Estimate`; the scaled fields of `CompactMeasurement`;
+//! `sigma`, `state` (a value table), `mu_min` and `change` (the change-of-surface flag, 0/1) of
+//! `Estimate`; the scaled fields of `CompactMeasurement`;
 //! and each message's CRC-32. A bus log then shows μ per wheel without gough. On classic CAN
 //! these messages span several frames, and only their bytes are signals.
 
@@ -95,8 +96,9 @@ const FORCES: [Field; 7] = [
     ("forces_crc", 19, 4, Kind::U, 1.0, "", &[]),
 ];
 
-/// `Estimate`'s body: wheel (1), t_us (4), μ, σ (f32), state (1), then the CRC-32.
-const ESTIMATE: [Field; 6] = [
+/// `Estimate`'s body: wheel (1), t_us (4), μ, σ (f32), state (1), μ_min (f32), change (bool,
+/// one byte 0/1), then the CRC-32.
+const ESTIMATE: [Field; 8] = [
     ("estimate_wheel", 0, 1, Kind::U, 1.0, "", WHEELS),
     ("estimate_t_us", 1, 4, Kind::U, 1.0, "us", &[]),
     ("mu", 5, 4, Kind::F, 1.0, "", &[]),
@@ -110,7 +112,9 @@ const ESTIMATE: [Field; 6] = [
         "",
         &["Identifiable", "NotIdentifiable", "Fallback"],
     ),
-    ("estimate_crc", 14, 4, Kind::U, 1.0, "", &[]),
+    ("mu_min", 14, 4, Kind::F, 1.0, "", &[]),
+    ("change", 18, 1, Kind::U, 1.0, "", &["NoChange", "Change"]),
+    ("estimate_crc", 19, 4, Kind::U, 1.0, "", &[]),
 ];
 
 /// `CompactMeasurement`'s body: wheel (1), t_us (4), then i16 counts (u16 for Fz), then the

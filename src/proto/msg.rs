@@ -174,9 +174,10 @@ impl Measurement {
         })
     }
 
-    /// What the friction estimator reads of this sample, taken at `t` \[s\] on the wheel's
-    /// clock: the forces, speed and camber (ISO-W, SI; never α or κ). Device and host both use
-    /// this.
+    /// What the table estimator ([`crate::mu::MuEstimator`], the bench's peer and the M0 bench's
+    /// estimator) reads of this sample, taken at `t` \[s\] on the wheel's clock: the forces,
+    /// speed and camber (ISO-W, SI; never α or κ). The product's estimator, the bank, reads
+    /// [`crate::wheel::sample`] instead.
     pub fn sample(&self, t: f32) -> Sample<f32> {
         Sample {
             t,
@@ -478,19 +479,26 @@ pub struct Forces {
     pub flags: u16,
 }
 
-/// State of a friction estimate.
+/// State of a friction estimate: whether μ is usable now (the estimator's `mu::bank::State`).
 #[derive(Serialize, Deserialize, MaxSize, Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum EstimateState {
-    /// Enough excitation: μ is an estimate.
+    /// μ is within ±0.1 at 95 % by the estimator's own account: usable now. A value may be
+    /// held through a zero crossing of the force; without excitation it ages with time and
+    /// distance rolled and falls back to `NotIdentifiable`.
     Identifiable,
-    /// Too little excitation: μ is the last identifiable value, not new information.
+    /// Some surfaces are excluded but not enough for the above: [`Estimate::mu_min`] bounds μ
+    /// from below; μ is the last identifiable value while the evidence has not turned against
+    /// it, else the most likely surface — not to be relied on.
     NotIdentifiable,
-    /// No estimate yet (or it was reset): μ is [`Settings::fallback_mu`].
+    /// No surface can be excluded (no excitation yet, or the evidence aged out): μ is the prior
+    /// [`Settings::fallback_mu`].
     Fallback,
 }
 
-/// Road friction estimate of one wheel.
+/// Road friction estimate of one wheel, sent after each measurement once the estimator runs.
+///
+/// Fields after `state` were added in protocol v2 (`mu_min`, `change`).
 #[derive(Serialize, Deserialize, MaxSize, Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Estimate {
@@ -501,10 +509,19 @@ pub struct Estimate {
     pub t_us: u32,
     /// Peak friction μ \[-\], on the scale of the `.tir` file's surface.
     pub mu: f32,
-    /// Standard deviation of μ \[-\] (the confidence).
+    /// Standard deviation of μ \[-\] by the estimator's own account (the confidence).
     pub sigma: f32,
     /// How to read μ.
     pub state: EstimateState,
+    /// The lowest μ \[-\] the evidence has not excluded: a lower bound on the road's friction a
+    /// controller may rely on in any state (the lowest hypothesis, 0.1, when nothing is
+    /// excluded).
+    pub mu_min: f32,
+    /// Change of surface: set on the one estimate at which the estimator declared it (an
+    /// identifiable μ that moved by more than 0.1 + 2σ from the last identifiable value, the
+    /// bank's `change_min`); clear on every other. It is not repeated: a receiver that misses
+    /// that one estimate sees the new μ only.
+    pub change: bool,
 }
 
 /// Where the device's parameter set came from.

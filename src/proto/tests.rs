@@ -72,6 +72,8 @@ pub(crate) fn largest() -> Vec<Msg> {
             mu: 1.0,
             sigma: 0.1,
             state: EstimateState::Fallback,
+            mu_min: 0.1,
+            change: true,
         }),
         Msg::Status(Status {
             firmware: [255; 3],
@@ -123,7 +125,7 @@ fn measurement_bytes() {
     let mut buf = [0xa5u8; MAX_MSG_LEN];
     let n = m.encode(&mut buf).unwrap();
     let body: &[u8] = &[
-        0x01, 0x01, // version 1, type Measurement
+        0x02, 0x01, // version 2, type Measurement
         0x01, // wheel FrontRight
         0xe8, 0x03, 0x00, 0x00, // t_us 1000
         0x00, 0x00, 0x80, 0x3f, // fz 1.0
@@ -151,10 +153,13 @@ fn decode_errors() {
         let l = b.len();
         b[l - 4..].copy_from_slice(&c.to_le_bytes());
     };
-    let mut v = buf[..n].to_vec();
-    v[0] = 2;
-    reseal(&mut v);
-    assert_eq!(Msg::decode(&v), Err(Error::Version));
+    // Another version (v1, before `Estimate` gained `mu_min` and `change`; v3): dropped.
+    for other in [1, PROTO_VERSION + 1] {
+        let mut v = buf[..n].to_vec();
+        v[0] = other;
+        reseal(&mut v);
+        assert_eq!(Msg::decode(&v), Err(Error::Version));
+    }
     let mut v = buf[..n].to_vec();
     v[1] = 0x7f;
     reseal(&mut v);
@@ -281,15 +286,15 @@ fn compact_measurement() {
 
 #[test]
 fn known_frames() {
-    // Command::StatusRequest, seq 5, classic: one frame c0 05 07 | 01 06 01 | crc.
+    // Command::StatusRequest, seq 5, classic: two frames 80 05 07 | 02 06 01 | crc.
     let m = Msg::Command(Command::StatusRequest);
     let fs = frames(&m, 5, Mtu::Classic);
-    let crc = crc32(&[1, 6, 1]).to_le_bytes();
+    let crc = crc32(&[2, 6, 1]).to_le_bytes();
     assert_eq!(fs.len(), 2);
-    assert_eq!(fs[0], [0x80, 5, 7, 1, 6, 1, crc[0], crc[1]]);
+    assert_eq!(fs[0], [0x80, 5, 7, 2, 6, 1, crc[0], crc[1]]);
     assert_eq!(fs[1], [0x41, 5, crc[2], crc[3], 0, 0, 0, 0]);
     let fd = frames(&m, 5, Mtu::Fd);
-    let mut one = vec![0xc0, 5, 7, 1, 6, 1, crc[0], crc[1], crc[2], crc[3]];
+    let mut one = vec![0xc0, 5, 7, 2, 6, 1, crc[0], crc[1], crc[2], crc[3]];
     one.resize(64, 0);
     assert_eq!(fd, [one]);
     // An estimate on CAN FD: one 32-byte frame on RESULT.
@@ -299,12 +304,23 @@ fn known_frames() {
         mu: 0.5,
         sigma: 0.25,
         state: EstimateState::Identifiable,
+        mu_min: 0.375,
+        change: true,
     });
     let fd = frames(&e, 1, Mtu::Fd);
     assert_eq!(fd.len(), 1);
     assert_eq!(fd[0].len(), 32);
-    assert_eq!(fd[0][..7], [0xc0, 1, 20, 1, 0x82, 2, 7]);
+    // header c0 01 len 25 | version 2, Estimate | wheel 2, t_us 7 ..
+    assert_eq!(fd[0][..7], [0xc0, 1, 25, 2, 0x82, 2, 7]);
     assert_eq!(fd[0][10..14], 0.5f32.to_le_bytes());
+    assert_eq!(fd[0][14..18], 0.25f32.to_le_bytes());
+    assert_eq!(fd[0][18], 0, "state Identifiable");
+    assert_eq!(fd[0][19..23], 0.375f32.to_le_bytes());
+    assert_eq!(fd[0][23], 1, "change");
+    assert_eq!(fd[0][24..28], crc32(&fd[0][3..24]).to_le_bytes());
+    assert!(fd[0][28..].iter().all(|&b| b == 0), "padding");
+    // On classic CAN: 25 bytes in 5 frames (5 in the first, 6 in each next).
+    assert_eq!(frames(&e, 1, Mtu::Classic).len(), 5);
 }
 
 #[test]
@@ -450,6 +466,30 @@ fn any_msg() -> impl Strategy<Value = Msg> {
                 mz,
                 flags
             })),
+        (
+            0usize..4,
+            any::<u32>(),
+            0f32..2.0,
+            0f32..1.0,
+            0usize..3,
+            0f32..2.0,
+            any::<bool>()
+        )
+            .prop_map(
+                |(w, t_us, mu, sigma, st, mu_min, change)| Msg::Estimate(Estimate {
+                    wheel: Wheel::from_index(w).unwrap(),
+                    t_us,
+                    mu,
+                    sigma,
+                    state: [
+                        EstimateState::Identifiable,
+                        EstimateState::NotIdentifiable,
+                        EstimateState::Fallback
+                    ][st],
+                    mu_min,
+                    change
+                })
+            ),
     ]
 }
 

@@ -1,4 +1,5 @@
-//! Firmware steps of `test-all`, and `snapshot [--overwrite]` (the golden outputs).
+//! Firmware steps of `test-all` (also alone: `cargo xtask firmware [--m0]`), and
+//! `snapshot [--overwrite]` (the golden outputs).
 use crate::{cargo, root, run, step};
 use gough_host::device::qemu;
 use std::path::{Path, PathBuf};
@@ -199,8 +200,20 @@ fn python_client() -> Result<(), String> {
     }
 }
 
-/// The firmware part of `test-all`; adds the passed checks to `passed`.
+/// The firmware part of `test-all`: the M4F steps ([`test_m4f`]), then the M0/M3 bench; adds the
+/// passed checks to `passed`.
 pub fn test_all(passed: &mut u64) -> Result<(), String> {
+    test_m4f(passed)?;
+    bench_m0()?;
+    *passed += 1;
+    Ok(())
+}
+
+/// The Cortex-M4F firmware's steps of `test-all` (`cargo xtask firmware`): build, size,
+/// selftest against its golden output, panic/HardFault, the SLCAN replay and garbage tests
+/// (`host-tests/tests/firmware.rs`), the python-can client, the STM32F405 link, the bench. Adds
+/// the passed checks to `passed`.
+pub fn test_m4f(passed: &mut u64) -> Result<(), String> {
     build_mps2()?;
     report_size("mps2-an386 gough-firmware", &elf("gough-firmware"))?;
     selftest(false)?;
@@ -226,7 +239,7 @@ pub fn test_all(passed: &mut u64) -> Result<(), String> {
     )?;
     python_client()?;
     *passed += 1;
-    step("STM32F405 with bxCAN (stm32f4xx-hal): build and link, flash/RAM/CCM (math::Fast; MF + transient filter + estimator: the table in SRAM, App and stack in CCM)");
+    step("STM32F405 with bxCAN (stm32f4xx-hal): build and link, flash/RAM/CCM (math::Fast; MF + transient filter + estimator: App, its four estimators and the stack in CCM)");
     run(fw_cargo().args([
         "build",
         "--release",
@@ -238,7 +251,7 @@ pub fn test_all(passed: &mut u64) -> Result<(), String> {
     ]))?;
     report_size("stm32f405 stm32f4", &elf("stm32f4"))?;
     *passed += 1;
-    step("bench: instructions on the M4F (QEMU -icount shift=6): combined MF evaluation; estimator and per-wheel pipeline per sample (dry, wet, icy road); table build");
+    step("bench: instructions on the M4F (QEMU -icount shift=6): combined MF evaluation; bank estimator and per-wheel pipeline per sample (dry, wet, icy road); RAM and stack");
     run(fw_cargo().args([
         "build",
         "--release",
@@ -257,8 +270,6 @@ pub fn test_all(passed: &mut u64) -> Result<(), String> {
         return Err(format!("bench exited with {code}"));
     }
     *passed += 1;
-    bench_m0()?;
-    *passed += 1;
     Ok(())
 }
 
@@ -268,7 +279,7 @@ pub fn test_all(passed: &mut u64) -> Result<(), String> {
 /// nRF51822's 256 KiB) in an image of its own, its flash and its run; then both formats with the
 /// estimator in one image on a Cortex-M3 (QEMU mps2-an385). Each run checks the Magic Formula
 /// and the filter against f64 and the estimator's estimates against the host's, bit for bit.
-fn bench_m0() -> Result<(), String> {
+pub fn bench_m0() -> Result<(), String> {
     step("bench: instructions on the M0 (QEMU microbit, -icount shift=0): combined MF evaluation and transient-filter step (each checked against f64) and the friction estimator at 100 Hz (mu::bank::Bank, batch 1; estimates equal to the host's bit for bit), soft-float f32 (math::Fast) and Q31.32 fixed point, one image each with its flash; then both in one image on a Cortex-M3 (QEMU mps2-an385)");
     let dir = root().join("firmware-m0");
     let elf = dir.join("target/thumbv6m-none-eabi/release/bench");

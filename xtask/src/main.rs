@@ -12,6 +12,10 @@
 //!   `gcc-arm-none-eabi` and `libnewlib-arm-none-eabi` the same way).
 //! - `qemu-check`: only ensures QEMU is present.
 //! - `capi`: only the C API's steps of `test-all` (builds the firmware's `capi_ref` first).
+//! - `firmware [--m0]`: only the firmware steps of `test-all` (the M4F firmware: build, selftest
+//!   against its golden output, panic/HardFault, the SLCAN replay and garbage tests, the
+//!   python-can client, the STM32F405 link with its sizes, the M4F bench); `--m0` adds the
+//!   Cortex-M0/M3 bench of `firmware-m0/`.
 //! - `header [--check]`: writes `capi/include/gough.h` with cbindgen (or checks it is current).
 //! - `snapshot [--overwrite]`: runs the firmware selftest under QEMU and compares its output with
 //!   `firmware/golden/selftest.out` (or rewrites it).
@@ -37,10 +41,20 @@ fn main() -> ExitCode {
         "capi" => ensure_qemu()
             .and_then(|()| firmware::build_mps2())
             .and_then(|()| capi::test_all(&firmware::elf("capi_ref"), &mut 0)),
+        "firmware" => ensure_qemu().and_then(|()| {
+            let mut passed = 0;
+            firmware::test_m4f(&mut passed)?;
+            if std::env::args().any(|a| a == "--m0") {
+                firmware::bench_m0()?;
+                passed += 1;
+            }
+            println!("\nfirmware: {passed} passed");
+            Ok(())
+        }),
         "snapshot" => ensure_qemu()
             .and_then(|()| firmware::snapshot(std::env::args().any(|a| a == "--overwrite"))),
         _ => Err(format!(
-            "unknown task '{task}'; tasks: test-all, qemu-check, snapshot [--overwrite], header [--check], capi"
+            "unknown task '{task}'; tasks: test-all, qemu-check, snapshot [--overwrite], header [--check], capi, firmware [--m0]"
         )),
     };
     match result {

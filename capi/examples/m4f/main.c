@@ -111,7 +111,6 @@ static uint32_t used(uint32_t top) {
 
 /* ---- state (static: the caller owns the storage) ---- */
 static gough_params_t params;
-static gough_table_t table;
 static gough_wheel_t wheels[4];
 static gough_estimator_t est;
 static gough_rx_t rx;
@@ -141,7 +140,7 @@ static int32_t codes[REPLAY_ROWS];
 
 static void start_wheels(void) {
     for (int k = 0; k < 4; k++) {
-        if (gough_wheel_init(&wheels[k], &params, &table) != GOUGH_OK) fails++;
+        if (gough_wheel_init(&wheels[k], &params, GOUGH_WHEEL_ESTIMATOR) != GOUGH_OK) fails++;
     }
 }
 
@@ -151,9 +150,9 @@ static int32_t step(uint32_t i) {
 }
 
 int main(void) {
-    printf("gough C API example (capi/examples/m4f): %d-byte params, %d-byte table, %d-byte "
-           "wheel, %d-byte estimator\n",
-           GOUGH_PARAMS_SIZE, GOUGH_TABLE_SIZE, GOUGH_WHEEL_SIZE, GOUGH_ESTIMATOR_SIZE);
+    printf("gough C API example (capi/examples/m4f): %d-byte params, %d-byte wheel, %d-byte "
+           "estimator\n",
+           GOUGH_PARAMS_SIZE, GOUGH_WHEEL_SIZE, GOUGH_ESTIMATOR_SIZE);
     SYST_RVR = RELOAD;
     SYST_CVR = 0;
     SYST_CSR = 7; /* core clock, interrupt, enable */
@@ -195,18 +194,18 @@ int main(void) {
           "gough_mf_eval_f64 matches the MFeval oracle within the f64 budget");
 
     /* 3. the pipeline over the replay stream */
-    STACK("gough_table_build", gough_table_build(&params, &table));
-    STACK("gough_wheel_init", gough_wheel_init(&wheels[0], &params, &table));
+    STACK("gough_wheel_init", gough_wheel_init(&wheels[0], &params, GOUGH_WHEEL_ESTIMATOR));
     start_wheels();
     for (uint32_t i = 0; i < REPLAY_ROWS; i++) codes[i] = step(i);
     for (uint32_t i = 0; i < REPLAY_ROWS; i++) {
         printf("row %lu wheel %lu: rc %ld Fx %08lx Fy %08lx Mz %08lx flags %lu; mu %08lx sigma "
-               "%08lx state %ld flags %lu\n",
+               "%08lx mu_min %08lx state %ld flags %lu\n",
                (unsigned long)i, (unsigned long)REPLAY[i][0], (long)codes[i],
                (unsigned long)bits(forces[i].fx), (unsigned long)bits(forces[i].fy),
                (unsigned long)bits(forces[i].mz), (unsigned long)forces[i].flags,
                (unsigned long)bits(estimates[i].mu), (unsigned long)bits(estimates[i].sigma),
-               (long)estimates[i].state, (unsigned long)estimates[i].flags);
+               (unsigned long)bits(estimates[i].mu_min), (long)estimates[i].state,
+               (unsigned long)estimates[i].flags);
     }
     {
         start_wheels();
@@ -238,9 +237,9 @@ int main(void) {
         int32_t rc = gough_estimator_update(&est, &s, &e);
         uint32_t u = used(top);
         if (u > worst_est) worst_est = u;
-        printf("estimator row %lu: rc %ld mu %08lx sigma %08lx state %ld flags %lu\n",
+        printf("estimator row %lu: rc %ld mu %08lx sigma %08lx mu_min %08lx state %ld flags %lu\n",
                (unsigned long)i, (long)rc, (unsigned long)bits(e.mu), (unsigned long)bits(e.sigma),
-               (long)e.state, (unsigned long)e.flags);
+               (unsigned long)bits(e.mu_min), (long)e.state, (unsigned long)e.flags);
     }
     printf("stack: gough_estimator_update (worst over wheel 0's stream) %lu bytes\n",
            (unsigned long)worst_est);

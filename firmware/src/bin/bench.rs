@@ -6,15 +6,15 @@
 //! Each workload is bracketed by `bench_start`/`bench_stop`: exported, never inlined, with
 //! distinct bodies, so an outside instruction counter (a QEMU plugin, a debugger) can check
 //! the figures. Printed: instructions per evaluation, and the largest error against the f64
-//! path over the same inputs; then, per wheel per sample, the friction estimator alone and the
-//! firmware's whole per-wheel pipeline (transient filter + Magic Formula + estimator), each with
-//! `Fast` and `Libm`, on 1 kHz slaloms with sensor noise on a dry, a wet and an icy road: the
-//! mean over the stream (one bracket) and the worst sample (each sample timed alone); the cost
-//! of building the estimator's table, and the RAM.
+//! path over the same inputs; then, per wheel per sample, the friction estimator alone (the bank,
+//! `mu::bank::Bank`) and the firmware's whole per-wheel pipeline (transient filter + Magic
+//! Formula + bank, `wheel::Wheel`), the pipeline with `Fast` and `Libm`, on 1 kHz slaloms with
+//! sensor noise on a dry, a wet and an icy road: the mean over the stream (one bracket) and the
+//! worst sample (each sample timed alone); the RAM, and the stack the pipeline takes.
 #![no_std]
 #![no_main]
 
-use core::mem::{size_of, MaybeUninit};
+use core::mem::size_of;
 use core::ptr::addr_of_mut;
 use core::sync::atomic::{AtomicU32, Ordering};
 use cortex_m::peripheral::{syst::SystClkSource, SYST};
@@ -22,10 +22,10 @@ use cortex_m_rt::{entry, exception};
 use cortex_m_semihosting::hprintln;
 use gough::math::{Backend, Libm};
 use gough::mf::{self, Input, Options, Params};
-use gough::mu::{GoughTable, MuEstimator, State};
-use gough::proto::{Measurement, Settings};
+use gough::mu::bank::{self, Bank, State};
+use gough::proto::{EstimateState, Measurement, Settings};
 use gough::wheel::Wheel;
-use gough_firmware::app::{self, App, TableJob};
+use gough_firmware::app::{self, App};
 use gough_firmware::{mps2, stack};
 use gough_workloads::marks::{bench_start, bench_stop};
 // N, `input`: the grid the M0 bench measures too.
@@ -246,8 +246,6 @@ fn staged<M: Backend<f32>>(name: &str, first_id: u32, per_count: f64, p32: &Para
 /// Samples in the estimator's stream (1 s at 1 kHz).
 const NS: usize = 1000;
 static mut STREAM: [Measurement; NS] = [workload::EMPTY; NS];
-static mut TABLE_FAST: MaybeUninit<GoughTable<f32>> = MaybeUninit::uninit();
-static mut TABLE_LIBM: MaybeUninit<GoughTable<f32>> = MaybeUninit::uninit();
 
 /// Per-sample figures of one workload, in instructions.
 struct PerSample {
@@ -313,58 +311,54 @@ fn per_sample<S>(
     }
 }
 
-fn to_state(s: gough::proto::EstimateState) -> State {
+fn to_state(s: EstimateState) -> State {
     match s {
-        gough::proto::EstimateState::Identifiable => State::Identifiable,
-        gough::proto::EstimateState::NotIdentifiable => State::NotIdentifiable,
-        gough::proto::EstimateState::Fallback => State::Fallback,
+        EstimateState::Identifiable => State::Identifiable,
+        EstimateState::NotIdentifiable => State::NotIdentifiable,
+        EstimateState::Fallback => State::Fallback,
     }
 }
 
-/// The estimator alone and the whole per-wheel pipeline with backend `M` on table `t`.
-fn estimator_figures<M: Backend<f32>>(
+/// The firmware's whole per-wheel pipeline (`wheel::Wheel`: transient filter + MF + the bank,
+/// started as the App starts it) with backend `M`: a readable line and a
+/// `bench: wheel_<name>_<stream> mean=<n> worst=<n> ram=<bytes>` line.
+fn pipeline_figures<M: Backend<f32>>(
     name: &str,
-    ids: (u32, u32),
+    stream_name: &str,
+    id: u32,
     clock: Clock,
     p: &Params<f32>,
-    t: &GoughTable<f32>,
     stream: &[Measurement],
 ) {
-    let cfg = gough::wheel::estimator_config(&Settings::default());
-    let e = per_sample(
-        ids.0,
-        clock,
-        stream,
-        || MuEstimator::for_tyre(t, p, cfg),
-        |est, m| {
-            let s = m.sample(m.t_us as f32 / 1.0e6);
-            est.update::<M>(&s).state
-        },
-    );
-    hprintln!(
-        "estimator (MuEstimator::update), {}: {} instructions per wheel per sample (mean over {} samples; identifiable samples {} mean; worst sample {}; {} identifiable)",
-        name, e.mean, NS, e.mean_identifiable, e.max, e.identifiable
-    );
     let settings = Settings::default();
     let w = per_sample(
-        ids.1,
+        id,
         clock,
         stream,
         || {
             let mut w = Wheel::new();
-            w.start_estimator(t, p, &settings);
+            let started = w.start_estimator::<M>(p, &settings);
+            core::hint::black_box(&started);
             w
         },
         |w, m| {
-            let f = w.forces::<M>(p, true, m);
+            let f = w.forces::<M>(p, settings.limits, m);
             core::hint::black_box(&f);
-            w.estimate::<M>(m)
-                .map_or(State::Fallback, |(e, _)| to_state(e.state))
+            w.estimate::<M>(p, m)
+                .map_or(State::Fallback, |e| to_state(e.state))
         },
     );
     hprintln!(
-        "pipeline (transient filter + MF + estimator, firmware wheel::Wheel), {}: {} instructions per wheel per sample (mean; identifiable samples {} mean; worst sample {})",
-        name, w.mean, w.mean_identifiable, w.max
+        "pipeline (transient filter + MF + bank estimator, firmware wheel::Wheel), {}: {} instructions per wheel per sample (mean over {} samples; identifiable samples {} mean; worst sample {}; {} identifiable)",
+        name, w.mean, NS, w.mean_identifiable, w.max, w.identifiable
+    );
+    hprintln!(
+        "bench: wheel_{}_{} mean={} worst={} ram={}",
+        name,
+        stream_name,
+        w.mean,
+        w.max,
+        size_of::<Wheel>()
     );
 }
 
@@ -379,7 +373,6 @@ fn bank_figures<M: Backend<f32>>(
     p: &Params<f32>,
     stream: &[Measurement],
 ) {
-    use gough::mu::bank::{self, Bank};
     if Bank::new::<M>(p, None, bank::Config::default()).is_err() {
         hprintln!("bank: no friction in the tyre file");
         return;
@@ -403,11 +396,7 @@ fn bank_figures<M: Backend<f32>>(
                 vx: m.vx,
                 gamma: m.gamma,
             };
-            match est.update::<M>(p, &s).state {
-                bank::State::Identifiable => State::Identifiable,
-                bank::State::NotIdentifiable => State::NotIdentifiable,
-                bank::State::Fallback => State::Fallback,
-            }
+            est.update::<M>(p, &s).state
         },
     );
     hprintln!(
@@ -418,16 +407,6 @@ fn bank_figures<M: Backend<f32>>(
         e.max,
         size_of::<Bank<f32>>()
     );
-}
-
-/// `app::build_table` in a frame of its own (not merged into `main`'s), so that its stack use
-/// shows.
-#[inline(never)]
-fn build_table(
-    job: &TableJob,
-    slot: &'static mut MaybeUninit<GoughTable<f32>>,
-) -> Result<&'static GoughTable<f32>, gough::mu::BuildError> {
-    app::build_table(job, slot)
 }
 
 #[entry]
@@ -509,40 +488,11 @@ fn main() -> ! {
         "micromath: not built (firmware feature `micromath` needs gough's `micromath` backend)"
     );
 
-    // The friction estimator. The tables first: the firmware's own (`app::build_table`, the
-    // firmware's backend `app::Math`) and, when that is `Fast`, a `Libm` one to compare.
-    let job = TableJob {
-        params: p32.clone(),
-        gen: 1,
-    };
-    // Repaint, so that the peak below is this build's (plus main's frame, `stack_before`).
-    // SAFETY: nothing lives below the current frame (SysTick's handler frames come and go).
-    unsafe { stack::paint() };
-    let stack_before = stack::peak();
-    // SAFETY: the only reference to TABLE_FAST, taken once.
-    let slot = unsafe { &mut *addr_of_mut!(TABLE_FAST) };
-    bench_start(10);
-    let t0 = now();
-    let built = build_table(&job, slot);
-    let t1 = now();
-    bench_stop(10);
-    let Ok(t_math) = built else {
-        hprintln!("table build failed");
-        mps2::exit(false)
-    };
-    let ins = ((t1 - t0) as f64 * per_count) as u64;
+    // The friction estimator and the per-wheel pipeline.
     hprintln!(
-        "table build (GoughTable::for_tyre), {}: {} instructions ({:.0} ms at 168 MHz); {} bytes, shared by the wheels; building it takes {} bytes of stack",
-        app::MATH_NAME,
-        ins,
-        ins as f64 / 168e3,
-        size_of::<GoughTable<f32>>(),
-        stack::peak() - stack_before
-    );
-    hprintln!(
-        "RAM per wheel: MuEstimator<f32> {} bytes, wheel::Wheel (filter + estimator + clock) {} bytes; App {} bytes; Params<f32> {} bytes",
-        size_of::<MuEstimator<'static, f32>>(),
-        size_of::<Wheel<'static>>(),
+        "RAM per wheel: Bank<f32> {} bytes, wheel::Wheel (filter + estimator) {} bytes; App {} bytes (four wheels); Params<f32> {} bytes",
+        size_of::<Bank<f32>>(),
+        size_of::<Wheel>(),
         size_of::<App>(),
         size_of::<Params<f32>>()
     );
@@ -560,38 +510,19 @@ fn main() -> ! {
         per_count,
         overhead: o as f64 / 64.0,
     };
-    // SAFETY: the only reference to TABLE_LIBM, taken once.
-    let slot = unsafe { &mut *addr_of_mut!(TABLE_LIBM) };
-    let t_libm: Option<&GoughTable<f32>> = if cfg!(feature = "fast") {
-        bench_start(20);
-        let t0 = now();
-        let built = GoughTable::for_tyre::<Libm>(&p32);
-        let t1 = now();
-        bench_stop(20);
-        let ins = ((t1 - t0) as f64 * per_count) as u64;
-        hprintln!(
-            "table build (GoughTable::for_tyre), libm: {} instructions ({:.0} ms at 168 MHz)",
-            ins,
-            ins as f64 / 168e3
-        );
-        built.ok().map(|t| &*slot.write(t))
-    } else {
-        None
-    };
     // Streams: the slalom on the tyre's own surface (λμ 1) with and without camber; then on a
-    // wet and an icy road, where the estimate sits on the lower surfaces of the table and the
-    // ambiguity guard checks the grippier ones (the estimator's costliest path).
+    // wet and an icy road.
     for (k, (camber, mu, what, short)) in [
         (
             0.02,
             1.0,
-            "λμ 1 (dry), camber measured (roll, ±0.02 rad: between table nodes)",
+            "λμ 1 (dry), camber measured (roll, ±0.02 rad)",
             "dry",
         ),
         (
             0.0,
             1.0,
-            "λμ 1 (dry), no camber in the message (static 0: a table node)",
+            "λμ 1 (dry), no camber in the message (static 0)",
             "dry_nocamber",
         ),
         (0.02, 0.5, "λμ 0.5 (wet), camber measured", "wet"),
@@ -604,16 +535,19 @@ fn main() -> ! {
         hprintln!("stream: 1 s slalom at 1 kHz, noise; {}", what);
         let id = 30 + 10 * k as u32;
         bank_figures::<app::Math>(app::MATH_NAME, short, id + 5, clock, &p32, stream);
-        estimator_figures::<app::Math>(
+        // The stack the pipeline takes (repainted, so that the peak is this run's, plus this
+        // frame's share, `before`).
+        // SAFETY: nothing lives below the current frame (SysTick's handler frames come and go).
+        unsafe { stack::paint() };
+        let before = stack::peak();
+        pipeline_figures::<app::Math>(app::MATH_NAME, short, id + 1, clock, &p32, stream);
+        hprintln!(
+            "stack: pipeline {} {} bytes",
             app::MATH_NAME,
-            (id + 1, id + 2),
-            clock,
-            &p32,
-            t_math,
-            stream,
+            stack::peak() - before
         );
-        if let Some(t) = t_libm {
-            estimator_figures::<Libm>("libm", (id + 3, id + 4), clock, &p32, t, stream);
+        if cfg!(feature = "fast") {
+            pipeline_figures::<Libm>("libm", short, id + 3, clock, &p32, stream);
         }
     }
     mps2::exit(true)

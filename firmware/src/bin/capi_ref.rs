@@ -18,7 +18,6 @@ use cortex_m_rt::{entry, exception};
 use cortex_m_semihosting::hprintln;
 use gough::mf::{self, Input, Options};
 use gough::mu::bank::{self, Bank};
-use gough::mu::GoughTable;
 use gough::proto::{self, AckCode, Forces, Measurement, Msg, Mtu, Segmenter, Settings};
 use gough::wheel::Wheel;
 use gough_firmware::app::Math;
@@ -48,9 +47,8 @@ const LOG: &str = include_str!("../../../examples/replay_log.csv");
 const ROWS: usize = 200;
 
 static mut STREAM: [Measurement; ROWS] = [gough_workloads::slalom::EMPTY; ROWS];
-static mut TABLE: MaybeUninit<GoughTable<f32>> = MaybeUninit::uninit();
-/// One step's answer: the forces or why none, and the estimate with its change flag.
-type Answer = (Result<Forces, AckCode>, Option<(proto::Estimate, bool)>);
+/// One step's answer: the forces or why none, and the estimate (with its change flag).
+type Answer = (Result<Forces, AckCode>, Option<proto::Estimate>);
 static mut OUT: [Answer; ROWS] = [(Err(AckCode::Ok), None); ROWS];
 
 /// The log's rows (header and comments skipped); `None` if it does not have `ROWS` rows.
@@ -93,10 +91,10 @@ fn read(out: &mut [Measurement; ROWS]) -> Option<()> {
 
 /// The pipeline's step, as `gough_wheel_step` does it: forces, then the estimate.
 #[inline(never)]
-fn step(wheels: &mut [Wheel<'static>; 4], p: &gough::mf::Params<f32>, m: &Measurement) -> Answer {
+fn step(wheels: &mut [Wheel; 4], p: &gough::mf::Params<f32>, m: &Measurement) -> Answer {
     let w = &mut wheels[m.wheel.index() & 3];
     let f = w.forces::<Math>(p, Settings::default().limits, m);
-    (f, w.estimate::<Math>(m))
+    (f, w.estimate::<Math>(p, m))
 }
 
 fn state_code(s: proto::EstimateState) -> i32 {
@@ -162,30 +160,18 @@ fn main() -> ! {
     }
 
     // SAFETY: the only references to these statics, taken once.
-    let (stream, slot, out) = unsafe {
-        (
-            &mut *addr_of_mut!(STREAM),
-            &mut *addr_of_mut!(TABLE),
-            &mut *addr_of_mut!(OUT),
-        )
-    };
+    let (stream, out) = unsafe { (&mut *addr_of_mut!(STREAM), &mut *addr_of_mut!(OUT)) };
     if read(stream).is_none() {
         hprintln!("examples/replay_log.csv: not {} rows", ROWS);
         mps2::exit(false);
     }
-    // SAFETY: GoughTable<f32> holds only f32, u8 and bool fields: all-zero bits are valid.
-    let table: &'static mut GoughTable<f32> = unsafe {
-        core::ptr::write_bytes(slot.as_mut_ptr(), 0, 1);
-        slot.assume_init_mut()
-    };
-    if table.for_wheel_into::<Math>(p, None).is_err() {
-        mps2::exit(false);
-    }
-    let table: &'static GoughTable<f32> = table;
+    // Four wheels with their estimators, as `gough_wheel_init(.., GOUGH_WHEEL_ESTIMATOR)`.
     let fresh = || {
-        let mut w: [Wheel<'static>; 4] = Default::default();
+        let mut w: [Wheel; 4] = Default::default();
         for x in &mut w {
-            x.start_estimator(table, p, &Settings::default());
+            if x.start_estimator::<Math>(p, &Settings::default()).is_err() {
+                mps2::exit(false);
+            }
         }
         w
     };
@@ -209,12 +195,18 @@ fn main() -> ! {
                 },
             ),
         };
-        let (mu, sigma, state, flags) = match e {
-            Some((e, change)) => (e.mu, e.sigma, state_code(e.state), u32::from(*change)),
-            None => (Settings::default().fallback_mu, 1.0, 2, 2),
+        let (mu, sigma, mu_min, state, flags) = match e {
+            Some(e) => (
+                e.mu,
+                e.sigma,
+                e.mu_min,
+                state_code(e.state),
+                u32::from(e.change),
+            ),
+            None => (Settings::default().fallback_mu, 1.0, 0.0, 2, 2),
         };
         hprintln!(
-            "row {} wheel {}: rc {} Fx {:08x} Fy {:08x} Mz {:08x} flags {}; mu {:08x} sigma {:08x} state {} flags {}",
+            "row {} wheel {}: rc {} Fx {:08x} Fy {:08x} Mz {:08x} flags {}; mu {:08x} sigma {:08x} mu_min {:08x} state {} flags {}",
             i,
             m.wheel.index(),
             rc,
@@ -224,6 +216,7 @@ fn main() -> ! {
             f.flags,
             mu.to_bits(),
             sigma.to_bits(),
+            mu_min.to_bits(),
             state,
             flags
         );
@@ -254,10 +247,11 @@ fn main() -> ! {
             bank::State::Fallback => 2,
         };
         hprintln!(
-            "estimator row {}: rc 0 mu {:08x} sigma {:08x} state {} flags {}",
+            "estimator row {}: rc 0 mu {:08x} sigma {:08x} mu_min {:08x} state {} flags {}",
             i,
             e.mu.to_bits(),
             e.sigma.to_bits(),
+            e.mu_min.to_bits(),
             state,
             u32::from(e.change)
         );
@@ -323,7 +317,7 @@ fn main() -> ! {
         "bench: pipeline_replay_rust mean={} worst={} ram={}",
         (mean + 0.5) as u32,
         (worst + 0.5) as u32,
-        size_of::<Wheel<'static>>()
+        size_of::<Wheel>()
     );
     mps2::exit(true)
 }

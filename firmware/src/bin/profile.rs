@@ -3,13 +3,14 @@
 //!
 //! 1. One combined Fx, Fy, Mz evaluation (`Options::moments` off): the 256 evaluations of the
 //!    bench's grid in the first `bench_start`/`bench_stop` bracket.
-//! 2. The friction estimator per wheel per sample (`MuEstimator::update`): the bench's 1 s
-//!    slalom with measured camber (1,000 samples) in the second bracket, on the dry road (λμ 1);
-//!    the same on the icy road (λμ 0.2) in the third, where the ambiguity test costs most.
+//! 2. The friction estimator per wheel per sample (`mu::bank::Bank::update`, as the firmware's
+//!    wheels run it: `wheel::sample`, the protocol's default settings): the bench's 1 s slalom
+//!    with measured camber (1,000 samples) in the second bracket, on the dry road (λμ 1); the
+//!    same on the icy road (λμ 0.2) in the third.
 //!
 //! The profiler counts the instructions QEMU executes in a bracket (`-d exec,in_asm`), then maps
 //! them to source lines with the debug info. Everything else (parsing the `.tir`, building the
-//! inputs and the estimator's table) is outside the brackets.
+//! inputs and the streams, starting the estimator) is outside the brackets.
 //!
 //! ```console
 //! $ cd firmware && cargo build --release --bin profile
@@ -19,20 +20,18 @@
 //! $ python3 ../tools/qemu_profile.py target/thumbv7em-none-eabihf/release/profile \
 //!     --bracket 3 --only 'gough::mu::' --per 1000
 //! ```
-//! (`--only` keeps the log to the estimator's functions: the table build before the bracket
-//! would otherwise log about 1.5 GB.)
+//! (`--only` keeps the log to the estimator's functions.)
 #![no_std]
 #![no_main]
 
-use core::mem::MaybeUninit;
 use core::ptr::addr_of_mut;
 use cortex_m_rt::entry;
 use gough::math::Fast;
 use gough::mf::prepared::{Operating, Prepared};
+use gough::mf::Params;
 use gough::mf::{self, Input, Options};
-use gough::mu::{GoughTable, MuEstimator};
+use gough::mu::bank::{self, Bank};
 use gough::proto::{Measurement, Settings};
-use gough_firmware::app::{self, TableJob};
 use gough_firmware::mps2;
 use gough_workloads::marks::{bench_start, bench_stop};
 use gough_workloads::points::{input, N};
@@ -41,7 +40,6 @@ use gough_workloads::slalom as workload;
 /// Samples in the second bracket (the bench's stream).
 const NS: usize = 1000;
 static mut STREAM: [Measurement; NS] = [workload::EMPTY; NS];
-static mut TABLE: MaybeUninit<GoughTable<f32>> = MaybeUninit::uninit();
 
 #[entry]
 fn main() -> ! {
@@ -73,21 +71,17 @@ fn main() -> ! {
     bench_stop(1);
     core::hint::black_box(acc);
 
-    // The estimator: the firmware's table and config, the bench's slalom with camber.
-    let job = TableJob {
-        params: p32.clone(),
-        gen: 1,
-    };
-    // SAFETY: the only references to TABLE and STREAM, taken once.
-    let (slot, stream) = unsafe { (&mut *addr_of_mut!(TABLE), &mut *addr_of_mut!(STREAM)) };
-    let Ok(t) = app::build_table(&job, slot) else {
-        mps2::exit(false)
-    };
+    // The estimator: the firmware's config, the bench's slalom with camber.
+    // SAFETY: the only reference to STREAM, taken once.
+    let stream = unsafe { &mut *addr_of_mut!(STREAM) };
     let cfg = gough::wheel::estimator_config(&Settings::default());
     let mut seen = [0u32; 2];
     for (k, mu) in [1.0, 0.2].into_iter().enumerate() {
         workload::slalom(&p32, mu, 0.02, stream);
-        seen[k] = estimator_stream(2 + k as u32, MuEstimator::for_tyre(t, p, cfg), stream);
+        let Ok(est) = Bank::new::<Fast>(p, None, cfg) else {
+            mps2::exit(false)
+        };
+        seen[k] = estimator_stream(2 + k as u32, est, p, stream);
     }
     // The staged MF's slip stage (issue 38) at the grid's loads: brackets 4 (values), 5 (with
     // ∂/∂κ, ∂/∂α) and 6 (with ∂/∂λμ too).
@@ -123,16 +117,16 @@ fn slip_stream(id: u32, preps: &[Option<Prepared<f32>>; 16], ins: &[Input<f32>; 
     acc
 }
 
-/// Bracket `id`: `MuEstimator::update` over the stream, in a function of its own so that
+/// Bracket `id`: `Bank::update` over the stream, in a function of its own so that
 /// `qemu_profile.py --only` can keep the log to it. Returns the identifiable samples.
 #[inline(never)]
-fn estimator_stream(id: u32, mut est: MuEstimator<'_, f32>, stream: &[Measurement]) -> u32 {
+fn estimator_stream(id: u32, mut est: Bank<f32>, p: &Params<f32>, stream: &[Measurement]) -> u32 {
     let mut seen = 0u32;
     bench_start(id);
     for m in stream {
-        let s = m.sample(m.t_us as f32 / 1.0e6);
-        let e = est.update::<Fast>(core::hint::black_box(&s));
-        seen += u32::from(e.state == gough::mu::State::Identifiable);
+        let s = gough::wheel::sample::<Fast>(p, m);
+        let e = est.update::<Fast>(p, core::hint::black_box(&s));
+        seen += u32::from(e.state == bank::State::Identifiable);
     }
     bench_stop(id);
     seen

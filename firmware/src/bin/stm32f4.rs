@@ -3,29 +3,25 @@
 //! `embedded_can::nb::Can`. defmt logs over RTT. Built and linked in CI (flash/RAM reported
 //! by `cargo xtask test-all`); not run there (no hardware).
 //!
-//! Memory (`boards/stm32f405.x`): the friction estimator's table fills most of the 128 KiB SRAM
-//! (`cargo xtask test-all` reports this image's SRAM and CCM use);
-//! the App (~36 KiB, mostly the upload buffer) and the stack live in the 64 KiB CCM. The App's
-//! initial value is copied from flash into CCM first thing in `main` (cortex-m-rt initialises
-//! only SRAM).
+//! Memory (`boards/stm32f405.x`): the App (~41 KiB: the 32 KiB upload buffer, the four wheels'
+//! friction estimators ~6 KiB, the parameters) and the stack live in the 64 KiB CCM; the 128 KiB
+//! SRAM holds little else (`cargo xtask firmware` reports this image's SRAM and CCM use). The
+//! App's initial value is copied from flash into CCM first thing in `main` (cortex-m-rt
+//! initialises only SRAM).
 //!
-//! The table is built in thread mode between polls, at boot and after each parameter upload
-//! (~41 M instructions: ~0.25 s at 168 MHz). The loop polls bxCAN, whose receive FIFOs hold 3
-//! frames each, so frames arriving during a build after an upload overrun and are lost (the
-//! reassembler counts the broken messages; the `ParamCommit` is acknowledged once the table is
-//! in). A board that must not lose frames then would move polling into the CAN receive
-//! interrupt, as the QEMU board does with its UART.
+//! The loop polls bxCAN (whose receive FIFOs hold 3 frames each) and runs a tick per
+//! millisecond; a parameter upload starts the estimators at once, so no long job runs between
+//! polls. A board that must never lose frames while a tick runs would move polling into the
+//! CAN receive interrupt, as the QEMU board does with its UART.
 #![no_std]
 #![no_main]
 
-use core::mem::MaybeUninit;
 use core::ptr::addr_of_mut;
 use core::sync::atomic::{AtomicU32, Ordering};
 use cortex_m_rt::{entry, exception};
 use defmt_rtt as _;
-use gough::mu::GoughTable;
 use gough::proto::ParamSource;
-use gough_firmware::app::{self, App, Event};
+use gough_firmware::app::{App, Event};
 use gough_firmware::{stack, BUNDLED_TIR};
 use stm32f4xx_hal::{can::Can, pac, prelude::*, rcc::Config};
 
@@ -33,9 +29,6 @@ static TICKS: AtomicU32 = AtomicU32::new(0);
 /// The device state, in CCM (`.ccmdata`: its initial value is in flash, copied by `ccm_init`).
 #[link_section = ".ccmdata.APP"]
 static mut APP: App = App::new();
-/// The estimators' table (SRAM). Written only while a table job is out (the App then
-/// holds no reference to it).
-static mut TABLE: MaybeUninit<GoughTable<f32>> = MaybeUninit::uninit();
 
 extern "C" {
     // boards/stm32f405.x: the `.ccmdata` section in CCM and its load address in flash.
@@ -68,7 +61,6 @@ fn main() -> ! {
     // SAFETY: the only reference to APP, taken once.
     let app: &'static mut App = unsafe { &mut *addr_of_mut!(APP) };
     app.stack_probe = Some(stack::peak);
-    app.estimator = true;
     let _ = app.load_tir(BUNDLED_TIR, ParamSource::Bundled);
     let (Some(dp), Some(cp)) = (pac::Peripherals::take(), cortex_m::Peripherals::take()) else {
         halt()
@@ -100,13 +92,6 @@ fn main() -> ! {
         if now != last {
             last = now;
             app.tick(&mut can, now);
-        }
-        if let Some(job) = app.table_job() {
-            // SAFETY: a job is out, so the App holds no reference into TABLE until the build
-            // is handed back; this loop is the only writer.
-            let slot = unsafe { &mut *addr_of_mut!(TABLE) };
-            let built = app::build_table(&job, slot);
-            app.table_built(&mut can, job.gen, built);
         }
     }
 }

@@ -17,7 +17,7 @@ pub struct ReplayArgs {
     /// Measurement log: t,fz,fy,mz required; fx,vx,alpha,kappa,gamma,wheel optional (SI, rad, ISO-W).
     #[arg(long)]
     pub log: PathBuf,
-    /// Results: t,wheel,fx,fy,mz,flags,ack,mu,sigma,state.
+    /// Results: t,wheel,fx,fy,mz,flags,ack,mu,sigma,state,mu_min,change.
     #[arg(long)]
     pub out: PathBuf,
     /// Talk to a firmware already listening on this TCP port instead of starting one.
