@@ -306,7 +306,12 @@ pub fn screen_second(ctx: &Ctx, first: &Score, second: Effect, fit_rows: usize) 
 }
 
 /// The pair fitted on all (settled, thinned) rows: (θ first, θ second) for the report.
-pub fn fit_pair_all(ctx: &Ctx, first: &Score, ps: &PairScore, fit_rows: usize) -> Option<(Vec<f64>, Vec<f64>)> {
+pub fn fit_pair_all(
+    ctx: &Ctx,
+    first: &Score,
+    ps: &PairScore,
+    fit_rows: usize,
+) -> Option<(Vec<f64>, Vec<f64>)> {
     let (spa, spb) = (first.spec.as_ref()?, ps.score.spec.as_ref()?);
     let max = if first.effect.cheap() && ps.score.effect.cheap() {
         usize::MAX
@@ -327,7 +332,13 @@ pub fn fit_pair_all(ctx: &Ctx, first: &Score, ps: &PairScore, fit_rows: usize) -
 /// cannot say which of the two it is. (Until issue 40 item 3 the test was a t-test on the K
 /// paired block shrinks: with 5 blocks, one block where the worse effect extrapolated badly
 /// made its standard error large enough to call a 0.75 and a 0.12 shrink indistinguishable.)
-pub fn indistinguishable(a: &Score, b: &Score, noise: &[f64; 3], min_shrink: f64, min_z: f64) -> bool {
+pub fn indistinguishable(
+    a: &Score,
+    b: &Score,
+    noise: &[f64; 3],
+    min_shrink: f64,
+    min_z: f64,
+) -> bool {
     let better = a.shrink - b.shrink;
     better.abs() < min_shrink || z_value(&b.heldout_resid, &a.heldout_resid, noise).abs() < min_z
 }

@@ -24,10 +24,10 @@
 //! 7. [`plot`]: residual maps before and after the winning effect.
 //!
 //! [`mod@bench`] is the withheld-effect benchmark (`gough gap bench`): logs from a truth model with
-//! one effect switched on, diagnosed from SIM.tir and the log alone.
+//! one effect or a pair switched on, diagnosed from SIM.tir and the log alone.
 //!
-//! Leaves out: Mx and My (not in the log's required channels); several simultaneous effects
-//! (the candidates are tried one at a time); logs of more than one wheel.
+//! Leaves out: Mx and My (not in the log's required channels); more than two simultaneous
+//! effects; logs of more than one wheel.
 
 pub mod bench;
 pub mod cv;
@@ -45,8 +45,8 @@ use effects::{Ctx, Effect};
 use gough::mf::Params;
 use regions::Channels;
 use report::{
-    Baseline, EffectReport, HeldOut, Method, NamedEffect, PairParams, Report, SecondReport, SimInfo,
-    Verdict,
+    Baseline, EffectReport, HeldOut, Method, NamedEffect, PairParams, Report, SecondReport,
+    SimInfo, Verdict,
 };
 use std::collections::BTreeMap;
 
@@ -288,7 +288,9 @@ pub fn diagnose(
             .take(FIRST_ALTERNATIVES)
         {
             if let Some(ps) = cv::score_pair(&ctx, alt, e2, fit_rows, &mut || {}) {
-                if adds(alt, &ps) && ps.score.shrink > second.as_ref().map_or(0.0, |q| q.score.shrink) {
+                if adds(alt, &ps)
+                    && ps.score.shrink > second.as_ref().map_or(0.0, |q| q.score.shrink)
+                {
                     // The better pair: the one held so far becomes an alternative.
                     let cur_first = winner.map(|x| x.effect).unwrap_or(w.effect);
                     if let Some(old) = second.replace(ps) {
