@@ -140,7 +140,12 @@ fn thermal_and_speed_friction_are_indistinguishable_where_slip_power_follows_sli
             sh(THERMAL),
             sh(SPEED)
         );
-        let named: Vec<Effect> = d.named.iter().chain(&d.indistinguishable).copied().collect();
+        let named: Vec<Effect> = d
+            .named
+            .iter()
+            .chain(&d.indistinguishable)
+            .copied()
+            .collect();
         assert!(
             named.contains(&THERMAL) && named.contains(&SPEED),
             "m {m}: {:?}",
@@ -148,7 +153,11 @@ fn thermal_and_speed_friction_are_indistinguishable_where_slip_power_follows_sli
         );
         if d.verdict == Some(SPEED) || d.verdict == Some(THERMAL) {
             // Reported against each other, in the report too.
-            let other = if d.verdict == Some(SPEED) { THERMAL } else { SPEED };
+            let other = if d.verdict == Some(SPEED) {
+                THERMAL
+            } else {
+                SPEED
+            };
             assert!(d
                 .report
                 .verdict
@@ -185,7 +194,11 @@ fn a_pair_gets_both_a_single_effect_one_and_none_none() {
             let mut got = d.named.clone();
             want.sort();
             got.sort();
-            assert_eq!(got, want, "{:?}; second round {:?}", d.report.verdict, d.seconds);
+            assert_eq!(
+                got, want,
+                "{:?}; second round {:?}",
+                d.report.verdict, d.seconds
+            );
             let v = &d.report.verdict;
             assert_eq!(v.effects.len(), effects.len());
             if effects.len() == 2 {
