@@ -29,7 +29,12 @@ fn truth_theta(e: Effect, sp: &effects::Spec) -> Vec<f64> {
     let b = &sp.bounds;
     match e {
         Effect::RelaxationLength => vec![1.4, 1.6, 0.3],
-        Effect::Thermal => vec![0.8 * b.scale[0] * 10.0, 3f64.ln()],
+        Effect::Thermal => vec![
+            0.8 * b.scale[0] * 10.0,
+            3f64.ln(),
+            0.3 * b.scale[0] * 10.0,
+            0.0,
+        ],
         Effect::SensorLag => vec![0.01, 0.02, 0.03],
         Effect::SensorBias => vec![-60.0, 90.0, 4.0],
         _ => s

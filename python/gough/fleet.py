@@ -14,7 +14,9 @@ from typing import Iterable, Sequence
 import pandas as pd
 
 #: Columns of the verdict table.
-COLUMNS = ["log", "effect", "shrink", "channel", "indistinguishable_from", "rows"]
+#: `effect` is the first effect named; `effects` every effect named, "+"-joined (a second one
+#: when forward selection keeps it); `shrink` the held-out shrink of all of them.
+COLUMNS = ["log", "effect", "effects", "shrink", "channel", "indistinguishable_from", "rows"]
 
 
 def diagnose_one(path: str, tir: str, fit_rows: int | None = None) -> dict:
@@ -28,6 +30,7 @@ def diagnose_one(path: str, tir: str, fit_rows: int | None = None) -> dict:
     return {
         "log": path,
         "effect": v["effect"],
+        "effects": "+".join(e["effect"] for e in v.get("effects") or []) or v["effect"],
         "shrink": v.get("shrink"),
         "channel": v.get("channel"),
         "indistinguishable_from": ",".join(v.get("indistinguishable_from") or []),

@@ -11,7 +11,7 @@
 //! | `combined_slip` | the weighting-function slopes Bxα (4.E54), Byκ (4.E62) and the Fx moment arm s (4.E76) re-fitted | `rbx1 rby1 ssz1` |
 //! | `relaxation_length` | σκ, σα times s·(1 + c·dfz) (a σ(Fz) relaxation); without filters in SIM.tir, σα = s_alpha·R0·Fz/Fz0, σκ = s_kappa·R0·Fz/(2·Fz0) | `s_kappa s_alpha c_fz` |
 //! | `speed_dependent_friction` | λμx = λμy = (1 + b·(|Vx| − V0)/V0)/(1 + a·Vs/V0), Vs the slip speed (TNO's λμV form plus a forward-speed trend), V0 = LONGVL | `a_vs b_vx` |
-//! | `thermal` | a first-order tread temperature T, τ·dT/dt + T = Ps/(Fz0·V0), driven by the slip power Ps = |Fx·Vsx| + |Fy·Vsy| of the *measured* forces, from T = 0 at the log's start; λμx = λμy = exp(−k·T) | `k tau` |
+//! | `thermal` | a first-order tread temperature T, τ·dT/dt + T = Ps/(Fz0·V0), driven by the slip power Ps = |Fx·Vsx| + |Fy·Vsy| of the *measured* forces, from a fitted T = t0 at the log's start (a log need not start with a cold tyre); λμx = λμy = exp(−k·T), and the tread softening with it, λKy = exp(−k_ky·T); τ from 0.05 s (a surface temperature) to 200 s | `k tau k_ky t0` |
 //! | `sensor_lag` | a first-order lag per channel (exact for a first-order hold) | `tau_fx tau_fy tau_mz` \[s\] |
 //! | `sensor_bias` | a constant offset per channel | `b_fx b_fy b_mz` \[N, N, N·m\] |
 //! | `conicity_plysteer` | the zero-slip offsets re-fitted: Fy horizontal and vertical shifts (4.E27, 4.E29), the trail's shift (4.E35) | `phy1 pvy1 qhz1` |
@@ -103,7 +103,9 @@ impl Effect {
             }
             Effect::RelaxationLength => "σ times s·(1 + c·dfz)",
             Effect::SpeedDependentFriction => "λμ = (1 + b·(|Vx|−V0)/V0)/(1 + a·Vs/V0)",
-            Effect::Thermal => "λμ = exp(−k·T), τ·dT/dt + T = slip power/(Fz0·V0)",
+            Effect::Thermal => {
+                "λμ = exp(−k·T), λKy = exp(−k_ky·T), τ·dT/dt + T = slip power/(Fz0·V0)"
+            }
             Effect::SensorLag => "first-order lag per channel",
             Effect::SensorBias => "constant offset per channel",
             Effect::ConicityPlysteer => "zero-slip offsets phy1, pvy1, qhz1 re-fitted",
@@ -471,17 +473,18 @@ pub fn spec(effect: Effect, ctx: &Ctx) -> Result<Spec, String> {
                 return Err("no slip power in the log".into());
             }
             let ks = 0.1 / m;
+            let pmax = ctx.power.iter().fold(0.0f64, |a, &b| a.max(b));
             Ok(simple(
                 effect,
-                &["k", "tau"],
-                [1.0f64, 5.0, 25.0]
+                &["k", "tau", "k_ky", "t0"],
+                [0.1f64, 1.0, 5.0, 25.0]
                     .iter()
-                    .map(|&tau| vec![0.0, tau.ln()])
+                    .map(|&tau| vec![0.0, tau.ln(), 0.0, 0.0])
                     .collect(),
                 [
-                    &[-10.0 * ks, 0.3f64.ln()],
-                    &[10.0 * ks, 200f64.ln()],
-                    &[ks, 0.5],
+                    &[-10.0 * ks, 0.05f64.ln(), -10.0 * ks, 0.0],
+                    &[10.0 * ks, 200f64.ln(), 10.0 * ks, 2.0 * pmax],
+                    &[ks, 0.5, ks, m],
                 ],
                 Variant::Thermal,
             ))
@@ -579,10 +582,13 @@ impl Spec {
                 )
             }
             Variant::Thermal => {
-                let temp = lowpass_from(&ctx.power, &log.t, theta[1].exp(), 0.0);
+                let temp = lowpass_from(&ctx.power, &log.t, theta[1].exp(), theta[3]);
                 Some(
                     temp.iter()
-                        .map(|&tk| Lambda::mu((-theta[0] * tk).exp().clamp(0.05, 5.0)))
+                        .map(|&tk| Lambda {
+                            ky: (-theta[2] * tk).exp().clamp(0.05, 5.0),
+                            ..Lambda::mu((-theta[0] * tk).exp().clamp(0.05, 5.0))
+                        })
                         .collect(),
                 )
             }
@@ -781,3 +787,136 @@ impl Spec {
 
 /// Times the slips of a fit are refreshed by an exact run (see [`Spec::fit`]).
 pub const SLIP_REFRESH: usize = 2;
+
+/// Two effects fitted together: the sim's output changed by both, their changes superposed,
+/// prediction = sim + Δa(θa) + Δb(θb) with Δ = (sim with the effect) − sim. Superposition is
+/// exact where the effects act on different channels or terms (a sensor bias on top of a
+/// camber change) and first order where they interact (two friction factors multiply: the
+/// cross term Δa·Δb/sim is left out).
+#[derive(Debug, Clone)]
+pub struct Pair<'s> {
+    /// The first effect (the verdict of the single-effect round).
+    pub a: &'s Spec,
+    /// The candidate second effect.
+    pub b: &'s Spec,
+}
+
+impl Pair<'_> {
+    /// The superposed prediction on `rows` (`None`: every row, exact runs).
+    pub fn predict(
+        &self,
+        ctx: &Ctx,
+        theta_a: &[f64],
+        theta_b: &[f64],
+        rows: Option<&[usize]>,
+    ) -> Option<Vec<Out>> {
+        let pa = self.a.predict(ctx, theta_a, rows)?;
+        let pb = self.b.predict(ctx, theta_b, rows)?;
+        let n = ctx.log.len();
+        let all: Vec<usize>;
+        let sel = match rows {
+            Some(r) => r,
+            None => {
+                all = (0..n).collect();
+                &all
+            }
+        };
+        Some(
+            sel.iter()
+                .enumerate()
+                .map(|(k, &i)| {
+                    let s = ctx.base.out[i];
+                    [
+                        pa[k][0] + pb[k][0] - s[0],
+                        pa[k][1] + pb[k][1] - s[1],
+                        pa[k][2] + pb[k][2] - s[2],
+                    ]
+                })
+                .collect(),
+        )
+    }
+
+    /// Fits `b` alone on `rows` on top of `a` held at `theta_a` (from each of `b`'s starts and
+    /// the best of its scan). Returns θb and the fall of the cost Σ(r/σ)² from `b`'s first start
+    /// (no change) to θb.
+    pub fn fit_second(
+        &self,
+        ctx: &Ctx,
+        rows: &[usize],
+        theta_a: &[f64],
+    ) -> Option<(Vec<f64>, f64)> {
+        let log = ctx.log;
+        let noise = ctx.noise;
+        let pa = self.a.predict(ctx, theta_a, Some(rows))?;
+        // Stage 1: b on top of the fixed a.
+        let resid_b = |th: &[f64]| -> Option<Vec<f64>> {
+            let pb = self.b.predict(ctx, th, Some(rows))?;
+            let mut r = Vec::with_capacity(3 * rows.len());
+            for (k, &i) in rows.iter().enumerate() {
+                let s = ctx.base.out[i];
+                for c in 0..3 {
+                    r.push((log.meas[i][c] - (pa[k][c] + pb[k][c] - s[c])) / noise[c]);
+                }
+            }
+            r.iter().all(|v| v.is_finite()).then_some(r)
+        };
+        let mut starts = self.b.starts.clone();
+        if !self.b.scan.is_empty() {
+            let cost = |th: &[f64]| resid_b(th).map(|r| r.iter().map(|v| v * v).sum::<f64>());
+            if let Some((_, th)) = self
+                .b
+                .scan
+                .iter()
+                .filter_map(|th| cost(th).map(|c| (c, th)))
+                .min_by(|x, y| x.0.total_cmp(&y.0))
+            {
+                starts.push(th.clone());
+            }
+        }
+        let mut best: Option<super::fit::Fit> = None;
+        for s in &starts {
+            if let Some(f) = super::fit::levenberg_marquardt(&resid_b, s, &self.b.bounds, 12) {
+                if best.as_ref().is_none_or(|b| f.cost < b.cost) {
+                    best = Some(f);
+                }
+            }
+        }
+        let c0 = resid_b(&self.b.starts[0]).map(|r| 0.5 * r.iter().map(|v| v * v).sum::<f64>())?;
+        let best = best?;
+        Some((best.theta, 2.0 * (c0 - best.cost)))
+    }
+
+    /// Fits both on `rows`: first `b` alone on top of `a` at `start_a`
+    /// ([`Pair::fit_second`]), then both together from there. Returns (θa, θb).
+    pub fn fit(&self, ctx: &Ctx, rows: &[usize], start_a: &[f64]) -> Option<(Vec<f64>, Vec<f64>)> {
+        let log = ctx.log;
+        let noise = ctx.noise;
+        let tb = self
+            .fit_second(ctx, rows, start_a)
+            .map(|f| f.0)
+            .unwrap_or_else(|| self.b.starts[0].clone());
+        // Stage 2: both together.
+        let na = start_a.len();
+        let resid = |th: &[f64]| -> Option<Vec<f64>> {
+            let p = self.predict(ctx, &th[..na], &th[na..], Some(rows))?;
+            let mut r = Vec::with_capacity(3 * rows.len());
+            for (k, &i) in rows.iter().enumerate() {
+                for c in 0..3 {
+                    r.push((log.meas[i][c] - p[k][c]) / noise[c]);
+                }
+            }
+            r.iter().all(|v| v.is_finite()).then_some(r)
+        };
+        let cat = |x: &[f64], y: &[f64]| -> Vec<f64> { x.iter().chain(y).copied().collect() };
+        let bounds = super::fit::Bounds {
+            lo: cat(&self.a.bounds.lo, &self.b.bounds.lo),
+            hi: cat(&self.a.bounds.hi, &self.b.bounds.hi),
+            scale: cat(&self.a.bounds.scale, &self.b.bounds.scale),
+        };
+        let start = cat(start_a, &tb);
+        let th = super::fit::levenberg_marquardt(&resid, &start, &bounds, 8)
+            .map(|f| f.theta)
+            .unwrap_or(start);
+        Some((th[..na].to_vec(), th[na..].to_vec()))
+    }
+}

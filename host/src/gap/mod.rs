@@ -12,15 +12,22 @@
 //!    ([`cv`]): held-out shrink of the gap in noise units.
 //! 5. The verdict: the best effect when it closes a meaningful ([`MIN_SHRINK`]), significant
 //!    ([`MIN_Z`]) part of the gap, else `none`; effects the data cannot tell apart
-//!    ([`IND_T`]) are reported with it.
+//!    (the same two tests between them: [`cv::indistinguishable`]) are reported with it.
+//! 6. Forward selection: the candidates ranked by how much they lower the misfit on top of the
+//!    verdict ([`cv::screen_second`]), the best [`SECOND_CANDIDATES`] cross-validated as pairs
+//!    with it ([`cv::score_pair`], both refitted together); the best pair's second effect is
+//!    named too when it adds [`MIN_ADD_SHRINK`] of held-out shrink at significance
+//!    [`MIN_Z_ADD`] over the first alone. With a second effect, the first is re-chosen among the
+//!    best single candidates by the pair's held-out shrink (a second effect can make the wrong
+//!    one look best alone).
 //! 6. With a `mu` column, the same questions for the friction estimator's output ([`mu`]).
 //! 7. [`plot`]: residual maps before and after the winning effect.
 //!
 //! [`mod@bench`] is the withheld-effect benchmark (`gough gap bench`): logs from a truth model with
-//! one effect switched on, diagnosed from SIM.tir and the log alone.
+//! one effect or a pair switched on, diagnosed from SIM.tir and the log alone.
 //!
-//! Leaves out: Mx and My (not in the log's required channels); several simultaneous effects
-//! (the candidates are tried one at a time); logs of more than one wheel.
+//! Leaves out: Mx and My (not in the log's required channels); more than two simultaneous
+//! effects; logs of more than one wheel.
 
 pub mod bench;
 pub mod cv;
@@ -37,7 +44,10 @@ pub mod stats;
 use effects::{Ctx, Effect};
 use gough::mf::Params;
 use regions::Channels;
-use report::{Baseline, EffectReport, HeldOut, Method, Report, SimInfo, Verdict};
+use report::{
+    Baseline, EffectReport, HeldOut, Method, NamedEffect, PairParams, Report, SecondReport,
+    SimInfo, Verdict,
+};
 use std::collections::BTreeMap;
 
 /// The channels, in the order of every `[f64; 3]`.
@@ -51,10 +61,20 @@ pub const MIN_SHRINK: f64 = 0.005;
 /// [`cv::z_value`] at least this (a χ²-style test; under "the effect only fits noise" z ≤ 0 on
 /// average with unit standard deviation).
 pub const MIN_Z: f64 = 5.0;
-/// Two effects are indistinguishable when their shrinks differ by less than this many standard
-/// errors of the paired block differences (a 1-SE band would call two identical explanations
-/// different about a third of the time).
-pub const IND_T: f64 = 2.0;
+
+/// A second effect is kept only when the pair closes at least this much more of the gap
+/// held-out than the first effect alone (shrink units) ...
+pub const MIN_ADD_SHRINK: f64 = 0.02;
+/// ... and that improvement is significant against the noise floor ([`cv::z_value`] of the
+/// first effect's held-out residual against the pair's) at least this.
+pub const MIN_Z_ADD: f64 = 5.0;
+/// The second effect is sought among at most this many candidates, cross-validated as pairs:
+/// those that lower the in-sample misfit most when fitted on top of the first
+/// ([`cv::screen_second`], one fit each).
+pub const SECOND_CANDIDATES: usize = 3;
+/// With a second effect named, this many other single candidates (the best alone) are tried
+/// as the first effect of the pair.
+pub const FIRST_ALTERNATIVES: usize = 2;
 
 /// Options of a diagnosis.
 #[derive(Debug, Clone, Default)]
@@ -77,8 +97,13 @@ pub struct Diagnosis {
     pub noise: [f64; 3],
     /// Sim RMSE per channel.
     pub rmse_before: [f64; 3],
-    /// The verdict (`None`: "none").
+    /// The verdict (`None`: "none"): the first effect named.
     pub verdict: Option<Effect>,
+    /// Every effect named (the verdict first; a second one from forward selection).
+    pub named: Vec<Effect>,
+    /// The second-effect candidates tried: (effect, held-out shrink of the pair, z of its
+    /// improvement over the first alone).
+    pub seconds: Vec<(Effect, f64, f64)>,
     /// Effects indistinguishable from the verdict.
     pub indistinguishable: Vec<Effect>,
     /// Held-out shrink and its significance z per effect (0 for those not applicable).
@@ -106,8 +131,21 @@ fn method() -> Method {
              found there stays far below it"
         ),
         indistinguishable_rule: format!(
-            "an effect is indistinguishable from the verdict when their shrinks differ by at \
-             most {IND_T} standard errors of the paired block differences (or 0.001)"
+            "an effect is indistinguishable from the verdict unless the verdict closes at least \
+             {MIN_SHRINK} more of the gap held-out and that is significant against the noise \
+             floor: z = (SSE_other - SSE_verdict) / (2 sqrt(sum (delta/noise)^2)) >= {MIN_Z}, \
+             delta the difference of their held-out predictions (the verdict rule, between two \
+             effects)"
+        ),
+        second_effect_rule: format!(
+            "forward selection: every other candidate fitted on top of the first effect (in \
+             sample, one fit) and the {SECOND_CANDIDATES} that lower the misfit most \
+             cross-validated as pairs (the blocks as above, both effects refitted together, \
+             their changes of the sim's output superposed); the best pair's second effect is \
+             named when the pair's held-out shrink exceeds the first's alone by >= \
+             {MIN_ADD_SHRINK} and z of the first's held-out residual against the pair's >= \
+             {MIN_Z_ADD}; then the first effect is re-chosen among the best single candidates by \
+             the shrink of their pair with the second. At most two effects"
         ),
     }
 }
@@ -172,31 +210,167 @@ pub fn diagnose(
     // Verdict.
     let best = scores.iter().find(|s| s.not_applicable.is_none());
     let winner = best.filter(|s| s.shrink >= MIN_SHRINK && s.z >= MIN_Z);
+    let first_round = winner;
     let indist: Vec<Effect> = match winner {
         Some(w) => scores
             .iter()
             .filter(|s| {
                 s.effect != w.effect
                     && s.not_applicable.is_none()
-                    && cv::indistinguishable(w, s, IND_T)
+                    && cv::indistinguishable(w, s, &noise, MIN_SHRINK, MIN_Z)
             })
             .map(|s| s.effect)
             .collect(),
         None => vec![],
     };
+    // Forward selection: a second effect on top of the first, kept only when the pair is
+    // significantly better than the first alone on held-out blocks.
+    let fit_rows = opts.fit_rows.unwrap_or(cv::FIT_ROWS).max(10);
+    let mut pairs: Vec<cv::PairScore> = Vec::new();
+    if let Some(w) = winner {
+        let mut screened: Vec<(Effect, f64)> = scores
+            .iter()
+            .filter(|s| s.effect != w.effect && s.not_applicable.is_none())
+            .filter_map(|s| {
+                cv::screen_second(&ctx, w, s.effect, fit_rows)
+                    .filter(|d| *d > 0.0)
+                    .map(|d| (s.effect, d))
+            })
+            .collect();
+        screened.sort_by(|a, b| b.1.total_cmp(&a.1));
+        let cands: Vec<Effect> = screened
+            .iter()
+            .take(SECOND_CANDIDATES)
+            .map(|c| c.0)
+            .collect();
+        let bar2 = opts.progress.then(|| {
+            indicatif::ProgressBar::with_draw_target(
+                Some((cands.len() * cv::K) as u64),
+                indicatif::ProgressDrawTarget::stderr(),
+            )
+        });
+        for e in cands {
+            let mut tick = || {
+                if let Some(b) = &bar2 {
+                    b.inc(1);
+                }
+            };
+            if let Some(ps) = cv::score_pair(&ctx, w, e, fit_rows, &mut tick) {
+                pairs.push(ps);
+            }
+        }
+        if let Some(b) = &bar2 {
+            b.finish_and_clear();
+        }
+        pairs.sort_by(|a, b| b.score.shrink.total_cmp(&a.score.shrink));
+    }
+    let adds = |first: &cv::Score, p: &cv::PairScore| {
+        p.score.shrink - first.shrink >= MIN_ADD_SHRINK && p.z_added >= MIN_Z_ADD
+    };
+    let mut second: Option<cv::PairScore> = winner
+        .and_then(|w| pairs.first().filter(|p| adds(w, p)))
+        .cloned();
+    // With a second effect, re-choose the first: the best single candidates other than these
+    // two, each paired with the second; the best pair (that still passes the rule) wins.
+    let mut first_alts: Vec<(Effect, cv::PairScore)> = Vec::new();
+    let mut winner = winner;
+    if let (Some(w), Some(p2)) = (winner, second.clone()) {
+        let e2 = p2.score.effect;
+        for alt in scores
+            .iter()
+            .filter(|s| {
+                s.not_applicable.is_none()
+                    && s.effect != w.effect
+                    && s.effect != e2
+                    && s.shrink >= MIN_SHRINK
+                    && s.z >= MIN_Z
+            })
+            .take(FIRST_ALTERNATIVES)
+        {
+            if let Some(ps) = cv::score_pair(&ctx, alt, e2, fit_rows, &mut || {}) {
+                if adds(alt, &ps)
+                    && ps.score.shrink > second.as_ref().map_or(0.0, |q| q.score.shrink)
+                {
+                    // The better pair: the one held so far becomes an alternative.
+                    let cur_first = winner.map(|x| x.effect).unwrap_or(w.effect);
+                    if let Some(old) = second.replace(ps) {
+                        first_alts.push((cur_first, old));
+                    }
+                    winner = Some(alt);
+                } else {
+                    first_alts.push((alt.effect, ps));
+                }
+            }
+        }
+    }
+    let second = second.as_ref();
+    // The first effect's alternatives: alone, those indistinguishable from it alone; with a
+    // second effect, the other firsts whose pair with it is indistinguishable from the pair.
+    let indist: Vec<Effect> = match (winner, second) {
+        (Some(_), Some(p2)) => first_alts
+            .iter()
+            .filter(|(_, q)| cv::indistinguishable(&p2.score, &q.score, &noise, MIN_SHRINK, MIN_Z))
+            .map(|(e, _)| *e)
+            .collect(),
+        _ => indist,
+    };
+    let swapped = winner.map(|w| w.effect) != first_round.map(|w| w.effect);
+    let second_indist: Vec<Effect> = match second {
+        Some(p2) if !swapped => pairs
+            .iter()
+            .filter(|q| q.score.effect != p2.score.effect)
+            .filter(|q| cv::indistinguishable(&p2.score, &q.score, &noise, MIN_SHRINK, MIN_Z))
+            .map(|q| q.score.effect)
+            .collect(),
+        _ => vec![],
+    };
+    let channel_of = |before: &[f64; 3], after: &[f64; 3]| -> String {
+        let c = (0..3)
+            .max_by(|&a, &b| {
+                let d = |c: usize| (before[c] - after[c]) / noise[c];
+                d(a).total_cmp(&d(b))
+            })
+            .unwrap_or(1);
+        CHANNELS[c].into()
+    };
+    let names = |v: &[Effect]| v.iter().map(|e| e.name().to_string()).collect::<Vec<_>>();
     let verdict = match (winner, best) {
         (Some(w), _) => {
-            let c = (0..3)
-                .max_by(|&a, &b| {
-                    let d = |c: usize| (w.rmse_before[c] - w.rmse_after[c]) / noise[c];
-                    d(a).total_cmp(&d(b))
-                })
-                .unwrap_or(1);
+            let mut named = vec![NamedEffect {
+                effect: w.effect.name().into(),
+                shrink_alone: w.shrink,
+                shrink_added: w.shrink,
+                z_added: w.z,
+                channel: channel_of(&w.rmse_before, &w.rmse_after),
+                indistinguishable_from: names(&indist),
+            }];
+            let total = match second {
+                Some(p2) => {
+                    let e2 = p2.score.effect;
+                    let alone = scores
+                        .iter()
+                        .find(|s| s.effect == e2)
+                        .map(|s| s.shrink)
+                        .unwrap_or(0.0);
+                    named[0].shrink_added = p2.score.shrink - alone;
+                    named.push(NamedEffect {
+                        effect: e2.name().into(),
+                        shrink_alone: alone,
+                        shrink_added: p2.score.shrink - w.shrink,
+                        z_added: p2.z_added,
+                        channel: channel_of(&w.rmse_after, &p2.score.rmse_after),
+                        indistinguishable_from: names(&second_indist),
+                    });
+                    p2.score.shrink
+                }
+                None => w.shrink,
+            };
             Verdict {
                 effect: w.effect.name().into(),
-                shrink: Some(w.shrink),
-                channel: Some(CHANNELS[c].into()),
-                indistinguishable_from: indist.iter().map(|e| e.name().to_string()).collect(),
+                shrink: Some(total),
+                channel: Some(named[0].channel.clone()),
+                indistinguishable_from: names(&indist),
+                effects: named,
                 reason: None,
             }
         }
@@ -205,6 +379,7 @@ pub fn diagnose(
             shrink: None,
             channel: None,
             indistinguishable_from: vec![],
+            effects: vec![],
             reason: Some(format!(
                 "best candidate {} closes {:.4} of the gap held-out (needs >= {MIN_SHRINK}) with \
                  significance z = {:.1} against the noise floor (needs >= {MIN_Z})",
@@ -218,11 +393,33 @@ pub fn diagnose(
             shrink: None,
             channel: None,
             indistinguishable_from: vec![],
+            effects: vec![],
             reason: Some("no candidate effect applies to this log".into()),
         },
     };
+    let seconds_report: Vec<SecondReport> = match first_round {
+        Some(w) => pairs
+            .iter()
+            .map(|p| SecondReport {
+                effect: p.score.effect.name().into(),
+                shrink_pair: p.score.shrink,
+                shrink_added: p.score.shrink - w.shrink,
+                z_added: p.z_added,
+                kept: second.is_some_and(|s| s.score.effect == p.score.effect),
+            })
+            .collect(),
+        None => vec![],
+    };
+    // The kept pair's parameters on the whole log (reported with each effect).
+    let pair_theta = match (winner, second) {
+        (Some(w), Some(p2)) => cv::fit_pair_all(&ctx, w, p2, fit_rows),
+        _ => None,
+    };
 
-    let after = winner.map(|w| w.heldout_resid.as_slice());
+    let after = match (second, winner) {
+        (Some(p2), _) => Some(p2.score.heldout_resid.as_slice()),
+        (None, w) => w.map(|w| w.heldout_resid.as_slice()),
+    };
     let where_ = regions::regions(log, &base_r, after, &noise);
 
     let effects_report: Vec<EffectReport> = scores
@@ -300,6 +497,17 @@ pub fn diagnose(
         where_,
         effects: effects_report,
         verdict,
+        second: seconds_report,
+        pair_params: match (winner, second, pair_theta) {
+            (Some(w), Some(p2), Some((ta, tb))) => match (&w.spec, &p2.score.spec) {
+                (Some(sa), Some(sb)) => Some(PairParams {
+                    first: sa.reported(&ta).into_iter().collect(),
+                    second: sb.reported(&tb).into_iter().collect(),
+                }),
+                _ => None,
+            },
+            _ => None,
+        },
         method: method(),
         mu,
     };
@@ -308,6 +516,15 @@ pub fn diagnose(
         noise,
         rmse_before,
         verdict: winner.map(|w| w.effect),
+        named: winner
+            .map(|w| w.effect)
+            .into_iter()
+            .chain(second.map(|p| p.score.effect))
+            .collect(),
+        seconds: pairs
+            .iter()
+            .map(|p| (p.score.effect, p.score.shrink, p.z_added))
+            .collect(),
         indistinguishable: indist,
         shrinks: scores.iter().map(|s| (s.effect, s.shrink, s.z)).collect(),
     })

@@ -25,6 +25,13 @@ pub struct Report {
     pub effects: Vec<EffectReport>,
     /// The diagnosis.
     pub verdict: Verdict,
+    /// The second-effect round (forward selection): each candidate tried on top of the
+    /// verdict's first effect (empty when the verdict is none).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub second: Vec<SecondReport>,
+    /// With two effects named: the parameters of both, fitted together on the whole log.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub pair_params: Option<PairParams>,
     /// How the numbers were made.
     pub method: Method,
     /// The friction estimator against the log's `mu` column (when there is one).
@@ -100,7 +107,7 @@ pub struct EffectReport {
 pub struct Verdict {
     /// The effect, or `none`.
     pub effect: String,
-    /// Its held-out shrink.
+    /// The held-out shrink of everything named (`effects`).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub shrink: Option<f64>,
     /// The channel it closes most of the gap in (largest reduction in noise units).
@@ -110,6 +117,10 @@ pub struct Verdict {
     /// cannot tell them apart from the verdict.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub indistinguishable_from: Vec<String>,
+    /// Every effect named, the first (`effect`) first: one, or two when a second one
+    /// significantly improves the held-out fit on top of the first (forward selection).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub effects: Vec<NamedEffect>,
     /// For `none`: the best candidate and why it did not count.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub reason: Option<String>,
@@ -126,4 +137,50 @@ pub struct Method {
     pub verdict_rule: String,
     /// The rule for indistinguishable effects.
     pub indistinguishable_rule: String,
+    /// How a second effect is sought and when it is named.
+    pub second_effect_rule: String,
+}
+
+/// One effect of the verdict.
+#[derive(Debug, Clone, Serialize)]
+pub struct NamedEffect {
+    /// Name.
+    pub effect: String,
+    /// Its held-out shrink alone.
+    pub shrink_alone: f64,
+    /// Its own share: the held-out shrink of all named effects minus that of the others
+    /// without it (with one effect: its shrink alone).
+    pub shrink_added: f64,
+    /// Significance of what it adds (against the sim for the first, against the first effect
+    /// alone for the second).
+    pub z_added: f64,
+    /// The channel it closes most of the gap in.
+    pub channel: String,
+    /// Effects that would serve as well in its place.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub indistinguishable_from: Vec<String>,
+}
+
+/// A candidate second effect, tried on top of the first.
+#[derive(Debug, Clone, Serialize)]
+pub struct SecondReport {
+    /// Name.
+    pub effect: String,
+    /// Held-out shrink of the pair.
+    pub shrink_pair: f64,
+    /// Pair minus the first effect alone.
+    pub shrink_added: f64,
+    /// Significance of the improvement over the first alone.
+    pub z_added: f64,
+    /// Named in the verdict.
+    pub kept: bool,
+}
+
+/// The parameters of a named pair, fitted together on the whole log.
+#[derive(Debug, Clone, Serialize)]
+pub struct PairParams {
+    /// The first effect's.
+    pub first: BTreeMap<String, f64>,
+    /// The second effect's.
+    pub second: BTreeMap<String, f64>,
 }
