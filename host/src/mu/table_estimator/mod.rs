@@ -42,7 +42,7 @@
 //!
 //! ## Leaves out
 //! Pure longitudinal excitation (straight braking, no Fy): the trail carries no information
-//! then; that is the slip-slope method's domain (a host peer in `gough-host`). Turn slip.
+//! then; that is the slip-slope method's domain ([`super::peers::SlipSlope`]). Turn slip.
 
 pub mod brush;
 pub mod table;

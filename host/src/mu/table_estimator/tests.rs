@@ -668,8 +668,9 @@ fn an_outlier_run_does_not_span_a_hold() {
 /// The estimator in Q31.32 fixed point (issue 7: `fixed::Fix`, `FixMath`, the same code): its
 /// table and its readings agree with f64 on a surface sweep (μ 1.0 … 0.1, loads 0.5 … 1.5·Fz0,
 /// slip up to the peak, braking in the turn). Identifiability is decided alike except within
-/// rounding of a gate, and μ agrees within 1e-4. (This checks the arithmetic; the no-FPU bench
-/// in `firmware-m0` runs the same estimator on a Cortex-M3 and compares it with the host's.)
+/// rounding of a gate, and μ agrees within 1e-4. (This checks the arithmetic; until issue 39
+/// the no-FPU bench in `firmware-m0` ran the same estimator on a Cortex-M3 and compared it with
+/// the host's; it now runs the bank.)
 #[test]
 fn fixed_point_estimator_reads_what_f64_reads() {
     use gough::fixed::{Fix, FixMath};
