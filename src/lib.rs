@@ -17,8 +17,9 @@
 //! - [`tir`] — `.tir` text → [`mf::Params`], without allocation.
 //! - [`proto`] — the CAN protocol: messages (postcard), segmentation, CRC, SLCAN, DBC.
 //! - [`relax`] — transient slip through relaxation lengths, paper eqs. (19)–(21).
-//! - [`brush`] — the paper's brush model: physical Gough curves without a `.tir` file.
-//! - [`mu`] — the Gough-plot road-friction estimator (μ from Fy, Mz, Fz without α).
+//! - [`mu`] — the road-friction estimator ([`mu::bank`]: μ from Fy, Mz, Fz and, when given, Fx,
+//!   κ, Vx, γ — never α). The previous table estimator is a peer in the host's bench
+//!   (`gough_host::mu::table_estimator`).
 //! - [`wheel`] — one wheel's per-sample pipeline (transient filter → Magic Formula → estimator),
 //!   as the firmware runs it.
 //!
@@ -41,7 +42,6 @@
 #[cfg(any(test, feature = "std"))]
 extern crate std;
 
-pub mod brush;
 #[cfg(feature = "fixed")]
 pub mod fixed;
 pub mod math;

@@ -431,7 +431,10 @@ fn bench_says_where_the_latency_goes() {
     let holds = std::fs::read_to_string(dir.join("bench/holds.csv")).unwrap();
     let mut lines = holds.lines();
     let header: Vec<&str> = lines.next().unwrap().split(',').collect();
-    let names: Vec<&str> = gough::mu::Hold::ALL.iter().map(|h| h.name()).collect();
+    let names: Vec<&str> = gough_host::mu::table_estimator::Hold::ALL
+        .iter()
+        .map(|h| h.name())
+        .collect();
     assert_eq!(
         header[..4],
         ["manoeuvre", "road", "wheel_surfaces", "within_150ms"]

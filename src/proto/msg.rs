@@ -9,7 +9,6 @@
 use super::crc::crc32;
 use super::{Error, PROTO_VERSION};
 use crate::mf::{Input, Params};
-use crate::mu::Sample;
 use core::fmt;
 use postcard::experimental::max_size::MaxSize;
 use serde::de::DeserializeOwned;
@@ -172,22 +171,6 @@ impl Measurement {
             vx: self.vx.unwrap_or(p.longvl),
             p: None,
         })
-    }
-
-    /// What the table estimator ([`crate::mu::MuEstimator`], the bench's peer and the M0 bench's
-    /// estimator) reads of this sample, taken at `t` \[s\] on the wheel's clock: the forces,
-    /// speed and camber (ISO-W, SI; never α or κ). The product's estimator, the bank, reads
-    /// [`crate::wheel::sample`] instead.
-    pub fn sample(&self, t: f32) -> Sample<f32> {
-        Sample {
-            t,
-            fz: self.fz,
-            fy: self.fy,
-            mz: self.mz,
-            fx: self.fx,
-            vx: self.vx,
-            gamma: self.gamma,
-        }
     }
 }
 

@@ -1,8 +1,8 @@
 //! `gough mu ...` subcommands.
+use crate::mu::table_estimator::Hold;
 use crate::mu::{estimate, read_log, Method, Precision};
 use crate::tyre;
 use clap::{Args, Subcommand};
-use gough::mu::Hold;
 use std::io::Write;
 use std::path::PathBuf;
 
@@ -62,7 +62,7 @@ pub struct EstimateArgs {
     /// Output CSV.
     #[arg(long)]
     pub out: PathBuf,
-    /// Float path of the core estimator.
+    /// Float path of the estimator (the bank or the table estimator).
     #[arg(long, value_enum, default_value_t = Precision::F64)]
     pub precision: Precision,
     /// Estimator.
@@ -108,7 +108,7 @@ pub fn run(cmd: MuCmd) -> Result<(), String> {
             write().map_err(|e| format!("{}: cannot write: {e}", a.out.display()))?;
             let n_id = est
                 .iter()
-                .filter(|e| e.state == gough::mu::State::Identifiable)
+                .filter(|e| e.state == crate::mu::table_estimator::State::Identifiable)
                 .count();
             let last = est.last().map(|e| (e.mu, e.sigma, e.state.name()));
             eprintln!(

@@ -1,6 +1,6 @@
 //! The diagnosis of the friction estimator's output, when the log has a reference `mu` column.
 //!
-//! The estimator ([`gough::mu::MuEstimator`], default settings, its Gough table built from
+//! The table estimator ([`MuEstimator`], default settings, its Gough table built from
 //! SIM.tir at the log's median camber) runs on the log's measured Fx, Fy, Mz, Fz, Vx. Its error
 //! against the reference μ is taken on the rows where it has an estimate (state not
 //! `fallback`). Then:
@@ -28,9 +28,9 @@ use super::effects::{Ctx, Effect};
 use super::log::Log;
 use super::sim::{Mods, Out, Sim};
 use super::stats;
+use crate::mu::table_estimator::{Config, MuEstimator, Sample, State};
 use gough::math::Libm;
 use gough::mf::Params;
-use gough::mu::{Config, MuEstimator, Sample, State};
 use serde::Serialize;
 
 /// The μ verdict needs a shrink of at least this.

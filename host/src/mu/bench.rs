@@ -18,12 +18,12 @@
 //! - false change alarms on constant surfaces (the Gough estimator's `change` flag).
 
 use super::peers::{HsuGerdes, Row, SlipSlope};
+use super::table_estimator::{Config, Estimate, GoughTable, Hold, MuEstimator, Sample, State};
 use crate::rng::Rng;
 use crate::sim::{self, Log, Manoeuvre, Overrides, SimConfig};
 use clap::Args;
 use gough::math::Libm;
 use gough::mf::Params;
-use gough::mu::{Config, Estimate, GoughTable, Hold, MuEstimator, Sample, State};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 

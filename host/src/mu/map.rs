@@ -1,4 +1,4 @@
-//! `gough mu map`: from which utilisation the core's estimator reads μ on a given tyre.
+//! `gough mu map`: from which utilisation the table estimator reads μ on a given tyre.
 //!
 //! For each surface μ and load, the tyre's own Magic Formula (λμx = λμy = μ/μy0, pure side
 //! slip, at the file's reference speed LONGVL and the inclination γ asked, 0 by default) gives
@@ -16,9 +16,9 @@
 //! surface 0.1 grippier lies from it at the same force. Where that gap is smaller than the
 //! model's own uncertainty of the trail (`Config::trail_model_rel` of the largest trail, plus
 //! the residual torque's share), no amount of averaging can tell the two surfaces apart.
+use super::table_estimator::{Config, GoughTable, MuEstimator, Sample, State};
 use gough::math::Libm;
 use gough::mf::{self, Params};
-use gough::mu::{Config, GoughTable, MuEstimator, Sample, State};
 
 /// Surfaces of the map (μ).
 pub const MUS: [f64; 10] = [1.0, 0.9, 0.8, 0.7, 0.6, 0.5, 0.4, 0.3, 0.2, 0.1];

@@ -1,17 +1,20 @@
-//! Friction estimation on logs: the core's Gough-plot estimator (`gough::mu`) driven by CSV
-//! rows, the literature baselines ([`peers`]), and the closed-loop benchmark on the vehicle
-//! simulation ([`bench`](mod@bench)). Nothing here re-implements the estimator.
+//! Friction estimation on logs: the core's estimator (`gough::mu::bank`) driven by CSV rows, its
+//! peers — the previous table estimator ([`table_estimator`], moved here from the core) and the
+//! literature baselines ([`peers`]) — and the closed-loop benchmark on the vehicle simulation
+//! ([`bench`](mod@bench)). Nothing here re-implements the core's estimator.
 pub mod bench;
 pub mod bound;
 pub mod map;
 pub mod peers;
+pub mod table_estimator;
 
 use crate::csvio;
 use gough::math::{Backend, Float, Libm};
 use gough::mf::{Params, Side};
-use gough::mu::{bank, Config, Estimate, GoughTable, Hold, MuEstimator, Sample};
+use gough::mu::bank;
 use peers::{HsuGerdes, Row, SlipSlope};
 use std::path::Path;
+use table_estimator::{Config, Estimate, GoughTable, Hold, MuEstimator, Sample, State};
 
 /// The Gough table of `p` mounted on `mounted` (`GoughTable::for_wheel_into`), built in place on
 /// the heap: a debug build copies a value the size of an f64 table several times on its way
@@ -32,8 +35,8 @@ pub enum Method {
     /// The exact-model bank of the core (`gough::mu::bank`: Fy, Mz, Fz, Fx, κ, Vx, γ — never
     /// α): the current estimator.
     Bank,
-    /// The table estimator of the core (`gough::mu::MuEstimator`, uses Fy, Mz, Fz, Fx, Vx —
-    /// never α): the previous one, kept as a peer until the firmware runs the bank.
+    /// The table estimator ([`table_estimator::MuEstimator`], uses Fy, Mz, Fz, Fx, Vx — never
+    /// α): the previous one, kept as a peer in the bench.
     Gough,
     /// Hsu, Laws & Gerdes (2010): pneumatic trail with the slip angle.
     HsuGerdes,
@@ -41,7 +44,7 @@ pub enum Method {
     SlipSlope,
 }
 
-/// Float path of the core estimator.
+/// Float path of the estimator (the bank or the table estimator).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
 pub enum Precision {
     /// f64 (host).
@@ -116,9 +119,9 @@ pub fn bank_estimate(b: bank::Estimate<f64>) -> Estimate<f64> {
         sigma: b.sigma,
         sigma_model: 0.0,
         state: match b.state {
-            bank::State::Identifiable => gough::mu::State::Identifiable,
-            bank::State::NotIdentifiable => gough::mu::State::NotIdentifiable,
-            bank::State::Fallback => gough::mu::State::Fallback,
+            bank::State::Identifiable => State::Identifiable,
+            bank::State::NotIdentifiable => State::NotIdentifiable,
+            bank::State::Fallback => State::Fallback,
         },
         change: b.change,
     }

@@ -14,9 +14,9 @@
 //!   μ through a calibration curve — here computed from the same tyre model: the secant slope
 //!   at κ = 0.03 for friction levels 0.05…1.5 (every 0.05; [`MU_RANGE`]).
 
+use super::table_estimator::{Estimate, State};
 use gough::math::Libm;
 use gough::mf::{self, Input, Options, Params};
-use gough::mu::{Estimate, State};
 
 /// One log row as the peers see it (SI, ISO-W).
 #[derive(Debug, Clone, Copy, Default)]

@@ -21,11 +21,10 @@
 //! Leaves out: carcass compliance, anisotropic stiffness, load-dependent friction, camber and
 //! turn slip — the reasons the paper turns to the Magic Formula.
 
-use crate::math::{Backend, Float};
+use gough::math::{Backend, Float};
 
 /// A brush tyre. SI units.
 #[derive(Debug, Clone, Copy, PartialEq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Brush<F> {
     /// Cornering stiffness Cα0 at the reference load \[N/rad\] (> 0).
     pub c_alpha0: F,
@@ -64,7 +63,7 @@ impl<F: Float> Brush<F> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::math::Libm;
+    use gough::math::Libm;
 
     const B: Brush<f64> = Brush {
         c_alpha0: 80_000.0,

@@ -1,14 +1,14 @@
 //! The estimator on Magic Formula and brush "truth" (steady state, then noisy sequences).
 //! The closed-loop benchmark on simulated manoeuvres is `gough mu bench` (host).
 use super::*;
-use crate::math::Libm;
-use crate::mf::{self, Input, Options};
+use gough::math::Libm;
+use gough::mf::{self, Input, Options};
 use proptest::prelude::*;
 use std::vec::Vec;
 
 fn tyre() -> Params<f64> {
-    crate::tir::parse(include_str!(
-        "../../host-tests/data/tyres/MagicFormula61_Parameters.tir"
+    gough::tir::parse(include_str!(
+        "../../../../host-tests/data/tyres/MagicFormula61_Parameters.tir"
     ))
     .unwrap()
     .params
@@ -37,9 +37,8 @@ fn truth(p: &Params<f64>, mu: f64, mu0: f64, fz: f64, alpha: f64, kappa: f64) ->
     .unwrap()
 }
 
-#[cfg(feature = "fixed")]
 /// `tyre`'s table on the heap, built in place.
-fn boxed_table<F: crate::math::Float, M: crate::math::Backend<F>>(
+fn boxed_table<F: gough::math::Float, M: gough::math::Backend<F>>(
     tyre: &Params<F>,
 ) -> std::boxed::Box<GoughTable<F>> {
     let mut t = std::boxed::Box::new(GoughTable::zeroed());
@@ -542,8 +541,8 @@ fn tau_band_encloses_tau_at() {
     }
     // Built in place on the heap: a debug build would copy each table (up to 248 KB) on the
     // test thread's stack several times.
-    fn table<F: Float, M: crate::math::Backend<F>>(
-        p: &crate::mf::Params<F>,
+    fn table<F: Float, M: gough::math::Backend<F>>(
+        p: &gough::mf::Params<F>,
     ) -> std::boxed::Box<GoughTable<F>> {
         let mut t = std::boxed::Box::new(GoughTable::zeroed());
         t.for_wheel_into::<M>(p, None).unwrap();
@@ -554,9 +553,8 @@ fn tau_band_encloses_tau_at() {
     let n32 = check(&table::<f32, Libm>(&p.cast::<f32>()));
     assert!(n64 > 300_000 && n32 > 300_000, "{n64} {n32} points bounded");
     // Q31.32, whose products truncate: the margin covers them too.
-    #[cfg(feature = "fixed")]
     {
-        use crate::fixed::{Fix, FixMath};
+        use gough::fixed::{Fix, FixMath};
         let nfx = check(&table::<Fix, FixMath>(&tyre().cast::<Fix>()));
         assert!(nfx > 300_000, "{nfx} points bounded in Q31.32");
     }
@@ -670,13 +668,13 @@ fn an_outlier_run_does_not_span_a_hold() {
 /// The estimator in Q31.32 fixed point (issue 7: `fixed::Fix`, `FixMath`, the same code): its
 /// table and its readings agree with f64 on a surface sweep (μ 1.0 … 0.1, loads 0.5 … 1.5·Fz0,
 /// slip up to the peak, braking in the turn). Identifiability is decided alike except within
-/// rounding of a gate, and μ agrees within 1e-4. (This checks the arithmetic; the no-FPU bench
-/// in `firmware-m0` runs the same estimator on a Cortex-M3 and compares it with the host's.)
-#[cfg(feature = "fixed")]
+/// rounding of a gate, and μ agrees within 1e-4. (This checks the arithmetic; until issue 39
+/// the no-FPU bench in `firmware-m0` ran the same estimator on a Cortex-M3 and compared it with
+/// the host's; it now runs the bank.)
 #[test]
 fn fixed_point_estimator_reads_what_f64_reads() {
-    use crate::fixed::{Fix, FixMath};
-    use crate::math::Float;
+    use gough::fixed::{Fix, FixMath};
+    use gough::math::Float;
     let p = tyre();
     let pfx = p.cast::<Fix>();
     // Built in place on the heap: by value, the two tables (f64 and Q31.32, 257 KB each) and

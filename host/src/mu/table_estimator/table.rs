@@ -21,9 +21,9 @@
 //! the other way, τ at a force, is first bounded from 8 force cells per curve (the chord across
 //! a cell, and how far the curve strays from it), also without a search ([`Curve::tau_band`]).
 
-use crate::brush::Brush;
-use crate::math::{Backend, Float};
-use crate::mf::{self, combined::Arm, Input, Options, Params, Side};
+use super::brush::Brush;
+use gough::math::{Backend, Float};
+use gough::mf::{self, combined::Arm, Input, Options, Params, Side};
 
 /// Loads the table holds, as multiples of the reference load.
 pub const LOAD_NODES: [f64; 7] = [0.2, 0.4, 0.6, 0.8, 1.0, 1.35, 1.8];
