@@ -31,7 +31,10 @@ fn msg_decode_seeds_are_messages_of_this_version() {
         results |= matches!(m, Msg::CompactResults(_));
     }
     assert!(estimate, "a seed with an Estimate and its change flag");
-    assert!(batch && results, "seeds with a four-wheel batch and its results");
+    assert!(
+        batch && results,
+        "seeds with a four-wheel batch and its results"
+    );
 }
 
 #[test]
