@@ -579,6 +579,15 @@ fn dbc_lists_every_identifier() {
     assert!(f.contains(&format!("BO_ {} GOUGH_STATUS: 64", id::STATUS)));
     assert!(f.contains("SIG_VALTYPE_ 784 mu : 1;"));
     assert!(s.contains("\"Measurement\""));
+    // The four-wheel messages: the batch in 48-byte frames (byte signals), the results in one
+    // 64-byte frame with per-wheel physical signals (the status byte's bits among them).
+    assert!(f.contains(&format!("BO_ {} GOUGH_BATCH: 48", id::BATCH)));
+    assert!(f.contains(&format!("BO_ {} GOUGH_BATCH_RESULT: 64", id::BATCH_RESULT)));
+    assert!(f.contains(" SG_ RR_mu m133 : 408|16@1+ (0.0001,0) [0|0] \"\" HOST"));
+    assert!(f.contains(" SG_ FL_state m133 : 160|2@1+ (1,0) [0|0] \"\" HOST"));
+    assert!(f.contains(" SG_ FL_present m133 : 164|1@1+ (1,0) [0|0] \"\" HOST"));
+    assert!(f.contains("VAL_ 786 FR_state 0 \"Identifiable\""));
+    assert!(s.contains(&format!("BO_ {} GOUGH_BATCH_RESULT: 8", id::BATCH_RESULT)));
 }
 
 fn any_msg() -> impl Strategy<Value = Msg> {
