@@ -231,6 +231,12 @@
 #define GOUGH_MSG_ACK 10
 
 /**
+ * A complete message the C API does not map (the four-wheel `CompactBatch` and
+ * `CompactResults`, protocol types 0x08 and 0x85): only `kind` is set.
+ */
+#define GOUGH_MSG_OTHER 11
+
+/**
  * Bytes of `.tir` text in one parameter chunk, at most.
  */
 #define GOUGH_CHUNK_LEN 48

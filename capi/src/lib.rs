@@ -933,6 +933,9 @@ pub const GOUGH_MSG_ESTIMATE: u32 = 8;
 pub const GOUGH_MSG_STATUS: u32 = 9;
 /// Device → host: an acknowledgement (`ack_of`, `ack_seq`, `ack_code`, `ack_line`).
 pub const GOUGH_MSG_ACK: u32 = 10;
+/// A complete message the C API does not map (the four-wheel `CompactBatch` and
+/// `CompactResults`, protocol types 0x08 and 0x85): only `kind` is set.
+pub const GOUGH_MSG_OTHER: u32 = 11;
 /// Bytes of `.tir` text in one parameter chunk, at most.
 pub const GOUGH_CHUNK_LEN: usize = 48;
 /// Frames of one message, at most (classic CAN, 8 bytes each).
@@ -1190,6 +1193,7 @@ fn to_c(m: &Msg) -> gough_msg_t {
             o.estimate = estimate_c(e);
         }
         Msg::Status(_) => o.kind = GOUGH_MSG_STATUS,
+        Msg::CompactBatch(_) | Msg::CompactResults(_) => o.kind = GOUGH_MSG_OTHER,
         Msg::Ack(a) => {
             o.kind = GOUGH_MSG_ACK;
             o.ack_of = u32::from(a.of);

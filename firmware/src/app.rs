@@ -17,8 +17,9 @@
 
 use gough::mf::Params;
 use gough::proto::{
-    self, crc32, id, link, Ack, AckCode, Command, Estimate, Feed, Forces, Measurement, Msg,
-    MsgType, ParamSource, Reassembler, Settings, Status, MAX_TIR_LEN, MSG_BUF,
+    self, crc32, id, link, Ack, AckCode, Command, CompactBatch, CompactResults,
+    CompactWheelResult, Estimate, Feed, Forces, Measurement, Msg, MsgType, ParamSource,
+    Reassembler, Settings, Status, MAX_TIR_LEN, MSG_BUF,
 };
 use gough::wheel::{self, Wheel};
 
@@ -42,8 +43,16 @@ pub const MATH_NAME: &str = if cfg!(feature = "fast") {
 const TX_ATTEMPTS: u32 = 100_000;
 /// Frames handled per [`App::poll`] call, so one call stays short.
 const RX_BUDGET: usize = 64;
-/// Measurements waiting for the next tick.
+/// Measurements (single-wheel or four-wheel batches) waiting for the next tick.
 pub const QUEUE: usize = 16;
+
+/// A queued piece of work: one wheel's measurement, or a four-wheel batch answered by one
+/// `CompactResults`; each with the sequence number of its frames.
+#[derive(Debug, Clone, Copy)]
+enum Job {
+    Single(Measurement, u8),
+    Batch(CompactBatch),
+}
 
 /// What the board must do after [`App::poll`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq, defmt::Format)]
@@ -73,12 +82,13 @@ pub struct App {
     rx_meas: Reassembler<MSG_BUF>,
     rx_cfg: Reassembler<MSG_BUF>,
     rx_compact: Reassembler<MSG_BUF>,
-    queue: heapless::Deque<(Measurement, u8), QUEUE>,
+    rx_batch: Reassembler<MSG_BUF>,
+    queue: heapless::Deque<Job, QUEUE>,
     settings: Settings,
     eval_errors: u32,
     tx_messages: u32,
     tx_errors: u32,
-    tx_seq: [u8; 2],
+    tx_seq: [u8; 3],
     /// Transport errors the board counted (SLCAN lines, overruns); reported in `Status`.
     pub link_errors: u32,
     /// Whether `Command::Stop` is honoured (QEMU) or answered `NotSupported`.
@@ -110,6 +120,7 @@ impl App {
             rx_meas: Reassembler::new(),
             rx_cfg: Reassembler::new(),
             rx_compact: Reassembler::new(),
+            rx_batch: Reassembler::new(),
             queue: heapless::Deque::new(),
             settings: Settings {
                 limits: true,
@@ -120,7 +131,7 @@ impl App {
             eval_errors: 0,
             tx_messages: 0,
             tx_errors: 0,
-            tx_seq: [0; 2],
+            tx_seq: [0; 3],
             link_errors: 0,
             can_stop: false,
             stack_probe: None,
@@ -186,6 +197,7 @@ impl App {
         let mut rx = *self.rx_meas.counters();
         rx.add(self.rx_cfg.counters());
         rx.add(self.rx_compact.counters());
+        rx.add(self.rx_batch.counters());
         Status {
             firmware: crate::VERSION,
             proto: proto::PROTO_VERSION,
@@ -202,7 +214,11 @@ impl App {
 
     fn send<C: embedded_can::nb::Can>(&mut self, can: &mut C, msg: &Msg) {
         let cid = id::of(msg.msg_type());
-        let k = usize::from(cid == id::STATUS);
+        let k = match cid {
+            id::STATUS => 1,
+            id::BATCH_RESULT => 2,
+            _ => 0,
+        };
         let seq = self.tx_seq.get(k).copied().unwrap_or(0);
         if let Some(s) = self.tx_seq.get_mut(k) {
             *s = seq.wrapping_add(1);
@@ -231,6 +247,7 @@ impl App {
         let _ = self.rx_meas.poll(now_ms);
         let _ = self.rx_cfg.poll(now_ms);
         let _ = self.rx_compact.poll(now_ms);
+        let _ = self.rx_batch.poll(now_ms);
         for _ in 0..RX_BUDGET {
             let frame = match can.receive() {
                 Ok(f) => f,
@@ -247,6 +264,7 @@ impl App {
                 Some(id::MEASUREMENT) => self.rx_meas.feed(data, now_ms),
                 Some(id::CONFIG) => self.rx_cfg.feed(data, now_ms),
                 Some(id::COMPACT) => self.rx_compact.feed(data, now_ms),
+                Some(id::BATCH) => self.rx_batch.feed(data, now_ms),
                 _ => continue, // other traffic on the bus
             };
             match fed {
@@ -275,7 +293,13 @@ impl App {
         };
         match msg {
             Msg::Measurement(m) => {
-                if self.queue.push_back((m, seq)).is_err() {
+                if self.queue.push_back(Job::Single(m, seq)).is_err() {
+                    self.eval_errors = self.eval_errors.wrapping_add(1);
+                    defmt::warn!("measurement queue full");
+                }
+            }
+            Msg::CompactBatch(b) => {
+                if self.queue.push_back(Job::Batch(b)).is_err() {
                     self.eval_errors = self.eval_errors.wrapping_add(1);
                     defmt::warn!("measurement queue full");
                 }
@@ -372,17 +396,30 @@ impl App {
                 self.ack(can, MsgType::Command, seq, AckCode::NotSupported);
             }
             // Device → host messages on our receive identifiers: not for us.
-            Msg::Forces(_) | Msg::Estimate(_) | Msg::Status(_) | Msg::Ack(_) => {}
+            Msg::Forces(_)
+            | Msg::Estimate(_)
+            | Msg::Status(_)
+            | Msg::Ack(_)
+            | Msg::CompactResults(_) => {}
             Msg::CompactMeasurement(_) => {} // turned into a Measurement above
         }
         None
     }
 
     /// One fixed-rate step: every queued measurement through its wheel's pipeline → `Forces`
-    /// (or an `Ack` saying why not), then `Estimate` when the estimator runs.
+    /// (or an `Ack` saying why not), then `Estimate` when the estimator runs; every queued
+    /// batch → one `CompactResults` ([`App::process_batch`]).
     pub fn tick<C: embedded_can::nb::Can>(&mut self, can: &mut C, now_ms: u32) {
         self.now_ms = now_ms;
-        while let Some((m, seq)) = self.queue.pop_front() {
+        while let Some(job) = self.queue.pop_front() {
+            let (m, seq) = match job {
+                Job::Single(m, seq) => (m, seq),
+                Job::Batch(b) => {
+                    let r = self.process_batch(&b);
+                    self.send(can, &Msg::CompactResults(r));
+                    continue;
+                }
+            };
             let (forces, estimate) = self.process(&m);
             match forces {
                 Ok(f) => self.send(can, &Msg::Forces(f)),
@@ -412,6 +449,27 @@ impl App {
             defmt::info!("wheel {}: change of surface, mu {}", m.wheel, e.mu);
         }
         (forces, estimate)
+    }
+
+    /// A four-wheel batch: each present wheel's measurement through its pipeline as
+    /// [`App::process`] does, in wheel order, gathered into one `CompactResults`. A wheel
+    /// without forces (no parameters, no slip, evaluation error; counted in `eval_errors`) or
+    /// with a value the message cannot represent gets "not available" there
+    /// (`CompactWheelResult::or_na`).
+    pub fn process_batch(&mut self, b: &CompactBatch) -> CompactResults {
+        let mut r = CompactResults {
+            t_us: b.t_us,
+            ..CompactResults::default()
+        };
+        for (m, out) in b.measurements().iter().zip(r.wheels.iter_mut()) {
+            let Some(m) = m else { continue };
+            let (forces, estimate) = self.process(m);
+            if forces.is_err() {
+                self.eval_errors = self.eval_errors.wrapping_add(1);
+            }
+            *out = CompactWheelResult::or_na(forces.ok().as_ref(), estimate.as_ref());
+        }
+        r
     }
 
     /// The steady-state forces of one sample, without the filter (the selftest's oracle point).

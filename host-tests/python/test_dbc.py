@@ -29,8 +29,8 @@ def load(fd):
     return cantools.database.load_string(text, database_format="dbc", strict=True)
 
 
-def frames(fd, compact=False):
-    flags = (["--fd"] if fd else []) + (["--compact"] if compact else [])
+def frames(fd, compact=False, batch=False):
+    flags = (["--fd"] if fd else []) + (["--compact"] if compact else []) + (["--batch"] if batch else [])
     out = gough("proto", "frames", "--tir", str(TIR), "--log", str(LOG), *flags)
     return [json.loads(line) for line in out.splitlines()]
 
@@ -56,12 +56,15 @@ COMPACT = [("Fz", "fz", 0.5), ("Fy", "fy", 1.0), ("Mz", "mz", 0.1), ("Fx", "fx",
            ("kappa", "kappa", 1e-4), ("gamma", "gamma", 1e-4)]
 
 
-@pytest.mark.parametrize("fd,compact", [(False, False), (True, False), (False, True), (True, True)],
-                         ids=["classic", "fd", "classic-compact", "fd-compact"])
-def test_every_frame_decodes_to_the_hosts_values(fd, compact):
+@pytest.mark.parametrize("fd,compact,batch", [(False, False, False), (True, False, False),
+                                              (False, True, False), (True, True, False),
+                                              (False, False, True), (True, False, True)],
+                         ids=["classic", "fd", "classic-compact", "fd-compact", "classic-batch",
+                              "fd-batch"])
+def test_every_frame_decodes_to_the_hosts_values(fd, compact, batch):
     db = load(fd)
-    msgs = frames(fd, compact)
-    assert len(msgs) > 500
+    msgs = frames(fd, compact, batch)
+    assert len(msgs) > (150 if batch else 500)
     seen = set()
     for m in msgs:
         dbm = db.get_message_by_frame_id(m["id"])
@@ -119,9 +122,38 @@ def test_every_frame_decodes_to_the_hosts_values(fd, compact):
                 assert raw[s] == want[f], (s, raw[s], want[f])
                 assert sig[s] == pytest.approx(want[f] * scale, rel=1e-12, abs=1e-12)
             seen.add(("CompactPhysical", False))
+        if fd and m["type"] == "CompactResults":
+            data = bytes.fromhex(m["frames"][0])
+            assert len(m["frames"]) == 1 and len(data) == 64
+            sig = dbm.decode(data)
+            raw = dbm.decode(data, scaling=False, decode_choices=False)
+            want = m["msg"]
+            assert sig["results_t_us"] == want["t_us"]
+            enc = bytes.fromhex(m["encoded"])
+            assert sig["results_crc"] == int.from_bytes(enc[-4:], "little")
+            for w, name in zip(want["wheels"], ("FL", "FR", "RL", "RR")):
+                for s, scale in (("Fx", 1.0), ("Fy", 1.0), ("Mz", 0.1), ("mu", 1e-4),
+                                 ("sigma", 1e-4), ("mu_min", 0.01)):
+                    assert raw[f"{name}_{s}"] == w[s.lower() if s != "mu_min" else s]
+                    assert sig[f"{name}_{s}"] == pytest.approx(raw[f"{name}_{s}"] * scale, rel=1e-9)
+                st = w["status"]
+                assert raw[f"{name}_state"] == st & 3
+                assert raw[f"{name}_change"] == (st >> 2) & 1
+                assert raw[f"{name}_mf_flags"] == (st >> 3) & 1
+                assert raw[f"{name}_present"] == (st >> 4) & 1
+                if st & 16:
+                    assert str(sig[f"{name}_present"]) == "Present"
+                    seen.add(("ResultsPhysical", str(sig[f"{name}_state"])))
     # What the replay puts on the bus: measurements, forces, estimates; continuation frames
     # on classic CAN.
     kinds = {t for t, _ in seen}
+    if batch:
+        assert {"CompactBatch", "CompactResults"} == kinds - {"ResultsPhysical"}
+        assert ("CompactBatch", True) in seen  # two frames (FD) or 14 (classic)
+        if fd:
+            states = {k for t, k in seen if t == "ResultsPhysical"}
+            assert len(states) >= 2, states
+        return
     meas = "CompactMeasurement" if compact else "Measurement"
     assert {meas, "Forces", "Estimate"} <= kinds
     if not fd:

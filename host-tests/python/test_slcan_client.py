@@ -13,7 +13,8 @@ start with the parameters, at boot), sends measurements, decodes the predicted f
 `gough mf eval --precision f32` (the host's f32 run of the same core, with libm: the firmware's
 default build runs the `fast` backend, so the check allows 2e-5 of Fz, ten times the measured
 difference between the two backends; a misplaced byte is off by far more), decodes the estimate
-that follows each; sends a message with a broken CRC and checks the device counted it; then stops
+that follows each; sends the four wheels as one CompactBatch and decodes the CompactResults
+against the same samples sent as single-wheel CompactMeasurements; sends a message with a broken CRC and checks the device counted it; then stops
 the firmware. Exit code 0 = pass.
 """
 import argparse
@@ -30,7 +31,10 @@ import can
 
 PROTO_VERSION = 2
 ID_MEASUREMENT, ID_CONFIG, ID_RESULT, ID_STATUS = 0x300, 0x301, 0x310, 0x311
+ID_COMPACT, ID_BATCH, ID_BATCH_RESULT = 0x302, 0x303, 0x312
 T_MEASUREMENT, T_COMMAND, T_FORCES, T_ESTIMATE, T_STATUS, T_ACK = 0x01, 0x06, 0x81, 0x82, 0x83, 0x84
+T_COMPACT, T_BATCH, T_BATCH_RESULTS = 0x07, 0x08, 0x85
+ABSENT = -32768  # compact fields: an absent optional value
 CMD_STATUS_REQUEST, CMD_STOP = 1, 2
 
 
@@ -76,6 +80,45 @@ def measurement(wheel, t_us, fz, fy, mz, vx, alpha, kappa):
     return message(T_MEASUREMENT, body)
 
 
+def compact_fields(fz, fy, mz, fx, vx, omega, alpha, kappa, gamma):
+    """A compact measurement's scaled fields (docs/protocol.md): Fz u16 0.5 N, Fy/Fx i16 N,
+    Mz i16 0.1 N m, vx/omega i16 0.01, alpha/kappa/gamma i16 1e-4; None -> -32768."""
+    c = lambda x, unit: ABSENT if x is None else int(round(x / unit))
+    return struct.pack("<Hhhhhhhhh", int(round(fz / 0.5)), c(fy, 1), c(mz, 0.1), c(fx, 1),
+                       c(vx, 0.01), c(omega, 0.01), c(alpha, 1e-4), c(kappa, 1e-4), c(gamma, 1e-4))
+
+
+def compact_measurement(wheel, t_us, fields):
+    return message(T_COMPACT, bytes([wheel]) + struct.pack("<I", t_us) + fields)
+
+
+def batch(t_us, wheels):
+    """CompactBatch: t_us u32 LE, present mask u8, then four wheels' 18-byte compact fields
+    (zeros for a wheel not present). `wheels`: {index: fields}."""
+    body = struct.pack("<IB", t_us, sum(1 << w for w in wheels))
+    for w in range(4):
+        body += wheels.get(w, bytes(18))
+    return message(T_BATCH, body)
+
+
+def decode_batch_results(b):
+    """CompactResults: t_us u32 LE, then per wheel Fx, Fy i16 [N], Mz i16 [0.1 N m], mu, sigma
+    u16 [1e-4], mu_min u8 [0.01], status u8 (state bits 0-1, change bit 2, MF flags bit 3,
+    present bit 4); -32768 / 65535 / 255: not available."""
+    assert len(b) == 4 + 4 * 12, "results body length"
+    (t_us,) = struct.unpack("<I", b[:4])
+    wheels = []
+    for w in range(4):
+        fx, fy, mz, mu, sigma, mu_min, status = struct.unpack("<hhhHHBB", b[4 + 12 * w:16 + 12 * w])
+        na = lambda v, n, unit: None if v == n else v * unit
+        wheels.append(dict(fx=na(fx, -32768, 1.0), fy=na(fy, -32768, 1.0), mz=na(mz, -32768, 0.1),
+                           mu=na(mu, 65535, 1e-4), sigma=na(sigma, 65535, 1e-4),
+                           mu_min=na(mu_min, 255, 0.01), state=status & 3,
+                           change=bool(status & 4), mf_flags=bool(status & 8),
+                           present=bool(status & 16)))
+    return t_us, wheels
+
+
 class Receiver:
     def __init__(self, bus):
         self.bus = bus
@@ -85,7 +128,7 @@ class Receiver:
         end = time.time() + timeout
         while time.time() < end:
             f = self.bus.recv(timeout=max(0.01, end - time.time()))
-            if f is None or f.arbitration_id not in (ID_RESULT, ID_STATUS):
+            if f is None or f.arbitration_id not in (ID_RESULT, ID_STATUS, ID_BATCH_RESULT):
                 continue
             d = bytes(f.data)
             first, last, seq = d[0] & 0x80, d[0] & 0x40, d[1]
@@ -184,7 +227,7 @@ def main():
     rx = Receiver(bus)
     fails = 0
     sent = 0  # good messages sent (the device's `messages` counter)
-    seq = {ID_MEASUREMENT: 0, ID_CONFIG: 0}
+    seq = {ID_MEASUREMENT: 0, ID_CONFIG: 0, ID_COMPACT: 0, ID_BATCH: 0}
 
     def send(cid, msg):
         nonlocal sent
@@ -239,6 +282,49 @@ def main():
                       f"mu_min {mu_min:.3g} change {int(change)}")
             else:
                 print(f"FAIL expected an Estimate after the forces, got type {t:#x}")
+            fails += not ok
+
+        # The four wheels in one batch, answered by one CompactResults; then the same samples
+        # as single-wheel compact measurements (the same scaled values, so the same input to the
+        # pipeline), each answered by Forces + Estimate. No Vx: the steady-state path, so the
+        # forces do not depend on the order. The estimators have seen one sample more for the
+        # singles, so the estimates are compared loosely.
+        T_B = 50_000
+        fields = {w: compact_fields(fz, -1000.0, 10.0, None, None, None, al, ka, None)
+                  for w, fz, al, ka, _ in cases}
+        send(ID_BATCH, batch(T_B, fields))
+        while True:
+            t, body = rx.recv()
+            if t == T_BATCH_RESULTS:
+                break
+        bt, bw = decode_batch_results(body)
+        ok = bt == T_B and all(w["present"] for w in bw)
+        print(f"{'ok  ' if ok else 'FAIL'} batch of four wheels answered by one results message, t_us {bt}")
+        fails += not ok
+        for w, *_ in cases:
+            send(ID_COMPACT, compact_measurement(w, T_B, fields[w]))
+            t, body = rx.recv()
+            if t != T_FORCES:
+                print(f"FAIL wheel {w}: expected Forces, got type {t:#x}")
+                fails += 1
+                continue
+            _, ft, fx, fy, mz, flags = decode_forces(body)
+            t, body = rx.recv()
+            est = decode_estimate(body) if t == T_ESTIMATE else None
+            r = bw[w]
+            ok = (ft == T_B and r["fx"] is not None and abs(r["fx"] - fx) <= 0.5 + 1e-3
+                  and abs(r["fy"] - fy) <= 0.5 + 1e-3 and abs(r["mz"] - mz) <= 0.05 + 1e-4
+                  and r["mf_flags"] == (flags != 0))
+            if est is None:
+                ok = False
+            else:
+                _, _, mu, sigma, state, mu_min, change = est
+                ok = ok and r["mu"] is not None and abs(r["mu"] - mu) <= 0.1 and r["state"] in (0, 1, 2)
+                ok = ok and r["mu_min"] is not None and r["mu_min"] <= mu_min + 0.1
+            print(f"{'ok  ' if ok else 'FAIL'} batch wheel {w}: Fx {r['fx']} Fy {r['fy']} Mz {r['mz']} "
+                  f"mu {r['mu']} sigma {r['sigma']} mu_min {r['mu_min']} state {r['state']} | single: "
+                  f"Fx {fx:.7g} Fy {fy:.7g} Mz {mz:.7g}" + (f" mu {est[2]:.4g} sigma {est[3]:.4g} "
+                  f"mu_min {est[5]:.3g} state {est[4]}" if est else " no estimate"))
             fails += not ok
 
         # A damaged message: the device must drop it and count it.

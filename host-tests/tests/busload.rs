@@ -33,8 +33,16 @@ fn frame_counts_are_the_segmenters() {
     assert_eq!(count(&r[0], Mtu::Classic), 5);
     assert_eq!(count(&r[1], Mtu::Classic), 5);
     assert_eq!(count(&r[0], Mtu::Fd) + count(&r[1], Mtu::Fd), 2);
+    // The four-wheel batch (83 bytes): two 48-byte FD frames, 14 classic; its results (58
+    // bytes): one 64-byte FD frame, 10 classic.
+    assert!(matches!(busload::batch(), Msg::CompactBatch(_)));
+    assert!(matches!(busload::batch_results(), Msg::CompactResults(_)));
+    assert_eq!(count(&busload::batch(), Mtu::Fd), 2);
+    assert_eq!(count(&busload::batch(), Mtu::Classic), 14);
+    assert_eq!(count(&busload::batch_results(), Mtu::Fd), 1);
+    assert_eq!(count(&busload::batch_results(), Mtu::Classic), 10);
     for bus in &BUSES {
-        for (_, msgs) in busload::traffics() {
+        for (_, msgs, _) in busload::traffics() {
             let n: usize = msgs.iter().map(|m| count(m, bus.mtu)).sum();
             assert_eq!(busload::per_sample(&msgs, bus).0, n);
         }
@@ -56,9 +64,11 @@ fn cli_table_rows_follow_from_the_frame_counts() {
             let head = format!("| {} | {rate} Hz |", bus.name);
             let line = text.lines().find(|l| l.starts_with(&head)).expect(&head);
             let cells: Vec<&str> = line[head.len()..].split('|').map(str::trim).collect();
-            for (k, (_, msgs)) in tr.iter().enumerate() {
+            for (k, (_, msgs, per)) in tr.iter().enumerate() {
                 let n: usize = msgs.iter().map(|m| count(m, bus.mtu)).sum();
-                let fps = n as f64 * rate * WHEELS;
+                // Per wheel-sample (× 4 wheels) or per four-wheel batch (× 1).
+                assert!(*per == WHEELS || *per == 1.0);
+                let fps = n as f64 * rate * per;
                 assert!(
                     cells[k].starts_with(&format!("{fps:.0} f/s")),
                     "{head} {}: {} != {fps}",
@@ -84,4 +94,20 @@ fn cli_table_rows_follow_from_the_frame_counts() {
     // Classic 1 Mbit/s, 1 kHz, all fields both ways: 4 × 1000 × (10 + 10) frames of 135 bits
     // or fewer: does not fit.
     assert!(text.contains("| classic 1 Mbit/s | 1000 Hz | 40000 f/s"));
+    // Four wheels at 1 kHz both ways as batches: 3 frames per millisecond on CAN FD (two of
+    // 48 bytes in, one of 64 out), fits 500 k / 5 M, not 500 k / 2 M.
+    let last = |bus: &str| {
+        let head = format!("| {bus} | 1000 Hz |");
+        let line = text.lines().find(|l| l.starts_with(&head)).unwrap();
+        line.trim_end_matches('|')
+            .rsplit('|')
+            .next()
+            .unwrap()
+            .trim()
+            .to_string()
+    };
+    let fd5 = last("FD 500 k / 5 M");
+    assert!(fd5.starts_with("3000 f/s") && !fd5.contains('✗'), "{fd5}");
+    let fd2 = last("FD 500 k / 2 M");
+    assert!(fd2.starts_with("3000 f/s") && fd2.contains('✗'), "{fd2}");
 }

@@ -22,13 +22,19 @@ fn seeds(dir: &str) -> Vec<(String, Vec<u8>)> {
 fn msg_decode_seeds_are_messages_of_this_version() {
     let s = seeds("msg_decode");
     assert!(s.len() >= 4);
-    let mut estimate = false;
+    let (mut estimate, mut batch, mut results) = (false, false, false);
     for (name, b) in &s {
         assert_eq!(b.first(), Some(&PROTO_VERSION), "{name}");
         let m = Msg::decode(b).unwrap_or_else(|e| panic!("{name}: {e:?}"));
         estimate |= matches!(m, Msg::Estimate(e) if e.change);
+        batch |= matches!(m, Msg::CompactBatch(b) if b.present != 0);
+        results |= matches!(m, Msg::CompactResults(_));
     }
     assert!(estimate, "a seed with an Estimate and its change flag");
+    assert!(
+        batch && results,
+        "seeds with a four-wheel batch and its results"
+    );
 }
 
 #[test]

@@ -1,6 +1,7 @@
 //! Bus load of the protocol: frames per second and the share of the bus they take, for four
 //! wheels streaming [`Msg::Measurement`]s and the device answering each with [`Msg::Forces`]
-//! and [`Msg::Estimate`] (`gough proto load`, the table in docs/protocol.md).
+//! and [`Msg::Estimate`], or the four wheels in one [`Msg::CompactBatch`] answered by one
+//! [`Msg::CompactResults`] (`gough proto load`, the table in docs/protocol.md).
 //!
 //! Frame counts and lengths are the core's: each message is cut by [`Segmenter`], and every
 //! frame it writes is timed. Frame time in bits, 11-bit identifiers, worst-case stuffing:
@@ -16,7 +17,8 @@
 //! other traffic of a vehicle bus and for retransmissions after errors).
 
 use gough::proto::{
-    CompactMeasurement, Estimate, EstimateState, Forces, Measurement, Msg, Mtu, Segmenter, Wheel,
+    CompactBatch, CompactMeasurement, CompactResults, CompactWheelResult, Estimate, EstimateState,
+    Forces, Measurement, Msg, Mtu, Segmenter, Wheel,
 };
 use std::fmt::Write as _;
 
@@ -163,20 +165,70 @@ pub fn compact() -> Msg {
     }
 }
 
-/// One traffic of the table: a name and the messages per wheel-sample.
-pub fn traffics() -> [(&'static str, Vec<Msg>); 7] {
+/// The four wheels' measurements with every optional field as one [`CompactBatch`].
+pub fn batch() -> Msg {
+    let ms = Wheel::ALL.map(|w| match measurement(true) {
+        Msg::Measurement(m) => Measurement { wheel: w, ..m },
+        _ => Measurement::default(),
+    });
+    CompactBatch::new(1_000_000, &ms)
+        .map(Msg::CompactBatch)
+        .unwrap_or(Msg::Measurement(ms[0]))
+}
+
+/// The four wheels' [`results`] as one [`CompactResults`].
+pub fn batch_results() -> Msg {
+    let w = match results() {
+        [Msg::Forces(f), Msg::Estimate(e)] => CompactWheelResult::or_na(Some(&f), Some(&e)),
+        _ => CompactWheelResult::default(),
+    };
+    Msg::CompactResults(CompactResults {
+        t_us: 1_000_000,
+        wheels: [w; 4],
+    })
+}
+
+/// Messages per sample instant of the four wheels: per wheel ([`WHEELS`]) or one for all four.
+pub const PER_WHEEL: f64 = WHEELS;
+/// One message (set) carries all four wheels.
+pub const PER_BATCH: f64 = 1.0;
+
+/// One traffic of the table: a name, the messages it sends per unit, and the units per sample
+/// instant ([`PER_WHEEL`]: the messages are sent for each wheel; [`PER_BATCH`]: once for the
+/// four wheels).
+pub fn traffics() -> [(&'static str, Vec<Msg>, f64); 10] {
     let r = results();
     [
-        ("measurement, all fields", vec![measurement(true)]),
-        ("measurement, no optional fields", vec![measurement(false)]),
-        ("compact measurement", vec![compact()]),
-        ("results (Forces + Estimate)", r.to_vec()),
-        ("both ways, all fields", vec![measurement(true), r[0], r[1]]),
+        (
+            "measurement, all fields",
+            vec![measurement(true)],
+            PER_WHEEL,
+        ),
+        (
+            "measurement, no optional fields",
+            vec![measurement(false)],
+            PER_WHEEL,
+        ),
+        ("compact measurement", vec![compact()], PER_WHEEL),
+        ("results (Forces + Estimate)", r.to_vec(), PER_WHEEL),
+        (
+            "both ways, all fields",
+            vec![measurement(true), r[0], r[1]],
+            PER_WHEEL,
+        ),
         (
             "both ways, no optional fields",
             vec![measurement(false), r[0], r[1]],
+            PER_WHEEL,
         ),
-        ("both ways, compact", vec![compact(), r[0], r[1]]),
+        ("both ways, compact", vec![compact(), r[0], r[1]], PER_WHEEL),
+        ("four-wheel batch in", vec![batch()], PER_BATCH),
+        ("four-wheel results out", vec![batch_results()], PER_BATCH),
+        (
+            "both ways, four-wheel",
+            vec![batch(), batch_results()],
+            PER_BATCH,
+        ),
     ]
 }
 
@@ -185,7 +237,7 @@ pub fn table(markdown: bool) -> String {
     let tr = traffics();
     let mut s = String::new();
     let _ = write!(s, "| bus | rate/wheel |");
-    for (name, _) in &tr {
+    for (name, ..) in &tr {
         let _ = write!(s, " {name} |");
     }
     let _ = writeln!(s);
@@ -195,10 +247,10 @@ pub fn table(markdown: bool) -> String {
     for bus in &BUSES {
         for rate in RATES {
             let _ = write!(s, "| {} | {rate} Hz |", bus.name);
-            for (_, msgs) in &tr {
+            for (_, msgs, per) in &tr {
                 let (n, t) = per_sample(msgs, bus);
-                let fps = n as f64 * rate * WHEELS;
-                let load = t * rate * WHEELS;
+                let fps = n as f64 * rate * per;
+                let load = t * rate * per;
                 let mark = if load <= FITS { "" } else { " ✗" };
                 let _ = write!(s, " {fps:.0} f/s, {:.0} %{mark} |", load * 100.0);
             }
@@ -207,7 +259,7 @@ pub fn table(markdown: bool) -> String {
     }
     let _ = writeln!(
         s,
-        "\n{} wheels; frames per wheel-sample and bus time from the core's segmenter, worst-case bit stuffing, 11-bit identifiers; ✗: above {:.0} % load.",
+        "\n{} wheels; frames per wheel-sample (per four-wheel sample for the batch columns) and bus time from the core's segmenter, worst-case bit stuffing, 11-bit identifiers; ✗: above {:.0} % load.",
         WHEELS,
         FITS * 100.0
     );

@@ -10,14 +10,19 @@
 //!   bytes as `next_bytes*`.
 //!
 //! Each identifier has one frame length ([`Mtu::frame_len`]): 8 on classic CAN; 64 on CAN FD, 32
-//! on [`id::RESULT`] and [`id::COMPACT`]. On CAN FD a whole [`super::Forces`],
+//! on [`id::RESULT`] and [`id::COMPACT`], 48 on [`id::BATCH`]. On CAN FD a whole [`super::Forces`],
 //! [`super::Estimate`] or [`super::CompactMeasurement`] fits one frame, and postcard puts their
 //! fields at fixed offsets (one-byte enums, fixed-width integers, `f32`), so the FD file
 //! multiplexes these identifiers' first frames on `msg_type` and gives the bodies as physical
 //! signals: `wheel`, `t_us`, `Fx`, `Fy`, `Mz` and `flags` of `Forces`; `wheel`, `t_us`, `mu`,
 //! `sigma`, `state` (a value table), `mu_min` and `change` (the change-of-surface flag, 0/1) of
 //! `Estimate`; the scaled fields of `CompactMeasurement`;
-//! and each message's CRC-32. A bus log then shows μ per wheel without gough. On classic CAN
+//! and each message's CRC-32; on [`id::BATCH_RESULT`] the four-wheel `CompactResults` (one
+//! 64-byte frame): `results_t_us`, per wheel (`FL_`, `FR_`, `RL_`, `RR_`) `Fx`, `Fy`, `Mz`,
+//! `mu`, `sigma`, `mu_min` (scaled), `state` (a value table with `NoEstimate`), `change`,
+//! `mf_flags`, `present` (bits of the status byte), and `results_crc`. The four-wheel
+//! `CompactBatch` ([`id::BATCH`], two 48-byte frames) has byte signals only.
+//! A bus log then shows μ per wheel without gough. On classic CAN
 //! these messages span several frames, and only their bytes are signals.
 
 use super::segmenter::Mtu;
@@ -67,6 +72,8 @@ enum Kind {
     I,
     /// IEEE-754 `f32`, little endian.
     F,
+    /// Unsigned bits `start .. start + len` of the byte at the offset.
+    Bits(usize, usize),
 }
 
 /// One physical signal of a single-frame body on CAN FD: name, byte offset in the body, bytes,
@@ -134,11 +141,100 @@ const COMPACT: [Field; 12] = [
     ("crc", 23, 4, Kind::U, 1.0, "", &[]),
 ];
 
-/// The single-frame messages whose bodies are signals on CAN FD, by identifier.
-const BODIES: [(u16, MsgType, &[Field]); 3] = [
+const STATES4: &[&str] = &["Identifiable", "NotIdentifiable", "Fallback", "NoEstimate"];
+const CHANGE: &[&str] = &["NoChange", "Change"];
+const PRESENT: &[&str] = &["Absent", "Present"];
+
+/// One wheel's signals of `CompactResults` (12 bytes from `4 + 12 i`): Fx, Fy, Mz (i16),
+/// μ, σ (u16), μ_min (u8), status (state bits 0–1, change bit 2, MF flags bit 3, present bit 4).
+/// Counts −32768 (i16), 65535 (u16), 255 (u8) mean "not available".
+macro_rules! wheel_results {
+    ($b:expr, $fx:literal, $fy:literal, $mz:literal, $mu:literal, $sigma:literal, $mu_min:literal,
+     $state:literal, $change:literal, $flags:literal, $present:literal) => {
+        [
+            ($fx, $b, 2, Kind::I, 1.0, "N", &[]),
+            ($fy, $b + 2, 2, Kind::I, 1.0, "N", &[]),
+            ($mz, $b + 4, 2, Kind::I, 0.1, "N.m", &[]),
+            ($mu, $b + 6, 2, Kind::U, 1e-4, "", &[]),
+            ($sigma, $b + 8, 2, Kind::U, 1e-4, "", &[]),
+            ($mu_min, $b + 10, 1, Kind::U, 0.01, "", &[]),
+            ($state, $b + 11, 1, Kind::Bits(0, 2), 1.0, "", STATES4),
+            ($change, $b + 11, 1, Kind::Bits(2, 1), 1.0, "", CHANGE),
+            ($flags, $b + 11, 1, Kind::Bits(3, 1), 1.0, "", &[]),
+            ($present, $b + 11, 1, Kind::Bits(4, 1), 1.0, "", PRESENT),
+        ]
+    };
+}
+
+const RESULTS_FL: [Field; 10] = wheel_results!(
+    4,
+    "FL_Fx",
+    "FL_Fy",
+    "FL_Mz",
+    "FL_mu",
+    "FL_sigma",
+    "FL_mu_min",
+    "FL_state",
+    "FL_change",
+    "FL_mf_flags",
+    "FL_present"
+);
+const RESULTS_FR: [Field; 10] = wheel_results!(
+    16,
+    "FR_Fx",
+    "FR_Fy",
+    "FR_Mz",
+    "FR_mu",
+    "FR_sigma",
+    "FR_mu_min",
+    "FR_state",
+    "FR_change",
+    "FR_mf_flags",
+    "FR_present"
+);
+const RESULTS_RL: [Field; 10] = wheel_results!(
+    28,
+    "RL_Fx",
+    "RL_Fy",
+    "RL_Mz",
+    "RL_mu",
+    "RL_sigma",
+    "RL_mu_min",
+    "RL_state",
+    "RL_change",
+    "RL_mf_flags",
+    "RL_present"
+);
+const RESULTS_RR: [Field; 10] = wheel_results!(
+    40,
+    "RR_Fx",
+    "RR_Fy",
+    "RR_Mz",
+    "RR_mu",
+    "RR_sigma",
+    "RR_mu_min",
+    "RR_state",
+    "RR_change",
+    "RR_mf_flags",
+    "RR_present"
+);
+/// `CompactResults`' body: t_us (4), the four wheels (12 bytes each), then the CRC-32.
+const RESULTS_T: [Field; 2] = [
+    ("results_t_us", 0, 4, Kind::U, 1.0, "us", &[]),
+    ("results_crc", 52, 4, Kind::U, 1.0, "", &[]),
+];
+
+/// The single-frame messages whose bodies are signals on CAN FD, by identifier (a message may
+/// have several field tables).
+const BODIES: [(u16, MsgType, &[Field]); 8] = [
     (id::COMPACT, MsgType::CompactMeasurement, &COMPACT),
     (id::RESULT, MsgType::Forces, &FORCES),
     (id::RESULT, MsgType::Estimate, &ESTIMATE),
+    (id::BATCH_RESULT, MsgType::CompactResults, &RESULTS_T),
+    (id::BATCH_RESULT, MsgType::CompactResults, &RESULTS_FL),
+    (id::BATCH_RESULT, MsgType::CompactResults, &RESULTS_FR),
+    (id::BATCH_RESULT, MsgType::CompactResults, &RESULTS_RL),
+    (id::BATCH_RESULT, MsgType::CompactResults, &RESULTS_RR),
 ];
 
 /// `true` when identifier `cid` has physical signals on a bus of `mtu`.
@@ -180,13 +276,19 @@ pub fn write<W: Write>(w: &mut W, mtu: Mtu) -> fmt::Result {
             writeln!(w, " SG_ msg_type m0M : 32|8@1+ (1,0) [0|255] \"\" {rx}")?;
             for (_, t, fields) in BODIES.iter().filter(|b| b.0 == cid) {
                 for (name, off, n, kind, scale, unit, _) in fields.iter() {
-                    let sign = if *kind == Kind::U { '+' } else { '-' };
+                    let sign = if matches!(kind, Kind::I | Kind::F) {
+                        '-'
+                    } else {
+                        '+'
+                    };
+                    let (start, bits) = match kind {
+                        Kind::Bits(b, l) => ((BODY + off) * 8 + b, *l),
+                        _ => ((BODY + off) * 8, n * 8),
+                    };
                     writeln!(
                         w,
-                        " SG_ {name} m{} : {}|{}@1{sign} ({scale},0) [0|0] \"{unit}\" {rx}",
+                        " SG_ {name} m{} : {start}|{bits}@1{sign} ({scale},0) [0|0] \"{unit}\" {rx}",
                         *t as u8,
-                        (BODY + off) * 8,
-                        n * 8
                     )?;
                 }
             }

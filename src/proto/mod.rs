@@ -75,6 +75,8 @@ pub const FRAME_TIMEOUT_MS: u32 = 50;
 /// | `0x302` | host → device | [`Msg::CompactMeasurement`] |
 /// | `0x310` | device → host | [`Msg::Forces`], [`Msg::Estimate`] |
 /// | `0x311` | device → host | [`Msg::Status`], [`Msg::Ack`] |
+/// | `0x303` | host → device | [`Msg::CompactBatch`] |
+/// | `0x312` | device → host | [`Msg::CompactResults`] |
 pub mod id {
     /// Measurements, host → device.
     pub const MEASUREMENT: u16 = 0x300;
@@ -83,17 +85,24 @@ pub mod id {
     /// Compact measurements, host → device (its own identifier: one frame length per
     /// identifier, 32 bytes on CAN FD).
     pub const COMPACT: u16 = 0x302;
+    /// Four-wheel batches of compact measurements, host → device (48-byte frames on CAN FD:
+    /// two per batch).
+    pub const BATCH: u16 = 0x303;
+    /// Four-wheel results, device → host (one 64-byte CAN FD frame per message).
+    pub const BATCH_RESULT: u16 = 0x312;
     /// Results (predicted forces, friction estimates), device → host.
     pub const RESULT: u16 = 0x310;
     /// Status and acknowledgements, device → host.
     pub const STATUS: u16 = 0x311;
     /// Every identifier with its name and direction, in the order of the table above.
-    pub const ALL: [(u16, &str, &str); 5] = [
+    pub const ALL: [(u16, &str, &str); 7] = [
         (MEASUREMENT, "GOUGH_MEASUREMENT", "host to device"),
         (CONFIG, "GOUGH_CONFIG", "host to device"),
         (COMPACT, "GOUGH_COMPACT", "host to device"),
         (RESULT, "GOUGH_RESULT", "device to host"),
         (STATUS, "GOUGH_STATUS", "device to host"),
+        (BATCH, "GOUGH_BATCH", "host to device"),
+        (BATCH_RESULT, "GOUGH_BATCH_RESULT", "device to host"),
     ];
     /// The identifier a message travels on.
     pub const fn of(t: super::MsgType) -> u16 {
@@ -104,6 +113,8 @@ pub mod id {
             T::ParamBegin | T::ParamChunk | T::ParamCommit | T::Settings | T::Command => CONFIG,
             T::Forces | T::Estimate => RESULT,
             T::Status | T::Ack => STATUS,
+            T::CompactBatch => BATCH,
+            T::CompactResults => BATCH_RESULT,
         }
     }
 }

@@ -41,6 +41,8 @@ pub enum MsgType {
     Command = 0x06,
     /// [`Msg::CompactMeasurement`]
     CompactMeasurement = 0x07,
+    /// [`Msg::CompactBatch`]
+    CompactBatch = 0x08,
     /// [`Msg::Forces`]
     Forces = 0x81,
     /// [`Msg::Estimate`]
@@ -49,11 +51,13 @@ pub enum MsgType {
     Status = 0x83,
     /// [`Msg::Ack`]
     Ack = 0x84,
+    /// [`Msg::CompactResults`]
+    CompactResults = 0x85,
 }
 
 impl MsgType {
     /// Every type, in code order.
-    pub const ALL: [MsgType; 11] = [
+    pub const ALL: [MsgType; 13] = [
         MsgType::Measurement,
         MsgType::ParamBegin,
         MsgType::ParamChunk,
@@ -61,10 +65,12 @@ impl MsgType {
         MsgType::Settings,
         MsgType::Command,
         MsgType::CompactMeasurement,
+        MsgType::CompactBatch,
         MsgType::Forces,
         MsgType::Estimate,
         MsgType::Status,
         MsgType::Ack,
+        MsgType::CompactResults,
     ];
     /// The type of a header byte, if known.
     pub fn from_u8(b: u8) -> Option<MsgType> {
@@ -84,6 +90,8 @@ impl MsgType {
             MsgType::Estimate => "Estimate",
             MsgType::Status => "Status",
             MsgType::Ack => "Ack",
+            MsgType::CompactBatch => "CompactBatch",
+            MsgType::CompactResults => "CompactResults",
         }
     }
 }
@@ -297,6 +305,353 @@ impl CompactMeasurement {
             gamma: opt(self.gamma, Self::ANGLE),
         }
     }
+}
+
+/// One wheel's fields in a [`CompactBatch`]: the scaled integers of [`CompactMeasurement`]
+/// without wheel and time (18 bytes, fixed-width little endian, in this order).
+#[derive(Serialize, Deserialize, Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct CompactWheel {
+    /// Fz \[0.5 N\].
+    #[serde(with = "postcard::fixint::le")]
+    pub fz: u16,
+    /// Fy \[N\].
+    #[serde(with = "postcard::fixint::le")]
+    pub fy: i16,
+    /// Mz \[0.1 N·m\].
+    #[serde(with = "postcard::fixint::le")]
+    pub mz: i16,
+    /// Fx \[N\] or [`CompactMeasurement::ABSENT`].
+    #[serde(with = "postcard::fixint::le")]
+    pub fx: i16,
+    /// Vx \[0.01 m/s\] or absent.
+    #[serde(with = "postcard::fixint::le")]
+    pub vx: i16,
+    /// ω \[0.01 rad/s\] or absent.
+    #[serde(with = "postcard::fixint::le")]
+    pub omega: i16,
+    /// α \[1e-4 rad\] or absent.
+    #[serde(with = "postcard::fixint::le")]
+    pub alpha: i16,
+    /// κ \[1e-4\] or absent.
+    #[serde(with = "postcard::fixint::le")]
+    pub kappa: i16,
+    /// γ \[1e-4 rad\] or absent.
+    #[serde(with = "postcard::fixint::le")]
+    pub gamma: i16,
+}
+
+// Fixed-width fields: the exact size (the derive would count them as varints).
+impl MaxSize for CompactWheel {
+    const POSTCARD_MAX_SIZE: usize = 18;
+}
+
+impl CompactWheel {
+    fn of(c: &CompactMeasurement) -> CompactWheel {
+        CompactWheel {
+            fz: c.fz,
+            fy: c.fy,
+            mz: c.mz,
+            fx: c.fx,
+            vx: c.vx,
+            omega: c.omega,
+            alpha: c.alpha,
+            kappa: c.kappa,
+            gamma: c.gamma,
+        }
+    }
+}
+
+/// One sample instant of up to four wheels in scaled integers (type 0x08, identifier
+/// [`super::id::BATCH`]): 77 body bytes, 83 encoded, two 48-byte CAN FD frames (14 classic
+/// frames), answered by one [`CompactResults`]. Four wheels at 1 kHz as one message per
+/// millisecond each way instead of four plus eight.
+///
+/// | bytes | field | meaning |
+/// |---|---|---|
+/// | 0..4 | `t_us` | u32 LE: the sample time of every wheel in the batch \[µs\] |
+/// | 4 | `present` | bit i set: wheel i (0 FL, 1 FR, 2 RL, 3 RR) is in the batch; bits 4–7 are 0 |
+/// | 5 + 18 i .. | `wheels[i]` | [`CompactWheel`]: Fz u16 \[0.5 N\], Fy i16 \[N\], Mz i16 \[0.1 N·m\], Fx i16 \[N\], Vx i16 \[0.01 m/s\], ω i16 \[0.01 rad/s\], α i16 \[1e-4 rad\], κ i16 \[1e-4\], γ i16 \[1e-4 rad\] |
+///
+/// Scales, ranges and the absent marker (−32 768) are [`CompactMeasurement`]'s; a wheel not
+/// present is sent as zeros and ignored. [`CompactBatch::new`] refuses (never clamps) a value
+/// out of range or not finite, as [`CompactMeasurement::new`] does.
+#[derive(Serialize, Deserialize, Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct CompactBatch {
+    /// Sample time \[µs\] of every wheel in the batch, sender's clock, wrapping.
+    #[serde(with = "postcard::fixint::le")]
+    pub t_us: u32,
+    /// Bit i: wheel i is present.
+    pub present: u8,
+    /// The wheels, by index (0 FL, 1 FR, 2 RL, 3 RR).
+    pub wheels: [CompactWheel; 4],
+}
+
+impl MaxSize for CompactBatch {
+    const POSTCARD_MAX_SIZE: usize = 4 + 1 + 4 * CompactWheel::POSTCARD_MAX_SIZE;
+}
+
+impl CompactBatch {
+    /// The batch of `t_us` holding `ms` (at most one per wheel; each at its own wheel's slot,
+    /// its own `t_us` replaced by the batch's), or `None` when a value is not finite or out of
+    /// range, or a wheel comes twice. δ is dropped.
+    pub fn new(t_us: u32, ms: &[Measurement]) -> Option<CompactBatch> {
+        let mut b = CompactBatch {
+            t_us,
+            ..CompactBatch::default()
+        };
+        for m in ms {
+            let bit = 1u8 << m.wheel.index();
+            if b.present & bit != 0 {
+                return None;
+            }
+            b.present |= bit;
+            *b.wheels.get_mut(m.wheel.index())? = CompactWheel::of(&CompactMeasurement::new(m)?);
+        }
+        Some(b)
+    }
+
+    /// The measurements it stands for, by wheel index (`None`: not present), each with the
+    /// batch's `t_us` and δ absent. Device and host both use this.
+    pub fn measurements(&self) -> [Option<Measurement>; 4] {
+        let mut out = [None; 4];
+        for ((o, w), wheel) in out.iter_mut().zip(self.wheels.iter()).zip(Wheel::ALL) {
+            if self.present & (1 << wheel.index()) != 0 {
+                let c = CompactMeasurement {
+                    wheel,
+                    t_us: self.t_us,
+                    fz: w.fz,
+                    fy: w.fy,
+                    mz: w.mz,
+                    fx: w.fx,
+                    vx: w.vx,
+                    omega: w.omega,
+                    alpha: w.alpha,
+                    kappa: w.kappa,
+                    gamma: w.gamma,
+                };
+                *o = Some(c.measurement());
+            }
+        }
+        out
+    }
+}
+
+/// One wheel's results in a [`CompactResults`]: 12 bytes, fixed-width little endian, in this
+/// order.
+///
+/// | field | type | per count | range | not available |
+/// |---|---|---|---|---|
+/// | `fx`, `fy` | i16 | 1 N | ±32 767 N | −32 768 |
+/// | `mz` | i16 | 0.1 N·m | ±3 276.7 N·m | −32 768 |
+/// | `mu`, `sigma` | u16 | 1e-4 | 0 ..= 6.5534 | 65 535 |
+/// | `mu_min` | u8 | 0.01, rounded **down** (stays a lower bound) | 0 ..= 2.54 | 255 |
+/// | `status` | u8 | bits 0–1 state (0 Identifiable, 1 NotIdentifiable, 2 Fallback, 3 no estimate), bit 2 change, bit 3 MF flags non-zero (an input clipped or regularised), bit 4 wheel present; bits 5–7 are 0 | | |
+///
+/// "Not available" marks a value the device has not got (no forces: no parameters, no slip or
+/// an evaluation error, counted in `Status::eval_errors`; no estimate: μ, σ, μ_min) or cannot
+/// represent (out of range or not finite): the device sends it rather than a clamped value
+/// ([`CompactWheelResult::or_na`]). [`CompactWheelResult::new`] refuses such values instead.
+#[derive(Serialize, Deserialize, Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct CompactWheelResult {
+    /// Predicted Fx \[N\] or [`CompactWheelResult::NA_I16`].
+    #[serde(with = "postcard::fixint::le")]
+    pub fx: i16,
+    /// Predicted Fy \[N\] or not available.
+    #[serde(with = "postcard::fixint::le")]
+    pub fy: i16,
+    /// Predicted Mz \[0.1 N·m\] or not available.
+    #[serde(with = "postcard::fixint::le")]
+    pub mz: i16,
+    /// μ \[1e-4\] or [`CompactWheelResult::NA_U16`].
+    #[serde(with = "postcard::fixint::le")]
+    pub mu: u16,
+    /// σ of μ \[1e-4\] or not available.
+    #[serde(with = "postcard::fixint::le")]
+    pub sigma: u16,
+    /// μ_min \[0.01\], rounded down, or [`CompactWheelResult::NA_U8`].
+    pub mu_min: u8,
+    /// State (bits 0–1), change (bit 2), MF flags non-zero (bit 3), present (bit 4).
+    pub status: u8,
+}
+
+impl MaxSize for CompactWheelResult {
+    const POSTCARD_MAX_SIZE: usize = 12;
+}
+
+/// `x / unit` rounded, if finite and in `0 ..= u16::MAX − 1`.
+fn count_u16(x: f32, unit: f32) -> Option<u16> {
+    let c = libm::roundf(x / unit);
+    (c.is_finite() && c >= 0.0 && c < f32::from(u16::MAX)).then_some(c as u16)
+}
+
+/// `x / unit` rounded down, if finite and in `0 ..= u8::MAX − 1`.
+fn count_u8_floor(x: f32, unit: f32) -> Option<u8> {
+    // A small tolerance so that 0.3 (0.29999…/0.01 = 29.99…) is 30, not 29.
+    let c = libm::floorf(x / unit + 1e-3);
+    (c.is_finite() && c >= 0.0 && c < f32::from(u8::MAX)).then_some(c as u8)
+}
+
+impl CompactWheelResult {
+    /// Not available (i16 fields).
+    pub const NA_I16: i16 = i16::MIN;
+    /// Not available (u16 fields).
+    pub const NA_U16: u16 = u16::MAX;
+    /// Not available (u8 fields).
+    pub const NA_U8: u8 = u8::MAX;
+    /// Fx, Fy per count \[N\].
+    pub const F: f32 = 1.0;
+    /// Mz per count \[N·m\].
+    pub const MZ: f32 = 0.1;
+    /// μ, σ per count.
+    pub const MU: f32 = 1e-4;
+    /// μ_min per count.
+    pub const MU_MIN: f32 = 0.01;
+    /// Status: the state bits.
+    pub const STATE_MASK: u8 = 0b11;
+    /// Status state value: no estimate.
+    pub const NO_ESTIMATE: u8 = 3;
+    /// Status: change of surface.
+    pub const CHANGE: u8 = 1 << 2;
+    /// Status: the Magic Formula clipped or regularised an input (`Forces::flags` ≠ 0).
+    pub const MF_FLAGS: u8 = 1 << 3;
+    /// Status: the wheel is present.
+    pub const PRESENT: u8 = 1 << 4;
+
+    fn status(forces: Option<&Forces>, estimate: Option<&Estimate>) -> u8 {
+        let state = estimate.map_or(Self::NO_ESTIMATE, |e| e.state as u8);
+        let change = if estimate.is_some_and(|e| e.change) {
+            Self::CHANGE
+        } else {
+            0
+        };
+        let flags = if forces.is_some_and(|f| f.flags != 0) {
+            Self::MF_FLAGS
+        } else {
+            0
+        };
+        Self::PRESENT | state | change | flags
+    }
+
+    /// A present wheel's results, or `None` when a value is out of range or not finite (no
+    /// clamp). Absent forces or estimate are sent as not available.
+    pub fn new(forces: Option<&Forces>, estimate: Option<&Estimate>) -> Option<Self> {
+        let (fx, fy, mz) = match forces {
+            None => (Self::NA_I16, Self::NA_I16, Self::NA_I16),
+            Some(f) => (
+                count_i16(f.fx, Self::F)?,
+                count_i16(f.fy, Self::F)?,
+                count_i16(f.mz, Self::MZ)?,
+            ),
+        };
+        let (mu, sigma, mu_min) = match estimate {
+            None => (Self::NA_U16, Self::NA_U16, Self::NA_U8),
+            Some(e) => (
+                count_u16(e.mu, Self::MU)?,
+                count_u16(e.sigma, Self::MU)?,
+                count_u8_floor(e.mu_min, Self::MU_MIN)?,
+            ),
+        };
+        Some(CompactWheelResult {
+            fx,
+            fy,
+            mz,
+            mu,
+            sigma,
+            mu_min,
+            status: Self::status(forces, estimate),
+        })
+    }
+
+    /// What the device sends: as [`CompactWheelResult::new`], but each value it cannot
+    /// represent (out of range or not finite) is sent as not available, never clamped.
+    pub fn or_na(forces: Option<&Forces>, estimate: Option<&Estimate>) -> Self {
+        let i = |x: Option<f32>, unit| x.and_then(|v| count_i16(v, unit)).unwrap_or(Self::NA_I16);
+        let u = |x: Option<f32>| {
+            x.and_then(|v| count_u16(v, Self::MU))
+                .unwrap_or(Self::NA_U16)
+        };
+        CompactWheelResult {
+            fx: i(forces.map(|f| f.fx), Self::F),
+            fy: i(forces.map(|f| f.fy), Self::F),
+            mz: i(forces.map(|f| f.mz), Self::MZ),
+            mu: u(estimate.map(|e| e.mu)),
+            sigma: u(estimate.map(|e| e.sigma)),
+            mu_min: estimate
+                .and_then(|e| count_u8_floor(e.mu_min, Self::MU_MIN))
+                .unwrap_or(Self::NA_U8),
+            status: Self::status(forces, estimate),
+        }
+    }
+
+    /// Whether the wheel is present.
+    pub fn present(&self) -> bool {
+        self.status & Self::PRESENT != 0
+    }
+    /// Fx \[N\], if available.
+    pub fn fx(&self) -> Option<f32> {
+        (self.fx != Self::NA_I16).then(|| f32::from(self.fx) * Self::F)
+    }
+    /// Fy \[N\], if available.
+    pub fn fy(&self) -> Option<f32> {
+        (self.fy != Self::NA_I16).then(|| f32::from(self.fy) * Self::F)
+    }
+    /// Mz \[N·m\], if available.
+    pub fn mz(&self) -> Option<f32> {
+        (self.mz != Self::NA_I16).then(|| f32::from(self.mz) * Self::MZ)
+    }
+    /// μ, if available.
+    pub fn mu(&self) -> Option<f32> {
+        (self.mu != Self::NA_U16).then(|| f32::from(self.mu) * Self::MU)
+    }
+    /// σ, if available.
+    pub fn sigma(&self) -> Option<f32> {
+        (self.sigma != Self::NA_U16).then(|| f32::from(self.sigma) * Self::MU)
+    }
+    /// μ_min, if available.
+    pub fn mu_min(&self) -> Option<f32> {
+        (self.mu_min != Self::NA_U8).then(|| f32::from(self.mu_min) * Self::MU_MIN)
+    }
+    /// The estimate's state (`None`: no estimate).
+    pub fn state(&self) -> Option<EstimateState> {
+        match self.status & Self::STATE_MASK {
+            0 => Some(EstimateState::Identifiable),
+            1 => Some(EstimateState::NotIdentifiable),
+            2 => Some(EstimateState::Fallback),
+            _ => None,
+        }
+    }
+    /// The change-of-surface flag.
+    pub fn change(&self) -> bool {
+        self.status & Self::CHANGE != 0
+    }
+}
+
+/// The four wheels' results answering one [`CompactBatch`] (type 0x85, identifier
+/// [`super::id::BATCH_RESULT`]): 52 body bytes, 58 encoded, one 64-byte CAN FD frame (10
+/// classic frames). Instead of a [`Forces`] and an [`Estimate`] per wheel.
+///
+/// | bytes | field | meaning |
+/// |---|---|---|
+/// | 0..4 | `t_us` | u32 LE: the batch's sample time \[µs\] |
+/// | 4 + 12 i .. | `wheels[i]` | [`CompactWheelResult`] of wheel i (0 FL, 1 FR, 2 RL, 3 RR): Fx, Fy i16 \[N\], Mz i16 \[0.1 N·m\], μ, σ u16 \[1e-4\], μ_min u8 \[0.01, rounded down\], status u8 |
+///
+/// A wheel not in the batch is all zeros (status bit 4 clear). `Forces::flags` are reduced to
+/// one bit (status bit 3).
+#[derive(Serialize, Deserialize, Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct CompactResults {
+    /// The batch's sample time \[µs\].
+    #[serde(with = "postcard::fixint::le")]
+    pub t_us: u32,
+    /// The wheels, by index.
+    pub wheels: [CompactWheelResult; 4],
+}
+
+impl MaxSize for CompactResults {
+    const POSTCARD_MAX_SIZE: usize = 4 + 4 * CompactWheelResult::POSTCARD_MAX_SIZE;
 }
 
 /// Starts a tyre parameter upload: the `.tir` text that follows in [`ParamChunk`]s.
@@ -607,6 +962,8 @@ pub enum Msg {
     Command(Command),
     /// Host → device: a per-wheel sample in scaled integers.
     CompactMeasurement(CompactMeasurement),
+    /// Host → device: one sample instant of up to four wheels in scaled integers.
+    CompactBatch(CompactBatch),
     /// Device → host: predicted forces.
     Forces(Forces),
     /// Device → host: friction estimate.
@@ -615,6 +972,8 @@ pub enum Msg {
     Status(Status),
     /// Device → host: acknowledgement.
     Ack(Ack),
+    /// Device → host: the four wheels' forces and estimates answering a [`CompactBatch`].
+    CompactResults(CompactResults),
 }
 
 fn body<T: DeserializeOwned>(b: &[u8]) -> Result<T, Error> {
@@ -635,6 +994,8 @@ impl Msg {
             Msg::Settings(_) => MsgType::Settings,
             Msg::Command(_) => MsgType::Command,
             Msg::CompactMeasurement(_) => MsgType::CompactMeasurement,
+            Msg::CompactBatch(_) => MsgType::CompactBatch,
+            Msg::CompactResults(_) => MsgType::CompactResults,
             Msg::Forces(_) => MsgType::Forces,
             Msg::Estimate(_) => MsgType::Estimate,
             Msg::Status(_) => MsgType::Status,
@@ -655,6 +1016,8 @@ impl Msg {
             Msg::Settings(m) => postcard::to_slice(m, rest),
             Msg::Command(m) => postcard::to_slice(m, rest),
             Msg::CompactMeasurement(m) => postcard::to_slice(m, rest),
+            Msg::CompactBatch(m) => postcard::to_slice(m, rest),
+            Msg::CompactResults(m) => postcard::to_slice(m, rest),
             Msg::Forces(m) => postcard::to_slice(m, rest),
             Msg::Estimate(m) => postcard::to_slice(m, rest),
             Msg::Status(m) => postcard::to_slice(m, rest),
@@ -696,6 +1059,8 @@ impl Msg {
             MsgType::Settings => Msg::Settings(body(b)?),
             MsgType::Command => Msg::Command(body(b)?),
             MsgType::CompactMeasurement => Msg::CompactMeasurement(body(b)?),
+            MsgType::CompactBatch => Msg::CompactBatch(body(b)?),
+            MsgType::CompactResults => Msg::CompactResults(body(b)?),
             MsgType::Forces => Msg::Forces(body(b)?),
             MsgType::Estimate => Msg::Estimate(body(b)?),
             MsgType::Status => Msg::Status(body(b)?),

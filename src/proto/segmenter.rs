@@ -32,13 +32,16 @@ impl Mtu {
     /// bytes is padded with 0x00 (receivers ignore padding after the announced length).
     /// Classic CAN: 8 on every identifier. CAN FD: 32 on [`id::RESULT`] and [`id::COMPACT`] (a
     /// whole [`Msg::Forces`], [`Msg::Estimate`] or [`Msg::CompactMeasurement`] fits one frame),
-    /// 64 on the others.
+    /// 48 on [`id::BATCH`] (a [`Msg::CompactBatch`], 83 bytes, in two frames), 64 on the others
+    /// (a [`Msg::CompactResults`] fits one).
     pub const fn frame_len(self, cid: u16) -> usize {
         match self {
             Mtu::Classic => 8,
             Mtu::Fd => {
                 if cid == id::RESULT || cid == id::COMPACT {
                     32
+                } else if cid == id::BATCH {
+                    48
                 } else {
                     64
                 }
@@ -53,6 +56,14 @@ impl Mtu {
 const _: () = assert!(
     3 + 2 + super::Forces::POSTCARD_MAX_SIZE + 4 <= Mtu::Fd.frame_len(id::RESULT)
         && 3 + 2 + super::Estimate::POSTCARD_MAX_SIZE + 4 <= Mtu::Fd.frame_len(id::RESULT)
+);
+
+// A whole `CompactResults` in one 64-byte frame; a `CompactBatch` in two 48-byte frames.
+const _: () = assert!(
+    3 + 2 + super::CompactResults::POSTCARD_MAX_SIZE + 4 <= Mtu::Fd.frame_len(id::BATCH_RESULT)
+        && 3 + 2 + super::CompactBatch::POSTCARD_MAX_SIZE + 4
+            <= 2 * Mtu::Fd.frame_len(id::BATCH) - 2
+        && 3 + 2 + super::CompactBatch::POSTCARD_MAX_SIZE + 4 > Mtu::Fd.frame_len(id::BATCH)
 );
 
 /// The smallest valid CAN FD data length ≥ `n` (n ≤ 64).
@@ -77,7 +88,6 @@ pub struct Segmenter {
     pos: usize,
     index: u8,
     seq: u8,
-    mtu: Mtu,
     frame_len: usize,
 }
 
@@ -93,7 +103,6 @@ impl Segmenter {
             pos: 0,
             index: 0,
             seq,
-            mtu,
             frame_len: mtu.frame_len(id::of(msg.msg_type())),
         })
     }
@@ -110,7 +119,7 @@ impl Segmenter {
 
     /// Number of frames the message takes.
     pub fn frame_count(&self) -> usize {
-        let m = self.mtu.bytes();
+        let m = self.frame_len;
         let first = m - 3;
         if self.len <= first {
             1
@@ -126,7 +135,8 @@ impl Segmenter {
         }
         let first = self.pos == 0;
         let header = if first { 3 } else { 2 };
-        let room = self.mtu.bytes() - header;
+        // Message bytes per frame: the identifier's frame length less the header.
+        let room = self.frame_len - header;
         let n = (self.len - self.pos).min(room);
         let last = self.pos + n == self.len;
         let repr = FrameRepr {

@@ -62,6 +62,25 @@ pub(crate) fn largest() -> Vec<Msg> {
             fz: u16::MAX,
             ..CompactMeasurement::default()
         }),
+        Msg::CompactBatch(CompactBatch {
+            t_us: u32::MAX,
+            present: 0x0F,
+            wheels: [CompactWheel {
+                fz: u16::MAX,
+                fy: i16::MIN,
+                ..CompactWheel::default()
+            }; 4],
+        }),
+        Msg::CompactResults(CompactResults {
+            t_us: u32::MAX,
+            wheels: [CompactWheelResult {
+                fx: i16::MIN,
+                mu: u16::MAX,
+                mu_min: u8::MAX,
+                status: u8::MAX,
+                ..CompactWheelResult::default()
+            }; 4],
+        }),
         Msg::Forces(Forces {
             flags: u16::MAX,
             ..Forces::default()
@@ -207,7 +226,7 @@ fn round_trip_classic_and_fd() {
             assert_eq!(got, Some(m));
         }
         assert_eq!(r.counters().dropped(), 0);
-        assert_eq!(r.counters().messages, 11);
+        assert_eq!(r.counters().messages, 13);
     }
 }
 
@@ -282,6 +301,164 @@ fn compact_measurement() {
             ..none
         }
     );
+}
+
+/// Four wheels' samples, each different.
+fn four() -> [Measurement; 4] {
+    Wheel::ALL.map(|w| {
+        let k = w.index() as f32;
+        Measurement {
+            wheel: w,
+            fz: 3000.0 + 500.0 * k,
+            fy: -1500.0 + 100.0 * k,
+            omega: Some(50.0 + k),
+            gamma: (k > 1.0).then_some(-0.01),
+            ..meas()
+        }
+    })
+}
+
+#[test]
+fn compact_batch() {
+    let ms = four();
+    let b = CompactBatch::new(77, &ms).unwrap();
+    assert_eq!(b.present, 0x0F);
+    // Each wheel decodes to what its single compact measurement stands for, at the batch's time.
+    for (got, m) in b.measurements().iter().zip(ms.iter()) {
+        let single = CompactMeasurement::new(&Measurement { t_us: 77, ..*m }).unwrap();
+        assert_eq!(*got, Some(single.measurement()));
+    }
+    // 77 body bytes, 83 encoded: two 48-byte FD frames, 14 classic frames; its own identifier.
+    let msg = Msg::CompactBatch(b);
+    let mut buf = [0u8; MSG_BUF];
+    let n = msg.encode(&mut buf).unwrap();
+    assert_eq!(n, 83);
+    assert_eq!(n - 6, CompactBatch::POSTCARD_MAX_SIZE);
+    // Byte layout: t_us LE, present, then wheel 0's Fz (u16 LE, 0.5 N).
+    assert_eq!(&buf[2..9], &[77, 0, 0, 0, 0x0F, 0x70, 0x17]);
+    assert_eq!(Msg::decode(&buf[..n]), Ok(msg));
+    assert_eq!(id::of(msg.msg_type()), id::BATCH);
+    let fd = frames(&msg, 3, Mtu::Fd);
+    assert_eq!(fd.iter().map(Vec::len).collect::<Vec<_>>(), [48, 48]);
+    assert_eq!(frames(&msg, 3, Mtu::Classic).len(), 14);
+    // A subset: the others absent (zeros, bit clear).
+    let two = CompactBatch::new(5, &[ms[3], ms[0]]).unwrap();
+    assert_eq!(two.present, 0b1001);
+    assert_eq!(two.wheels[1], CompactWheel::default());
+    let back = two.measurements();
+    assert!(back[0].is_some() && back[1].is_none() && back[2].is_none() && back[3].is_some());
+    assert_eq!(CompactBatch::new(5, &[]).unwrap().measurements(), [None; 4]);
+    // Refused, never clamped: a value out of range or not finite, or a wheel twice.
+    for bad in [
+        Measurement { fz: -1.0, ..ms[1] },
+        Measurement {
+            fy: f32::NAN,
+            ..ms[1]
+        },
+        Measurement {
+            kappa: Some(4.0),
+            ..ms[1]
+        },
+    ] {
+        assert_eq!(CompactBatch::new(0, &[ms[0], bad]), None, "{bad:?}");
+    }
+    assert_eq!(CompactBatch::new(0, &[ms[0], ms[0]]), None);
+}
+
+#[test]
+fn compact_results() {
+    let f = Forces {
+        wheel: Wheel::FrontRight,
+        t_us: 9,
+        fx: 812.4,
+        fy: -1500.6,
+        mz: 41.26,
+        flags: 0,
+    };
+    let e = Estimate {
+        wheel: Wheel::FrontRight,
+        t_us: 9,
+        mu: 0.91234,
+        sigma: 0.04321,
+        state: EstimateState::NotIdentifiable,
+        mu_min: 0.3,
+        change: true,
+    };
+    let w = CompactWheelResult::new(Some(&f), Some(&e)).unwrap();
+    assert_eq!(CompactWheelResult::or_na(Some(&f), Some(&e)), w);
+    assert_eq!(
+        (w.fx, w.fy, w.mz, w.mu, w.sigma, w.mu_min),
+        (812, -1501, 413, 9123, 432, 30)
+    );
+    assert_eq!(w.state(), Some(EstimateState::NotIdentifiable));
+    assert!(w.change() && w.present());
+    assert_eq!(w.status & CompactWheelResult::MF_FLAGS, 0);
+    assert!((w.mu().unwrap() - e.mu).abs() <= 0.5e-4 + 1e-7);
+    // μ_min rounds down: it stays a lower bound.
+    let e2 = Estimate { mu_min: 0.349, ..e };
+    let w2 = CompactWheelResult::new(Some(&f), Some(&e2)).unwrap();
+    assert_eq!(w2.mu_min, 34);
+    assert!(w2.mu_min().unwrap() <= e2.mu_min);
+    // No forces, no estimate: not available; flags set: bit 3.
+    let w3 = CompactWheelResult::new(None, None).unwrap();
+    assert_eq!(
+        (w3.fx(), w3.mu(), w3.mu_min(), w3.state()),
+        (None, None, None, None)
+    );
+    assert!(w3.present() && !w3.change());
+    let w4 = CompactWheelResult::new(Some(&Forces { flags: 4, ..f }), None).unwrap();
+    assert_ne!(w4.status & CompactWheelResult::MF_FLAGS, 0);
+    // Out of range or not finite: `new` refuses, the device's `or_na` sends "not available".
+    for (bf, be) in [
+        (Forces { fx: 40_000.0, ..f }, e),
+        (Forces { mz: f32::NAN, ..f }, e),
+        (f, Estimate { mu: -0.1, ..e }),
+        (f, Estimate { sigma: 7.0, ..e }),
+        (f, Estimate { mu_min: 2.6, ..e }),
+        (
+            f,
+            Estimate {
+                mu: f32::INFINITY,
+                ..e
+            },
+        ),
+    ] {
+        assert_eq!(CompactWheelResult::new(Some(&bf), Some(&be)), None);
+        let na = CompactWheelResult::or_na(Some(&bf), Some(&be));
+        let got = [na.fx(), na.fy(), na.mz(), na.mu(), na.sigma(), na.mu_min()];
+        assert_eq!(got.iter().filter(|v| v.is_none()).count(), 1, "{na:?}");
+        assert_eq!(na.state(), Some(EstimateState::NotIdentifiable));
+    }
+    // 52 body bytes, 58 encoded: one 64-byte FD frame, 10 classic frames.
+    let msg = Msg::CompactResults(CompactResults {
+        t_us: 9,
+        wheels: [CompactWheelResult::default(), w, w3, w4],
+    });
+    let mut buf = [0u8; MSG_BUF];
+    let n = msg.encode(&mut buf).unwrap();
+    assert_eq!(n, 58);
+    assert_eq!(n - 6, CompactResults::POSTCARD_MAX_SIZE);
+    // Wheel 1 at body offset 4 + 12: Fx 812 LE.
+    assert_eq!(&buf[2 + 16..2 + 18], &812i16.to_le_bytes());
+    assert_eq!(Msg::decode(&buf[..n]), Ok(msg));
+    assert_eq!(id::of(msg.msg_type()), id::BATCH_RESULT);
+    let fd = frames(&msg, 0, Mtu::Fd);
+    assert_eq!(fd.iter().map(Vec::len).collect::<Vec<_>>(), [64]);
+    assert_eq!(frames(&msg, 0, Mtu::Classic).len(), 10);
+}
+
+#[test]
+fn new_types_need_no_version_bump() {
+    // A receiver that does not know a type drops that message alone (`UnknownType`), after the
+    // version and CRC checks: adding types leaves every other message as it was.
+    let mut buf = [0u8; MSG_BUF];
+    let n = Msg::CompactBatch(CompactBatch::default())
+        .encode(&mut buf)
+        .unwrap();
+    buf[1] = 0x7F;
+    let crc = crc32(&buf[..n - 4]);
+    buf[n - 4..n].copy_from_slice(&crc.to_le_bytes());
+    assert_eq!(Msg::decode(&buf[..n]), Err(Error::UnknownType));
 }
 
 #[test]
@@ -402,12 +579,59 @@ fn dbc_lists_every_identifier() {
     assert!(f.contains(&format!("BO_ {} GOUGH_STATUS: 64", id::STATUS)));
     assert!(f.contains("SIG_VALTYPE_ 784 mu : 1;"));
     assert!(s.contains("\"Measurement\""));
+    // The four-wheel messages: the batch in 48-byte frames (byte signals), the results in one
+    // 64-byte frame with per-wheel physical signals (the status byte's bits among them).
+    assert!(f.contains(&format!("BO_ {} GOUGH_BATCH: 48", id::BATCH)));
+    assert!(f.contains(&format!("BO_ {} GOUGH_BATCH_RESULT: 64", id::BATCH_RESULT)));
+    assert!(f.contains(" SG_ RR_mu m133 : 408|16@1+ (0.0001,0) [0|0] \"\" HOST"));
+    assert!(f.contains(" SG_ FL_state m133 : 160|2@1+ (1,0) [0|0] \"\" HOST"));
+    assert!(f.contains(" SG_ FL_present m133 : 164|1@1+ (1,0) [0|0] \"\" HOST"));
+    assert!(f.contains("VAL_ 786 FR_state 0 \"Identifiable\""));
+    assert!(s.contains(&format!("BO_ {} GOUGH_BATCH_RESULT: 8", id::BATCH_RESULT)));
 }
 
 fn any_msg() -> impl Strategy<Value = Msg> {
     let f = -1e6f32..1e6f32;
     let of = proptest::option::of(-1e3f32..1e3f32);
     prop_oneof![
+        (any::<u32>(), any::<u8>(), any::<[[u8; 18]; 4]>()).prop_map(|(t_us, present, w)| {
+            let i = |b: &[u8; 18], k: usize| i16::from_le_bytes([b[k], b[k + 1]]);
+            Msg::CompactBatch(CompactBatch {
+                t_us,
+                present,
+                wheels: w.map(|b| CompactWheel {
+                    fz: u16::from_le_bytes([b[0], b[1]]),
+                    fy: i(&b, 2),
+                    mz: i(&b, 4),
+                    fx: i(&b, 6),
+                    vx: i(&b, 8),
+                    omega: i(&b, 10),
+                    alpha: i(&b, 12),
+                    kappa: i(&b, 14),
+                    gamma: i(&b, 16),
+                }),
+            })
+        }),
+        (
+            any::<u32>(),
+            any::<[(i16, i16, i16, u16, u16, u8, u8); 4]>()
+        )
+            .prop_map(|(t_us, w)| {
+                Msg::CompactResults(CompactResults {
+                    t_us,
+                    wheels: w.map(
+                        |(fx, fy, mz, mu, sigma, mu_min, status)| CompactWheelResult {
+                            fx,
+                            fy,
+                            mz,
+                            mu,
+                            sigma,
+                            mu_min,
+                            status,
+                        },
+                    ),
+                })
+            }),
         (
             0usize..4,
             any::<u32>(),
@@ -494,6 +718,31 @@ fn any_msg() -> impl Strategy<Value = Msg> {
 }
 
 proptest! {
+    #[test]
+    fn compact_batch_within_half_a_count(
+        w in proptest::collection::vec((0usize..4, 0f32..30_000.0, -30_000f32..30_000.0,
+            proptest::option::of(-3.0f32..3.0)), 0..4),
+        t_us in any::<u32>(),
+    ) {
+        let mut ms: Vec<Measurement> = Vec::new();
+        for (wi, fz, fy, alpha) in w {
+            let wheel = Wheel::from_index(wi).unwrap();
+            if ms.iter().all(|m| m.wheel != wheel) {
+                ms.push(Measurement { wheel, fz, fy, alpha, ..meas() });
+            }
+        }
+        let b = CompactBatch::new(t_us, &ms).unwrap();
+        let back = b.measurements();
+        for m in &ms {
+            let g = back[m.wheel.index()].unwrap();
+            prop_assert_eq!(g.t_us, t_us);
+            prop_assert!((g.fz - m.fz).abs() <= 0.25 + 1e-2);
+            prop_assert!((g.fy - m.fy).abs() <= 0.5 + 1e-2);
+            prop_assert_eq!(g.alpha.is_some(), m.alpha.is_some());
+        }
+        prop_assert_eq!(back.iter().filter(|m| m.is_some()).count(), ms.len());
+    }
+
     #[test]
     fn parse_emit_round_trip(m in any_msg(), seq in any::<u8>(), fd in any::<bool>()) {
         let mtu = if fd { Mtu::Fd } else { Mtu::Classic };

@@ -3,7 +3,8 @@ use crate::replay::{self, Answer, Backend32};
 use crate::tyre;
 use clap::Subcommand;
 use gough::proto::{
-    id, Ack, CompactMeasurement, Feed, Msg, MsgType, Mtu, Reassembler, Segmenter, MSG_BUF,
+    id, Ack, CompactBatch, CompactMeasurement, CompactResults, CompactWheelResult, Feed, Msg,
+    MsgType, Mtu, Reassembler, Segmenter, MSG_BUF,
 };
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -40,6 +41,10 @@ pub enum ProtoCmd {
         /// values it carries).
         #[arg(long)]
         compact: bool,
+        /// Send the wheels of each sample time (consecutive rows with one time, one row per
+        /// wheel) as one four-wheel `CompactBatch`, answered by one `CompactResults`.
+        #[arg(long, conflicts_with = "compact")]
+        batch: bool,
         /// Write to this file instead of stdout.
         #[arg(long)]
         out: Option<PathBuf>,
@@ -78,6 +83,7 @@ pub fn run(cmd: ProtoCmd) -> Result<(), String> {
             log,
             fd,
             compact,
+            batch,
             out,
         } => {
             let t = tyre::load(&tir)?;
@@ -96,8 +102,12 @@ pub fn run(cmd: ProtoCmd) -> Result<(), String> {
                 }
             }
             let mtu = if fd { Mtu::Fd } else { Mtu::Classic };
-            let replies = replay::host_f32(&t.params.cast::<f32>(), &rows, Backend32::Fast);
             let mut msgs = Vec::new();
+            if batch {
+                batches(&t.params.cast::<f32>(), &rows, &mut msgs)?;
+                sent.clear();
+            }
+            let replies = replay::host_f32(&t.params.cast::<f32>(), &rows, Backend32::Fast);
             for (m, r) in sent.iter().zip(&replies) {
                 msgs.push(*m);
                 msgs.push(match r.answer {
@@ -113,8 +123,8 @@ pub fn run(cmd: ProtoCmd) -> Result<(), String> {
                 }
             }
             let mut s = String::new();
-            let mut seq = [0u8; 5];
-            let mut rx: [Reassembler<MSG_BUF>; 5] = Default::default();
+            let mut seq = [0u8; id::ALL.len()];
+            let mut rx: [Reassembler<MSG_BUF>; id::ALL.len()] = Default::default();
             for m in &msgs {
                 let cid = id::of(m.msg_type());
                 let k = id::ALL.iter().position(|x| x.0 == cid).unwrap_or(0);
@@ -126,6 +136,58 @@ pub fn run(cmd: ProtoCmd) -> Result<(), String> {
         }
         ProtoCmd::Load { markdown } => emit(&crate::busload::table(markdown), None),
     }
+}
+
+/// The log's rows grouped by sample time (consecutive rows with one `t_us`, distinct wheels)
+/// into `CompactBatch`es, each followed by the `CompactResults` the device's pipeline answers
+/// (run on the host on the values the batch carries, as the firmware's `process_batch`).
+fn batches(
+    p: &gough::mf::Params<f32>,
+    rows: &[gough::proto::Measurement],
+    msgs: &mut Vec<Msg>,
+) -> Result<(), String> {
+    let mut groups: Vec<Vec<gough::proto::Measurement>> = Vec::new();
+    for m in rows {
+        match groups.last_mut() {
+            Some(g) if g[0].t_us == m.t_us && g.iter().all(|x| x.wheel != m.wheel) => g.push(*m),
+            _ => groups.push(vec![*m]),
+        }
+    }
+    let mut carried = Vec::new();
+    let mut sent = Vec::new();
+    for (i, g) in groups.iter().enumerate() {
+        let b = CompactBatch::new(g[0].t_us, g).ok_or_else(|| {
+            format!(
+                "batch {}: a value out of the compact measurement's range",
+                i + 1
+            )
+        })?;
+        let ms = b.measurements();
+        carried.extend(ms.iter().flatten().copied());
+        sent.push(b);
+    }
+    // The pipeline runs per wheel in time order, as the device does wheel by wheel.
+    let replies = replay::host_f32(p, &carried, Backend32::Fast);
+    let mut r = replies.iter();
+    for b in sent {
+        let mut res = CompactResults {
+            t_us: b.t_us,
+            ..CompactResults::default()
+        };
+        for (m, out) in b.measurements().iter().zip(res.wheels.iter_mut()) {
+            if m.is_some() {
+                let reply = r.next().ok_or("fewer replies than measurements")?;
+                let f = match reply.answer {
+                    Answer::Forces(f) => Some(f),
+                    Answer::Ack(_) => None,
+                };
+                *out = CompactWheelResult::or_na(f.as_ref(), reply.estimate.as_ref());
+            }
+        }
+        msgs.push(Msg::CompactBatch(b));
+        msgs.push(Msg::CompactResults(res));
+    }
+    Ok(())
 }
 
 fn hex(b: &[u8]) -> String {
@@ -175,6 +237,29 @@ fn frames_json(
                 "wheel": serde_json::to_value(x.wheel).map_err(|e| e.to_string())?,
                 "fz": x.fz, "fy": x.fy, "mz": x.mz, "fx": x.fx, "vx": x.vx,
                 "omega": x.omega, "alpha": x.alpha, "kappa": x.kappa, "gamma": x.gamma,
+            })),
+            Some(x.t_us),
+            None,
+        ),
+        Msg::CompactBatch(x) => (
+            "CompactBatch",
+            Ok(serde_json::json!({
+                "present": x.present,
+                "wheels": x.wheels.iter().map(|w| serde_json::json!({
+                    "fz": w.fz, "fy": w.fy, "mz": w.mz, "fx": w.fx, "vx": w.vx,
+                    "omega": w.omega, "alpha": w.alpha, "kappa": w.kappa, "gamma": w.gamma,
+                })).collect::<Vec<_>>(),
+            })),
+            Some(x.t_us),
+            None,
+        ),
+        Msg::CompactResults(x) => (
+            "CompactResults",
+            Ok(serde_json::json!({
+                "wheels": x.wheels.iter().map(|w| serde_json::json!({
+                    "fx": w.fx, "fy": w.fy, "mz": w.mz, "mu": w.mu, "sigma": w.sigma,
+                    "mu_min": w.mu_min, "status": w.status,
+                })).collect::<Vec<_>>(),
             })),
             Some(x.t_us),
             None,
