@@ -559,6 +559,25 @@ impl<F: Float> TransientTyre<F> {
         dt: F,
         op: &Operating<F>,
     ) -> Result<Output<F>, TyreError> {
+        // σ at this sample's load and zero slip (the relaxation lengths depend on the load only).
+        let zero_slip = || -> Result<Sigma<F>, TyreError> {
+            let o = mf::eval::<F, M>(
+                p,
+                &Input {
+                    fz: op.fz,
+                    gamma: op.gamma,
+                    vx: op.kin.vx,
+                    p: op.p,
+                    ..Input::default()
+                },
+                opts,
+            )
+            .map_err(TyreError::Eval)?;
+            Ok(Sigma {
+                sigma_kappa: o.sigma_x,
+                sigma_alpha: o.sigma_y,
+            })
+        };
         let sigma = match self.last {
             Some(o) => {
                 let (mut sk, mut sa) = (o.sigma_x, o.sigma_y);
@@ -571,50 +590,23 @@ impl<F: Float> TransientTyre<F> {
                     sigma_alpha: sa,
                 }
             }
-            None => {
-                // First step: σ at this load, zero slip.
-                let o = mf::eval::<F, M>(
-                    p,
-                    &Input {
-                        fz: op.fz,
-                        gamma: op.gamma,
-                        vx: op.kin.vx,
-                        p: op.p,
-                        ..Input::default()
-                    },
-                    opts,
-                )
-                .map_err(TyreError::Eval)?;
-                Sigma {
-                    sigma_kappa: o.sigma_x,
-                    sigma_alpha: o.sigma_y,
-                }
-            }
+            // First step: σ at this load, zero slip.
+            None => zero_slip()?,
         };
         let mut state = self.state;
         let s = if self.hold {
-            let end = mf::eval::<F, M>(
-                p,
-                &Input {
-                    fz: op.fz,
-                    gamma: op.gamma,
-                    vx: op.kin.vx,
-                    p: op.p,
-                    ..Input::default()
-                },
-                opts,
-            )
-            .map_err(TyreError::Eval)?;
+            // The end's σ; on the first step that is `sigma` itself (evaluated once).
             let s1 = Sample {
                 kin: op.kin,
-                sigma: Sigma {
-                    sigma_kappa: end.sigma_x,
-                    sigma_alpha: end.sigma_y,
+                sigma: if self.last.is_some() {
+                    zero_slip()?
+                } else {
+                    sigma
                 },
             };
             let s0 = Sample {
                 kin: self.last_kin.unwrap_or(op.kin),
-                sigma: if self.last.is_some() { sigma } else { s1.sigma },
+                sigma,
             };
             state.step_hold::<M>(&self.config, dt, &s0, &s1)
         } else {
