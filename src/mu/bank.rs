@@ -16,7 +16,13 @@
 //!   step is kept when a trial evaluation finds that it lowers the batch's χ² (the trust region
 //!   then grows; otherwise it shrinks), except a small one (at most [`TRUST_STEP`] in α′ and κ′,
 //!   its linear model predicting a fall of χ² below [`TRUST_GAIN`]): that one is taken untried,
-//!   and the batch's χ² is the one its linear model predicts.
+//!   and the batch's χ² is the one its linear model predicts. From batch to batch every cell's
+//!   κ′ moves with the measured κ′, by the change shrunk towards 0 by the noise of a difference
+//!   of two batch means. A cell that fits the batch badly tries a seed: the best cell's slips,
+//!   the brush model's slip angle for the batch's |Fy| on its own surface, or a point of a scan
+//!   (at most [`RESEEDS`] per batch in turn); a cell still in contention (ℓ within
+//!   `exclude_nll` of the best) always tries the brush seed, so that a cell that lost its slips
+//!   (a fast reversal out of the saturated range) is not excluded for it.
 //! - **Likelihood with memory**: each cell's negative log-likelihood ℓ is the sum of its batches'
 //!   χ²/2 (each capped at `chi2_cap`, so that one batch the model cannot represent — a transient
 //!   faster than the batch — never decides), forgotten at the rate exp(−Δt/`memory` −
@@ -28,16 +34,27 @@
 //!   curvature and the spread of the posterior exp(−ℓ), with a floor for the grid.
 //!
 //! ## States ([`State`])
-//! - `Identifiable`: 1.96·σ ≤ 0.1 by the estimator's own account (`sigma_identifiable`), and
-//!   every surface more than 0.1 away is excluded (ℓ more than `exclude_nll` above the best).
+//! - `Identifiable`: 1.96·σ ≤ 0.1 by the estimator's own account (`sigma_identifiable`),
+//!   every surface more than 0.1 away is excluded (ℓ more than `exclude_nll` above the best),
+//!   and the reported surface explains the latest batch (χ² ≤ `chi2_identifiable`).
 //! - `NotIdentifiable`: some surfaces are excluded (`mu_min` says which μ is still possible), but
-//!   not enough for the above.
+//!   not enough for the above. The last identifiable μ is reported while the evidence does not
+//!   turn against it (ℓ ≤ `hold_nll` at it), its σ growing with time and distance
+//!   (`age_q_time`, `age_q_distance`); once that σ reaches the prior's it is still reported
+//!   while some surface stays excluded. Otherwise the minimum of ℓ.
 //! - `Fallback`: no surface can be excluded (no excitation yet, or the evidence aged out): the
 //!   prior `mu_prior` is reported.
 //!
 //! Without excitation the evidence ages at the forgetting rate above: an identifiable estimate
 //! is held through a zero crossing of the force and stays identifiable for about
 //! 2·`memory`·ln(σ_identifiable/σ) of straight running.
+//!
+//! On every sample, the running mean of the batch being collected is checked against the
+//! reported μ: a horizontal force it cannot produce at this load (|F|/Fz less 3σ of the noise and
+//! the model error above the friction ellipse's largest axis, max(μx, μy)) ends the
+//! identification at once (a change to a grippier surface is not reported as the old one for
+//! a batch and its fit), drops the held value, and bounds μ from below (`mu_min` and the
+//! reported μ) for the next two batches.
 //!
 //! ## Time
 //! Samples carry a `u32` microsecond timestamp; only wrapping differences are used, so the
@@ -48,8 +65,9 @@
 //! ## Cost
 //! Bounded per sample, no allocation: a batch's cells are fitted over the next batch's samples,
 //! `⌈CELLS/batch⌉` cells per sample, each one Magic Formula evaluation with the slip derivatives
-//! and one without (the trial; none for a small step), plus one more for at most [`RESEEDS`] poorly fitting cells per batch. M4F, `Fast`: 6,294–6,826
-//! instructions per sample on average, 18,831 at worst (docs/estimator.md).
+//! and one without (the trial; none for a small step), plus one more for a poorly fitting cell
+//! (at most [`RESEEDS`] per batch, and those in contention). M4F, `Fast`: see
+//! docs/estimator.md ("Cost on the device") for the figures the firmware bench measures.
 
 use crate::math::{Backend, Float};
 use crate::mf::prepared::{Mu, Operating, Prepared};
@@ -57,7 +75,8 @@ use crate::mf::{self, Input, Options, Params, Side};
 
 /// Number of surface hypotheses.
 pub const CELLS: usize = 25;
-/// Cells per batch that may try the best cell's slips when their own fit is poor.
+/// Cells out of contention per batch that may try a seed when their own fit is poor (cells in
+/// contention always may).
 pub const RESEEDS: usize = 6;
 /// Slip angles \[rad\] a poorly fitting cell tries in turn (on the side of the lateral force).
 const SCAN: [f64; 8] = [0.01, 0.02, 0.035, 0.05, 0.08, 0.12, 0.2, 0.35];
@@ -142,6 +161,9 @@ pub struct Config<F> {
     pub sigma_prior: F,
     /// A cell whose batch χ² exceeds this tries the best cell's slips (at most [`RESEEDS`]).
     pub reseed_chi2: F,
+    /// Largest χ² of the latest batch at the reported surface for the estimate to be
+    /// identifiable (the surface must explain what is measured now).
+    pub chi2_identifiable: F,
 }
 
 impl<F: Float> Default for Config<F> {
@@ -166,8 +188,8 @@ impl<F: Float> Default for Config<F> {
             memory: c(2.0),
             memory_distance: c(50.0),
             excitation: c(0.03),
-            chi2_cap: c(25.0),
-            deadzone: c(2.0),
+            chi2_cap: c(8.0),
+            deadzone: c(1.0),
             chi2_explain: c(30.0),
             switch_nll: c(12.0),
             exclude_nll: c(4.5),
@@ -180,6 +202,7 @@ impl<F: Float> Default for Config<F> {
             mu_prior: c(0.8),
             sigma_prior: c(0.4),
             reseed_chi2: c(25.0),
+            chi2_identifiable: c(12.0),
         }
     }
 }
@@ -385,6 +408,13 @@ pub struct Bank<F> {
     age_m: F,
     est: Estimate<F>,
     bad: u32,
+    /// Largest |F|/Fz the reported μ gives at the last batch's load, over μ (the model's
+    /// friction ellipse at that load: max(μx, μy)/μ).
+    peak_ratio: F,
+    /// A lower bound of μ from a measured force the reported μ cannot produce, and the batches
+    /// it stays in force (until the likelihoods have taken that force in).
+    floor: F,
+    floor_batches: u8,
 }
 
 impl<F: Float> Bank<F> {
@@ -454,6 +484,9 @@ impl<F: Float> Bank<F> {
                 change: false,
             },
             bad: 0,
+            peak_ratio: F::ONE,
+            floor: F::ZERO,
+            floor_batches: 0,
         })
     }
 
@@ -569,7 +602,8 @@ impl<F: Float> Bank<F> {
             a.dist += vx.abs() * dt;
         }
         a.us = a.us.saturating_add(dt_us.min(MAX_GAP_US));
-        if a.n >= self.cfg.batch {
+        self.check_force::<M>();
+        if self.acc.n >= self.cfg.batch {
             let b = self.batch_of::<M>(&self.acc);
             self.acc = Acc::new();
             if self.pending.is_some() {
@@ -579,9 +613,20 @@ impl<F: Float> Bank<F> {
                     self.work::<M>();
                 }
             }
-            // Every cell's κ′ follows the measured κ′ from batch to batch (its own offset kept).
+            // Every cell's κ′ follows the measured κ′ from batch to batch (its own offset kept),
+            // by the change shrunk towards 0 by the noise of a difference of two batch means
+            // (d·d²/(d² + 2σκ²/n)): a change well above the noise (ABS) passes whole, the
+            // noise of a steady κ is not fed into every cell's slip (it once moved a saturated
+            // cell's κ′ by most of its value each batch, and the true surface lost to a wrong
+            // one over a long steady turn on ice).
             if let (Some((k, _)), Some(prev)) = (b.kappa, self.kappa_prev) {
-                let d = k - prev;
+                let raw = k - prev;
+                let v = F::TWO * self.cfg.sigma_kappa.sq() / F::from_index(self.cfg.batch);
+                let d = if raw * raw + v > F::ZERO {
+                    raw * raw * raw / (raw * raw + v)
+                } else {
+                    raw
+                };
                 for c in self.cells.iter_mut() {
                     c.kappa = clamp(c.kappa + d, F::ONE);
                 }
@@ -617,6 +662,40 @@ impl<F: Float> Bank<F> {
             self.reseeds = 0;
         }
         self.est
+    }
+
+    /// A force the reported μ cannot produce: checked on every sample against the running mean
+    /// of the batch being collected (from its 3rd sample), so that a change to a grippier
+    /// surface ends a stale identification within a few samples instead of after the batch and
+    /// its fit. The mean |F|/Fz, less 3σ of its noise and the model error, above what the
+    /// reported μ gives at this load (the friction ellipse's largest axis) makes the estimate
+    /// not identifiable, drops the held value, and sets a lower bound of μ (`mu_min`, and the
+    /// reported μ at least) for the next two batches.
+    fn check_force<M: Backend<F>>(&mut self) {
+        let a = &self.acc;
+        if a.n < 3 || self.est.state == State::Fallback {
+            return;
+        }
+        let c = &self.cfg;
+        let n = F::from_index(a.n);
+        let fz = a.fz / n;
+        let fx = if a.n_fx == a.n { a.fx / n } else { F::ZERO };
+        let fy = a.fy / n;
+        if fz <= F::ZERO {
+            return;
+        }
+        let f = M::sqrt(fx * fx + fy * fy) / fz;
+        let noise = M::sqrt(F::TWO * c.sigma_f_rel.sq() / n + c.model_f_abs.sq());
+        let bound = (f * (F::ONE - c.model_f_rel) - F::from_f64(3.0) * noise) / self.peak_ratio;
+        if bound > self.est.mu && bound.is_finite() {
+            self.floor = self.floor.max(bound);
+            self.floor_batches = 2;
+            self.held = None;
+            self.est.state = State::NotIdentifiable;
+            self.est.change = false;
+            self.est.mu = bound;
+            self.est.mu_min = self.est.mu_min.max(bound);
+        }
     }
 
     /// The means and σ of a full batch.
@@ -821,15 +900,25 @@ impl<F: Float> Bank<F> {
                 }
             }
         }
-        if chi > self.cfg.reseed_chi2 && self.reseeds < RESEEDS {
-            self.reseeds += 1;
-            // Alternately the best cell's slips and a point of a scan of α′ on the side the
-            // lateral force gives (α′ > 0 gives Fy < 0, ISO-W), κ′ at the measured value.
+        // A cell still in contention (ℓ within `exclude_nll` of the best) that fits poorly has
+        // most likely lost its slips (a fast reversal out of the saturated range, where the
+        // force says little of α′): it always tries the brush model's slip angle for the
+        // batch's |Fy| on its own surface, beyond the [`RESEEDS`] budget, so that a tracking
+        // failure is not counted as evidence against the surface. Other cells take turns.
+        let contending = cell.nll <= self.cfg.exclude_nll;
+        if chi > self.cfg.reseed_chi2 && (self.reseeds < RESEEDS || contending) {
+            if !contending {
+                self.reseeds += 1;
+            }
+            // Alternately the best cell's slips, the brush model's slip angle and a point of a
+            // scan of α′ on the side the lateral force gives (α′ > 0 gives Fy < 0, ISO-W), κ′ at
+            // the measured value.
             let (sa, sk) = self.best;
             let sk = b.kappa.map_or(sk, |(k, _)| k);
             self.scan = self.scan.wrapping_add(1);
             let side = |a: F| if b.fy.0 > F::ZERO { -a } else { a };
-            let sa = match self.scan % 3 {
+            let pick = if contending { 1 } else { self.scan % 3 };
+            let sa = match pick {
                 0 => sa,
                 1 => side(self.brush_alpha::<M>(k, b)),
                 _ => {
@@ -980,7 +1069,24 @@ impl<F: Float> Bank<F> {
         for c in self.cells.iter_mut() {
             c.nll = (c.nll - lo).min(self.cfg.switch_nll);
         }
+        if self.floor_batches > 0 {
+            self.floor_batches -= 1;
+        } else {
+            self.floor = F::ZERO;
+        }
         self.estimate::<M>();
+        if self.floor > F::ZERO && self.est.state != State::Fallback {
+            self.est.mu = self.est.mu.max(self.floor);
+            self.est.mu_min = self.est.mu_min.max(self.floor);
+        }
+        if let Some(pr) = &self.prep {
+            let lambda = self.est.mu / self.mu_y0;
+            let m = pr.with_mu(self.lmux * lambda, self.lmuy * lambda);
+            let r = m.mu_x().max(m.mu_y()) / self.est.mu;
+            if r.is_finite() && r > F::ZERO {
+                self.peak_ratio = r;
+            }
+        }
     }
 
     /// The estimate from the cells' likelihoods.
@@ -1044,8 +1150,15 @@ impl<F: Float> Bank<F> {
         let var_post = (s2 / sw - mean * mean).max(F::ZERO);
         let var = var_post.max(var_curv.min(var_post.max(h * h)));
         let sigma = M::sqrt(var + c.sigma_floor.sq());
-        let identifiable =
-            self.evidence && excluded > 0 && sigma <= c.sigma_identifiable && !far_open;
+        // The reported surface must explain the latest batch (a cell that wins only because
+        // the true one lost its slips is no identification).
+        let fits = self.chi2.get(m).is_some_and(|x| *x <= c.chi2_identifiable);
+        let identifiable = self.evidence
+            && excluded > 0
+            && sigma <= c.sigma_identifiable
+            && !far_open
+            && fits
+            && mu >= self.floor;
         let mu_min = if mu_min < F::from_f64(f64::MAX) {
             mu_min
         } else {
@@ -1077,10 +1190,13 @@ impl<F: Float> Bank<F> {
                 .floor_index(CELLS - 1);
             let against = self.cells.get(k).is_some_and(|cell| cell.nll > c.hold_nll);
             let aged = M::sqrt(hs * hs + c.age_q_time * self.age_s + c.age_q_distance * self.age_m);
-            if !against && aged < c.sigma_prior {
+            // Aged to the prior's σ, it is still kept while the evidence excludes some surface
+            // (the data say something, and not that the held value is wrong): a steady
+            // state that two surfaces explain alike does not make the estimate jump between them.
+            if !against && (aged < c.sigma_prior || excluded > 0) {
                 self.est = Estimate {
                     mu: h,
-                    sigma: aged.max(sigma.min(c.sigma_prior)),
+                    sigma: aged.min(c.sigma_prior).max(sigma.min(c.sigma_prior)),
                     mu_min,
                     state: State::NotIdentifiable,
                     change: false,
