@@ -76,6 +76,16 @@ impl<F: Float> Mu<F> {
     pub fn mu_y(&self) -> F {
         self.fy0.mu_y.abs()
     }
+    /// The largest |Fx0| and |Fy0| the pure-slip formulas can give at this load and friction
+    /// scaling \[N\]: |Dx| + |SVx| ((25), (31)) and |Dy| + |SVy| ((36), (42)) — the peak and
+    /// the vertical shift, which scales with λμ′ (4.E8), not λμ*, and so weighs more on a
+    /// slippery surface.
+    pub fn f_peak(&self) -> (F, F) {
+        (
+            self.fx0.d_x.abs() + self.fx0.s_vx.abs(),
+            self.fy0.d_y.abs() + self.fy0.s_vy.abs(),
+        )
+    }
 }
 
 /// Fx, Fy, Mz and what goes with them, as [`super::Output`] has them.
