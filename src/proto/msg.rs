@@ -200,7 +200,7 @@ impl Measurement {
 /// angle δ is not carried (the device's pipeline does not use it). [`CompactMeasurement::new`]
 /// refuses a value outside its range or not finite (no silent clamp); values are rounded to the
 /// nearest count, so the device sees the measurement within half a count.
-#[derive(Serialize, Deserialize, MaxSize, Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(Serialize, Deserialize, Debug, Clone, Copy, PartialEq, Eq, Default)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct CompactMeasurement {
     /// The wheel.
@@ -208,33 +208,15 @@ pub struct CompactMeasurement {
     /// Sample time \[µs\], sender's clock, wrapping.
     #[serde(with = "postcard::fixint::le")]
     pub t_us: u32,
-    /// Fz \[0.5 N\].
-    #[serde(with = "postcard::fixint::le")]
-    pub fz: u16,
-    /// Fy \[N\].
-    #[serde(with = "postcard::fixint::le")]
-    pub fy: i16,
-    /// Mz \[0.1 N·m\].
-    #[serde(with = "postcard::fixint::le")]
-    pub mz: i16,
-    /// Fx \[N\] or [`CompactMeasurement::ABSENT`].
-    #[serde(with = "postcard::fixint::le")]
-    pub fx: i16,
-    /// Vx \[0.01 m/s\] or absent.
-    #[serde(with = "postcard::fixint::le")]
-    pub vx: i16,
-    /// ω \[0.01 rad/s\] or absent.
-    #[serde(with = "postcard::fixint::le")]
-    pub omega: i16,
-    /// α \[1e-4 rad\] or absent.
-    #[serde(with = "postcard::fixint::le")]
-    pub alpha: i16,
-    /// κ \[1e-4\] or absent.
-    #[serde(with = "postcard::fixint::le")]
-    pub kappa: i16,
-    /// γ \[1e-4 rad\] or absent.
-    #[serde(with = "postcard::fixint::le")]
-    pub gamma: i16,
+    /// Fz, Fy, Mz, Fx, Vx, ω, α, κ, γ in the scaled integers above ([`CompactWheel`], which a
+    /// [`CompactBatch`] carries per wheel; postcard writes a nested struct's fields in place,
+    /// so the bytes are those of the table).
+    pub fields: CompactWheel,
+}
+
+// Fixed-width fields: the exact size (the derive would count them as varints).
+impl MaxSize for CompactMeasurement {
+    const POSTCARD_MAX_SIZE: usize = Wheel::POSTCARD_MAX_SIZE + 4 + CompactWheel::POSTCARD_MAX_SIZE;
 }
 
 /// `x / unit` rounded, if it is finite and fits an i16 other than `i16::MIN`.
@@ -275,40 +257,44 @@ impl CompactMeasurement {
         Some(CompactMeasurement {
             wheel: m.wheel,
             t_us: m.t_us,
-            fz: fz as u16,
-            fy: count_i16(m.fy, Self::F)?,
-            mz: count_i16(m.mz, Self::MZ)?,
-            fx: opt(m.fx, Self::F)?,
-            vx: opt(m.vx, Self::SPEED)?,
-            omega: opt(m.omega, Self::SPEED)?,
-            alpha: opt(m.alpha, Self::ANGLE)?,
-            kappa: opt(m.kappa, Self::ANGLE)?,
-            gamma: opt(m.gamma, Self::ANGLE)?,
+            fields: CompactWheel {
+                fz: fz as u16,
+                fy: count_i16(m.fy, Self::F)?,
+                mz: count_i16(m.mz, Self::MZ)?,
+                fx: opt(m.fx, Self::F)?,
+                vx: opt(m.vx, Self::SPEED)?,
+                omega: opt(m.omega, Self::SPEED)?,
+                alpha: opt(m.alpha, Self::ANGLE)?,
+                kappa: opt(m.kappa, Self::ANGLE)?,
+                gamma: opt(m.gamma, Self::ANGLE)?,
+            },
         })
     }
 
     /// The measurement it stands for (δ absent). Device and host both use this.
     pub fn measurement(&self) -> Measurement {
         let opt = |c: i16, unit: f32| (c != Self::ABSENT).then(|| f32::from(c) * unit);
+        let f = &self.fields;
         Measurement {
             wheel: self.wheel,
             t_us: self.t_us,
-            fz: f32::from(self.fz) * Self::FZ,
-            fy: f32::from(self.fy) * Self::F,
-            mz: f32::from(self.mz) * Self::MZ,
-            fx: opt(self.fx, Self::F),
-            vx: opt(self.vx, Self::SPEED),
-            omega: opt(self.omega, Self::SPEED),
+            fz: f32::from(f.fz) * Self::FZ,
+            fy: f32::from(f.fy) * Self::F,
+            mz: f32::from(f.mz) * Self::MZ,
+            fx: opt(f.fx, Self::F),
+            vx: opt(f.vx, Self::SPEED),
+            omega: opt(f.omega, Self::SPEED),
             delta: None,
-            alpha: opt(self.alpha, Self::ANGLE),
-            kappa: opt(self.kappa, Self::ANGLE),
-            gamma: opt(self.gamma, Self::ANGLE),
+            alpha: opt(f.alpha, Self::ANGLE),
+            kappa: opt(f.kappa, Self::ANGLE),
+            gamma: opt(f.gamma, Self::ANGLE),
         }
     }
 }
 
-/// One wheel's fields in a [`CompactBatch`]: the scaled integers of [`CompactMeasurement`]
-/// without wheel and time (18 bytes, fixed-width little endian, in this order).
+/// One wheel's measured fields in scaled integers: [`CompactMeasurement`]'s after its wheel and
+/// time, and each wheel's in a [`CompactBatch`] (18 bytes, fixed-width little endian, in this
+/// order; scales and the absent marker in [`CompactMeasurement`]'s table).
 #[derive(Serialize, Deserialize, Debug, Clone, Copy, PartialEq, Eq, Default)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct CompactWheel {
@@ -344,22 +330,6 @@ pub struct CompactWheel {
 // Fixed-width fields: the exact size (the derive would count them as varints).
 impl MaxSize for CompactWheel {
     const POSTCARD_MAX_SIZE: usize = 18;
-}
-
-impl CompactWheel {
-    fn of(c: &CompactMeasurement) -> CompactWheel {
-        CompactWheel {
-            fz: c.fz,
-            fy: c.fy,
-            mz: c.mz,
-            fx: c.fx,
-            vx: c.vx,
-            omega: c.omega,
-            alpha: c.alpha,
-            kappa: c.kappa,
-            gamma: c.gamma,
-        }
-    }
 }
 
 /// One sample instant of up to four wheels in scaled integers (type 0x08, identifier
@@ -407,7 +377,7 @@ impl CompactBatch {
                 return None;
             }
             b.present |= bit;
-            *b.wheels.get_mut(m.wheel.index())? = CompactWheel::of(&CompactMeasurement::new(m)?);
+            *b.wheels.get_mut(m.wheel.index())? = CompactMeasurement::new(m)?.fields;
         }
         Some(b)
     }
@@ -421,15 +391,7 @@ impl CompactBatch {
                 let c = CompactMeasurement {
                     wheel,
                     t_us: self.t_us,
-                    fz: w.fz,
-                    fy: w.fy,
-                    mz: w.mz,
-                    fx: w.fx,
-                    vx: w.vx,
-                    omega: w.omega,
-                    alpha: w.alpha,
-                    kappa: w.kappa,
-                    gamma: w.gamma,
+                    fields: *w,
                 };
                 *o = Some(c.measurement());
             }

@@ -59,7 +59,10 @@ pub(crate) fn largest() -> Vec<Msg> {
         Msg::Command(Command::Stop),
         Msg::CompactMeasurement(CompactMeasurement {
             t_us: u32::MAX,
-            fz: u16::MAX,
+            fields: CompactWheel {
+                fz: u16::MAX,
+                ..CompactWheel::default()
+            },
             ..CompactMeasurement::default()
         }),
         Msg::CompactBatch(CompactBatch {
@@ -245,15 +248,17 @@ fn compact_measurement() {
     let big = CompactMeasurement {
         wheel: Wheel::RearRight,
         t_us: u32::MAX,
-        fz: u16::MAX,
-        fy: i16::MAX,
-        mz: i16::MIN,
-        fx: -1,
-        vx: i16::MAX,
-        omega: i16::MAX,
-        alpha: i16::MAX,
-        kappa: i16::MAX,
-        gamma: i16::MAX,
+        fields: CompactWheel {
+            fz: u16::MAX,
+            fy: i16::MAX,
+            mz: i16::MIN,
+            fx: -1,
+            vx: i16::MAX,
+            omega: i16::MAX,
+            alpha: i16::MAX,
+            kappa: i16::MAX,
+            gamma: i16::MAX,
+        },
     };
     let msg = Msg::CompactMeasurement(big);
     let mut b = [0u8; MSG_BUF];
@@ -290,7 +295,7 @@ fn compact_measurement() {
         ..m
     };
     let c = CompactMeasurement::new(&none).unwrap();
-    assert_eq!(c.fx, CompactMeasurement::ABSENT);
+    assert_eq!(c.fields.fx, CompactMeasurement::ABSENT);
     assert_eq!(
         c.measurement(),
         Measurement {

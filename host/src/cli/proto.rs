@@ -235,8 +235,9 @@ fn frames_json(
             "CompactMeasurement",
             Ok(serde_json::json!({
                 "wheel": serde_json::to_value(x.wheel).map_err(|e| e.to_string())?,
-                "fz": x.fz, "fy": x.fy, "mz": x.mz, "fx": x.fx, "vx": x.vx,
-                "omega": x.omega, "alpha": x.alpha, "kappa": x.kappa, "gamma": x.gamma,
+                "fz": x.fields.fz, "fy": x.fields.fy, "mz": x.fields.mz, "fx": x.fields.fx,
+                "vx": x.fields.vx, "omega": x.fields.omega, "alpha": x.fields.alpha,
+                "kappa": x.fields.kappa, "gamma": x.fields.gamma,
             })),
             Some(x.t_us),
             None,
