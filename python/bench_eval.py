@@ -13,6 +13,7 @@ import argparse
 import os
 import platform
 import subprocess
+import sys
 import tempfile
 import time
 from pathlib import Path
@@ -20,7 +21,11 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-import gough
+# Run as a file, this script's directory comes first on sys.path, and the source tree's
+# `gough/` (without the compiled `_gough`) would shadow the installed package.
+_HERE = Path(__file__).resolve().parent
+sys.path = [p for p in sys.path if Path(p or ".").resolve() != _HERE]
+import gough  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 TIR = ROOT / "host-tests" / "data" / "tyres" / "MagicFormula61_Parameters.tir"
