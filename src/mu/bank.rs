@@ -57,6 +57,10 @@
 //! a batch and its fit), drops the held value, and bounds μ from below (`mu_min` and the
 //! reported μ) for the next two batches.
 //!
+//! Each batch's fit starts with the likeliest cell: when it no longer explains the new batch
+//! (χ² above `chi2_identifiable`), an identifiable estimate is withdrawn then (its value held),
+//! on the first sample of the fit rather than when the batch's fit is finished.
+//!
 //! ## Time
 //! Samples carry a `u32` microsecond timestamp; only wrapping differences are used, so the
 //! estimator behaves identically whatever the clock read at its start, for as long as it runs.
@@ -417,6 +421,10 @@ pub struct Bank<F> {
     /// it stays in force (until the likelihoods have taken that force in).
     floor: F,
     floor_batches: u8,
+    /// The cell fitted first in the pending batch (the likeliest), if not yet fitted.
+    first: Option<u8>,
+    /// The cell fitted first, skipped in the rotation.
+    skip: Option<u8>,
 }
 
 impl<F: Float> Bank<F> {
@@ -489,6 +497,8 @@ impl<F: Float> Bank<F> {
             peak_ratio: F::ONE,
             floor: F::ZERO,
             floor_batches: 0,
+            first: None,
+            skip: None,
         })
     }
 
@@ -785,6 +795,8 @@ impl<F: Float> Bank<F> {
             *a = excited && (c.nll < cap || k.abs_diff(best) <= 2 || k % VISIT == self.round);
             self.n_active += usize::from(*a);
         }
+        self.first = u8::try_from(best).ok().filter(|_| excited);
+        self.skip = None;
     }
 
     /// Fits the next cells of the pending batch; finishes the batch after the last.
@@ -795,11 +807,28 @@ impl<F: Float> Bank<F> {
             .div_ceil(usize::from(self.cfg.batch.max(1)))
             .max(1);
         let mut done = 0;
+        // The likeliest cell first: when it no longer explains the new batch, an identifiable
+        // estimate is withdrawn on the batch's first fitted sample instead of after the last.
+        if let Some(k8) = self.first.take() {
+            let k = usize::from(k8);
+            done += 1;
+            self.skip = Some(k8);
+            let chi2 = self.fit_cell::<M>(k, &b);
+            if let Some(slot) = self.chi2.get_mut(k) {
+                *slot = chi2;
+            }
+            // (NaN counts as not explained.)
+            let explains = chi2 <= self.cfg.chi2_identifiable;
+            if self.est.state == State::Identifiable && !explains {
+                self.est.state = State::NotIdentifiable;
+                self.est.change = false;
+            }
+        }
         while self.next < CELLS && done < per {
             // Rotated order, so that the re-seeds of successive batches go to different cells.
             let k = (self.next + self.reseed_from) % CELLS;
             self.next += 1;
-            if self.active.get(k).copied().unwrap_or(false) {
+            if self.skip.map(usize::from) != Some(k) && self.active.get(k).copied().unwrap_or(false) {
                 done += 1;
                 let chi2 = self.fit_cell::<M>(k, &b);
                 if let Some(slot) = self.chi2.get_mut(k) {
