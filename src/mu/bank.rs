@@ -828,7 +828,8 @@ impl<F: Float> Bank<F> {
             // Rotated order, so that the re-seeds of successive batches go to different cells.
             let k = (self.next + self.reseed_from) % CELLS;
             self.next += 1;
-            if self.skip.map(usize::from) != Some(k) && self.active.get(k).copied().unwrap_or(false) {
+            if self.skip.map(usize::from) != Some(k) && self.active.get(k).copied().unwrap_or(false)
+            {
                 done += 1;
                 let chi2 = self.fit_cell::<M>(k, &b);
                 if let Some(slot) = self.chi2.get_mut(k) {
