@@ -1300,12 +1300,14 @@ mod tests {
         crate::tir::parse(text).unwrap().params
     }
 
-    /// Samples of a wheel at slip angle α(t) (steady-state Magic Formula on surface μ, the
-    /// transient option as the estimator evaluates it), 1 kHz, clock starting at `t0_us`.
-    fn stream(
+    /// Samples of a wheel at slips (α(t), κ(t)) and speed `vx` (steady-state Magic Formula on
+    /// surface μ, the transient option as the estimator evaluates it; κ measured without noise),
+    /// 1 kHz, clock starting at `t0_us`.
+    fn slips_stream(
         p: &Params<f64>,
         mu: f64,
-        alpha: impl Fn(f64) -> f64,
+        slips: impl Fn(f64) -> (f64, f64),
+        vx: f64,
         n: usize,
         t0_us: u32,
     ) -> Vec<Sample<f64>> {
@@ -1320,30 +1322,38 @@ mod tests {
         };
         (0..n)
             .map(|i| {
-                let t = i as f64 * 1e-3;
-                let o = mf::eval::<f64, Libm>(
-                    &q,
-                    &Input {
-                        fz: p.fnomin,
-                        alpha: alpha(t),
-                        vx: 20.0,
-                        ..Input::default()
-                    },
-                    &opts,
-                )
-                .unwrap();
+                let (alpha, kappa) = slips(i as f64 * 1e-3);
+                let input = Input {
+                    fz: p.fnomin,
+                    alpha,
+                    kappa,
+                    vx,
+                    ..Input::default()
+                };
+                let o = mf::eval::<f64, Libm>(&q, &input, &opts).unwrap();
                 Sample {
-                    t_us: t0_us.wrapping_add((i as u32) * 1000),
+                    t_us: t0_us.wrapping_add((i as u32).wrapping_mul(1000)),
                     fz: p.fnomin,
                     fy: o.fy,
                     mz: o.mz,
                     fx: Some(o.fx),
-                    kappa: Some(0.0),
-                    vx: Some(20.0),
+                    kappa: Some(kappa),
+                    vx: Some(vx),
                     gamma: Some(0.0),
                 }
             })
             .collect()
+    }
+
+    /// Samples of a freely rolling wheel (κ 0) at slip angle α(t), 20 m/s.
+    fn stream(
+        p: &Params<f64>,
+        mu: f64,
+        alpha: impl Fn(f64) -> f64,
+        n: usize,
+        t0_us: u32,
+    ) -> Vec<Sample<f64>> {
+        slips_stream(p, mu, |t| (alpha(t), 0.0), 20.0, n, t0_us)
     }
 
     fn run(p: &Params<f64>, s: &[Sample<f64>]) -> Vec<Estimate<f64>> {
@@ -1438,40 +1448,18 @@ mod tests {
         assert!((last.mu - 1.0).abs() < 0.05, "{last:?}");
     }
 
-    /// A turn under drive: slips α, κ ramped in over 1 s and held, measured with the bench's
-    /// noise.
+    /// A turn under drive at 15 m/s: slips α, κ ramped in over 1 s and held, measured with the
+    /// bench's noise.
     fn steady(p: &Params<f64>, mu: f64, alpha: f64, kappa: f64, n: usize) -> Vec<Sample<f64>> {
-        let mu0 = mu_y0::<f64, Libm>(p).unwrap();
-        let mut q = p.clone();
-        q.lmux = p.lmux * mu / mu0;
-        q.lmuy = p.lmuy * mu / mu0;
-        let opts = Options {
-            transient: true,
-            moments: false,
-            ..Options::default()
-        };
-        let s = (0..n).map(|i| {
-            let r = (i as f64 * 1e-3).min(1.0);
-            let input = Input {
-                fz: p.fnomin,
-                alpha: alpha * r,
-                kappa: kappa * r,
-                vx: 15.0,
-                ..Input::default()
-            };
-            let o = mf::eval::<f64, Libm>(&q, &input, &opts).unwrap();
-            Sample {
-                t_us: (i as u32).wrapping_mul(1000),
-                fz: p.fnomin,
-                fy: o.fy,
-                mz: o.mz,
-                fx: Some(o.fx),
-                kappa: Some(kappa * r),
-                vx: Some(15.0),
-                gamma: Some(0.0),
-            }
-        });
-        noisy(s.collect())
+        let ramp = |t: f64| t.min(1.0);
+        noisy(slips_stream(
+            p,
+            mu,
+            |t| (alpha * ramp(t), kappa * ramp(t)),
+            15.0,
+            n,
+            0,
+        ))
     }
 
     #[test]
