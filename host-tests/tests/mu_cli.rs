@@ -422,10 +422,25 @@ fn bench_says_where_the_latency_goes() {
         o
     };
     let out = run("bench");
+    let text = String::from_utf8_lossy(&out.stdout);
     assert!(
-        String::from_utf8_lossy(&out.stdout)
-            .contains("## Where the Gough estimator's latency goes"),
+        text.contains("## Where the Gough estimator's latency goes"),
         "the table is printed"
+    );
+    // The cases are the suite without its five straight ABS stops, counted apart.
+    let suite = gough_host::mu::bench::suite();
+    assert_eq!(
+        suite
+            .iter()
+            .filter(|c| gough_host::mu::bench::straight_stop(c))
+            .count(),
+        5
+    );
+    assert_eq!(suite.len(), 34);
+    assert!(
+        text.contains("bank, without the straight ABS stops: within ±0.1 within 0.15 s of utilisation 0.5 on ")
+            && text.contains(" of 3 cases and "),
+        "{text}"
     );
     run("bound");
     let holds = std::fs::read_to_string(dir.join("bench/holds.csv")).unwrap();
