@@ -263,6 +263,13 @@ fn compact_measurement() {
     let msg = Msg::CompactMeasurement(big);
     let mut b = [0u8; MSG_BUF];
     assert_eq!(msg.encode(&mut b).unwrap(), 29);
+    // The exact size (fixed-width fields): 29 less the envelope, as for the batch below.
+    assert_eq!(29 - 6, CompactMeasurement::POSTCARD_MAX_SIZE);
+    // Byte layout: wheel, t_us LE, then the nested fields in place (Fz u16 LE, Fy, Mz, Fx i16 LE).
+    assert_eq!(
+        &b[2..15],
+        &[3, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0x7F, 0x00, 0x80, 0xFF, 0xFF]
+    );
     assert_eq!(frames(&msg, 0, Mtu::Classic).len(), 5);
     let fd = frames(&msg, 0, Mtu::Fd);
     assert_eq!((fd.len(), fd[0].len()), (1, 32));
