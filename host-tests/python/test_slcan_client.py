@@ -20,6 +20,7 @@ the firmware. Exit code 0 = pass.
 import argparse
 import csv
 import os
+import socket
 import struct
 import subprocess
 import sys
@@ -224,6 +225,15 @@ def main():
         except Exception:
             time.sleep(0.1)
     assert bus is not None, "cannot connect to the firmware"
+    # Each frame is one small socket write: with Nagle's algorithm on (pyserial's socket:// does
+    # not turn it off), the second frame of a message waits for the ACK of the first, which the
+    # peer may delay by 40 ms or more — beyond the device's 50 ms between the frames of one
+    # message (FRAME_TIMEOUT_MS), and the message is dropped as timed out. A CAN adapter
+    # would send the frames back to back; so does the host's own client (`set_nodelay`).
+    sock = getattr(getattr(bus, "serialPortOrig", None), "_socket", None)
+    if sock is not None:
+        sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+    print(f"note: TCP_NODELAY {'set' if sock is not None else 'not available (frames may be delayed)'}")
     rx = Receiver(bus)
     fails = 0
     sent = 0  # good messages sent (the device's `messages` counter)
