@@ -36,7 +36,10 @@
 //! ## States ([`State`])
 //! - `Identifiable`: 1.96·σ ≤ 0.1 by the estimator's own account (`sigma_identifiable`),
 //!   every surface more than 0.1 away is excluded (ℓ more than `exclude_nll` above the best),
-//!   and the reported surface explains the latest batch (χ² ≤ `chi2_identifiable`).
+//!   the reported surface explains the latest batch (χ² ≤ `chi2_identifiable`), and the
+//!   identification is fresh: σ aged (`age_q_time`, `age_q_distance`) over the time and distance
+//!   since the last batch whose horizontal force used `inform_util` of the reported surface
+//!   (|F| ≥ `inform_util`·μ·Fz) is still within `sigma_identifiable`.
 //! - `NotIdentifiable`: some surfaces are excluded (`mu_min` says which μ is still possible), but
 //!   not enough for the above. The last identifiable μ is reported while the evidence does not
 //!   turn against it (ℓ ≤ `hold_nll` at it), its σ growing with time and distance
@@ -45,9 +48,13 @@
 //! - `Fallback`: no surface can be excluded (no excitation yet, or the evidence aged out): the
 //!   prior `mu_prior` is reported.
 //!
-//! Without excitation the evidence ages at the forgetting rate above: an identifiable estimate
-//! is held through a zero crossing of the force and stays identifiable for about
-//! 2·`memory`·ln(σ_identifiable/σ) of straight running.
+//! Below `inform_util` of the reported surface a batch says little of μ near it (the curve is
+//! linear there, and every surface above the force explains it alike — a wheel that has just
+//! run onto ice at a zero crossing of the force is explained by the old grip as well), so an
+//! identification ages from the last batch that reached it: with the defaults (σ² growing by
+//! 0.01 per second and 0.0005 per metre, 0.02/s at 20 m/s) an estimate of σ 0.015–0.03 stays
+//! identifiable for 0.08–0.12 s of such running, then is held as `NotIdentifiable` (above),
+//! and is identifiable again on the first batch that uses the surface once more.
 //!
 //! On every sample, the running mean of the batch being collected is checked against the
 //! reported μ: a horizontal force it cannot produce at this load (|F|/Fz less 3σ of the noise and
@@ -169,6 +176,13 @@ pub struct Config<F> {
     /// Largest χ² of the latest batch at the reported surface for the estimate to be
     /// identifiable (the surface must explain what is measured now).
     pub chi2_identifiable: F,
+    /// Smallest utilisation of the reported surface, |F|/(μ·Fz), of a batch that refreshes an
+    /// identification \[-\]. Below it a batch says little of μ near the reported value (the
+    /// curve is linear there, every surface above the force explains it alike), and the
+    /// identification ages as a held value does (`age_q_time`, `age_q_distance`, from the last
+    /// batch that reached it): it ends when its aged σ exceeds `sigma_identifiable`. 0: every
+    /// excited batch refreshes.
+    pub inform_util: F,
 }
 
 impl<F: Float> Default for Config<F> {
@@ -208,6 +222,7 @@ impl<F: Float> Default for Config<F> {
             sigma_prior: c(0.4),
             reseed_chi2: c(25.0),
             chi2_identifiable: c(12.0),
+            inform_util: c(0.3),
         }
     }
 }
@@ -411,6 +426,10 @@ pub struct Bank<F> {
     held: Option<(F, F)>,
     age_s: F,
     age_m: F,
+    /// Time \[s\] and distance \[m\] since the last batch that used `inform_util` of the
+    /// reported surface.
+    quiet_s: F,
+    quiet_m: F,
     est: Estimate<F>,
     bad: u32,
     /// A bound of |F|/Fz on the reported μ's surface at the last batch's load, over μ:
@@ -486,6 +505,8 @@ impl<F: Float> Bank<F> {
             held: None,
             age_s: F::ZERO,
             age_m: F::ZERO,
+            quiet_s: F::ZERO,
+            quiet_m: F::ZERO,
             est: Estimate {
                 mu: cfg.mu_prior,
                 sigma: cfg.sigma_prior,
@@ -1081,6 +1102,13 @@ impl<F: Float> Bank<F> {
         // in the model; a real tyre's conicity, ply steer and the sensors' offsets do not).
         let f = b.fy.0.abs().max(b.fx.map_or(F::ZERO, |(v, _)| v.abs()));
         let excited = f >= self.cfg.excitation * b.fz;
+        if excited && f >= self.cfg.inform_util * self.est.mu * b.fz {
+            self.quiet_s = F::ZERO;
+            self.quiet_m = F::ZERO;
+        } else {
+            self.quiet_s += b.dt;
+            self.quiet_m += b.dist;
+        }
         if excited && best <= self.cfg.chi2_explain {
             let cap = self.cfg.chi2_cap;
             // Each batch's excess χ² over the best, through a soft dead zone: differences a
@@ -1185,9 +1213,13 @@ impl<F: Float> Bank<F> {
         // The reported surface must explain the latest batch (a cell that wins only because
         // the true one lost its slips is no identification).
         let fits = self.chi2.get(m).is_some_and(|x| *x <= c.chi2_identifiable);
+        // Aged since the last batch that used enough of the reported surface to say something
+        // of it.
+        let aged_now =
+            M::sqrt(sigma * sigma + c.age_q_time * self.quiet_s + c.age_q_distance * self.quiet_m);
         let identifiable = self.evidence
             && excluded > 0
-            && sigma <= c.sigma_identifiable
+            && aged_now <= c.sigma_identifiable
             && !far_open
             && fits
             && mu >= self.floor;
@@ -1446,6 +1478,51 @@ mod tests {
         let last = est.last().unwrap();
         assert_eq!(last.state, State::Identifiable, "{last:?}");
         assert!((last.mu - 1.0).abs() < 0.05, "{last:?}");
+    }
+
+    #[test]
+    fn an_identification_ages_while_the_force_says_nothing_of_the_surface() {
+        let p = tyre();
+        // Identified on μ 1.0 in a hard turn (α 0.1 rad), then 0.6 s at α 0.005 rad (|Fy| about
+        // 0.1·Fz: the linear range, every surface above it explains it alike), then α 0.1 again.
+        let alpha = |t: f64| {
+            if t < 1.5 {
+                0.1 * (t / 0.5).min(1.0)
+            } else if t < 2.1 {
+                0.005
+            } else {
+                0.1
+            }
+        };
+        let est = run(&p, &noisy(stream(&p, 1.0, alpha, 2600, 0)));
+        let at = |t: f64| est[(t * 1000.0) as usize];
+        assert_eq!(at(1.499).state, State::Identifiable, "{:?}", at(1.499));
+        // Within 0.25 s of the low force (at 20 m/s, σ² grows by 0.02 per second from the last
+        // batch that used 0.3 of the surface; from about 0.015 it passes 0.1/1.96 in ~0.12 s):
+        // no longer identifiable, the value held.
+        for (i, e) in est.iter().enumerate().take(2100).skip(1750) {
+            assert_ne!(e.state, State::Identifiable, "{i}: {e:?}");
+            assert!((e.mu - 1.0).abs() < 0.1, "{i}: {e:?}");
+        }
+        // Back in the turn: identifiable again, on the same value.
+        let last = est.last().unwrap();
+        assert_eq!(last.state, State::Identifiable, "{last:?}");
+        assert!((last.mu - 1.0).abs() < 0.05, "{last:?}");
+        // Without the rule (`inform_util` 0) the identification stood through the quiet stretch.
+        let mut e = Bank::new::<Libm>(
+            &p,
+            None,
+            Config {
+                inform_util: 0.0,
+                ..Config::default()
+            },
+        )
+        .unwrap();
+        let old: Vec<_> = noisy(stream(&p, 1.0, alpha, 2600, 0))
+            .iter()
+            .map(|x| e.update::<Libm>(&p, x))
+            .collect();
+        assert_eq!(old[2099].state, State::Identifiable, "{:?}", old[2099]);
     }
 
     /// A turn under drive at 15 m/s: slips α, κ ramped in over 1 s and held, measured with the

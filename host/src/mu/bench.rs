@@ -473,6 +473,11 @@ pub struct Metrics {
     pub ws_total: usize,
     /// Of those, the ones whose estimate settles within ±0.1 within [`TARGET_LATENCY`] of it.
     pub ws_within: usize,
+    /// Samples of the case (all wheels).
+    pub n_samples: usize,
+    /// Samples at a utilisation of 0.5 or more, and of those the identifiable ones.
+    pub n_util_hi: usize,
+    pub n_identifiable_util_hi: usize,
 }
 
 pub(crate) fn median(mut v: Vec<f64>) -> Option<f64> {
@@ -534,12 +539,17 @@ pub fn metrics(traces: &[WheelTrace], ests: &[Vec<Estimate<f64>>]) -> Metrics {
     let mut covered = 0;
     let (mut gross, mut samples) = (0usize, 0usize);
     let (mut ws_total, mut ws_within) = (0, 0);
+    let (mut util_hi, mut ident_hi) = (0, 0);
     for (tr, est) in traces.iter().zip(ests) {
         if est.len() != tr.rows.len() {
             continue;
         }
         samples += est.len();
         for (i, e) in est.iter().enumerate() {
+            if tr.util[i] >= 0.5 {
+                util_hi += 1;
+                ident_hi += usize::from(e.state == State::Identifiable);
+            }
             if e.state == State::Identifiable {
                 let err = (e.mu - tr.mu_true[i]).abs();
                 errs.push(err);
@@ -594,6 +604,9 @@ pub fn metrics(traces: &[WheelTrace], ests: &[Vec<Estimate<f64>>]) -> Metrics {
         latency: median(lats),
         detect: median(dets),
         false_alarms,
+        n_samples: samples,
+        n_util_hi: util_hi,
+        n_identifiable_util_hi: ident_hi,
     }
 }
 
@@ -710,6 +723,9 @@ pub fn run(a: BenchArgs) -> Result<(), String> {
     let mut alarms = [0usize; METHODS.len()];
     let mut worst: [Option<f64>; METHODS.len()] = [None; METHODS.len()];
     let mut worst_gross = [0.0f64; METHODS.len()];
+    // Identifiable samples over the suite: (identifiable, all, identifiable at utilisation
+    // ≥ 0.5, all at ≥ 0.5).
+    let mut shares = [(0usize, 0usize, 0usize, 0usize); METHODS.len()];
     for c in &cases {
         bar.set_message(format!("{} on {}", c.manoeuvre, c.road));
         let log = simulate_case(&p, c)?;
@@ -781,6 +797,10 @@ pub fn run(a: BenchArgs) -> Result<(), String> {
                 ws_issue[m].1 += mt.ws_total;
             }
             alarms[m] += mt.false_alarms;
+            shares[m].0 += mt.n_identifiable;
+            shares[m].1 += mt.n_samples;
+            shares[m].2 += mt.n_identifiable_util_hi;
+            shares[m].3 += mt.n_util_hi;
             worst_gross[m] = worst_gross[m].max(mt.gross);
             worst[m] = match (worst[m], mt.err_p95) {
                 (Some(a), Some(b)) => Some(a.max(b)),
@@ -833,6 +853,16 @@ pub fn run(a: BenchArgs) -> Result<(), String> {
             summary,
             "{name}, without the straight ABS stops: within ±0.1 within {TARGET_LATENCY} s of utilisation 0.5 on {} of {issue_cases} cases and {} of {} wheel-surfaces.",
             within_issue[m], ws_issue[m].0, ws_issue[m].1,
+        );
+    }
+    for (m, name) in METHODS.iter().enumerate() {
+        let (i, n, ih, nh) = shares[m];
+        let pct = |a: usize, b: usize| 100.0 * a as f64 / b.max(1) as f64;
+        let _ = writeln!(
+            summary,
+            "{name}: identifiable on {:.1} % of the suite's samples ({i} of {n}), {:.1} % of those at utilisation 0.5 or more ({ih} of {nh}).",
+            pct(i, n),
+            pct(ih, nh),
         );
     }
     md.push_str(&summary);
