@@ -442,6 +442,12 @@ fn bench_says_where_the_latency_goes() {
             && text.contains(" of 3 cases and "),
         "{text}"
     );
+    // Each method's identifiable share, over all samples and those at utilisation ≥ 0.5.
+    assert!(
+        text.contains("bank: identifiable on ")
+            && text.contains(" % of those at utilisation 0.5 or more ("),
+        "{text}"
+    );
     run("bound");
     let holds = std::fs::read_to_string(dir.join("bench/holds.csv")).unwrap();
     let mut lines = holds.lines();

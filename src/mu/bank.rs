@@ -1071,6 +1071,13 @@ impl<F: Float> Bank<F> {
         [rx, ry, rm, rk]
     }
 
+    /// σ of an estimate `sigma` aged over `s` seconds and `m` metres without informative force
+    /// (σ² grows by `age_q_time` per second and `age_q_distance` per metre).
+    fn aged<M: Backend<F>>(&self, sigma: F, s: F, m: F) -> F {
+        let c = &self.cfg;
+        M::sqrt(sigma * sigma + c.age_q_time * s + c.age_q_distance * m)
+    }
+
     /// Forgets evidence over `dt` seconds and `dist` metres.
     fn age<M: Backend<F>>(&mut self, dt: F, dist: F) {
         let x = dt / self.cfg.memory.max(F::from_f64(1e-3))
@@ -1215,8 +1222,7 @@ impl<F: Float> Bank<F> {
         let fits = self.chi2.get(m).is_some_and(|x| *x <= c.chi2_identifiable);
         // Aged since the last batch that used enough of the reported surface to say something
         // of it.
-        let aged_now =
-            M::sqrt(sigma * sigma + c.age_q_time * self.quiet_s + c.age_q_distance * self.quiet_m);
+        let aged_now = self.aged::<M>(sigma, self.quiet_s, self.quiet_m);
         let identifiable = self.evidence
             && excluded > 0
             && aged_now <= c.sigma_identifiable
@@ -1253,7 +1259,7 @@ impl<F: Float> Bank<F> {
                 .max(F::ZERO)
                 .floor_index(CELLS - 1);
             let against = self.cells.get(k).is_some_and(|cell| cell.nll > c.hold_nll);
-            let aged = M::sqrt(hs * hs + c.age_q_time * self.age_s + c.age_q_distance * self.age_m);
+            let aged = self.aged::<M>(hs, self.age_s, self.age_m);
             // Aged to the prior's σ, it is still kept while the evidence excludes some surface
             // (the data say something, and not that the held value is wrong): a steady
             // state that two surfaces explain alike does not make the estimate jump between them.

@@ -475,8 +475,9 @@ pub struct Metrics {
     pub ws_within: usize,
     /// Samples of the case (all wheels).
     pub n_samples: usize,
-    /// Samples at a utilisation of 0.5 or more, and of those the identifiable ones.
+    /// Samples at a utilisation of 0.5 or more.
     pub n_util_hi: usize,
+    /// Of those, the identifiable ones.
     pub n_identifiable_util_hi: usize,
 }
 
