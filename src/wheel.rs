@@ -44,6 +44,7 @@
 use crate::math::Backend;
 use crate::mf::{self, Input, Options, Output, Params};
 use crate::mu::bank::{self, Bank, BuildError};
+use crate::mu::preview::{self, Preview};
 use crate::proto::{AckCode, Estimate, EstimateState, Forces, Measurement, Settings};
 use crate::relax::{self, DampingSpeed, Kinematics, Sigma, Transient};
 
@@ -336,8 +337,17 @@ impl Wheel {
         p: &Params<f32>,
         m: &Measurement,
     ) -> Option<Estimate> {
+        self.estimate_sample::<M>(p, m, &sample::<M>(p, m))
+    }
+
+    fn estimate_sample<M: Backend<f32>>(
+        &mut self,
+        p: &Params<f32>,
+        m: &Measurement,
+        s: &bank::Sample<f32>,
+    ) -> Option<Estimate> {
         let est = self.est.as_mut()?;
-        let e = est.update::<M>(p, &sample::<M>(p, m));
+        let e = est.update::<M>(p, s);
         let state = match e.state {
             bank::State::Identifiable => EstimateState::Identifiable,
             bank::State::NotIdentifiable => EstimateState::NotIdentifiable,
@@ -352,5 +362,137 @@ impl Wheel {
             mu_min: e.mu_min,
             change: e.change,
         })
+    }
+}
+
+/// A car's four wheels (index = [`crate::proto::Wheel::index`]: FL, FR, RL, RR) and, when a
+/// wheelbase is set ([`Car::set_wheelbase`]), the front-to-rear preview between their
+/// estimators ([`crate::mu::preview`]: what the front-left wheel read is handed to the
+/// rear-left one when it gets there, front-right to rear-right). The firmware's pipeline and the
+/// host's replay check run this.
+///
+/// The wheelbase is the car's calibration, not a protocol setting: the integration sets it once
+/// (the firmware's `App::set_wheelbase`); without it every wheel estimates alone.
+#[derive(Debug, Clone)]
+pub struct Car {
+    wheels: [Wheel; 4],
+    wheelbase: Option<f32>,
+    preview: Option<[Preview<f32>; 2]>,
+}
+
+impl Default for Car {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+const NO_WHEEL: Wheel = Wheel::new();
+
+impl Car {
+    /// No filter state, no estimators, no preview.
+    pub const fn new() -> Self {
+        Car {
+            wheels: [NO_WHEEL; 4],
+            wheelbase: None,
+            preview: None,
+        }
+    }
+
+    /// Sets the wheelbase \[m\] of the front-to-rear preview, `None` for none; it applies from
+    /// the next [`Car::start_estimators`]. A wheelbase that is not a positive number is
+    /// refused (and none set).
+    pub fn set_wheelbase(&mut self, wheelbase: Option<f32>) -> Result<(), preview::PreviewError> {
+        self.wheelbase = None;
+        if let Some(l) = wheelbase {
+            Preview::new(preview::Config::with_wheelbase(l))?;
+        }
+        self.wheelbase = wheelbase;
+        Ok(())
+    }
+
+    /// The wheelbase of the preview, if set.
+    pub fn wheelbase(&self) -> Option<f32> {
+        self.wheelbase
+    }
+
+    /// Wheel `i` (0..=3).
+    pub fn wheel(&self, i: usize) -> Option<&Wheel> {
+        self.wheels.get(i)
+    }
+
+    /// The preview of side `i` (0 left, 1 right), if one runs.
+    pub fn preview(&self, i: usize) -> Option<&Preview<f32>> {
+        self.preview.as_ref().and_then(|p| p.get(i))
+    }
+
+    /// Forgets every filter's deflections.
+    pub fn reset_filters(&mut self) {
+        for w in self.wheels.iter_mut() {
+            w.reset_filter();
+        }
+    }
+
+    /// (Re)starts the four estimators for tyre `p` with settings `s` ([`estimator_config`]),
+    /// and the preview when a wheelbase is set; all forget what they learnt. On an error (a tyre without friction) no estimator runs.
+    pub fn start_estimators<M: Backend<f32>>(
+        &mut self,
+        p: &Params<f32>,
+        s: &Settings,
+    ) -> Result<(), BuildError> {
+        let mut out = Ok(());
+        for w in self.wheels.iter_mut() {
+            if let Err(e) = w.start_estimator::<M>(p, s) {
+                out = Err(e);
+            }
+        }
+        self.preview = self
+            .wheelbase
+            .and_then(|l| Preview::new(preview::Config::with_wheelbase(l)).ok())
+            .map(|pv| [pv.clone(), pv]);
+        out
+    }
+
+    /// The predicted forces of one sample ([`Wheel::forces`] of its wheel).
+    pub fn forces<M: Backend<f32>>(
+        &mut self,
+        p: &Params<f32>,
+        limits: bool,
+        m: &Measurement,
+    ) -> Result<Forces, AckCode> {
+        match self.wheels.get_mut(m.wheel.index()) {
+            Some(w) => w.forces::<M>(p, limits, m),
+            None => Err(AckCode::EvalError),
+        }
+    }
+
+    /// Runs the estimator of the sample's wheel ([`Wheel::estimate`]); a rear wheel first takes
+    /// what its front wheel read that it has now reached, a front wheel's new identification is
+    /// queued for the rear wheel behind it.
+    pub fn estimate<M: Backend<f32>>(
+        &mut self,
+        p: &Params<f32>,
+        m: &Measurement,
+    ) -> Option<Estimate> {
+        let i = m.wheel.index();
+        let s = sample::<M>(p, m);
+        let side = i % 2;
+        if let (true, Some(pv), Some(w)) = (
+            i >= 2,
+            self.preview.as_mut().and_then(|p| p.get_mut(side)),
+            self.wheels.get_mut(i),
+        ) {
+            if let Some(b) = w.est.as_mut() {
+                pv.rear::<M>(b, &s);
+            }
+        }
+        let e = self.wheels.get_mut(i)?.estimate_sample::<M>(p, m, &s);
+        if let (true, Some(pv), Some(b)) = (
+            i < 2,
+            self.preview.as_mut().and_then(|p| p.get_mut(side)),
+            self.wheels.get(i).and_then(Wheel::estimator),
+        ) {
+            pv.front(b);
+        }
+        e
     }
 }

@@ -5,9 +5,11 @@
 //!
 //! ## The friction estimator
 //! Each wheel runs the exact-model bank ([`gough::mu::bank::Bank`] in `f32`, through
-//! [`gough::wheel::Wheel`]): the App starts the four wheels' estimators whenever a parameter set
+//! [`gough::wheel::Car`]): the App starts the four wheels' estimators whenever a parameter set
 //! is loaded (bundled or uploaded) and whenever `Settings` arrive (their `fallback_mu` is the
-//! prior); the estimators forget what they learnt then. Starting one costs one Magic Formula
+//! prior); the estimators forget what they learnt then. With the car's wheelbase set
+//! ([`App::set_wheelbase`], the integration's calibration) each rear wheel's estimator is told
+//! what the front wheel on its side read when it gets there (`gough::mu::preview`). Starting one costs one Magic Formula
 //! evaluation (the tyre's μy0), so the `ParamCommit` is acknowledged at once and estimates
 //! follow from the next measurement on. The bank keeps no reference to the parameters: the App
 //! owns them beside the wheels and hands them to each update. Its work per sample is bounded
@@ -17,11 +19,11 @@
 
 use gough::mf::Params;
 use gough::proto::{
-    self, crc32, id, link, Ack, AckCode, Command, CompactBatch, CompactResults,
-    CompactWheelResult, Estimate, Feed, Forces, Measurement, Msg, MsgType, ParamSource,
-    Reassembler, Settings, Status, MAX_TIR_LEN, MSG_BUF,
+    self, crc32, id, link, Ack, AckCode, Command, CompactBatch, CompactResults, CompactWheelResult,
+    Estimate, Feed, Forces, Measurement, Msg, MsgType, ParamSource, Reassembler, Settings, Status,
+    MAX_TIR_LEN, MSG_BUF,
 };
-use gough::wheel::{self, Wheel};
+use gough::wheel::{self, Car, Wheel};
 
 /// The math backend of the device's pipeline: `gough::math::Fast` (feature `fast`, on by
 /// default: as accurate as f32 libm and cheaper on the M4F, the `bench` output gives both
@@ -74,7 +76,7 @@ struct Upload {
 /// ~6 KiB): keep it in a `static`.
 pub struct App {
     params: Option<Params<f32>>,
-    wheels: [Wheel; 4],
+    car: Car,
     source: ParamSource,
     hash: u32,
     upload: Option<Upload>,
@@ -105,14 +107,12 @@ impl Default for App {
     }
 }
 
-const NO_WHEEL: Wheel = Wheel::new();
-
 impl App {
     /// Empty state: no parameters, default settings (`Settings::default()`).
     pub const fn new() -> Self {
         App {
             params: None,
-            wheels: [NO_WHEEL; 4],
+            car: Car::new(),
             source: ParamSource::None,
             hash: 0,
             upload: None,
@@ -163,33 +163,38 @@ impl App {
         self.params = Some(p);
         self.hash = hash;
         self.source = source;
-        for w in self.wheels.iter_mut() {
-            w.reset_filter();
-        }
+        self.car.reset_filters();
         self.start_estimators();
     }
 
     /// (Re)starts the four wheels' estimators on the parameters in use, with the prior of the
-    /// settings; without parameters (or for a tyre without friction) none runs.
+    /// settings and the preview over the wheelbase, if set; without parameters (or for a tyre
+    /// without friction) none runs.
     fn start_estimators(&mut self) {
         let Some(p) = self.params.as_ref() else {
             return;
         };
-        let mut failed = None;
-        for w in self.wheels.iter_mut() {
-            if let Err(e) = w.start_estimator::<Math>(p, &self.settings) {
-                failed = Some(e);
-            }
-        }
-        if let Some(e) = failed {
+        if let Err(e) = self.car.start_estimators::<Math>(p, &self.settings) {
             defmt::warn!("no estimator for this tyre: {}", e);
         }
+    }
+
+    /// Sets the car's wheelbase \[m\] (its calibration; `None`: every wheel estimates alone,
+    /// the default) and restarts the estimators with the front-to-rear preview over it. A
+    /// wheelbase that is not a positive number is refused, and none is set.
+    pub fn set_wheelbase(
+        &mut self,
+        wheelbase: Option<f32>,
+    ) -> Result<(), gough::mu::preview::PreviewError> {
+        let r = self.car.set_wheelbase(wheelbase);
+        self.start_estimators();
+        r
     }
 
     /// Wheel `i`'s estimator (0..=3), if it runs: its state, μy0 of the tyre
     /// (`Bank::mu0`), its count of refused samples (`Bank::bad_samples`).
     pub fn estimator(&self, i: usize) -> Option<&gough::mu::bank::Bank<f32>> {
-        self.wheels.get(i).and_then(Wheel::estimator)
+        self.car.wheel(i).and_then(Wheel::estimator)
     }
 
     /// The status report.
@@ -437,14 +442,11 @@ impl App {
     /// One measurement through its wheel's pipeline ([`gough::wheel`]): the forces (or why
     /// none) and the estimate (when the estimator runs). The host's replay check runs the same.
     pub fn process(&mut self, m: &Measurement) -> (Result<Forces, AckCode>, Option<Estimate>) {
-        let Some(w) = self.wheels.get_mut(m.wheel.index()) else {
-            return (Err(AckCode::EvalError), None);
-        };
         let Some(p) = self.params.as_ref() else {
             return (Err(AckCode::NoParams), None);
         };
-        let forces = w.forces::<Math>(p, self.settings.limits, m);
-        let estimate = w.estimate::<Math>(p, m);
+        let forces = self.car.forces::<Math>(p, self.settings.limits, m);
+        let estimate = self.car.estimate::<Math>(p, m);
         if let Some(e) = estimate.filter(|e| e.change) {
             defmt::info!("wheel {}: change of surface, mu {}", m.wheel, e.mu);
         }

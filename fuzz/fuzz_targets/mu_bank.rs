@@ -1,13 +1,17 @@
 //! The friction estimator (`gough::mu::bank::Bank`) fed arbitrary bytes as samples, in f32 with
 //! the device's `Fast` backend and in f64: it must never panic, and every estimate must be
 //! finite (σ ≥ 0), whatever the samples — NaN, ±∞, Fz ≤ 0, time going backwards or wrapping.
+//! The f32 bank is a rear wheel: a front wheel's bank on the same samples hands it its readings
+//! through a front-to-rear preview (`gough::mu::preview`, 0.5 m), and a flag feeds it a raw
+//! profile of the sample's values (any floats) as a reading.
 //!
 //! Run: `cargo +nightly fuzz run mu_bank -- -max_total_time=60`.
 #![no_main]
 
 use gough::math::{Fast, Libm};
 use gough::mf::{Params, Side};
-use gough::mu::bank::{Bank, Config, Sample};
+use gough::mu::bank::{Bank, Config, Sample, CELLS};
+use gough::mu::preview::{self, Preview};
 use libfuzzer_sys::fuzz_target;
 use std::sync::OnceLock;
 
@@ -35,6 +39,12 @@ fuzz_target!(|data: &[u8]| {
     ) else {
         return;
     };
+    let (Ok(mut front), Ok(mut pv)) = (
+        Bank::new::<Fast>(p32, side, Config::default()),
+        Preview::new(preview::Config::with_wheelbase(0.5f32)),
+    ) else {
+        return;
+    };
     // One sample per 33 bytes: a flags byte, t_us, then Fz, Fy, Mz, Fx, κ, Vx, γ.
     for c in data.chunks_exact(33) {
         let flags = c[0];
@@ -51,6 +61,13 @@ fuzz_target!(|data: &[u8]| {
             vx: opt(4, v[5]),
             gamma: opt(8, v[6]),
         };
+        front.update::<Fast>(p32, &s);
+        pv.front(&front);
+        pv.rear::<Fast>(&mut e32, &s);
+        if flags & 16 != 0 {
+            let profile: [f32; CELLS] = core::array::from_fn(|k| v[k % v.len()]);
+            e32.preview::<Fast>(&profile, v[6]);
+        }
         let e = e32.update::<Fast>(p32, &s);
         assert!(e.mu.is_finite() && e.sigma.is_finite() && e.sigma >= 0.0, "{e:?}");
         let d = |x: f32| f64::from(x);

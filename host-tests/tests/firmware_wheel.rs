@@ -346,3 +346,111 @@ fn no_estimator_no_estimate() {
     w.stop_estimator();
     assert!(w.estimate::<Fast>(&p, &m).is_none());
 }
+
+/// Four wheels in a steady turn at 20 m/s whose front wheels run onto ice (λμ × 0.3) at 1.5 s
+/// and the rear ones 2.9 m later; the fronts at α −0.05, the rears at α −0.01 (half the ice's
+/// grip: by themselves they say little of the surface). Interleaved FL, FR, RL, RR per ms.
+fn onto_ice(p: &Params<f32>, n: u32) -> Vec<Measurement> {
+    let mut ice = p.clone();
+    ice.lmux *= 0.3;
+    ice.lmuy *= 0.3;
+    let lag = (2.9 / 20.0 * 1000.0) as u32;
+    let mut out = Vec::new();
+    for i in 0..n {
+        for (w, id) in [
+            WheelId::FrontLeft,
+            WheelId::FrontRight,
+            WheelId::RearLeft,
+            WheelId::RearRight,
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            let rear = w >= 2;
+            let on_ice = i >= 1500 + if rear { lag } else { 0 };
+            let alpha = if rear { -0.01 } else { -0.05 } * (i as f32 / 500.0).min(1.0);
+            let o = steady(if on_ice { &ice } else { p }, 5000.0, alpha, 0.0, 20.0);
+            out.push(Measurement {
+                wheel: id,
+                t_us: 1000 * i,
+                fz: 5000.0,
+                fy: o.fy,
+                mz: o.mz,
+                fx: Some(o.fx),
+                vx: Some(20.0),
+                alpha: Some(alpha),
+                ..Measurement::default()
+            });
+        }
+    }
+    out
+}
+
+#[test]
+fn the_car_hands_what_a_front_wheel_read_to_the_rear_wheel_behind_it() {
+    use gough::mu::preview::{self, Preview};
+    use gough::wheel::Car;
+    let p = tyre();
+    let log = onto_ice(&p, 3500);
+    let with = Settings::default();
+    let run = |wheelbase: Option<f32>| {
+        let mut car = Car::new();
+        car.set_wheelbase(wheelbase).unwrap();
+        car.start_estimators::<Fast>(&p, &with).unwrap();
+        let est: Vec<_> = log
+            .iter()
+            .map(|m| car.estimate::<Fast>(&p, m).unwrap())
+            .collect();
+        (est, car)
+    };
+    let (told, car) = run(Some(2.9));
+    let (alone, car0) = run(None);
+    assert!(Car::new().set_wheelbase(Some(0.0)).is_err());
+    assert!(car0.preview(0).is_none(), "no wheelbase, no preview");
+    let handed = car.preview(0).unwrap().handed() + car.preview(1).unwrap().handed();
+    assert!(handed >= 2, "{handed}");
+    // The same, written out with the core's pieces: banks and two previews.
+    let cfg = estimator_config(&with);
+    let mut banks: Vec<_> = (0..4)
+        .map(|_| Bank::new::<Fast>(&p, None, cfg).unwrap())
+        .collect();
+    let pv = Preview::new(preview::Config::with_wheelbase(2.9f32)).unwrap();
+    let mut pvs = [pv.clone(), pv];
+    for (m, e) in log.iter().zip(&told) {
+        let w = m.wheel.index();
+        let s = bank_sample(m);
+        if w >= 2 {
+            pvs[w - 2].rear::<Fast>(&mut banks[w], &s);
+        }
+        let d = banks[w].update::<Fast>(&p, &s);
+        if w < 2 {
+            pvs[w].front(&banks[w]);
+        }
+        assert_eq!(
+            (e.mu, e.sigma, e.mu_min, e.change),
+            (d.mu, d.sigma, d.mu_min, d.change),
+            "wheel {w}, t_us {}",
+            m.t_us
+        );
+    }
+    // The front wheels are never touched; the rear ones read the ice sooner.
+    let first_on_ice = |est: &[gough::proto::Estimate], w: usize| {
+        est.iter()
+            .zip(&log)
+            .filter(|(_, m)| m.wheel.index() == w && m.t_us > 1_500_000)
+            .find(|(e, _)| e.state == EstimateState::Identifiable && (e.mu - 0.3).abs() < 0.1)
+            .map(|(_, m)| m.t_us)
+    };
+    for (a, b) in told.iter().zip(&alone) {
+        if a.wheel.index() < 2 {
+            assert_eq!((a.mu, a.sigma, a.state), (b.mu, b.sigma, b.state));
+        }
+    }
+    for w in 2..4 {
+        let (t, a) = (first_on_ice(&told, w), first_on_ice(&alone, w));
+        assert!(
+            t.is_some_and(|t| a.is_none_or(|a| t < a)),
+            "wheel {w}: told {t:?}, alone {a:?}"
+        );
+    }
+}

@@ -189,21 +189,18 @@ pub fn host_f32(p: &Params<f32>, log: &[Measurement], backend: Backend32) -> Vec
 
 fn run<M: Backend<f32>>(p: &Params<f32>, log: &[Measurement]) -> Vec<Reply> {
     let settings = Settings::default();
-    let mut wheels: [wheel::Wheel; 4] = Default::default();
-    for w in &mut wheels {
-        // As the device: a tyre without friction gets forces and no estimates.
-        let _ = w.start_estimator::<M>(p, &settings);
-    }
+    let mut car = wheel::Car::new();
+    // As the device: a tyre without friction gets forces and no estimates.
+    let _ = car.start_estimators::<M>(p, &settings);
     log.iter()
         .map(|m| {
-            let w = &mut wheels[m.wheel.index()];
-            let answer = match w.forces::<M>(p, settings.limits, m) {
+            let answer = match car.forces::<M>(p, settings.limits, m) {
                 Ok(f) => Answer::Forces(f),
                 Err(c) => Answer::Ack(c),
             };
             Reply {
                 answer,
-                estimate: w.estimate::<M>(p, m),
+                estimate: car.estimate::<M>(p, m),
             }
         })
         .collect()

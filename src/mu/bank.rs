@@ -549,6 +549,36 @@ impl<F: Float> Bank<F> {
         out
     }
 
+    /// The estimate of the last [`Bank::update`] (its `change` set only on that update).
+    pub fn current(&self) -> Estimate<F> {
+        self.est
+    }
+
+    /// The likelihood profile: ℓ per cell, the likeliest at 0 — what a wheel that follows this
+    /// one on its track takes in with [`Bank::preview`] when it gets here.
+    pub fn profile(&self) -> [F; CELLS] {
+        let mut out = [F::ZERO; CELLS];
+        for (o, c) in out.iter_mut().zip(self.cells.iter()) {
+            *o = c.nll;
+        }
+        out
+    }
+
+    /// Takes in a reading of the surface this wheel is running onto: another wheel's
+    /// [`Bank::profile`] where it ran over the same place ([`crate::mu::preview`]), with weight
+    /// `p` (0 < p < 1: the probability that it applies here). The cells' likelihoods become the
+    /// mixture (1 − p)·e^−ℓ + p·e^−ℓ′ — a switch of surface this wheel is told of rather than
+    /// one it must find alone; its own batches then confirm or overrule it. A held value the
+    /// reading excludes (ℓ′ above `hold_nll`) is dropped. The estimate follows at the end of the
+    /// batch being fitted. A profile that is not finite and non-negative, or a weight outside
+    /// (0, 1), is ignored.
+    pub fn preview<M: Backend<F>>(&mut self, profile: &[F; CELLS], p: F) {
+        let ok = profile.iter().all(|x| x.is_finite() && *x >= F::ZERO);
+        if ok && p > F::ZERO && p < F::ONE {
+            self.mix::<M>(profile, p);
+        }
+    }
+
     /// μ of cell `k`.
     fn mu_of(&self, k: usize) -> F {
         self.cfg.mu_lo + self.cfg.mu_step * F::from_index(k as u16)
@@ -1156,6 +1186,31 @@ impl<F: Float> Bank<F> {
         }
     }
 
+    /// The mixture of the cells' likelihoods with a reading from ahead (see [`Bank::preview`]).
+    fn mix<M: Backend<F>>(&mut self, pf: &[F; CELLS], p: F) {
+        let mut lo = F::from_f64(f64::MAX);
+        for c in self.cells.iter() {
+            lo = lo.min(c.nll);
+        }
+        let (la, lb) = (M::ln(F::ONE - p), M::ln(p));
+        for (c, l2) in self.cells.iter_mut().zip(pf.iter()) {
+            let a = la - (c.nll - lo);
+            let b = lb - *l2;
+            let m = a.max(b);
+            c.nll = -(m + M::ln(F::ONE + M::exp(-(a - b).abs())));
+        }
+        if let Some((h, _)) = self.held {
+            let c = &self.cfg;
+            let k = ((h - c.mu_lo) / c.mu_step + F::HALF)
+                .max(F::ZERO)
+                .floor_index(CELLS - 1);
+            if pf.get(k).is_some_and(|l| *l > c.hold_nll) {
+                self.held = None;
+            }
+        }
+        self.evidence = true;
+    }
+
     /// The estimate from the cells' likelihoods.
     fn estimate<M: Backend<F>>(&mut self) {
         let c = self.cfg;
@@ -1326,14 +1381,14 @@ fn clamp<F: Float>(x: F, lim: F) -> F {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::math::Libm;
     use proptest::prelude::*;
     extern crate std;
     use std::vec::Vec;
 
-    fn tyre() -> Params<f64> {
+    pub(crate) fn tyre() -> Params<f64> {
         let text = include_str!("../../host-tests/data/tyres/MagicFormula61_Parameters.tir");
         crate::tir::parse(text).unwrap().params
     }
@@ -1341,7 +1396,7 @@ mod tests {
     /// Samples of a wheel at slips (α(t), κ(t)) and speed `vx` (steady-state Magic Formula on
     /// surface μ, the transient option as the estimator evaluates it; κ measured without noise),
     /// 1 kHz, clock starting at `t0_us`.
-    fn slips_stream(
+    pub(crate) fn slips_stream(
         p: &Params<f64>,
         mu: f64,
         slips: impl Fn(f64) -> (f64, f64),
@@ -1400,7 +1455,7 @@ mod tests {
     }
 
     /// Adds the bench's sensor noise (forces 1 % of Fz, Mz 2 N·m, κ 0.005 rms; a fixed LCG).
-    fn noisy(mut s: Vec<Sample<f64>>) -> Vec<Sample<f64>> {
+    pub(crate) fn noisy(mut s: Vec<Sample<f64>>) -> Vec<Sample<f64>> {
         let mut x = 0x2545_f491_4f6c_dd1du64;
         let mut gauss = move || {
             // Sum of 12 uniforms − 6: unit variance, deterministic.

@@ -550,5 +550,89 @@ fn main() -> ! {
             pipeline_figures::<Libm>("libm", short, id + 3, clock, &p32, stream);
         }
     }
+    preview_figures::<app::Math>(app::MATH_NAME, 80, clock, &p32, stream);
     mps2::exit(true)
+}
+
+/// The front-to-rear preview (`gough::mu::preview`) with backend `M`: a reading handed to a
+/// rear wheel's bank (`Bank::preview`, the mixture over the cells; at most one per rear sample
+/// in practice, a few per change of surface), and the rear's per-sample roll-on with a full
+/// queue and nothing arriving (`Preview::rear`). `bench: mu_preview_mix_<name> mean=<n>
+/// worst=<n> ram=<Preview bytes>` and `bench: mu_preview_roll_<name> …` lines.
+fn preview_figures<M: Backend<f32>>(
+    name: &str,
+    id: u32,
+    clock: Clock,
+    p: &Params<f32>,
+    stream: &[Measurement],
+) {
+    use gough::mu::preview::{self, Preview};
+    let Ok(mut b) = Bank::new::<M>(p, None, bank::Config::default()) else {
+        return;
+    };
+    let Ok(mut pv) = Preview::new(preview::Config::with_wheelbase(2.9f32)) else {
+        return;
+    };
+    let mut profile = [0f32; bank::CELLS];
+    for (k, x) in profile.iter_mut().enumerate() {
+        *x = 0.5 * (k as f32 - 4.0) * (k as f32 - 4.0);
+    }
+    const K: usize = 64;
+    let timed = |f: &mut dyn FnMut(usize)| {
+        bench_start(id);
+        let (mut sum, mut max) = (0f64, 0f64);
+        for i in 0..K {
+            let t0 = now();
+            f(i);
+            let t1 = now();
+            let ins = ((t1 - t0) as f64 - clock.overhead).max(0.0) * clock.per_count;
+            sum += ins;
+            max = max.max(ins);
+        }
+        bench_stop(id);
+        ((sum / K as f64) as u32, max as u32)
+    };
+    let (mean, worst) = timed(&mut |i| {
+        let w = if i % 2 == 0 { 0.9 } else { 0.5 };
+        b.preview::<M>(core::hint::black_box(&profile), w);
+    });
+    hprintln!(
+        "bench: mu_preview_mix_{} mean={} worst={} ram={}",
+        name,
+        mean,
+        worst,
+        size_of::<Preview<f32>>()
+    );
+    // Readings on their way: a front wheel's identifications over the last stream.
+    if let Ok(mut f) = Bank::new::<M>(p, None, bank::Config::default()) {
+        for m in stream {
+            f.update::<M>(p, &gough::wheel::sample::<M>(p, m));
+            pv.front(&f);
+        }
+    }
+    let pending = pv.pending();
+    let (mean, worst) = timed(&mut |i| {
+        let s = bank::Sample {
+            t_us: 1000 * i as u32,
+            fz: 4000.0,
+            fy: 0.0,
+            mz: 0.0,
+            fx: None,
+            kappa: None,
+            vx: Some(0.001),
+            gamma: None,
+        };
+        pv.rear::<M>(&mut b, core::hint::black_box(&s));
+    });
+    hprintln!(
+        "preview: {} readings on their way while rolling on",
+        pending
+    );
+    hprintln!(
+        "bench: mu_preview_roll_{} mean={} worst={} ram={}",
+        name,
+        mean,
+        worst,
+        size_of::<Preview<f32>>()
+    );
 }

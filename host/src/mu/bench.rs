@@ -60,9 +60,32 @@ pub struct BenchArgs {
     /// Pure delay of every measured channel \[s\] (rounded to the simulation's step, 1 ms).
     #[arg(long, value_name = "S", allow_negative_numbers = true, default_value_t = Sensors::default().delay)]
     pub delay: f64,
+    /// Weight of the bank's front-to-rear preview (`gough::mu::preview`: what a front wheel
+    /// read, handed to the rear wheel on its side a wheelbase later), inside (0, 1); 0: every
+    /// wheel alone.
+    #[arg(long, value_name = "W", default_value_t = 0.9)]
+    pub preview: f64,
 }
 
 impl BenchArgs {
+    /// The preview these arguments ask for over the simulated vehicle's wheelbase (`None`:
+    /// `--preview 0`).
+    pub fn preview(&self) -> Result<Option<gough::mu::preview::Config<f64>>, String> {
+        if self.preview == 0.0 {
+            return Ok(None);
+        }
+        if !(self.preview > 0.0 && self.preview < 1.0) {
+            return Err(format!(
+                "--preview {}: a weight inside (0, 1), or 0 for none",
+                self.preview
+            ));
+        }
+        Ok(Some(gough::mu::preview::Config {
+            wheelbase: sim_wheelbase(),
+            weight: self.preview,
+        }))
+    }
+
     /// The sensor model these arguments ask for: each value finite and ≥ 0, the delay at most
     /// 1 s.
     pub fn sensors(&self) -> Result<Sensors, String> {
@@ -327,26 +350,76 @@ pub fn run_method(
     }
 }
 
-/// The bank estimator over wheel `w`'s trace (mounted on the wheel's side, measured κ).
+/// The bank estimator over wheel `w`'s trace (mounted on the wheel's side, measured κ), alone.
 pub fn run_bank(p: &Params<f64>, w: usize, tr: &WheelTrace) -> Vec<Estimate<f64>> {
+    let Some(mut e) = new_bank(p, w) else {
+        return Vec::new();
+    };
+    (0..tr.rows.len())
+        .map(|i| super::bank_estimate(e.update::<Libm>(p, &bank_row(tr, i))))
+        .collect()
+}
+
+fn new_bank(p: &Params<f64>, w: usize) -> Option<gough::mu::bank::Bank<f64>> {
     use gough::mf::Side;
-    use gough::mu::bank;
     let side = if w.is_multiple_of(2) {
         Side::Left
     } else {
         Side::Right
     };
-    let Ok(mut e) = bank::Bank::new::<Libm>(p, Some(side), bank::Config::default()) else {
-        return Vec::new();
+    gough::mu::bank::Bank::new::<Libm>(p, Some(side), gough::mu::bank::Config::default()).ok()
+}
+
+/// Row `i` of a trace as the bank's sample (Fx, measured κ, Vx, camber).
+fn bank_row(tr: &WheelTrace, i: usize) -> gough::mu::bank::Sample<f64> {
+    let mut r = tr.rows[i];
+    r.kappa = tr.kappa_meas.get(i).copied().unwrap_or(f64::NAN);
+    super::bank_sample(&r, true, true, tr.gamma.get(i).copied())
+}
+
+/// Wheelbase of the simulated vehicle \[m\] (the front-to-rear preview's distance).
+pub fn sim_wheelbase() -> f64 {
+    sim::VehicleParams::default().wheelbase()
+}
+
+/// The bank over a vehicle's four wheels (fl, fr, rl, rr, sampled together), sample by sample
+/// as the firmware runs them: each front wheel, then each rear wheel with what its front wheel
+/// read handed on a wheelbase later ([`gough::mu::preview`], `preview`; `None`: every wheel
+/// alone). Traces of other lengths than four, or not of one length, run wheel by wheel alone.
+pub fn run_banks(
+    p: &Params<f64>,
+    traces: &[WheelTrace],
+    preview: Option<gough::mu::preview::Config<f64>>,
+) -> Vec<Vec<Estimate<f64>>> {
+    use gough::mu::preview::Preview;
+    let n = traces.first().map_or(0, |t| t.rows.len());
+    let together = traces.len() == 4 && traces.iter().all(|t| t.rows.len() == n);
+    let (Some(cfg), true) = (preview, together) else {
+        return traces
+            .iter()
+            .enumerate()
+            .map(|(w, tr)| run_bank(p, w, tr))
+            .collect();
     };
-    (0..tr.rows.len())
-        .map(|i| {
-            let mut r = tr.rows[i];
-            r.kappa = tr.kappa_meas.get(i).copied().unwrap_or(f64::NAN);
-            let s = super::bank_sample(&r, true, true, tr.gamma.get(i).copied());
-            super::bank_estimate(e.update::<Libm>(p, &s))
-        })
-        .collect()
+    let banks: Option<Vec<_>> = (0..4).map(|w| new_bank(p, w)).collect();
+    let (Some(mut banks), Ok(pv)) = (banks, Preview::new(cfg)) else {
+        return vec![Vec::new(); traces.len()];
+    };
+    let mut pvs = [pv.clone(), pv];
+    let mut out: Vec<Vec<_>> = (0..4).map(|_| Vec::with_capacity(n)).collect();
+    for i in 0..n {
+        for w in 0..2 {
+            let e = banks[w].update::<Libm>(p, &bank_row(&traces[w], i));
+            pvs[w].front(&banks[w]);
+            out[w].push(super::bank_estimate(e));
+        }
+        for w in 2..4 {
+            let s = bank_row(&traces[w], i);
+            pvs[w - 2].rear::<Libm>(&mut banks[w], &s);
+            out[w].push(super::bank_estimate(banks[w].update::<Libm>(p, &s)));
+        }
+    }
+    out
 }
 
 /// The Gough estimator (settings `cfg`) over wheel `w`'s trace: its estimates and, per sample,
@@ -741,6 +814,8 @@ pub fn run(a: BenchArgs) -> Result<(), String> {
                     .unzip();
                 tallies.push((c, hold_tally(&traces, &ests, &holds)));
                 ests
+            } else if m == 3 {
+                run_banks(&p, &traces, a.preview()?)
             } else {
                 traces
                     .iter()
@@ -975,9 +1050,13 @@ pub fn demo(a: DemoArgs) -> Result<(), String> {
     );
     println!("wheel | true μ (start → end) | estimate at end | state | max utilisation | within ±0.1 from util");
     let mut first: Option<(WheelTrace, Vec<Estimate<f64>>)> = None;
-    for (w, name) in names.iter().enumerate() {
-        let tr = measure(&log, w, &sensors, a.seed);
-        let est = run_bank(&p, w, &tr);
+    let traces: Vec<WheelTrace> = (0..4).map(|w| measure(&log, w, &sensors, a.seed)).collect();
+    let ests = run_banks(
+        &p,
+        &traces,
+        Some(gough::mu::preview::Config::with_wheelbase(sim_wheelbase())),
+    );
+    for (w, ((name, tr), est)) in names.iter().zip(traces).zip(ests).enumerate() {
         for (i, e) in est.iter().enumerate().step_by(10) {
             let _ = writeln!(
                 csv,

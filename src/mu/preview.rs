@@ -1,0 +1,411 @@
+//! Front-to-rear preview: what a front wheel read of the road, handed to the rear wheel on its
+//! side when the rear gets there.
+//!
+//! A rear wheel runs, a wheelbase later, over the road its front wheel has just read. When the
+//! front wheel's estimator makes a **new identification** — its first, its first after the
+//! evidence aged out (`Fallback`), or a change of surface (`Estimate::change`) — its likelihood
+//! profile ([`Bank::profile`]) is queued with the distance still to roll, the wheelbase. Every
+//! rear sample rolls the queued readings on by the distance the rear wheel covered since its
+//! last sample (Vx·Δt, with the sign of Vx: reversing moves the place away again); a reading
+//! that has arrived is handed to the rear estimator ([`Bank::preview`]) with the weight
+//! `Config::weight`, the probability that the rear wheel runs on what the front read. The rear's
+//! likelihoods become the mixture (1 − w)·e^−ℓ + w·e^−ℓ′: the old surface is no longer taken
+//! for granted, and the rear's own batches confirm or overrule the reading within a few batches
+//! (a rear wheel that tracks off the front's path, a patch that ends between the axles).
+//!
+//! One [`Preview`] per side (front left → rear left, front right → rear right), never across:
+//! on a μ-split the sides differ. Without a measured Vx the distance is unknown and nothing is
+//! handed on; a gap between rear samples longer than [`MAX_GAP_US`] (or a timestamp that does
+//! not advance) leaves the readings where they are and drops those that have come to lie more
+//! than two wheelbases away. At most [`QUEUE`] readings are on their way; a further one replaces
+//! the oldest (counted in [`Preview::dropped`]).
+//!
+//! Bounded: a fixed queue, no allocation, a few operations per sample and one mixture (25
+//! logarithms and exponentials) per reading handed on.
+//!
+//! Limits: the rear is taken to follow the front's path at a wheelbase's distance; in a tight
+//! turn it runs inside the front's track (off-tracking ≈ L²/2R, 0.1 m at R = 40 m), on a
+//! lane change slightly off it. The rear's own evidence decides then.
+
+use crate::math::{Backend, Float};
+use crate::mu::bank::{Bank, Estimate, Sample, State, CELLS, MAX_GAP_US};
+
+/// Readings on their way from a front wheel to the rear wheel behind it.
+pub const QUEUE: usize = 4;
+
+/// Preview settings. SI units.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Config<F> {
+    /// Distance the rear wheel rolls to reach where the front wheel was: the wheelbase \[m\].
+    pub wheelbase: F,
+    /// Probability that the rear wheel runs on what the front wheel read \[-\], 0 < w < 1.
+    pub weight: F,
+}
+
+impl<F: Float> Config<F> {
+    /// A preview over `wheelbase` metres with the default weight (0.9).
+    pub fn with_wheelbase(wheelbase: F) -> Self {
+        Config {
+            wheelbase,
+            weight: F::from_f64(0.9),
+        }
+    }
+}
+
+/// Why a preview cannot be built.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum PreviewError {
+    /// The wheelbase is not a positive number, or the weight not inside (0, 1).
+    BadConfig,
+}
+
+impl core::fmt::Display for PreviewError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str("the preview's wheelbase is not positive or its weight not inside (0, 1)")
+    }
+}
+
+/// A reading on its way: the distance still to roll \[m\] and the front's profile.
+#[derive(Debug, Clone, Copy)]
+struct Reading<F> {
+    left: F,
+    profile: [F; CELLS],
+}
+
+/// One side's front-to-rear preview (see the module documentation). About 420 bytes in `f32`.
+#[derive(Debug, Clone)]
+pub struct Preview<F> {
+    cfg: Config<F>,
+    queue: heapless::Deque<Reading<F>, QUEUE>,
+    /// Whether the front wheel's estimate has been identifiable since it last fell back.
+    identified: bool,
+    /// The rear wheel's last timestamp \[µs\].
+    last_t: Option<u32>,
+    dropped: u32,
+    handed: u32,
+}
+
+impl<F: Float> Preview<F> {
+    /// A preview with settings `cfg`.
+    pub fn new(cfg: Config<F>) -> Result<Self, PreviewError> {
+        let ok = cfg.wheelbase.is_finite()
+            && cfg.wheelbase > F::ZERO
+            && cfg.weight > F::ZERO
+            && cfg.weight < F::ONE;
+        if !ok {
+            return Err(PreviewError::BadConfig);
+        }
+        Ok(Preview {
+            cfg,
+            queue: heapless::Deque::new(),
+            identified: false,
+            last_t: None,
+            dropped: 0,
+            handed: 0,
+        })
+    }
+
+    /// The settings.
+    pub fn config(&self) -> &Config<F> {
+        &self.cfg
+    }
+
+    /// Readings replaced before they arrived (the queue was full).
+    pub fn dropped(&self) -> u32 {
+        self.dropped
+    }
+
+    /// Readings handed to the rear wheel so far.
+    pub fn handed(&self) -> u32 {
+        self.handed
+    }
+
+    /// Readings on their way.
+    pub fn pending(&self) -> usize {
+        self.queue.len()
+    }
+
+    /// After the front wheel's update: queues its profile when the estimate that update
+    /// returned ([`Bank::current`]) is a new identification.
+    pub fn front(&mut self, front: &Bank<F>) {
+        self.front_with(front, &front.current());
+    }
+
+    fn front_with(&mut self, front: &Bank<F>, est: &Estimate<F>) {
+        match est.state {
+            State::Fallback => self.identified = false,
+            State::NotIdentifiable => {}
+            State::Identifiable => {
+                if est.change || !self.identified {
+                    let r = Reading {
+                        left: self.cfg.wheelbase,
+                        profile: front.profile(),
+                    };
+                    if self.queue.is_full() {
+                        self.queue.pop_front();
+                        self.dropped = self.dropped.wrapping_add(1);
+                    }
+                    let _ = self.queue.push_back(r);
+                }
+                self.identified = true;
+            }
+        }
+    }
+
+    /// Before the rear wheel's update with sample `s`: rolls the readings on by the distance
+    /// the rear wheel covered since its last sample and hands those that have arrived to
+    /// `rear`.
+    pub fn rear<M: Backend<F>>(&mut self, rear: &mut Bank<F>, s: &Sample<F>) {
+        let dt_us = self.last_t.map(|t| s.t_us.wrapping_sub(t));
+        self.last_t = Some(s.t_us);
+        let (Some(dt_us), Some(vx)) = (dt_us, s.vx) else {
+            return;
+        };
+        if dt_us == 0 || dt_us > MAX_GAP_US || !vx.is_finite() {
+            return;
+        }
+        let ds = vx * F::from_f64(f64::from(dt_us) * 1e-6);
+        for r in self.queue.iter_mut() {
+            r.left -= ds;
+        }
+        // All readings roll alike, so the oldest is the nearest: arrivals leave at the front,
+        // readings a reversal has carried too far away at the back.
+        while let Some(r) = self.queue.front() {
+            if r.left > F::ZERO {
+                break;
+            }
+            rear.preview::<M>(&r.profile, self.cfg.weight);
+            self.handed = self.handed.wrapping_add(1);
+            self.queue.pop_front();
+        }
+        let far = F::TWO * self.cfg.wheelbase;
+        while self.queue.back().is_some_and(|r| r.left > far) {
+            self.queue.pop_back();
+            self.dropped = self.dropped.wrapping_add(1);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::math::Libm;
+    use crate::mu::bank::tests::{noisy, slips_stream, tyre};
+    use crate::mu::bank::Config as BankConfig;
+    extern crate std;
+    use std::vec::Vec;
+
+    const L: f64 = 2.7;
+
+    /// A steady turn at slip angle `a`, 20 m/s, `n` ms: μ 1.0 for the first 3 s (plus
+    /// `lag_ms`: the rear meets a change L/Vx later), then `mu2`.
+    fn turn(mu2: f64, lag_ms: usize, n: usize, slip: f64) -> Vec<Sample<f64>> {
+        let p = tyre();
+        let alpha = |t: f64| slip * (t / 0.5).min(1.0);
+        let change = 3000 + lag_ms;
+        let mut a = slips_stream(&p, 1.0, |t| (alpha(t), 0.0), 20.0, change, 0);
+        let b = slips_stream(
+            &p,
+            mu2,
+            |_| (slip, 0.0),
+            20.0,
+            n - change,
+            (change as u32) * 1000,
+        );
+        a.extend(b);
+        noisy(a)
+    }
+
+    /// Front and rear over their streams, the rear with or without the preview; the rear's
+    /// estimates.
+    fn pair(front: &[Sample<f64>], rear: &[Sample<f64>], with: bool) -> Vec<Estimate<f64>> {
+        let p = tyre();
+        let mut f = Bank::new::<Libm>(&p, None, BankConfig::default()).unwrap();
+        let mut r = Bank::new::<Libm>(&p, None, BankConfig::default()).unwrap();
+        let mut pv = Preview::new(Config::with_wheelbase(L)).unwrap();
+        front
+            .iter()
+            .zip(rear)
+            .map(|(sf, sr)| {
+                f.update::<Libm>(&p, sf);
+                pv.front(&f);
+                if with {
+                    pv.rear::<Libm>(&mut r, sr);
+                }
+                r.update::<Libm>(&p, sr)
+            })
+            .collect()
+    }
+
+    /// First sample from which the estimate stays identifiable within ±0.1 of `mu`.
+    fn settled(est: &[Estimate<f64>], from: usize, mu: f64) -> Option<usize> {
+        let mut first = None;
+        for (i, e) in est.iter().enumerate().skip(from).rev() {
+            if e.state != State::Identifiable || (e.mu - mu).abs() > 0.1 {
+                break;
+            }
+            first = Some(i);
+        }
+        first
+    }
+
+    #[test]
+    fn a_rear_wheel_told_of_ice_reads_it_sooner_than_alone() {
+        let lag = (L / 20.0 * 1000.0) as usize;
+        // The front runs onto ice in a hard turn and reads it at once; the rear, at a small
+        // slip angle (half the ice's grip: the curve nearly linear, every surface explains it
+        // alike), says little of the surface by itself.
+        let front = turn(0.3, 0, 6000, -0.03);
+        let rear = turn(0.3, lag, 6000, -0.006);
+        let alone = pair(&front, &rear, false);
+        let told = pair(&front, &rear, true);
+        let on_ice = 3000 + lag;
+        let a = settled(&alone, on_ice, 0.3).map(|i| i - on_ice);
+        let t = settled(&told, on_ice, 0.3).map(|i| i - on_ice);
+        std::println!("told {t:?} ms, alone {a:?} ms");
+        assert!(
+            t.is_some_and(|t| a.is_none_or(|a| t + 100 < a)),
+            "told {t:?} ms, alone {a:?} ms"
+        );
+        // Never confidently wrong on the way.
+        assert!(told
+            .iter()
+            .enumerate()
+            .all(|(i, e)| e.state != State::Identifiable
+                || (e.mu - if i < on_ice { 1.0 } else { 0.3 }).abs() <= 0.1));
+    }
+
+    #[test]
+    fn a_reading_that_does_not_apply_is_overruled() {
+        // The front runs onto ice, the rear never does (a patch that ended between the axles).
+        let front = turn(0.3, 0, 6000, -0.03);
+        let rear = turn(1.0, 0, 6000, -0.03);
+        let told = pair(&front, &rear, true);
+        let wrong = told
+            .iter()
+            .filter(|e| e.state == State::Identifiable && (e.mu - 1.0).abs() > 0.1)
+            .count();
+        assert_eq!(wrong, 0);
+        let back = settled(&told, 3000, 1.0).unwrap();
+        std::println!("identifiable at 1.0 again from {back} ms");
+        assert!(back < 3300, "{back}");
+    }
+
+    fn at(t_ms: u32, vx: Option<f64>) -> Sample<f64> {
+        Sample {
+            t_us: t_ms.wrapping_mul(1000),
+            fz: 4000.0,
+            fy: 0.0,
+            mz: 0.0,
+            fx: None,
+            kappa: None,
+            vx,
+            gamma: None,
+        }
+    }
+
+    fn identified(change: bool) -> Estimate<f64> {
+        Estimate {
+            mu: 0.5,
+            sigma: 0.02,
+            mu_min: 0.4,
+            state: State::Identifiable,
+            change,
+        }
+    }
+
+    #[test]
+    fn a_reading_arrives_after_a_wheelbase_and_only_with_a_speed() {
+        let p = tyre();
+        let b = Bank::new::<Libm>(&p, None, BankConfig::default()).unwrap();
+        let mut rear = b.clone();
+        let mut pv = Preview::new(Config::with_wheelbase(2.0)).unwrap();
+        pv.front_with(&b, &identified(false));
+        // Identifiable again without a change: nothing new.
+        pv.front_with(&b, &identified(false));
+        assert_eq!(pv.pending(), 1);
+        // Without Vx nothing moves; at 10 m/s 2 m take 200 ms.
+        for t in 0..500 {
+            pv.rear::<Libm>(&mut rear, &at(t, None));
+        }
+        assert_eq!((pv.pending(), pv.handed()), (1, 0));
+        let mut arrived = None;
+        for t in 500..800 {
+            pv.rear::<Libm>(&mut rear, &at(t, Some(10.0)));
+            if arrived.is_none() && pv.handed() == 1 {
+                arrived = Some(t);
+            }
+        }
+        // 200 steps of 10 mm from t = 500 ms (the clock ran on without a speed).
+        assert!(matches!(arrived, Some(699..=700)), "{arrived:?}");
+        // A change of surface is new; so is an identification after a fallback.
+        pv.front_with(&b, &identified(true));
+        let fb = Estimate {
+            state: State::Fallback,
+            ..identified(false)
+        };
+        pv.front_with(&b, &fb);
+        pv.front_with(&b, &identified(false));
+        assert_eq!(pv.pending(), 2);
+        // Reversing carries them away: dropped beyond two wheelbases.
+        for t in 800..1300 {
+            pv.rear::<Libm>(&mut rear, &at(t, Some(-10.0)));
+        }
+        assert_eq!((pv.pending(), pv.dropped(), pv.handed()), (0, 2, 1));
+        // A gap longer than MAX_GAP_US moves nothing.
+        pv.front_with(&b, &identified(true));
+        pv.rear::<Libm>(&mut rear, &at(100_000, Some(10.0)));
+        assert_eq!(pv.pending(), 1);
+        // At most QUEUE readings on their way: a further one replaces the oldest.
+        for _ in 0..QUEUE {
+            pv.front_with(&b, &identified(true));
+        }
+        assert_eq!((pv.pending(), pv.dropped()), (QUEUE, 3));
+    }
+
+    #[test]
+    fn a_bad_config_is_refused() {
+        for (wheelbase, weight) in [(0.0, 0.9), (f64::NAN, 0.9), (2.7, 0.0), (2.7, 1.0)] {
+            assert_eq!(
+                Preview::new(Config { wheelbase, weight }).err(),
+                Some(PreviewError::BadConfig)
+            );
+        }
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(32))]
+        /// A front and a rear wheel on random finite streams, the preview between them over a
+        /// short wheelbase, and raw readings of any floats: every estimate finite.
+        #[test]
+        fn any_streams_and_readings_give_finite_estimates(
+            rows in proptest::collection::vec(
+                (0u32..3000, -2e4f64..2e4, -1e4f64..1e4, -500f64..500.0, -1.5f64..1.5, -60f64..60.0),
+                1..300,
+            ),
+            raw in proptest::collection::vec(proptest::num::f64::ANY, CELLS),
+            weight in proptest::num::f64::ANY,
+        ) {
+            let p = tyre();
+            let mut f = Bank::new::<Libm>(&p, None, BankConfig::default()).unwrap();
+            let mut r = f.clone();
+            let mut pv = Preview::new(Config::with_wheelbase(0.3)).unwrap();
+            let profile: [f64; CELLS] = core::array::from_fn(|k| raw[k]);
+            let mut t = 0u32;
+            for (i, (dt, fz, fy, mz, k, vx)) in rows.into_iter().enumerate() {
+                t = t.wrapping_add(dt);
+                let s = Sample { t_us: t, fz, fy, mz, fx: Some(fy * 0.3), kappa: Some(k), vx: Some(vx), gamma: None };
+                f.update::<Libm>(&p, &s);
+                pv.front(&f);
+                pv.rear::<Libm>(&mut r, &s);
+                if i % 50 == 0 {
+                    r.preview::<Libm>(&profile, weight);
+                }
+                let e = r.update::<Libm>(&p, &s);
+                proptest::prop_assert!(e.mu.is_finite() && e.sigma.is_finite() && e.sigma >= 0.0 && e.mu_min.is_finite(), "{e:?}");
+            }
+        }
+    }
+}
