@@ -237,6 +237,12 @@ impl Wheel {
         self.est.as_ref()
     }
 
+    /// The estimator, if one runs, to hand it a reading of the road ahead
+    /// ([`crate::mu::preview::Preview::rear`]).
+    pub fn estimator_mut(&mut self) -> Option<&mut Bank<f32>> {
+        self.est.as_mut()
+    }
+
     /// The filter's deflections (v lateral, u longitudinal) \[m\], if it runs.
     pub fn deflection(&self) -> Option<(f32, f32)> {
         self.defl.map(|d| (d.tr.v, d.tr.u))

@@ -88,6 +88,11 @@
 #define GOUGH_RX_SIZE 256
 
 /**
+ * Bytes of a `gough_preview_t` (one side's front-to-rear preview, `gough::mu::preview`).
+ */
+#define GOUGH_PREVIEW_SIZE 512
+
+/**
  * 64-bit words of a `gough_params_t`.
  */
 #define GOUGH_PARAMS_WORDS (GOUGH_PARAMS_SIZE / 8)
@@ -106,6 +111,11 @@
  * 64-bit words of a `gough_rx_t`.
  */
 #define GOUGH_RX_WORDS (GOUGH_RX_SIZE / 8)
+
+/**
+ * 64-bit words of a `gough_preview_t`.
+ */
+#define GOUGH_PREVIEW_WORDS (GOUGH_PREVIEW_SIZE / 8)
 
 /**
  * `gough_measurement_t::present`: Fx is measured.
@@ -653,6 +663,13 @@ typedef struct gough_sample_t {
 } gough_sample_t;
 
 /**
+ * One side's front-to-rear preview (`gough_preview_init`). Opaque.
+ */
+typedef struct gough_preview_t {
+  uint64_t _opaque[GOUGH_PREVIEW_WORDS];
+} gough_preview_t;
+
+/**
  * The protocol's settings (`docs/protocol.md`).
  */
 typedef struct gough_settings_t {
@@ -853,6 +870,47 @@ int32_t gough_estimator_init(struct gough_estimator_t *e, const struct gough_par
 int32_t gough_estimator_update(struct gough_estimator_t *e,
                                const struct gough_sample_t *s,
                                struct gough_estimate_t *out);
+
+/**
+ * Starts one side's front-to-rear preview (`gough::mu::preview`: what the front wheel's
+ * estimator read is handed to the rear wheel's on the same side once it has rolled
+ * `wheelbase` metres, measured by the rear's Vx; weight 0.9). Use one per side, never across.
+ * Per sample: after the front wheel's update `gough_preview_front` (or `_front_wheel`),
+ * before the rear wheel's update `gough_preview_rear` (or `_rear_wheel`) with the sample the
+ * rear is about to take. `GOUGH_E_ARG`: the wheelbase is not a positive number.
+ */
+int32_t gough_preview_init(struct gough_preview_t *pv, float wheelbase);
+
+/**
+ * After the front estimator's `gough_estimator_update`: queues what it read when that update
+ * made a new identification (its first, its first after a fallback, a change of surface).
+ */
+int32_t gough_preview_front(struct gough_preview_t *pv, const struct gough_estimator_t *front);
+
+/**
+ * Before the rear estimator's `gough_estimator_update` with sample `s`: rolls the readings on
+ * by the distance the rear wheel covered since its last sample (`s`'s Vx; without
+ * `GOUGH_HAS_VX` nothing moves) and hands those that have arrived to `rear`.
+ * `GOUGH_E_NONFINITE`: the sample is refused (nothing changes).
+ */
+int32_t gough_preview_rear(struct gough_preview_t *pv,
+                           struct gough_estimator_t *rear,
+                           const struct gough_sample_t *s);
+
+/**
+ * `gough_preview_front` for a wheel's pipeline (`gough_wheel_step` of the front wheel first).
+ * `GOUGH_E_ARG`: the wheel runs no estimator.
+ */
+int32_t gough_preview_front_wheel(struct gough_preview_t *pv, const struct gough_wheel_t *front);
+
+/**
+ * `gough_preview_rear` for a wheel's pipeline, before its `gough_wheel_step` with `m` (the
+ * estimator's sample of `m`, κ from ω as the step takes it). `GOUGH_E_ARG`: the wheel runs no
+ * estimator, or `m`'s wheel index is not 0–3; `GOUGH_E_NONFINITE`: `m` is refused.
+ */
+int32_t gough_preview_rear_wheel(struct gough_preview_t *pv,
+                                 struct gough_wheel_t *rear,
+                                 const struct gough_measurement_t *m);
 
 /**
  * Encodes `msg` with sequence number `seq` into classic CAN frames `frames[0..*n]` (`cap`

@@ -4,7 +4,7 @@
 //!
 //! - **No allocation**: every state lives in an opaque, 8-byte aligned storage struct that the
 //!   caller declares (`static`, or on its stack) — `gough_params_t`, `gough_wheel_t`,
-//!   `gough_estimator_t`, `gough_rx_t`; their sizes are the `GOUGH_*_SIZE` macros. An
+//!   `gough_estimator_t`, `gough_preview_t`, `gough_rx_t`; their sizes are the `GOUGH_*_SIZE` macros. An
 //!   `*_init`/`*_parse` call writes a storage and marks it; any other call on a storage that was
 //!   not written so returns `GOUGH_E_UNINIT`.
 //! - **No panics across the boundary**: the core does not panic; every function returns
@@ -30,6 +30,7 @@ use core::ptr;
 use core_gough::math::{Fast, Libm};
 use core_gough::mf::{self, EvalError, Input, Options, Params};
 use core_gough::mu::bank::{self, Bank};
+use core_gough::mu::preview::{self, Preview};
 use core_gough::proto::{self, Feed, Msg, Mtu, Reassembler, Segmenter, Settings, MSG_BUF};
 use core_gough::wheel::Wheel;
 
@@ -84,6 +85,8 @@ pub const GOUGH_WHEEL_SIZE: usize = 1600;
 pub const GOUGH_ESTIMATOR_SIZE: usize = 1536;
 /// Bytes of a `gough_rx_t` (a reassembler of one CAN identifier's messages).
 pub const GOUGH_RX_SIZE: usize = 256;
+/// Bytes of a `gough_preview_t` (one side's front-to-rear preview, `gough::mu::preview`).
+pub const GOUGH_PREVIEW_SIZE: usize = 512;
 
 /// 64-bit words of a `gough_params_t`.
 pub const GOUGH_PARAMS_WORDS: usize = GOUGH_PARAMS_SIZE / 8;
@@ -93,6 +96,8 @@ pub const GOUGH_WHEEL_WORDS: usize = GOUGH_WHEEL_SIZE / 8;
 pub const GOUGH_ESTIMATOR_WORDS: usize = GOUGH_ESTIMATOR_SIZE / 8;
 /// 64-bit words of a `gough_rx_t`.
 pub const GOUGH_RX_WORDS: usize = GOUGH_RX_SIZE / 8;
+/// 64-bit words of a `gough_preview_t`.
+pub const GOUGH_PREVIEW_WORDS: usize = GOUGH_PREVIEW_SIZE / 8;
 
 /// A parsed tyre (`gough_tir_parse`). Opaque; declare it, never read it.
 #[repr(C)]
@@ -119,6 +124,12 @@ pub struct gough_rx_t {
     _opaque: [u64; GOUGH_RX_WORDS],
 }
 
+/// One side's front-to-rear preview (`gough_preview_init`). Opaque.
+#[repr(C)]
+pub struct gough_preview_t {
+    _opaque: [u64; GOUGH_PREVIEW_WORDS],
+}
+
 /// A storage's contents behind its magic word.
 #[repr(C)]
 struct Slot<T> {
@@ -130,6 +141,7 @@ const MAGIC_PARAMS: u32 = 0x676f_7001;
 const MAGIC_WHEEL: u32 = 0x676f_7003;
 const MAGIC_EST: u32 = 0x676f_7004;
 const MAGIC_RX: u32 = 0x676f_7005;
+const MAGIC_PREVIEW: u32 = 0x676f_7006;
 
 struct ParamsIn {
     p32: Params<f32>,
@@ -157,15 +169,17 @@ fits!(ParamsIn, gough_params_t, GOUGH_PARAMS_SIZE);
 fits!(WheelIn, gough_wheel_t, GOUGH_WHEEL_SIZE);
 fits!(EstIn, gough_estimator_t, GOUGH_ESTIMATOR_SIZE);
 fits!(Reassembler<MSG_BUF>, gough_rx_t, GOUGH_RX_SIZE);
+fits!(Preview<f32>, gough_preview_t, GOUGH_PREVIEW_SIZE);
 
 /// Bytes each storage needs on this target (what the `GOUGH_*_SIZE` macros round up):
-/// params, wheel, estimator, rx. For `docs/c-api.md` and the tests.
-pub fn used_sizes() -> [usize; 4] {
+/// params, wheel, estimator, rx, preview. For `docs/c-api.md` and the tests.
+pub fn used_sizes() -> [usize; 5] {
     [
         size_of::<Slot<ParamsIn>>(),
         size_of::<Slot<WheelIn>>(),
         size_of::<Slot<EstIn>>(),
         size_of::<Slot<Reassembler<MSG_BUF>>>(),
+        size_of::<Slot<Preview<f32>>>(),
     ]
 }
 
@@ -831,6 +845,26 @@ pub struct gough_sample_t {
     pub present: u32,
 }
 
+/// The estimator's sample of C's, or `GOUGH_E_NONFINITE`.
+fn sample(s: &gough_sample_t) -> Result<bank::Sample<f32>, i32> {
+    let p = s.present;
+    let sample = bank::Sample {
+        t_us: s.t_us,
+        fz: s.fz,
+        fy: s.fy,
+        mz: s.mz,
+        fx: opt(p, GOUGH_HAS_FX, s.fx),
+        kappa: opt(p, GOUGH_HAS_KAPPA, s.kappa),
+        vx: opt(p, GOUGH_HAS_VX, s.vx),
+        gamma: opt(p, GOUGH_HAS_GAMMA, s.gamma),
+    };
+    let given = [sample.fx, sample.kappa, sample.vx, sample.gamma];
+    if !finite(&[s.fz, s.fy, s.mz]) || given.iter().flatten().any(|x| !x.is_finite()) {
+        return Err(GOUGH_E_NONFINITE);
+    }
+    Ok(sample)
+}
+
 /// Starts the friction estimator (`gough::mu::bank::Bank`, default settings, the tyre as the
 /// file describes it) of one wheel on tyre `p`. **`p` must outlive the estimator** and stay
 /// unchanged while it runs (the estimator keeps a pointer to it). `GOUGH_E_MODEL`: the tyre
@@ -871,22 +905,7 @@ pub unsafe extern "C" fn gough_estimator_update(
             return Err(GOUGH_E_NULL);
         }
         // SAFETY: non-null, the caller's sample.
-        let s = unsafe { s.read() };
-        let p = s.present;
-        let sample = bank::Sample {
-            t_us: s.t_us,
-            fz: s.fz,
-            fy: s.fy,
-            mz: s.mz,
-            fx: opt(p, GOUGH_HAS_FX, s.fx),
-            kappa: opt(p, GOUGH_HAS_KAPPA, s.kappa),
-            vx: opt(p, GOUGH_HAS_VX, s.vx),
-            gamma: opt(p, GOUGH_HAS_GAMMA, s.gamma),
-        };
-        let given = [sample.fx, sample.kappa, sample.vx, sample.gamma];
-        if !finite(&[s.fz, s.fy, s.mz]) || given.iter().flatten().any(|x| !x.is_finite()) {
-            return Err(GOUGH_E_NONFINITE);
-        }
+        let sample = sample(&unsafe { s.read() })?;
         let r = est.bank.update::<Fast>(&est.params.p32, &sample);
         let state = match r.state {
             bank::State::Identifiable => GOUGH_STATE_IDENTIFIABLE,
@@ -903,6 +922,119 @@ pub unsafe extern "C" fn gough_estimator_update(
                 flags: if r.change { GOUGH_EST_CHANGE } else { 0 },
             })
         };
+        Ok(())
+    })
+}
+
+// ---------------------------------------------------------------------------------------------
+// Front-to-rear preview
+// ---------------------------------------------------------------------------------------------
+
+/// Starts one side's front-to-rear preview (`gough::mu::preview`: what the front wheel's
+/// estimator read is handed to the rear wheel's on the same side once it has rolled
+/// `wheelbase` metres, measured by the rear's Vx; weight 0.9). Use one per side, never across.
+/// Per sample: after the front wheel's update `gough_preview_front` (or `_front_wheel`),
+/// before the rear wheel's update `gough_preview_rear` (or `_rear_wheel`) with the sample the
+/// rear is about to take. `GOUGH_E_ARG`: the wheelbase is not a positive number.
+#[no_mangle]
+pub unsafe extern "C" fn gough_preview_init(pv: *mut gough_preview_t, wheelbase: f32) -> i32 {
+    ret(|| {
+        if pv.is_null() {
+            return Err(GOUGH_E_NULL);
+        }
+        // SAFETY: non-null; unmark, so that a failure leaves it unusable.
+        unsafe { pv.cast::<u32>().write(0) };
+        let val =
+            Preview::new(preview::Config::with_wheelbase(wheelbase)).map_err(|_| GOUGH_E_ARG)?;
+        // SAFETY: non-null, GOUGH_PREVIEW_SIZE bytes aligned to 8.
+        unsafe { put(pv, MAGIC_PREVIEW, val) };
+        Ok(())
+    })
+}
+
+/// After the front estimator's `gough_estimator_update`: queues what it read when that update
+/// made a new identification (its first, its first after a fallback, a change of surface).
+#[no_mangle]
+pub unsafe extern "C" fn gough_preview_front(
+    pv: *mut gough_preview_t,
+    front: *const gough_estimator_t,
+) -> i32 {
+    ret(|| {
+        // SAFETY: storages or null; the preview exclusive for the call.
+        let pv: &mut Preview<f32> = unsafe { get_mut(pv, MAGIC_PREVIEW)? };
+        // SAFETY: as above.
+        let front: &EstIn = unsafe { get(front, MAGIC_EST)? };
+        pv.front(&front.bank);
+        Ok(())
+    })
+}
+
+/// Before the rear estimator's `gough_estimator_update` with sample `s`: rolls the readings on
+/// by the distance the rear wheel covered since its last sample (`s`'s Vx; without
+/// `GOUGH_HAS_VX` nothing moves) and hands those that have arrived to `rear`.
+/// `GOUGH_E_NONFINITE`: the sample is refused (nothing changes).
+#[no_mangle]
+pub unsafe extern "C" fn gough_preview_rear(
+    pv: *mut gough_preview_t,
+    rear: *mut gough_estimator_t,
+    s: *const gough_sample_t,
+) -> i32 {
+    ret(|| {
+        // SAFETY: storages or null, distinct (their magic words differ); exclusive for the call.
+        let pv: &mut Preview<f32> = unsafe { get_mut(pv, MAGIC_PREVIEW)? };
+        // SAFETY: as above.
+        let rear: &mut EstIn = unsafe { get_mut(rear, MAGIC_EST)? };
+        if s.is_null() {
+            return Err(GOUGH_E_NULL);
+        }
+        // SAFETY: non-null, the caller's sample.
+        let sample = sample(&unsafe { s.read() })?;
+        pv.rear::<Fast>(&mut rear.bank, &sample);
+        Ok(())
+    })
+}
+
+/// `gough_preview_front` for a wheel's pipeline (`gough_wheel_step` of the front wheel first).
+/// `GOUGH_E_ARG`: the wheel runs no estimator.
+#[no_mangle]
+pub unsafe extern "C" fn gough_preview_front_wheel(
+    pv: *mut gough_preview_t,
+    front: *const gough_wheel_t,
+) -> i32 {
+    ret(|| {
+        // SAFETY: storages or null; the preview exclusive for the call.
+        let pv: &mut Preview<f32> = unsafe { get_mut(pv, MAGIC_PREVIEW)? };
+        // SAFETY: as above.
+        let front: &WheelIn = unsafe { get(front, MAGIC_WHEEL)? };
+        pv.front(front.wheel.estimator().ok_or(GOUGH_E_ARG)?);
+        Ok(())
+    })
+}
+
+/// `gough_preview_rear` for a wheel's pipeline, before its `gough_wheel_step` with `m` (the
+/// estimator's sample of `m`, κ from ω as the step takes it). `GOUGH_E_ARG`: the wheel runs no
+/// estimator, or `m`'s wheel index is not 0–3; `GOUGH_E_NONFINITE`: `m` is refused.
+#[no_mangle]
+pub unsafe extern "C" fn gough_preview_rear_wheel(
+    pv: *mut gough_preview_t,
+    rear: *mut gough_wheel_t,
+    m: *const gough_measurement_t,
+) -> i32 {
+    ret(|| {
+        // SAFETY: storages or null, distinct (their magic words differ); exclusive for the call.
+        let pv: &mut Preview<f32> = unsafe { get_mut(pv, MAGIC_PREVIEW)? };
+        // SAFETY: as above.
+        let wi: &mut WheelIn = unsafe { get_mut(rear, MAGIC_WHEEL)? };
+        if m.is_null() {
+            return Err(GOUGH_E_NULL);
+        }
+        // SAFETY: non-null, the caller's measurement.
+        let meas = measurement(&unsafe { m.read() })?;
+        // SAFETY: set by `gough_wheel_init` to caller-owned params that outlive the wheel.
+        let p = unsafe { &*wi.params };
+        let s = core_gough::wheel::sample::<Fast>(p, &meas);
+        let bank = wi.wheel.estimator_mut().ok_or(GOUGH_E_ARG)?;
+        pv.rear::<Fast>(bank, &s);
         Ok(())
     })
 }
@@ -1399,8 +1531,9 @@ mod tests {
             GOUGH_WHEEL_SIZE,
             GOUGH_ESTIMATOR_SIZE,
             GOUGH_RX_SIZE,
+            GOUGH_PREVIEW_SIZE,
         ];
-        let names = ["params", "wheel", "estimator", "rx"];
+        let names = ["params", "wheel", "estimator", "rx", "preview"];
         for ((u, m), n) in used.iter().zip(macros).zip(names) {
             println!(
                 "{n}: needs {u} bytes on this target, GOUGH_{}_SIZE = {m}",
@@ -1461,6 +1594,102 @@ mod tests {
             // A failed parse leaves the storage unusable.
             assert_eq!(gough_mf_eval(&*p, &input, 111, &mut out), GOUGH_E_UNINIT);
         }
+    }
+
+    #[test]
+    fn a_preview_through_the_c_api_is_the_core_preview() {
+        let text = include_str!("../../host-tests/data/tyres/MagicFormula61_Parameters.tir");
+        let mut p = Box::new(gough_params_t_zeroed());
+        let mut line = 0u32;
+        // Storages as C declares them (zeroed: unmarked).
+        // SAFETY: opaque arrays of u64: all-zero bits are valid unmarked storages.
+        let mut ests: Vec<gough_estimator_t> =
+            (0..2).map(|_| unsafe { std::mem::zeroed() }).collect();
+        // SAFETY: as above.
+        let mut pv: Box<gough_preview_t> = Box::new(unsafe { std::mem::zeroed() });
+        // SAFETY: valid pointers or null, as the C API allows.
+        unsafe {
+            assert_eq!(
+                gough_tir_parse(text.as_ptr().cast(), text.len(), &mut *p, &mut line),
+                GOUGH_OK
+            );
+            assert_eq!(gough_preview_init(&mut *pv, 0.0), GOUGH_E_ARG);
+            assert_eq!(gough_preview_init(ptr::null_mut(), 2.9), GOUGH_E_NULL);
+            assert_eq!(gough_preview_front(&mut *pv, &ests[0]), GOUGH_E_UNINIT);
+            assert_eq!(gough_preview_init(&mut *pv, 2.9), GOUGH_OK);
+            for e in ests.iter_mut() {
+                assert_eq!(gough_estimator_init(e, &*p), GOUGH_OK);
+            }
+        }
+        let p32 = core_gough::tir::parse(text).unwrap().params.cast::<f32>();
+        let mut ice = p32.clone();
+        ice.lmux *= 0.3;
+        ice.lmuy *= 0.3;
+        let cfg = bank::Config::default();
+        let mut banks = [
+            Bank::new::<Fast>(&p32, None, cfg).unwrap(),
+            Bank::new::<Fast>(&p32, None, cfg).unwrap(),
+        ];
+        let mut rpv = Preview::new(preview::Config::with_wheelbase(2.9f32)).unwrap();
+        let mut alone = Bank::new::<Fast>(&p32, None, cfg).unwrap();
+        let mut differs = 0;
+        for i in 0..3000u32 {
+            for w in 0..2 {
+                // Front (0) at α −0.05 onto ice at 1.5 s, rear (1) at −0.01, 145 ms later.
+                let on_ice = i >= 1500 + if w == 1 { 145 } else { 0 };
+                let a = if w == 1 { -0.01 } else { -0.05 } * (i as f32 / 500.0).min(1.0);
+                let input = Input {
+                    fz: 5000.0,
+                    alpha: a,
+                    vx: 20.0,
+                    ..Input::default()
+                };
+                let q = if on_ice { &ice } else { &p32 };
+                let o = mf::eval::<f32, Fast>(q, &input, &Options::default()).unwrap();
+                let cs = gough_sample_t {
+                    t_us: 1000 * i,
+                    fz: 5000.0,
+                    fy: o.fy,
+                    mz: o.mz,
+                    fx: o.fx,
+                    vx: 20.0,
+                    present: GOUGH_HAS_FX | GOUGH_HAS_VX,
+                    ..Default::default()
+                };
+                let s = sample(&cs).unwrap();
+                let mut ce = gough_estimate_t::default();
+                // SAFETY: initialised storages, valid pointers.
+                unsafe {
+                    if w == 1 {
+                        assert_eq!(gough_preview_rear(&mut *pv, &mut ests[1], &cs), GOUGH_OK);
+                    }
+                    assert_eq!(gough_estimator_update(&mut ests[w], &cs, &mut ce), GOUGH_OK);
+                    if w == 0 {
+                        assert_eq!(gough_preview_front(&mut *pv, &ests[0]), GOUGH_OK);
+                    }
+                }
+                if w == 1 {
+                    rpv.rear::<Fast>(&mut banks[1], &s);
+                }
+                let r = banks[w].update::<Fast>(&p32, &s);
+                if w == 0 {
+                    rpv.front(&banks[0]);
+                } else {
+                    let a = alone.update::<Fast>(&p32, &s);
+                    differs += usize::from(a.mu.to_bits() != r.mu.to_bits());
+                }
+                assert_eq!(
+                    (ce.mu.to_bits(), ce.sigma.to_bits(), ce.mu_min.to_bits()),
+                    (r.mu.to_bits(), r.sigma.to_bits(), r.mu_min.to_bits()),
+                    "wheel {w}, sample {i}"
+                );
+            }
+        }
+        assert!(
+            rpv.handed() >= 1 && differs > 0,
+            "{} {differs}",
+            rpv.handed()
+        );
     }
 
     fn gough_params_t_zeroed() -> gough_params_t {

@@ -344,6 +344,46 @@ static void errors(const char *root) {
     s.mz = NAN;
     CHECK(gough_estimator_update(&est, &s, &e) == GOUGH_E_NONFINITE, "NaN Mz");
 
+    /* The front-to-rear preview: errors; then a front and a rear estimator in a steady turn
+     * (forces from gough_mf_eval), the rear told what the front read 2.9 m later: both read
+     * the tyre's own surface. */
+    {
+        static gough_preview_t pv, pv0;
+        static gough_estimator_t fe, re;
+        CHECK(gough_preview_init(NULL, 2.9f) == GOUGH_E_NULL, "null preview");
+        CHECK(gough_preview_init(&pv, 0.0f) == GOUGH_E_ARG, "wheelbase 0");
+        CHECK(gough_preview_init(&pv, NAN) == GOUGH_E_ARG, "wheelbase NaN");
+        CHECK(gough_preview_front(&pv, &est) == GOUGH_E_UNINIT, "a failed init: unusable");
+        CHECK(gough_preview_init(&pv, 2.9f) == GOUGH_OK, "preview");
+        CHECK(gough_preview_front(&pv0, &est) == GOUGH_E_UNINIT, "uninitialised preview");
+        CHECK(gough_preview_front(&pv, NULL) == GOUGH_E_NULL, "null front");
+        CHECK(gough_preview_front(&pv, &est0) == GOUGH_E_UNINIT, "uninitialised front");
+        CHECK(gough_preview_front_wheel(&pv, &wheel0) == GOUGH_E_ARG, "front wheel without estimator");
+        CHECK(gough_preview_rear_wheel(&pv, &wheel, NULL) == GOUGH_E_NULL, "null measurement");
+        gough_sample_t sn = s; /* s.mz is NaN */
+        CHECK(gough_preview_rear(&pv, &est, &sn) == GOUGH_E_NONFINITE, "NaN sample");
+        CHECK(gough_estimator_init(&fe, &p) == GOUGH_OK && gough_estimator_init(&re, &p) == GOUGH_OK,
+              "front and rear estimators");
+        gough_estimate_t ef = {0}, er = {0};
+        int ok = 1;
+        for (uint32_t i = 0; i < 2000; i++) {
+            float a = -0.05f * (i < 500 ? (float)i / 500.0f : 1.0f);
+            gough_mf_input_t mi = {5000.0f, 0.0f, a, 0.0f, 0.0f, 20.0f, 0.0f};
+            gough_mf_output_t o;
+            ok &= gough_mf_eval(&p, &mi, 111, &o) == GOUGH_OK;
+            gough_sample_t x = {1000u * i, 5000.0f, o.fy, o.mz, o.fx, 0.0f, 20.0f, 0.0f,
+                                GOUGH_HAS_FX | GOUGH_HAS_VX};
+            ok &= gough_estimator_update(&fe, &x, &ef) == GOUGH_OK;
+            ok &= gough_preview_front(&pv, &fe) == GOUGH_OK;
+            ok &= gough_preview_rear(&pv, &re, &x) == GOUGH_OK;
+            ok &= gough_estimator_update(&re, &x, &er) == GOUGH_OK;
+        }
+        CHECK(ok, "preview run");
+        CHECK(ef.state == GOUGH_STATE_IDENTIFIABLE && er.state == GOUGH_STATE_IDENTIFIABLE &&
+                  fabsf(ef.mu - er.mu) < 0.05f,
+              "front %g (%d), rear %g (%d)", (double)ef.mu, ef.state, (double)er.mu, er.state);
+    }
+
     /* The protocol. */
     gough_msg_t msg, got;
     memset(&msg, 0, sizeof msg);
