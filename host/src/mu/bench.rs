@@ -1043,10 +1043,11 @@ pub fn demo(a: DemoArgs) -> Result<(), String> {
     let names = ["fl", "fr", "rl", "rr"];
     let mut csv = String::from("t,wheel,mu_true,mu,sigma,state,util\n");
     println!(
-        "{} on '{}' ({}), estimator at every wheel (noise: Mz 2 N·m, F 1 % Fz, 10 ms lag):",
+        "{} on '{}' ({}), estimator at every wheel (noise: Mz 2 N·m, F 1 % Fz, 10 ms lag; rear wheels told what the front ones read, {:.1} m later):",
         case.manoeuvre,
         case.road,
-        p.version.name()
+        p.version.name(),
+        sim_wheelbase()
     );
     println!("wheel | true μ (start → end) | estimate at end | state | max utilisation | within ±0.1 from util");
     let mut first: Option<(WheelTrace, Vec<Estimate<f64>>)> = None;
