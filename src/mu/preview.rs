@@ -74,7 +74,8 @@ struct Reading<F> {
     profile: [F; CELLS],
 }
 
-/// One side's front-to-rear preview (see the module documentation). About 420 bytes in `f32`.
+/// One side's front-to-rear preview (see the module documentation). 456 bytes in `f32` on the
+/// M4F (the firmware bench's `bench: mu_preview_*` lines).
 #[derive(Debug, Clone)]
 pub struct Preview<F> {
     cfg: Config<F>,
