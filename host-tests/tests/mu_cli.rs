@@ -761,3 +761,125 @@ fn the_clock_offset_of_a_log_changes_nothing() {
         .iter()
         .any(|l| l.ends_with("identifiable") && !l.ends_with("not_identifiable")));
 }
+
+/// A four-wheel log (a `wheel` column, rows interleaved): the slalom onto ice of the bench, as
+/// its sensors measure it.
+fn write_car_log(path: &Path) -> usize {
+    use gough_host::mu::bench::{measure, simulate_case, suite, Sensors};
+    let p = gough_host::tyre::load(Path::new(&tyre())).unwrap().params;
+    let case = suite()
+        .into_iter()
+        .find(|c| c.road == "step=1.0@0,0.3@90")
+        .unwrap();
+    let log = simulate_case(&p, &case).unwrap();
+    let traces: Vec<_> = (0..4)
+        .map(|w| measure(&log, w, &Sensors::default(), 1))
+        .collect();
+    let mut s = String::from("t,wheel,fz,fy,mz,fx,vx,kappa,gamma\n");
+    let n = traces[0].rows.len();
+    for i in 0..n {
+        for (w, tr) in traces.iter().enumerate() {
+            let r = &tr.rows[i];
+            s.push_str(&format!(
+                "{},{w},{},{},{},{},{},{},{}\n",
+                r.t, r.fz, r.fy, r.mz, r.fx, r.vx, tr.kappa_meas[i], tr.gamma[i]
+            ));
+        }
+    }
+    std::fs::write(path, s).unwrap();
+    n
+}
+
+#[test]
+fn a_four_wheel_log_runs_each_wheel_and_the_preview() {
+    let log = tmp("car.csv");
+    let n = write_car_log(&log);
+    let tir = tyre();
+    let run = |out: &str, extra: &[&str]| -> Vec<(f64, usize, f64, String)> {
+        let out = tmp(out);
+        let mut args = vec![
+            "mu",
+            "estimate",
+            "--tir",
+            &tir,
+            "--log",
+            log.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ];
+        args.extend_from_slice(extra);
+        let o = gough(&args);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let text = std::fs::read_to_string(&out).unwrap();
+        let mut lines = text.lines();
+        assert_eq!(lines.next(), Some("t,wheel,mu,sigma,state"));
+        lines
+            .map(|l| {
+                let v: Vec<&str> = l.split(',').collect();
+                (
+                    v[0].parse().unwrap(),
+                    v[1].parse().unwrap(),
+                    v[2].parse().unwrap(),
+                    v[4].to_string(),
+                )
+            })
+            .collect()
+    };
+    let alone = run("car-alone.est", &[]);
+    let told = run("car-told.est", &["--wheelbase", "2.9"]);
+    assert_eq!((alone.len(), told.len()), (4 * n, 4 * n));
+    // The front wheels are never touched; the rear ones are told of the ice.
+    let mut rear_differs = 0;
+    for (a, b) in alone.iter().zip(&told) {
+        if a.1 < 2 {
+            assert_eq!(a, b);
+        } else {
+            rear_differs += usize::from(a.2 != b.2);
+        }
+    }
+    assert!(rear_differs > 0);
+    // On the ice (x ≥ 90 m, from t ≈ 5.2 s on), each rear wheel reads 0.3 identifiable no later
+    // with the preview than without it, and the rear-left sooner.
+    let first = |est: &[(f64, usize, f64, String)], w: usize| {
+        est.iter()
+            .filter(|e| e.1 == w && e.0 > 5.2)
+            .find(|e| e.3 == "identifiable" && (e.2 - 0.3).abs() <= 0.1)
+            .map(|e| e.0)
+            .unwrap()
+    };
+    for w in 2..4 {
+        assert!(first(&told, w) <= first(&alone, w), "wheel {w}");
+    }
+    assert!(first(&told, 2) < first(&alone, 2));
+    // One wheel's methods refuse it; a wheel index out of range is a one-line error.
+    one_line_error(
+        &[
+            "mu",
+            "estimate",
+            "--tir",
+            &tyre(),
+            "--log",
+            log.to_str().unwrap(),
+            "--out",
+            tmp("car-gough.est").to_str().unwrap(),
+            "--method",
+            "gough",
+        ],
+        "the gough method reads one wheel's log (this one has several wheels)",
+    );
+    let bad = tmp("car-bad.csv");
+    std::fs::write(&bad, "t,wheel,fz,fy,mz\n0.001,4,4000,100,-2\n").unwrap();
+    one_line_error(
+        &[
+            "mu",
+            "estimate",
+            "--tir",
+            &tyre(),
+            "--log",
+            bad.to_str().unwrap(),
+            "--out",
+            tmp("car-bad.est").to_str().unwrap(),
+        ],
+        "column wheel: 4 is not 0, 1, 2 or 3",
+    );
+}

@@ -1,6 +1,6 @@
 //! `gough mu ...` subcommands.
 use crate::mu::table_estimator::Hold;
-use crate::mu::{estimate, read_log, Method, Precision};
+use crate::mu::{estimate, estimate_car, read_car_log, Method, Precision};
 use crate::tyre;
 use clap::{Args, Subcommand};
 use std::io::Write;
@@ -74,6 +74,11 @@ pub struct EstimateArgs {
     /// terminal. Gough method only.
     #[arg(long)]
     pub why: bool,
+    /// Wheelbase \[m\] of the car a four-wheel log comes from (a `wheel` column, 0–3 = FL, FR,
+    /// RL, RR): each rear wheel's estimator is told what the front wheel on its side read when
+    /// it gets there (`gough::mu::preview`). Bank method only.
+    #[arg(long, value_name = "M")]
+    pub wheelbase: Option<f64>,
 }
 
 /// Runs a `gough mu` subcommand.
@@ -84,18 +89,54 @@ pub fn run(cmd: MuCmd) -> Result<(), String> {
                 return Err("--why: only the gough method says why it holds an estimate".into());
             }
             let t = tyre::load(&a.tir)?;
-            let (rows, gamma, present) = read_log(&a.log)?;
-            let (est, holds) =
-                estimate(&t.params, &rows, present[0], &gamma, a.method, a.precision)?;
+            let ((rows, gamma, present), wheels) = read_car_log(&a.log)?;
+            let several = wheels.iter().any(|&w| w != 0);
+            if (several || a.wheelbase.is_some()) && a.method != Method::Bank {
+                return Err(format!(
+                    "{}: the {} method reads one wheel's log{}",
+                    a.log.display(),
+                    clap::ValueEnum::to_possible_value(&a.method)
+                        .map_or_else(String::new, |v| v.get_name().to_string()),
+                    if several {
+                        " (this one has several wheels)"
+                    } else {
+                        "; --wheelbase is the bank's"
+                    }
+                ));
+            }
+            let (est, holds) = if several || a.wheelbase.is_some() {
+                let e = estimate_car(
+                    &t.params,
+                    &rows,
+                    &wheels,
+                    present[0],
+                    &gamma,
+                    a.precision,
+                    a.wheelbase,
+                )?;
+                (e, Vec::new())
+            } else {
+                estimate(&t.params, &rows, present[0], &gamma, a.method, a.precision)?
+            };
+            let wheel_col = several;
             if let Some(dir) = a.out.parent().filter(|d| !d.as_os_str().is_empty()) {
                 std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
             }
             let tmp = a.out.with_extension("csv.tmp");
             let write = || -> std::io::Result<()> {
                 let mut w = std::io::BufWriter::new(std::fs::File::create(&tmp)?);
-                writeln!(w, "t,mu,sigma,state{}", if a.why { ",hold" } else { "" })?;
+                writeln!(
+                    w,
+                    "t,{}mu,sigma,state{}",
+                    if wheel_col { "wheel," } else { "" },
+                    if a.why { ",hold" } else { "" }
+                )?;
                 for (i, (r, e)) in rows.iter().zip(&est).enumerate() {
-                    write!(w, "{},{:.6},{:.6},{}", r.t, e.mu, e.sigma, e.state.name())?;
+                    write!(w, "{},", r.t)?;
+                    if wheel_col {
+                        write!(w, "{},", wheels[i])?;
+                    }
+                    write!(w, "{:.6},{:.6},{}", e.mu, e.sigma, e.state.name())?;
                     if a.why {
                         let h = holds.get(i).copied().flatten();
                         write!(w, ",{}", h.map_or("", Hold::name))?;

@@ -62,21 +62,50 @@ pub type Log = (Vec<Row>, Vec<f64>, [bool; 5]);
 
 /// Reads a log into rows; the error is one line naming file, line and column. Time must
 /// increase strictly. Absent optional values read as NaN (never mistaken for a measured 0).
+/// A `wheel` column is not read (see [`read_car_log`]).
 pub fn read_log(path: &Path) -> Result<Log, String> {
+    read_rows(path, false).map(|(log, _)| log)
+}
+
+/// [`read_log`] for a log of up to four wheels: with a `wheel` column (0–3: FL, FR, RL, RR;
+/// rows of the wheels interleaved in time) each row's wheel, time increasing per wheel; without
+/// it every row is wheel 0 and time increases throughout.
+pub fn read_car_log(path: &Path) -> Result<(Log, Vec<usize>), String> {
+    read_rows(path, true)
+}
+
+fn read_rows(path: &Path, per_wheel: bool) -> Result<(Log, Vec<usize>), String> {
     let t = csvio::read::<csvio::WheelRow>(path).map_err(|e| e.to_string())?;
     let mut rows = Vec::with_capacity(t.rows.len());
     let mut gamma = Vec::with_capacity(t.rows.len());
-    let mut last = f64::NEG_INFINITY;
+    let mut wheels = Vec::with_capacity(t.rows.len());
+    let mut last = [f64::NEG_INFINITY; 4];
     let v = |x: Option<f64>| x.unwrap_or(f64::NAN);
     for (r, line) in t.rows.iter().zip(&t.lines) {
-        if r.t <= last {
+        let w = match r.wheel.filter(|_| per_wheel) {
+            None => 0,
+            Some(w) if w.fract() == 0.0 && (0.0..=3.0).contains(&w) => w as usize,
+            Some(w) => {
+                return Err(format!(
+                    "{}: line {line}, column wheel: {w} is not 0, 1, 2 or 3",
+                    path.display()
+                ))
+            }
+        };
+        if r.t <= last[w] {
             return Err(format!(
-                "{}: line {line}, column t: time does not increase ({} after {last})",
+                "{}: line {line}, column t: time does not increase ({} after {}{})",
                 path.display(),
-                r.t
+                r.t,
+                last[w],
+                if per_wheel && t.has("wheel") {
+                    format!(", wheel {w}")
+                } else {
+                    String::new()
+                }
             ));
         }
-        last = r.t;
+        last[w] = r.t;
         rows.push(Row {
             t: r.t,
             fz: r.fz,
@@ -88,8 +117,97 @@ pub fn read_log(path: &Path) -> Result<Log, String> {
             alpha: v(r.alpha),
         });
         gamma.push(v(r.gamma));
+        wheels.push(w);
     }
-    Ok((rows, gamma, OPTIONAL.map(|c| t.has(c))))
+    Ok(((rows, gamma, OPTIONAL.map(|c| t.has(c))), wheels))
+}
+
+/// The bank over a log of up to four wheels (`wheels[i]`: row `i`'s wheel, 0–3 = FL, FR, RL,
+/// RR), row by row as a car's controller runs it: a bank per wheel (mounted as the file
+/// describes the tyre, as on the device), and with `wheelbase` \[m\] the front-to-rear preview
+/// ([`gough::mu::preview`]) from each front wheel to the rear wheel on its side. In f64 or f32
+/// (`Libm`, as [`estimate`]); a one-wheel log gives [`estimate`]'s bank estimates.
+pub fn estimate_car(
+    p: &Params<f64>,
+    rows: &[Row],
+    wheels: &[usize],
+    has_fx: bool,
+    gamma: &[f64],
+    prec: Precision,
+    wheelbase: Option<f64>,
+) -> Result<Vec<Estimate<f64>>, String> {
+    match prec {
+        Precision::F64 => run_car::<f64, Libm>(p, rows, wheels, has_fx, gamma, wheelbase),
+        Precision::F32 => {
+            run_car::<f32, Libm>(&p.cast::<f32>(), rows, wheels, has_fx, gamma, wheelbase)
+        }
+    }
+}
+
+fn run_car<F: gough::math::Float, M: gough::math::Backend<F>>(
+    p: &Params<F>,
+    rows: &[Row],
+    wheels: &[usize],
+    has_fx: bool,
+    gamma: &[f64],
+    wheelbase: Option<f64>,
+) -> Result<Vec<Estimate<f64>>, String> {
+    use gough::mu::preview::{self, Preview};
+    if wheels.len() != rows.len() {
+        return Err(format!(
+            "{} rows, {} wheel indices",
+            rows.len(),
+            wheels.len()
+        ));
+    }
+    let has_kappa = rows.iter().any(|r| r.kappa.is_finite());
+    let new = || bank::Bank::new::<M>(p, None, bank::Config::default()).map_err(|e| e.to_string());
+    let mut banks = [new()?, new()?, new()?, new()?];
+    let mut pvs = match wheelbase {
+        Some(l) => {
+            let pv = Preview::new(preview::Config::with_wheelbase(F::from_f64(l)))
+                .map_err(|e| format!("--wheelbase {l}: {e}"))?;
+            Some([pv.clone(), pv])
+        }
+        None => None,
+    };
+    let c = |x: f64| F::from_f64(x);
+    let back = |x: F| x.to_f64();
+    let mut out = Vec::with_capacity(rows.len());
+    for (i, (r, &w)) in rows.iter().zip(wheels).enumerate() {
+        let s = bank_sample(
+            r,
+            has_fx,
+            has_kappa,
+            gamma.get(i).copied().filter(|g| g.is_finite()),
+        );
+        let s = bank::Sample {
+            t_us: s.t_us,
+            fz: c(s.fz),
+            fy: c(s.fy),
+            mz: c(s.mz),
+            fx: s.fx.map(c),
+            kappa: s.kappa.map(c),
+            vx: s.vx.map(c),
+            gamma: s.gamma.map(c),
+        };
+        let w = w.min(3);
+        if let (true, Some(pv)) = (w >= 2, pvs.as_mut()) {
+            pv[w - 2].rear::<M>(&mut banks[w], &s);
+        }
+        let e = banks[w].update::<M>(p, &s);
+        if let (true, Some(pv)) = (w < 2, pvs.as_mut()) {
+            pv[w].front(&banks[w]);
+        }
+        out.push(bank_estimate(bank::Estimate {
+            mu: back(e.mu),
+            sigma: back(e.sigma),
+            mu_min: back(e.mu_min),
+            state: e.state,
+            change: e.change,
+        }));
+    }
+    Ok(out)
 }
 
 /// A log row as the bank's sample: the time in wrapping microseconds (only differences are
@@ -145,64 +263,10 @@ pub fn estimate(
     let g_of = |i: usize| gamma.get(i).copied().filter(|g| g.is_finite());
     let cfg = Config::<f64>::default();
     match method {
-        Method::Bank => {
-            let has_kappa = rows.iter().any(|r| r.kappa.is_finite());
-            match prec {
-                Precision::F64 => {
-                    let mut est = bank::Bank::new::<Libm>(p, None, bank::Config::default())
-                        .map_err(|e| e.to_string())?;
-                    Ok((
-                        rows.iter()
-                            .enumerate()
-                            .map(|(i, r)| {
-                                bank_estimate(
-                                    est.update::<Libm>(
-                                        p,
-                                        &bank_sample(r, has_fx, has_kappa, g_of(i)),
-                                    ),
-                                )
-                            })
-                            .collect(),
-                        Vec::new(),
-                    ))
-                }
-                Precision::F32 => {
-                    let p32 = p.cast::<f32>();
-                    let mut est = bank::Bank::new::<Libm>(&p32, None, bank::Config::default())
-                        .map_err(|e| e.to_string())?;
-                    Ok((
-                        rows.iter()
-                            .enumerate()
-                            .map(|(i, r)| {
-                                let s = bank_sample(r, has_fx, has_kappa, g_of(i));
-                                let c = |x: f64| x as f32;
-                                let e = est.update::<Libm>(
-                                    &p32,
-                                    &bank::Sample {
-                                        t_us: s.t_us,
-                                        fz: c(s.fz),
-                                        fy: c(s.fy),
-                                        mz: c(s.mz),
-                                        fx: s.fx.map(c),
-                                        kappa: s.kappa.map(c),
-                                        vx: s.vx.map(c),
-                                        gamma: s.gamma.map(c),
-                                    },
-                                );
-                                bank_estimate(bank::Estimate {
-                                    mu: f64::from(e.mu),
-                                    sigma: f64::from(e.sigma),
-                                    mu_min: f64::from(e.mu_min),
-                                    state: e.state,
-                                    change: e.change,
-                                })
-                            })
-                            .collect(),
-                        Vec::new(),
-                    ))
-                }
-            }
-        }
+        Method::Bank => Ok((
+            estimate_car(p, rows, &vec![0; rows.len()], has_fx, gamma, prec, None)?,
+            Vec::new(),
+        )),
         Method::Gough => match prec {
             Precision::F64 => {
                 let table = table::<f64, Libm>(p, None)?;
