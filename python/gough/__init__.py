@@ -140,11 +140,15 @@ def _col(cols: Mapping[str, Any], name: str, n: int | None = None, required=True
     return np.ascontiguousarray(a)
 
 
-def estimate_mu(tyre: Tyre, log, method: str = "bank", precision: str = "f64"):
+def estimate_mu(tyre: Tyre, log, method: str = "bank", precision: str = "f64",
+                wheelbase: float | None = None):
     """The friction estimator of `gough mu estimate` over a log (a DataFrame, a dict of arrays
     or a CSV/Parquet path) with its columns: t [s], fz, fy [N], mz [N·m] required; fx [N],
     vx [m/s], kappa, alpha, gamma [rad] optional. Returns a DataFrame t, mu, sigma, state
-    (identifiable, not_identifiable, fallback)."""
+    (identifiable, not_identifiable, fallback). A car's log of four wheels has a `wheel` column
+    (0–3 = FL, FR, RL, RR, rows interleaved, time increasing per wheel): a bank per wheel, and
+    with `wheelbase` [m] each rear wheel is told what its front wheel read (`gough mu estimate
+    --wheelbase`); the DataFrame then has a `wheel` column."""
     import pandas as pd
 
     cols = _columns(log)
@@ -152,8 +156,14 @@ def estimate_mu(tyre: Tyre, log, method: str = "bank", precision: str = "f64"):
     n = len(t)
     req = [_col(cols, c) for c in ("fz", "fy", "mz")]
     opt = [_col(cols, c, n, required=False) for c in ("fx", "vx", "kappa", "alpha", "gamma")]
-    mu, sigma, state = _gough._estimate_mu(tyre._inner, t, *req, *opt, "fx" in cols, method, precision)
-    return pd.DataFrame({"t": t, "mu": mu, "sigma": sigma, "state": state})
+    wheel = _col(cols, "wheel", required=False)
+    mu, sigma, state = _gough._estimate_mu(tyre._inner, t, *req, *opt, "fx" in cols, method, precision,
+                                           wheel, None if wheelbase is None else float(wheelbase))
+    out = {"t": t}
+    if wheel is not None:
+        out["wheel"] = wheel.astype(np.int64)
+    out.update({"mu": mu, "sigma": sigma, "state": state})
+    return pd.DataFrame(out)
 
 
 _GAP_REQUIRED = ("t", "vx", "alpha", "kappa", "gamma", "fz", "fx", "fy", "mz")

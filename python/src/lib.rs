@@ -162,11 +162,12 @@ type Estimates<'py> = (
     Vec<&'static str>,
 );
 
-/// `gough mu estimate` on columns (NaN = not logged; `has_fx` says whether Fx was logged).
-/// Returns (mu, sigma, state names).
+/// `gough mu estimate` on columns (NaN = not logged; `has_fx` says whether Fx was logged);
+/// with `wheel` (0–3 per row) and/or `wheelbase` \[m\] a car's four-wheel log with the
+/// front-to-rear preview (`mu::estimate_car`, method bank). Returns (mu, sigma, state names).
 #[pyfunction]
 #[allow(clippy::too_many_arguments)]
-#[pyo3(signature = (tyre, t, fz, fy, mz, fx, vx, kappa, alpha, gamma, has_fx, method="gough", precision="f64"))]
+#[pyo3(signature = (tyre, t, fz, fy, mz, fx, vx, kappa, alpha, gamma, has_fx, method="gough", precision="f64", wheel=None, wheelbase=None))]
 fn _estimate_mu<'py>(
     py: Python<'py>,
     tyre: &Tyre,
@@ -182,6 +183,8 @@ fn _estimate_mu<'py>(
     has_fx: bool,
     method: &str,
     precision: &str,
+    wheel: Option<PyReadonlyArray1<'py, f64>>,
+    wheelbase: Option<f64>,
 ) -> PyResult<Estimates<'py>> {
     let method = match method {
         "bank" => Method::Bank,
@@ -223,7 +226,34 @@ fn _estimate_mu<'py>(
     {
         return Err(PyValueError::new_err("columns of different lengths"));
     }
-    let mut last = f64::NEG_INFINITY;
+    let wheels: Vec<usize> = match &wheel {
+        None => vec![0; n],
+        Some(w) => {
+            let w = arr(w)?;
+            if w.len() != n {
+                return Err(PyValueError::new_err("columns of different lengths"));
+            }
+            w.iter()
+                .enumerate()
+                .map(|(i, &x)| {
+                    if x.fract() == 0.0 && (0.0..=3.0).contains(&x) {
+                        Ok(x as usize)
+                    } else {
+                        Err(PyValueError::new_err(format!(
+                            "row {i}, column wheel: {x} is not 0, 1, 2 or 3"
+                        )))
+                    }
+                })
+                .collect::<PyResult<_>>()?
+        }
+    };
+    let car = wheels.iter().any(|&w| w != 0) || wheelbase.is_some();
+    if car && method != Method::Bank {
+        return Err(PyValueError::new_err(
+            "a log of several wheels, or a wheelbase, needs method 'bank'",
+        ));
+    }
+    let mut last = [f64::NEG_INFINITY; 4];
     let mut rows = Vec::with_capacity(n);
     for i in 0..n {
         for (name, v) in [("t", t[i]), ("fz", fz[i]), ("fy", fy[i]), ("mz", mz[i])] {
@@ -233,13 +263,14 @@ fn _estimate_mu<'py>(
                 )));
             }
         }
-        if t[i] <= last {
+        let w = wheels[i];
+        if t[i] <= last[w] {
             return Err(PyValueError::new_err(format!(
-                "row {i}, column t: time does not increase ({} after {last})",
-                t[i]
+                "row {i}, column t: time does not increase ({} after {})",
+                t[i], last[w]
             )));
         }
-        last = t[i];
+        last[w] = t[i];
         rows.push(Row {
             t: t[i],
             fz: fz[i],
@@ -252,8 +283,14 @@ fn _estimate_mu<'py>(
         });
     }
     let params = &tyre.params;
-    let (est, _) = py
-        .detach(|| mu::estimate(params, &rows, has_fx, &gamma, method, prec))
+    let est = py
+        .detach(|| {
+            if car {
+                mu::estimate_car(params, &rows, &wheels, has_fx, &gamma, prec, wheelbase)
+            } else {
+                mu::estimate(params, &rows, has_fx, &gamma, method, prec).map(|(e, _)| e)
+            }
+        })
         .map_err(PyValueError::new_err)?;
     let m: Vec<f64> = est.iter().map(|e| e.mu).collect();
     let s: Vec<f64> = est.iter().map(|e| e.sigma).collect();

@@ -74,3 +74,36 @@ def test_simulate_equals_cli(gough_cli, tmp_path):
         gough.simulate(gough.Tyre.from_tir(TIR61), "moonwalk")
     with pytest.raises(ValueError, match="--dt"):
         gough.simulate(gough.Tyre.from_tir(TIR61), "step-steer", dt=float("nan"))
+
+
+def test_a_four_wheel_log_equals_cli_with_the_preview(gough_cli, tmp_path):
+    """A car's log (a `wheel` column, rows interleaved): estimate_mu(wheelbase=2.9) gives what
+    `gough mu estimate --wheelbase 2.9` gives, and the rear wheels differ from a run without it."""
+    tyre = gough.Tyre.from_tir(TIR61)
+    sim = gough.simulate(tyre, "slalom", road="step=1.0@0,0.3@90", duration=7.0)
+    parts = []
+    for w, name in enumerate(("fl", "fr", "rl", "rr")):
+        parts.append(pd.DataFrame({
+            "t": sim.t, "wheel": w, "fz": sim[f"{name}_fz"], "fy": sim[f"{name}_fy"],
+            "mz": sim[f"{name}_mz"], "fx": sim[f"{name}_fx"], "vx": sim[f"{name}_vx"],
+            "kappa": sim[f"{name}_kappa"], "gamma": sim[f"{name}_gamma"],
+        }))
+    car = pd.concat(parts).sort_values(["t", "wheel"], kind="stable").reset_index(drop=True)
+    log = tmp_path / "car.csv"
+    car.to_csv(log, index=False, float_format="%.17g")
+    out = tmp_path / "car.est"
+    gough_cli("mu", "estimate", "--tir", TIR61, "--log", log, "--out", out, "--wheelbase", "2.9")
+    cli = pd.read_csv(out)
+    got = gough.estimate_mu(tyre, log, wheelbase=2.9)
+    assert list(got.columns) == ["t", "wheel", "mu", "sigma", "state"] == list(cli.columns)
+    np.testing.assert_array_equal(got.wheel.to_numpy(), cli.wheel.to_numpy())
+    assert np.abs(got.mu.to_numpy() - cli.mu.to_numpy()).max() <= 5.1e-7
+    assert (got.state.to_numpy() == cli.state.to_numpy()).all()
+    alone = gough.estimate_mu(tyre, log)
+    front = got.wheel < 2
+    np.testing.assert_array_equal(got.mu[front].to_numpy(), alone.mu[front].to_numpy())
+    assert (got.mu[~front].to_numpy() != alone.mu[~front].to_numpy()).any()
+    with pytest.raises(ValueError, match="needs method 'bank'"):
+        gough.estimate_mu(tyre, log, method="gough")
+    with pytest.raises(ValueError, match="column wheel: 4"):
+        gough.estimate_mu(tyre, {"t": [0.0], "wheel": [4], "fz": [4e3], "fy": [0.0], "mz": [0.0]})
