@@ -343,31 +343,26 @@ impl Wheel {
         p: &Params<f32>,
         m: &Measurement,
     ) -> Option<Estimate> {
-        self.estimate_sample::<M>(p, m, &sample::<M>(p, m))
-    }
-
-    fn estimate_sample<M: Backend<f32>>(
-        &mut self,
-        p: &Params<f32>,
-        m: &Measurement,
-        s: &bank::Sample<f32>,
-    ) -> Option<Estimate> {
         let est = self.est.as_mut()?;
-        let e = est.update::<M>(p, s);
-        let state = match e.state {
-            bank::State::Identifiable => EstimateState::Identifiable,
-            bank::State::NotIdentifiable => EstimateState::NotIdentifiable,
-            bank::State::Fallback => EstimateState::Fallback,
-        };
-        Some(Estimate {
-            wheel: m.wheel,
-            t_us: m.t_us,
-            mu: e.mu,
-            sigma: e.sigma,
-            state,
-            mu_min: e.mu_min,
-            change: e.change,
-        })
+        Some(estimate_of(m, &est.update::<M>(p, &sample::<M>(p, m))))
+    }
+}
+
+/// The bank's estimate after measurement `m` as the protocol's.
+fn estimate_of(m: &Measurement, e: &bank::Estimate<f32>) -> Estimate {
+    let state = match e.state {
+        bank::State::Identifiable => EstimateState::Identifiable,
+        bank::State::NotIdentifiable => EstimateState::NotIdentifiable,
+        bank::State::Fallback => EstimateState::Fallback,
+    };
+    Estimate {
+        wheel: m.wheel,
+        t_us: m.t_us,
+        mu: e.mu,
+        sigma: e.sigma,
+        state,
+        mu_min: e.mu_min,
+        change: e.change,
     }
 }
 
@@ -471,34 +466,18 @@ impl Car {
         }
     }
 
-    /// Runs the estimator of the sample's wheel ([`Wheel::estimate`]); a rear wheel first takes
-    /// what its front wheel read that it has now reached, a front wheel's new identification is
-    /// queued for the rear wheel behind it.
+    /// Runs the estimator of the sample's wheel ([`Wheel::estimate`]) with the previews between
+    /// the axles ([`preview::update`]): a rear wheel first takes what its front wheel read that
+    /// it has now reached, a front wheel's new identification is queued for the rear wheel
+    /// behind it.
     pub fn estimate<M: Backend<f32>>(
         &mut self,
         p: &Params<f32>,
         m: &Measurement,
     ) -> Option<Estimate> {
         let i = m.wheel.index();
-        let s = sample::<M>(p, m);
-        let side = i % 2;
-        if let (true, Some(pv), Some(w)) = (
-            i >= 2,
-            self.preview.as_mut().and_then(|p| p.get_mut(side)),
-            self.wheels.get_mut(i),
-        ) {
-            if let Some(b) = w.est.as_mut() {
-                pv.rear::<M>(b, &s);
-            }
-        }
-        let e = self.wheels.get_mut(i)?.estimate_sample::<M>(p, m, &s);
-        if let (true, Some(pv), Some(b)) = (
-            i < 2,
-            self.preview.as_mut().and_then(|p| p.get_mut(side)),
-            self.wheels.get(i).and_then(Wheel::estimator),
-        ) {
-            pv.front(b);
-        }
-        e
+        let bank = self.wheels.get_mut(i)?.est.as_mut()?;
+        let e = preview::update::<f32, M>(self.preview.as_mut(), i, bank, p, &sample::<M>(p, m));
+        Some(estimate_of(m, &e))
     }
 }

@@ -848,6 +848,12 @@ fn a_four_wheel_log_runs_each_wheel_and_the_preview() {
             .unwrap()
     };
     for w in 2..4 {
+        // `-- --nocapture` prints the figures docs/estimator.md quotes.
+        println!(
+            "wheel {w}: identifiable on the ice from {} s told, {} s alone",
+            first(&told, w),
+            first(&alone, w)
+        );
         assert!(first(&told, w) <= first(&alone, w), "wheel {w}");
     }
     assert!(first(&told, 2) < first(&alone, 2));
@@ -881,5 +887,52 @@ fn a_four_wheel_log_runs_each_wheel_and_the_preview() {
             tmp("car-bad.est").to_str().unwrap(),
         ],
         "column wheel: 4 is not 0, 1, 2 or 3",
+    );
+    // Time increases per wheel, not across them; a wheelbase must be a positive number.
+    std::fs::write(
+        &bad,
+        "t,wheel,fz,fy,mz\n0.001,0,4000,100,-2\n0.001,1,4000,100,-2\n0.0005,1,4000,100,-2\n",
+    )
+    .unwrap();
+    let bad_est = tmp("car-bad.est");
+    let args = |extra: &'static str| {
+        let mut v = vec![
+            "mu".to_string(),
+            "estimate".into(),
+            "--tir".into(),
+            tyre(),
+            "--log".into(),
+            bad.to_str().unwrap().into(),
+            "--out".into(),
+            bad_est.to_str().unwrap().into(),
+        ];
+        v.extend(extra.split_whitespace().map(String::from));
+        v
+    };
+    let a = args("");
+    one_line_error(
+        &a.iter().map(String::as_str).collect::<Vec<_>>(),
+        "line 4, column t: time does not increase (0.0005 after 0.001, wheel 1)",
+    );
+    let ok_log = tmp("car-ok.csv");
+    std::fs::write(
+        &ok_log,
+        "t,wheel,fz,fy,mz\n0.001,0,4000,100,-2\n0.001,2,4000,100,-2\n",
+    )
+    .unwrap();
+    one_line_error(
+        &[
+            "mu",
+            "estimate",
+            "--tir",
+            &tir,
+            "--log",
+            ok_log.to_str().unwrap(),
+            "--out",
+            bad_est.to_str().unwrap(),
+            "--wheelbase",
+            "0",
+        ],
+        "--wheelbase 0:",
     );
 }

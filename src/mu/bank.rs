@@ -579,6 +579,14 @@ impl<F: Float> Bank<F> {
         }
     }
 
+    /// The cell nearest μ `mu`.
+    fn cell_of(&self, mu: F) -> usize {
+        let c = &self.cfg;
+        ((mu - c.mu_lo) / c.mu_step + F::HALF)
+            .max(F::ZERO)
+            .floor_index(CELLS - 1)
+    }
+
     /// μ of cell `k`.
     fn mu_of(&self, k: usize) -> F {
         self.cfg.mu_lo + self.cfg.mu_step * F::from_index(k as u16)
@@ -1200,11 +1208,10 @@ impl<F: Float> Bank<F> {
             c.nll = -(m + M::ln(F::ONE + M::exp(-(a - b).abs())));
         }
         if let Some((h, _)) = self.held {
-            let c = &self.cfg;
-            let k = ((h - c.mu_lo) / c.mu_step + F::HALF)
-                .max(F::ZERO)
-                .floor_index(CELLS - 1);
-            if pf.get(k).is_some_and(|l| *l > c.hold_nll) {
+            if pf
+                .get(self.cell_of(h))
+                .is_some_and(|l| *l > self.cfg.hold_nll)
+            {
                 self.held = None;
             }
         }
@@ -1310,10 +1317,10 @@ impl<F: Float> Bank<F> {
         // against it (`hold_nll`), its σ growing with time and distance (`age_q_time`,
         // `age_q_distance`) until it reaches the prior's.
         if let Some((h, hs)) = self.held {
-            let k = ((h - c.mu_lo) / c.mu_step + F::HALF)
-                .max(F::ZERO)
-                .floor_index(CELLS - 1);
-            let against = self.cells.get(k).is_some_and(|cell| cell.nll > c.hold_nll);
+            let against = self
+                .cells
+                .get(self.cell_of(h))
+                .is_some_and(|cell| cell.nll > c.hold_nll);
             let aged = self.aged::<M>(hs, self.age_s, self.age_m);
             // Aged to the prior's σ, it is still kept while the evidence excludes some surface
             // (the data say something, and not that the held value is wrong): a steady

@@ -16,9 +16,12 @@
 //! One [`Preview`] per side (front left → rear left, front right → rear right), never across:
 //! on a μ-split the sides differ. Without a measured Vx the distance is unknown and nothing is
 //! handed on; a gap between rear samples longer than [`MAX_GAP_US`] (or a timestamp that does
-//! not advance) leaves the readings where they are and drops those that have come to lie more
-//! than two wheelbases away. At most [`QUEUE`] readings are on their way; a further one replaces
-//! the oldest (counted in [`Preview::dropped`]).
+//! not advance) leaves the readings where they are. Readings a reversal has carried more than
+//! two wheelbases away are dropped. At most [`QUEUE`] readings are on their way; a further one
+//! replaces the oldest (both counted in [`Preview::dropped`]).
+//!
+//! [`update`] runs one sample of one of a car's four wheels with the previews between them: the
+//! one composition the firmware's `wheel::Car`, the host's bench and `gough mu estimate` use.
 //!
 //! Bounded: a fixed queue, no allocation, a few operations per sample and one mixture (25
 //! logarithms and exponentials) per reading handed on.
@@ -28,6 +31,7 @@
 //! lane change slightly off it. The rear's own evidence decides then.
 
 use crate::math::{Backend, Float};
+use crate::mf::Params;
 use crate::mu::bank::{Bank, Estimate, Sample, State, CELLS, MAX_GAP_US};
 
 /// Readings on their way from a front wheel to the rear wheel behind it.
@@ -187,6 +191,33 @@ impl<F: Float> Preview<F> {
             self.dropped = self.dropped.wrapping_add(1);
         }
     }
+}
+
+/// One sample `s` of wheel `wheel` (0–3 = FL, FR, RL, RR) through its bank, with `previews`
+/// (left, right) between the axles: a rear wheel first takes the readings that have reached it
+/// ([`Preview::rear`]), a front wheel's new identification is queued after its update
+/// ([`Preview::front`]). Without previews (or for another index) the bank's own update.
+pub fn update<F: Float, M: Backend<F>>(
+    previews: Option<&mut [Preview<F>; 2]>,
+    wheel: usize,
+    bank: &mut Bank<F>,
+    params: &Params<F>,
+    s: &Sample<F>,
+) -> Estimate<F> {
+    let Some(pv) = previews
+        .and_then(|p| p.get_mut(wheel % 2))
+        .filter(|_| wheel < 4)
+    else {
+        return bank.update::<M>(params, s);
+    };
+    if wheel >= 2 {
+        pv.rear::<M>(bank, s);
+    }
+    let e = bank.update::<M>(params, s);
+    if wheel < 2 {
+        pv.front(bank);
+    }
+    e
 }
 
 #[cfg(test)]

@@ -408,15 +408,10 @@ pub fn run_banks(
     let mut pvs = [pv.clone(), pv];
     let mut out: Vec<Vec<_>> = (0..4).map(|_| Vec::with_capacity(n)).collect();
     for i in 0..n {
-        for w in 0..2 {
-            let e = banks[w].update::<Libm>(p, &bank_row(&traces[w], i));
-            pvs[w].front(&banks[w]);
-            out[w].push(super::bank_estimate(e));
-        }
-        for w in 2..4 {
+        for (w, (bank, o)) in banks.iter_mut().zip(out.iter_mut()).enumerate() {
             let s = bank_row(&traces[w], i);
-            pvs[w - 2].rear::<Libm>(&mut banks[w], &s);
-            out[w].push(super::bank_estimate(banks[w].update::<Libm>(p, &s)));
+            let e = gough::mu::preview::update::<f64, Libm>(Some(&mut pvs), w, bank, p, &s);
+            o.push(super::bank_estimate(e));
         }
     }
     out

@@ -192,13 +192,7 @@ fn run_car<F: gough::math::Float, M: gough::math::Backend<F>>(
             gamma: s.gamma.map(c),
         };
         let w = w.min(3);
-        if let (true, Some(pv)) = (w >= 2, pvs.as_mut()) {
-            pv[w - 2].rear::<M>(&mut banks[w], &s);
-        }
-        let e = banks[w].update::<M>(p, &s);
-        if let (true, Some(pv)) = (w < 2, pvs.as_mut()) {
-            pv[w].front(&banks[w]);
-        }
+        let e = preview::update::<F, M>(pvs.as_mut(), w, &mut banks[w], p, &s);
         out.push(bank_estimate(bank::Estimate {
             mu: back(e.mu),
             sigma: back(e.sigma),
