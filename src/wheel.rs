@@ -37,9 +37,8 @@
 //! (ω·Re − Vx)/|Vx| clamped to ±1 ([`effective_radius`]).
 //!
 //! Of the protocol's [`Settings`]: `fallback_mu` is the bank's prior `mu_prior` (the μ of a
-//! `Fallback` estimate; when it is a positive number); `limits` applies to the forces only;
-//! `window` and `min_utilisation` (settings of an earlier estimator) have no counterpart in the
-//! bank and are not used ([`estimator_config`]). The tyre is taken as its file describes it on
+//! `Fallback` estimate; when it is a positive number, [`estimator_config`]); `limits` applies
+//! to the forces only; `wheelbase` starts the front-to-rear preview between a [`Car`]'s axles. The tyre is taken as its file describes it on
 //! every wheel (`side` None), as for the forces.
 use crate::math::Backend;
 use crate::mf::{self, Input, Options, Output, Params};
@@ -88,8 +87,7 @@ impl Default for Wheel {
 }
 
 /// The estimator's settings from the protocol's: the bank's defaults with the prior
-/// `mu_prior` = `fallback_mu` (when it is a positive number); `window` and `min_utilisation`
-/// have no counterpart in the bank and are not used.
+/// `mu_prior` = `fallback_mu` (when it is a positive number).
 pub fn estimator_config(s: &Settings) -> bank::Config<f32> {
     let mut c = bank::Config::default();
     if s.fallback_mu.is_finite() && s.fallback_mu > 0.0 {
@@ -366,18 +364,41 @@ fn estimate_of(m: &Measurement, e: &bank::Estimate<f32>) -> Estimate {
     }
 }
 
-/// A car's four wheels (index = [`crate::proto::Wheel::index`]: FL, FR, RL, RR) and, when a
-/// wheelbase is set ([`Car::set_wheelbase`]), the front-to-rear preview between their
+/// Why [`Car::start_estimators`] did not start every estimator.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum StartError {
+    /// The settings' wheelbase is out of range ([`Settings::wheelbase`]); nothing changed.
+    Settings,
+    /// The tyre has no friction to estimate ([`BuildError`]); no estimator runs (the preview,
+    /// if any, idles).
+    Tyre(BuildError),
+}
+
+impl core::fmt::Display for StartError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            StartError::Settings => {
+                f.write_str("the settings' wheelbase is not 0 or a positive number")
+            }
+            StartError::Tyre(e) => write!(f, "{e}"),
+        }
+    }
+}
+
+impl core::error::Error for StartError {}
+
+/// A car's four wheels (index = [`crate::proto::Wheel::index`]: FL, FR, RL, RR) and, when the
+/// settings give a wheelbase ([`Settings::wheelbase`]), the front-to-rear preview between their
 /// estimators ([`crate::mu::preview`]: what the front-left wheel read is handed to the
 /// rear-left one when it gets there, front-right to rear-right). The firmware's pipeline and the
 /// host's replay check run this.
 ///
-/// The wheelbase is the car's calibration, not a protocol setting: the integration sets it once
-/// (the firmware's `App::set_wheelbase`); without it every wheel estimates alone.
+/// The wheelbase comes with the protocol's `Settings` (v3); with `0` (the default) every wheel
+/// estimates alone.
 #[derive(Debug, Clone)]
 pub struct Car {
     wheels: [Wheel; 4],
-    wheelbase: Option<f32>,
     preview: Option<[Preview<f32>; 2]>,
 }
 
@@ -394,26 +415,8 @@ impl Car {
     pub const fn new() -> Self {
         Car {
             wheels: [NO_WHEEL; 4],
-            wheelbase: None,
             preview: None,
         }
-    }
-
-    /// Sets the wheelbase \[m\] of the front-to-rear preview, `None` for none; it applies from
-    /// the next [`Car::start_estimators`]. A wheelbase that is not a positive number is
-    /// refused (and none set).
-    pub fn set_wheelbase(&mut self, wheelbase: Option<f32>) -> Result<(), preview::PreviewError> {
-        self.wheelbase = None;
-        if let Some(l) = wheelbase {
-            Preview::new(preview::Config::with_wheelbase(l))?;
-        }
-        self.wheelbase = wheelbase;
-        Ok(())
-    }
-
-    /// The wheelbase of the preview, if set.
-    pub fn wheelbase(&self) -> Option<f32> {
-        self.wheelbase
     }
 
     /// Wheel `i` (0..=3).
@@ -434,22 +437,30 @@ impl Car {
     }
 
     /// (Re)starts the four estimators for tyre `p` with settings `s` ([`estimator_config`]),
-    /// and the preview when a wheelbase is set; all forget what they learnt. On an error (a tyre without friction) no estimator runs.
+    /// and the preview over `s`'s wheelbase when it gives one; all forget what they learnt.
+    /// Settings whose wheelbase is out of range are refused ([`AckCode::BadSettings`]) and
+    /// nothing changes; on a tyre without friction no estimator runs
+    /// ([`StartError::Tyre`]).
     pub fn start_estimators<M: Backend<f32>>(
         &mut self,
         p: &Params<f32>,
         s: &Settings,
-    ) -> Result<(), BuildError> {
+    ) -> Result<(), StartError> {
+        let preview = match s.wheelbase() {
+            Ok(None) => None,
+            Ok(Some(l)) => match Preview::new(preview::Config::with_wheelbase(l)) {
+                Ok(pv) => Some([pv.clone(), pv]),
+                Err(_) => return Err(StartError::Settings),
+            },
+            Err(_) => return Err(StartError::Settings),
+        };
+        self.preview = preview;
         let mut out = Ok(());
         for w in self.wheels.iter_mut() {
             if let Err(e) = w.start_estimator::<M>(p, s) {
-                out = Err(e);
+                out = Err(StartError::Tyre(e));
             }
         }
-        self.preview = self
-            .wheelbase
-            .and_then(|l| Preview::new(preview::Config::with_wheelbase(l)).ok())
-            .map(|pv| [pv.clone(), pv]);
         out
     }
 

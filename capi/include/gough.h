@@ -678,17 +678,14 @@ typedef struct gough_settings_t {
    */
   uint32_t limits;
   /**
-   * μ [-] reported in the fallback state.
+   * μ [-] reported in the fallback state (the estimators' prior).
    */
   float fallback_mu;
   /**
-   * Estimator window [samples].
+   * The car's wheelbase [m] for the front-to-rear preview; 0: none. The device refuses
+   * anything but 0 or a positive number (ack code 10).
    */
-  uint32_t window;
-  /**
-   * Minimum utilisation |F|/(μ·Fz) [-].
-   */
-  float min_utilisation;
+  float wheelbase;
 } gough_settings_t;
 
 /**
@@ -758,7 +755,8 @@ typedef struct gough_msg_t {
   uint32_t ack_seq;
   /**
    * `GOUGH_MSG_ACK`: 0 ok, 1 bad hash, 2 bad length, 3 bad offset, 4 not in upload, 5 .tir
-   * error (`ack_line`), 6 no params, 7 no slip, 8 evaluation error, 9 not supported.
+   * error (`ack_line`), 6 no params, 7 no slip, 8 evaluation error, 9 not supported,
+   * 10 bad settings.
    */
   uint32_t ack_code;
   /**

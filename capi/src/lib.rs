@@ -1079,12 +1079,11 @@ pub const GOUGH_MAX_FRAMES: usize = 16;
 pub struct gough_settings_t {
     /// Clip inputs to the `.tir` ranges: 1 on, 0 off.
     pub limits: u32,
-    /// μ [-] reported in the fallback state.
+    /// μ [-] reported in the fallback state (the estimators' prior).
     pub fallback_mu: f32,
-    /// Estimator window [samples].
-    pub window: u32,
-    /// Minimum utilisation |F|/(μ·Fz) [-].
-    pub min_utilisation: f32,
+    /// The car's wheelbase [m] for the front-to-rear preview; 0: none. The device refuses
+    /// anything but 0 or a positive number (ack code 10).
+    pub wheelbase: f32,
 }
 
 /// One protocol message, flattened: `kind` (`GOUGH_MSG_*`) says which fields count.
@@ -1123,7 +1122,8 @@ pub struct gough_msg_t {
     /// `GOUGH_MSG_ACK`: sequence number of the request.
     pub ack_seq: u32,
     /// `GOUGH_MSG_ACK`: 0 ok, 1 bad hash, 2 bad length, 3 bad offset, 4 not in upload, 5 .tir
-    /// error (`ack_line`), 6 no params, 7 no slip, 8 evaluation error, 9 not supported.
+    /// error (`ack_line`), 6 no params, 7 no slip, 8 evaluation error, 9 not supported,
+    /// 10 bad settings.
     pub ack_code: u32,
     /// `GOUGH_MSG_ACK` with code 5: 1-based line of the first error (0: the whole file).
     pub ack_line: u32,
@@ -1182,8 +1182,7 @@ const ZERO_MSG: gough_msg_t = gough_msg_t {
     settings: gough_settings_t {
         limits: 0,
         fallback_mu: 0.0,
-        window: 0,
-        min_utilisation: 0.0,
+        wheelbase: 0.0,
     },
     command: 0,
     ack_of: 0,
@@ -1240,6 +1239,7 @@ fn ack_code(c: proto::AckCode) -> (u32, u32) {
         A::NoSlip => (7, 0),
         A::EvalError => (8, 0),
         A::NotSupported => (9, 0),
+        A::BadSettings => (10, 0),
     }
 }
 
@@ -1256,6 +1256,7 @@ fn ack_from(code: u32, line: u32) -> Option<proto::AckCode> {
         7 => A::NoSlip,
         8 => A::EvalError,
         9 => A::NotSupported,
+        10 => A::BadSettings,
         _ => return None,
     })
 }
@@ -1295,8 +1296,7 @@ fn to_c(m: &Msg) -> gough_msg_t {
             o.settings = gough_settings_t {
                 limits: u32::from(s.limits),
                 fallback_mu: s.fallback_mu,
-                window: u32::from(s.window),
-                min_utilisation: s.min_utilisation,
+                wheelbase: s.wheelbase,
             };
         }
         Msg::Command(c) => {
@@ -1360,14 +1360,13 @@ fn from_c(m: &gough_msg_t) -> Result<Msg, i32> {
         GOUGH_MSG_PARAM_COMMIT => Msg::ParamCommit(proto::ParamCommit { hash: m.param_hash }),
         GOUGH_MSG_SETTINGS => {
             let s = &m.settings;
-            if !finite(&[s.fallback_mu, s.min_utilisation]) {
+            if !finite(&[s.fallback_mu, s.wheelbase]) {
                 return Err(GOUGH_E_NONFINITE);
             }
             Msg::Settings(Settings {
                 limits: s.limits != 0,
                 fallback_mu: s.fallback_mu,
-                window: u16::try_from(s.window).map_err(|_| GOUGH_E_ARG)?,
-                min_utilisation: s.min_utilisation,
+                wheelbase: s.wheelbase,
             })
         }
         GOUGH_MSG_COMMAND => Msg::Command(match m.command {

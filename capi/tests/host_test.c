@@ -447,6 +447,37 @@ static void errors(const char *root) {
     em.estimate.mu_min = NAN;
     CHECK(gough_msg_encode(&em, 11, frames, GOUGH_MAX_FRAMES, &nf) == GOUGH_E_NONFINITE,
           "NaN mu_min");
+    /* Settings (protocol v3) with the car's wheelbase, back and forth; an acknowledgement
+     * refusing settings (code 10). */
+    gough_msg_t sm;
+    memset(&sm, 0, sizeof sm);
+    sm.kind = GOUGH_MSG_SETTINGS;
+    sm.settings.limits = 1;
+    sm.settings.fallback_mu = 0.3f;
+    sm.settings.wheelbase = 2.9f;
+    CHECK(gough_msg_encode(&sm, 12, frames, GOUGH_MAX_FRAMES, &nf) == GOUGH_OK &&
+              frames[0].id == 0x301,
+          "settings: %zu frames", nf);
+    for (size_t i = 0; i < nf; i++) gough_rx_feed(&rx, &frames[i], 0, &got);
+    CHECK(got.kind == GOUGH_MSG_SETTINGS && got.settings.limits == 1 &&
+              got.settings.fallback_mu == 0.3f && got.settings.wheelbase == 2.9f,
+          "settings round trip: kind %u wheelbase %g", got.kind, (double)got.settings.wheelbase);
+    sm.settings.wheelbase = INFINITY;
+    CHECK(gough_msg_encode(&sm, 13, frames, GOUGH_MAX_FRAMES, &nf) == GOUGH_E_NONFINITE,
+          "infinite wheelbase");
+    gough_msg_t am;
+    memset(&am, 0, sizeof am);
+    am.kind = GOUGH_MSG_ACK;
+    am.ack_of = GOUGH_MSG_SETTINGS;
+    am.ack_seq = 12;
+    am.ack_code = 10;
+    CHECK(gough_msg_encode(&am, 14, frames, GOUGH_MAX_FRAMES, &nf) == GOUGH_OK, "ack");
+    for (size_t i = 0; i < nf; i++) gough_rx_feed(&rx, &frames[i], 0, &got);
+    CHECK(got.kind == GOUGH_MSG_ACK && got.ack_code == 10 && got.ack_of == GOUGH_MSG_SETTINGS,
+          "bad-settings ack: kind %u code %u", got.kind, got.ack_code);
+    am.ack_code = 11;
+    CHECK(gough_msg_encode(&am, 15, frames, GOUGH_MAX_FRAMES, &nf) == GOUGH_E_ARG,
+          "unknown ack code");
     CHECK(gough_rx_feed(&rx0, &frames[0], 0, &got) == GOUGH_E_UNINIT, "uninitialised rx");
     CHECK(gough_rx_feed(&rx, NULL, 0, &got) == GOUGH_E_NULL, "null frame");
     CHECK(gough_rx_feed(&rx, &frames[0], 0, NULL) == GOUGH_E_NULL, "null message out");

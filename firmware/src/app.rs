@@ -6,10 +6,11 @@
 //! ## The friction estimator
 //! Each wheel runs the exact-model bank ([`gough::mu::bank::Bank`] in `f32`, through
 //! [`gough::wheel::Car`]): the App starts the four wheels' estimators whenever a parameter set
-//! is loaded (bundled or uploaded) and whenever `Settings` arrive (their `fallback_mu` is the
-//! prior); the estimators forget what they learnt then. With the car's wheelbase set
-//! ([`App::set_wheelbase`], the integration's calibration) each rear wheel's estimator is told
-//! what the front wheel on its side read when it gets there (`gough::mu::preview`). Starting one costs one Magic Formula
+//! is loaded (bundled or uploaded) and whenever `Settings` are applied (their `fallback_mu` is
+//! the prior); the estimators forget what they learnt then. With the settings' `wheelbase`
+//! (the car's, sent by the car or set by the board, [`App::apply_settings`]) each rear wheel's
+//! estimator is told what the front wheel on its side read when it gets there
+//! (`gough::mu::preview`). Starting one costs one Magic Formula
 //! evaluation (the tyre's μy0), so the `ParamCommit` is acknowledged at once and estimates
 //! follow from the next measurement on. The bank keeps no reference to the parameters: the App
 //! owns them beside the wheels and hands them to each update. Its work per sample is bounded
@@ -125,8 +126,7 @@ impl App {
             settings: Settings {
                 limits: true,
                 fallback_mu: 0.3,
-                window: 64,
-                min_utilisation: 0.3,
+                wheelbase: 0.0,
             },
             eval_errors: 0,
             tx_messages: 0,
@@ -168,27 +168,31 @@ impl App {
     }
 
     /// (Re)starts the four wheels' estimators on the parameters in use, with the prior of the
-    /// settings and the preview over the wheelbase, if set; without parameters (or for a tyre
-    /// without friction) none runs.
+    /// settings and the preview over their wheelbase, if any; without parameters (or for a tyre
+    /// without friction) none runs. The settings in use were checked when applied.
     fn start_estimators(&mut self) {
         let Some(p) = self.params.as_ref() else {
             return;
         };
         if let Err(e) = self.car.start_estimators::<Math>(p, &self.settings) {
-            defmt::warn!("no estimator for this tyre: {}", e);
+            defmt::warn!("no estimator: {}", e);
         }
     }
 
-    /// Sets the car's wheelbase \[m\] (its calibration; `None`: every wheel estimates alone,
-    /// the default) and restarts the estimators with the front-to-rear preview over it. A
-    /// wheelbase that is not a positive number is refused, and none is set.
-    pub fn set_wheelbase(
-        &mut self,
-        wheelbase: Option<f32>,
-    ) -> Result<(), gough::mu::preview::PreviewError> {
-        let r = self.car.set_wheelbase(wheelbase);
+    /// Applies settings (as a `Settings` message does): the estimators restart with the new
+    /// prior and the preview over the new wheelbase (they forget what they learnt). Settings
+    /// out of range ([`Settings::wheelbase`]) are refused with [`AckCode::BadSettings`] and the
+    /// ones in use stay.
+    pub fn apply_settings(&mut self, s: Settings) -> Result<(), AckCode> {
+        s.wheelbase()?;
+        self.settings = s;
         self.start_estimators();
-        r
+        Ok(())
+    }
+
+    /// The settings in use.
+    pub fn settings(&self) -> &Settings {
+        &self.settings
     }
 
     /// Wheel `i`'s estimator (0..=3), if it runs: its state, μy0 of the tyre
@@ -379,10 +383,11 @@ impl App {
                 self.ack(can, MsgType::ParamCommit, seq, code);
             }
             Msg::Settings(s) => {
-                self.settings = s;
-                // The estimators restart with the new prior (they forget what they learnt).
-                self.start_estimators();
-                self.ack(can, MsgType::Settings, seq, AckCode::Ok);
+                let code = match self.apply_settings(s) {
+                    Ok(()) => AckCode::Ok,
+                    Err(c) => c,
+                };
+                self.ack(can, MsgType::Settings, seq, code);
             }
             Msg::Command(Command::StatusRequest) => {
                 let s = self.status();

@@ -79,7 +79,7 @@ def test_every_frame_decodes_to_the_hosts_values(fd, compact, batch):
             assert sig["last_frame"] == (k == len(m["frames"]) - 1)
             if k == 0:
                 assert sig["msg_len"] == len(m["encoded"]) // 2
-                assert sig["proto_version"] == 2
+                assert sig["proto_version"] == 3
                 assert str(sig["msg_type"]) == m["type"]
                 if any(s.startswith("first_bytes") for s in sig):
                     raw = dbm.decode(data, decode_choices=False)

@@ -30,11 +30,13 @@ import zlib
 
 import can
 
-PROTO_VERSION = 2
+PROTO_VERSION = 3
 ID_MEASUREMENT, ID_CONFIG, ID_RESULT, ID_STATUS = 0x300, 0x301, 0x310, 0x311
 ID_COMPACT, ID_BATCH, ID_BATCH_RESULT = 0x302, 0x303, 0x312
 T_MEASUREMENT, T_COMMAND, T_FORCES, T_ESTIMATE, T_STATUS, T_ACK = 0x01, 0x06, 0x81, 0x82, 0x83, 0x84
 T_COMPACT, T_BATCH, T_BATCH_RESULTS = 0x07, 0x08, 0x85
+T_SETTINGS = 0x05
+ACK_OK, ACK_BAD_SETTINGS = 0, 10
 ABSENT = -32768  # compact fields: an absent optional value
 CMD_STATUS_REQUEST, CMD_STOP = 1, 2
 
@@ -335,6 +337,20 @@ def main():
                   f"mu {r['mu']} sigma {r['sigma']} mu_min {r['mu_min']} state {r['state']} | single: "
                   f"Fx {fx:.7g} Fy {fy:.7g} Mz {mz:.7g}" + (f" mu {est[2]:.4g} sigma {est[3]:.4g} "
                   f"mu_min {est[5]:.3g} state {est[4]}" if est else " no estimate"))
+            fails += not ok
+
+        # Settings (v3: limits bool, fallback_mu f32, wheelbase f32): a wheelbase starts the
+        # front-to-rear preview; a negative one is refused; back to none.
+        for wheelbase, want in ((2.9, ACK_OK), (-2.9, ACK_BAD_SETTINGS), (0.0, ACK_OK)):
+            send(ID_CONFIG, message(T_SETTINGS, bytes([1]) + struct.pack("<ff", 0.3, wheelbase)))
+            while True:
+                t, body = rx.recv()
+                if t == T_ACK:
+                    break
+            of, _, code = body[0], body[1], body[2]
+            ok = of == T_SETTINGS and code == want and len(body) == 3
+            print(f"{'ok  ' if ok else 'FAIL'} settings with wheelbase {wheelbase} m: ack code {code} "
+                  f"(expected {want})")
             fails += not ok
 
         # A damaged message: the device must drop it and count it.

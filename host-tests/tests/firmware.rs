@@ -12,22 +12,40 @@ fn root() -> &'static Path {
     Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/.."))
 }
 
+/// `gough replay --no-build ARGS --tir TIR --log LOG --out OUT --workdir target/WORKDIR`.
+fn replay(
+    args: &[&str],
+    tir: &Path,
+    log: &Path,
+    out: &Path,
+    workdir: &str,
+) -> std::process::Output {
+    Proc::new(gough_host_tests::gough_bin())
+        .args(["replay", "--no-build"])
+        .args(args)
+        .arg("--tir")
+        .arg(tir)
+        .arg("--log")
+        .arg(log)
+        .arg("--out")
+        .arg(out)
+        .arg("--workdir")
+        .arg(root().join("target").join(workdir))
+        .output()
+        .unwrap()
+}
+
 #[test]
 #[ignore = "needs QEMU and the release firmware; run by `cargo xtask test-all`"]
 fn replay_answers_equal_the_host_f32_run() {
     let out = std::env::temp_dir().join(format!("gough-replay-{}.csv", std::process::id()));
-    let o = Proc::new(gough_host_tests::gough_bin())
-        .args(["replay", "--no-build", "--check"])
-        .arg("--tir")
-        .arg(root().join("host-tests/data/tyres/MagicFormula61_Parameters.tir"))
-        .arg("--log")
-        .arg(root().join("examples/replay_log.csv"))
-        .arg("--out")
-        .arg(&out)
-        .arg("--workdir")
-        .arg(root().join("target/qemu-replay"))
-        .output()
-        .unwrap();
+    let o = replay(
+        &["--check"],
+        &root().join("host-tests/data/tyres/MagicFormula61_Parameters.tir"),
+        &root().join("examples/replay_log.csv"),
+        &out,
+        "qemu-replay",
+    );
     let err = String::from_utf8_lossy(&o.stderr);
     eprintln!("{err}");
     assert!(o.status.success(), "gough replay failed");
@@ -181,6 +199,158 @@ fn compact_measurement_is_answered_like_the_measurement_it_stands_for() {
         "{a:?} {raw:?}"
     );
     assert!(a.fy != 0.0);
+    let st = dev.status(Duration::from_secs(10)).unwrap();
+    assert_eq!(st.rx.dropped(), 0);
+    dev.send(&Msg::Command(Command::Stop)).unwrap();
+    assert_eq!(q.wait(Duration::from_secs(20)), Some(0));
+}
+
+/// A car's four wheels in a slalom with braking (rows interleaved FL, FR, RL, RR at 50 Hz per
+/// wheel, the rear wheels at 60 % of the fronts' slip angle), "measured" = the f64 Magic
+/// Formula; returns the log's text.
+fn car_log(p: &gough::mf::Params<f64>, seconds: f64) -> String {
+    use gough::math::Libm;
+    use gough::mf::{self, Input, Options};
+    use std::fmt::Write as _;
+    let tau = std::f64::consts::TAU;
+    let mut s = String::from("t,wheel,fz,fy,mz,fx,vx,alpha,kappa,gamma\n");
+    for i in 0..(seconds * 50.0) as usize {
+        let t = i as f64 * 0.02;
+        for wheel in 0..4 {
+            let side = if wheel % 2 == 0 { 1.0 } else { -1.0 };
+            let rear = if wheel >= 2 { 0.6 } else { 1.0 };
+            let fz = (6000.0 * (1.0 + 0.25 * side * (tau * 0.5 * t).sin())).round();
+            let alpha = (rear * 0.12 * (tau * 0.5 * t).sin() * 1e6).round() / 1e6;
+            let kappa = ((-0.08 * (tau * 0.25 * t).sin().powi(2)) * 1e6).round() / 1e6;
+            let vx = 20.0 - 2.0 * t;
+            let input = Input {
+                fz,
+                kappa,
+                alpha,
+                gamma: 0.0,
+                phit: 0.0,
+                vx,
+                p: None,
+            };
+            let o = mf::eval::<f64, Libm>(p, &input, &Options::default()).unwrap();
+            writeln!(
+                s,
+                "{t:.2},{wheel},{fz:.0},{:.1},{:.2},{:.1},{vx:.2},{alpha:.6},{kappa:.6},0",
+                o.fy, o.mz, o.fx
+            )
+            .unwrap();
+        }
+    }
+    s
+}
+
+#[test]
+#[ignore = "needs QEMU and the release firmware; run by `cargo xtask test-all`"]
+fn the_device_runs_the_front_to_rear_preview_the_settings_ask_for_as_the_host_does() {
+    use gough::proto::Settings;
+    use gough_host::replay::{self, Backend32};
+    let tir = root().join("host-tests/data/tyres/MagicFormula61_Parameters.tir");
+    let p = gough_host::tyre::load(&tir).unwrap().params;
+    let dir = std::env::temp_dir().join(format!("gough-replay-car-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let log_path = dir.join("car.csv");
+    std::fs::write(&log_path, car_log(&p, 3.0)).unwrap();
+    // On the host first: the preview hands the fronts' readings over and changes the rear
+    // wheels' estimates, never the fronts'.
+    let log = replay::read_log(&log_path).unwrap();
+    let p32 = p.cast::<f32>();
+    let host = |wheelbase: f32| {
+        let s = Settings {
+            wheelbase,
+            ..Settings::default()
+        };
+        replay::host_f32(&p32, &s, &log, Backend32::Fast).unwrap()
+    };
+    let (alone, told) = (host(0.0), host(2.9));
+    let mut rear_differs = 0;
+    for ((a, b), m) in alone.iter().zip(&told).zip(&log) {
+        if m.wheel.index() < 2 {
+            assert_eq!(a, b);
+        } else {
+            rear_differs += usize::from(a != b);
+        }
+    }
+    assert!(rear_differs > 0, "the preview changed no rear estimate");
+    assert!(replay::host_f32(
+        &p32,
+        &Settings {
+            wheelbase: -1.0,
+            ..Settings::default()
+        },
+        &log,
+        Backend32::Fast
+    )
+    .is_err());
+    // The device, told the wheelbase in its settings, answers the host's run to the bit.
+    let out = dir.join("car-results.csv");
+    let o = replay(
+        &["--check", "--wheelbase", "2.9"],
+        &tir,
+        &log_path,
+        &out,
+        "qemu-replay-car",
+    );
+    let err = String::from_utf8_lossy(&o.stderr);
+    eprintln!("{err}");
+    assert!(o.status.success(), "gough replay failed");
+    assert!(err.contains("settings: wheelbase 2.9 m (front-to-rear preview)"));
+    assert!(err.contains(&format!(
+        "check: device answers = host f32 run (math::Fast): forces worst 0 ulp; estimates worst 0 ulp ({} rows)",
+        log.len()
+    )));
+    // A wheelbase the device refuses: the replay stops before streaming.
+    let o = replay(
+        &["--wheelbase", "-2.9"],
+        &tir,
+        &log_path,
+        &out,
+        "qemu-replay-car",
+    );
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("--wheelbase -2.9: not a positive number"),
+        "{err}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+#[ignore = "needs QEMU and the release firmware; run by `cargo xtask test-all`"]
+fn a_wheelbase_out_of_range_is_refused() {
+    use gough::proto::{AckCode, MsgType, Settings};
+    let mut q = Qemu::start(
+        &device::firmware_elf("gough-firmware"),
+        &root().join("target/qemu-settings"),
+        true,
+        None,
+    )
+    .unwrap();
+    let mut dev = Device::new(SlcanTcp::connect(q.port, Duration::from_secs(20)).unwrap());
+    let mut ack = |s: Settings| {
+        dev.send(&Msg::Settings(s)).unwrap();
+        dev.wait_ack(MsgType::Settings, Duration::from_secs(10))
+            .unwrap()
+    };
+    for (wheelbase, want) in [
+        (2.9, AckCode::Ok),
+        (0.0, AckCode::Ok),
+        (-2.9, AckCode::BadSettings),
+        (f32::NAN, AckCode::BadSettings),
+        (f32::INFINITY, AckCode::BadSettings),
+        (3.1, AckCode::Ok),
+    ] {
+        let s = Settings {
+            wheelbase,
+            ..Settings::default()
+        };
+        assert_eq!(ack(s), want, "wheelbase {wheelbase}");
+    }
     let st = dev.status(Duration::from_secs(10)).unwrap();
     assert_eq!(st.rx.dropped(), 0);
     dev.send(&Msg::Command(Command::Stop)).unwrap();

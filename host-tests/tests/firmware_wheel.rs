@@ -389,24 +389,43 @@ fn onto_ice(p: &Params<f32>, n: u32) -> Vec<Measurement> {
 #[test]
 fn the_car_hands_what_a_front_wheel_read_to_the_rear_wheel_behind_it() {
     use gough::mu::preview::{self, Preview};
-    use gough::wheel::Car;
+    use gough::wheel::{Car, StartError};
     let p = tyre();
     let log = onto_ice(&p, 3500);
     let with = Settings::default();
-    let run = |wheelbase: Option<f32>| {
+    let run = |wheelbase: f32| {
         let mut car = Car::new();
-        car.set_wheelbase(wheelbase).unwrap();
-        car.start_estimators::<Fast>(&p, &with).unwrap();
+        let s = Settings { wheelbase, ..with };
+        car.start_estimators::<Fast>(&p, &s).unwrap();
         let est: Vec<_> = log
             .iter()
             .map(|m| car.estimate::<Fast>(&p, m).unwrap())
             .collect();
         (est, car)
     };
-    let (told, car) = run(Some(2.9));
-    let (alone, car0) = run(None);
-    assert!(Car::new().set_wheelbase(Some(0.0)).is_err());
+    let (told, car) = run(2.9);
+    let (alone, car0) = run(0.0);
     assert!(car0.preview(0).is_none(), "no wheelbase, no preview");
+    // A wheelbase out of range is refused and changes nothing.
+    for bad in [-2.9, f32::NAN, f32::INFINITY] {
+        let mut c = car.clone();
+        let s = Settings {
+            wheelbase: bad,
+            ..with
+        };
+        assert_eq!(
+            c.start_estimators::<Fast>(&p, &s),
+            Err(StartError::Settings)
+        );
+        assert_eq!(
+            c.preview(0).unwrap().handed(),
+            car.preview(0).unwrap().handed()
+        );
+        assert_eq!(
+            c.wheel(2).unwrap().estimator().unwrap().current(),
+            car.wheel(2).unwrap().estimator().unwrap().current()
+        );
+    }
     let handed = car.preview(0).unwrap().handed() + car.preview(1).unwrap().handed();
     assert!(handed >= 2, "{handed}");
     // The same, written out with the core's pieces: banks and two previews.

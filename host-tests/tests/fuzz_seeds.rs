@@ -22,15 +22,17 @@ fn seeds(dir: &str) -> Vec<(String, Vec<u8>)> {
 fn msg_decode_seeds_are_messages_of_this_version() {
     let s = seeds("msg_decode");
     assert!(s.len() >= 4);
-    let (mut estimate, mut batch, mut results) = (false, false, false);
+    let (mut estimate, mut batch, mut results, mut settings) = (false, false, false, false);
     for (name, b) in &s {
         assert_eq!(b.first(), Some(&PROTO_VERSION), "{name}");
         let m = Msg::decode(b).unwrap_or_else(|e| panic!("{name}: {e:?}"));
         estimate |= matches!(m, Msg::Estimate(e) if e.change);
         batch |= matches!(m, Msg::CompactBatch(b) if b.present != 0);
         results |= matches!(m, Msg::CompactResults(_));
+        settings |= matches!(m, Msg::Settings(s) if s.wheelbase > 0.0);
     }
     assert!(estimate, "a seed with an Estimate and its change flag");
+    assert!(settings, "a seed with Settings and a wheelbase");
     assert!(
         batch && results,
         "seeds with a four-wheel batch and its results"

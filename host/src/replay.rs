@@ -178,20 +178,31 @@ impl Backend32 {
 }
 
 /// What the device must answer: its per-wheel pipeline run on the host in f32 with backend
-/// `backend`, from the state right after a parameter upload (filters at rest, estimators
-/// started on `p` with the default settings).
-pub fn host_f32(p: &Params<f32>, log: &[Measurement], backend: Backend32) -> Vec<Reply> {
-    match backend {
-        Backend32::Fast => run::<Fast>(p, log),
-        Backend32::Libm => run::<Libm>(p, log),
-    }
+/// `backend`, from the state right after a parameter upload and `settings` (filters at rest,
+/// estimators started on `p` with `settings`: the prior, and the preview over the wheelbase if
+/// it gives one). Settings the device would refuse are an error.
+pub fn host_f32(
+    p: &Params<f32>,
+    settings: &Settings,
+    log: &[Measurement],
+    backend: Backend32,
+) -> Result<Vec<Reply>, String> {
+    settings.wheelbase().map_err(|_| {
+        format!(
+            "wheelbase {} m: not 0 or a positive number",
+            settings.wheelbase
+        )
+    })?;
+    Ok(match backend {
+        Backend32::Fast => run::<Fast>(p, settings, log),
+        Backend32::Libm => run::<Libm>(p, settings, log),
+    })
 }
 
-fn run<M: Backend<f32>>(p: &Params<f32>, log: &[Measurement]) -> Vec<Reply> {
-    let settings = Settings::default();
+fn run<M: Backend<f32>>(p: &Params<f32>, settings: &Settings, log: &[Measurement]) -> Vec<Reply> {
     let mut car = wheel::Car::new();
     // As the device: a tyre without friction gets forces and no estimates.
-    let _ = car.start_estimators::<M>(p, &settings);
+    let _ = car.start_estimators::<M>(p, settings);
     log.iter()
         .map(|m| {
             let answer = match car.forces::<M>(p, settings.limits, m) {

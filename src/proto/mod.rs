@@ -52,7 +52,7 @@ use postcard::experimental::max_size::MaxSize;
 
 /// Protocol version, the first byte of every encoded message. A receiver drops messages of
 /// another version ([`Error::Version`]).
-pub const PROTO_VERSION: u8 = 2;
+pub const PROTO_VERSION: u8 = 3;
 
 /// Longest encoded message \[bytes\]: header (2) + the largest postcard body + CRC (4). It fits
 /// the one-byte length field of the first frame.

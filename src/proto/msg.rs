@@ -720,18 +720,25 @@ pub struct ParamCommit {
     pub hash: u32,
 }
 
-/// Evaluation and estimator settings. Answered by an [`Ack`].
+/// Evaluation and estimator settings. Answered by an [`Ack`]: [`AckCode::Ok`] when applied
+/// (the estimators restart: they forget what they learnt), [`AckCode::BadSettings`] when a
+/// field is out of range (nothing changes).
+///
+/// Protocol v3 replaced v2's `window` and `min_utilisation` (settings of an earlier estimator
+/// that the bank never used) by `wheelbase`.
 #[derive(Serialize, Deserialize, MaxSize, Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Settings {
     /// Clip inputs to the `.tir` ranges (`mf::Options::limits`).
     pub limits: bool,
-    /// Friction μ \[-\] reported in [`EstimateState::Fallback`] (on the `.tir` surface's scale).
+    /// Friction μ \[-\] reported in [`EstimateState::Fallback`] (on the `.tir` surface's scale);
+    /// the bank's prior. A value that is not a positive number keeps the bank's default prior.
     pub fallback_mu: f32,
-    /// Estimator window \[samples\].
-    pub window: u16,
-    /// Minimum utilisation |F|/(μ·Fz) \[-\] before the estimator trusts a sample.
-    pub min_utilisation: f32,
+    /// The car's wheelbase \[m\] for the front-to-rear preview (`mu::preview`: each rear wheel's
+    /// estimator is told what the front wheel on its side read when it gets there); `0`: none,
+    /// every wheel estimates alone. Otherwise a positive finite number (else
+    /// [`AckCode::BadSettings`]).
+    pub wheelbase: f32,
 }
 
 impl Default for Settings {
@@ -739,8 +746,22 @@ impl Default for Settings {
         Settings {
             limits: true,
             fallback_mu: 0.3,
-            window: 64,
-            min_utilisation: 0.3,
+            wheelbase: 0.0,
+        }
+    }
+}
+
+impl Settings {
+    /// The wheelbase of the preview: `Ok(None)` for `0` (none), `Ok(Some(l))` for a positive
+    /// finite `l`, `Err(AckCode::BadSettings)` for anything else (negative, NaN, ±∞).
+    pub fn wheelbase(&self) -> Result<Option<f32>, AckCode> {
+        let l = self.wheelbase;
+        if l == 0.0 {
+            Ok(None)
+        } else if l.is_finite() && l > 0.0 {
+            Ok(Some(l))
+        } else {
+            Err(AckCode::BadSettings)
         }
     }
 }
@@ -891,6 +912,8 @@ pub enum AckCode {
     EvalError,
     /// This board does not do that.
     NotSupported,
+    /// A [`Settings`] field is out of range ([`Settings::wheelbase`]); the settings in use stay.
+    BadSettings,
 }
 
 /// Answer to a request ([`ParamBegin`], [`ParamCommit`], [`Settings`], [`Command`]), to a

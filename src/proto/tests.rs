@@ -53,7 +53,7 @@ pub(crate) fn largest() -> Vec<Msg> {
         }),
         Msg::ParamCommit(ParamCommit { hash: u32::MAX }),
         Msg::Settings(Settings {
-            window: u16::MAX,
+            wheelbase: f32::MAX,
             ..Settings::default()
         }),
         Msg::Command(Command::Stop),
@@ -147,7 +147,7 @@ fn measurement_bytes() {
     let mut buf = [0xa5u8; MAX_MSG_LEN];
     let n = m.encode(&mut buf).unwrap();
     let body: &[u8] = &[
-        0x02, 0x01, // version 2, type Measurement
+        0x03, 0x01, // version 3, type Measurement
         0x01, // wheel FrontRight
         0xe8, 0x03, 0x00, 0x00, // t_us 1000
         0x00, 0x00, 0x80, 0x3f, // fz 1.0
@@ -163,6 +163,40 @@ fn measurement_bytes() {
 }
 
 #[test]
+fn settings_bytes() {
+    // Protocol v3: limits (bool), fallback_mu and wheelbase (f32 LE); 9 body bytes.
+    let m = Msg::Settings(Settings {
+        limits: true,
+        fallback_mu: 0.5,
+        wheelbase: 2.5,
+    });
+    let mut buf = [0u8; MAX_MSG_LEN];
+    let n = m.encode(&mut buf).unwrap();
+    let body: &[u8] = &[
+        0x03, 0x05, // version 3, type Settings
+        0x01, // limits
+        0x00, 0x00, 0x00, 0x3f, // fallback_mu 0.5
+        0x00, 0x00, 0x20, 0x40, // wheelbase 2.5
+    ];
+    assert_eq!(&buf[..n - 4], body);
+    assert_eq!(Msg::decode(&buf[..n]), Ok(m));
+    // The wheelbase's range: 0 is none, a positive number the preview's, the rest refused.
+    let wb = |wheelbase: f32| {
+        Settings {
+            wheelbase,
+            ..Settings::default()
+        }
+        .wheelbase()
+    };
+    assert_eq!(Settings::default().wheelbase, 0.0);
+    assert_eq!(wb(0.0), Ok(None));
+    assert_eq!(wb(2.5), Ok(Some(2.5)));
+    for bad in [-0.1, f32::NAN, f32::INFINITY, f32::NEG_INFINITY] {
+        assert_eq!(wb(bad), Err(AckCode::BadSettings), "{bad}");
+    }
+}
+
+#[test]
 fn decode_errors() {
     let mut buf = [0u8; MAX_MSG_LEN];
     let n = Msg::Command(Command::Reset).encode(&mut buf).unwrap();
@@ -175,8 +209,8 @@ fn decode_errors() {
         let l = b.len();
         b[l - 4..].copy_from_slice(&c.to_le_bytes());
     };
-    // Another version (v1, before `Estimate` gained `mu_min` and `change`; v3): dropped.
-    for other in [1, PROTO_VERSION + 1] {
+    // Another version (v1; v2, before `Settings` carried the wheelbase; v4): dropped.
+    for other in [1, 2, PROTO_VERSION + 1] {
         let mut v = buf[..n].to_vec();
         v[0] = other;
         reseal(&mut v);
@@ -475,15 +509,15 @@ fn new_types_need_no_version_bump() {
 
 #[test]
 fn known_frames() {
-    // Command::StatusRequest, seq 5, classic: two frames 80 05 07 | 02 06 01 | crc.
+    // Command::StatusRequest, seq 5, classic: two frames 80 05 07 | 03 06 01 | crc.
     let m = Msg::Command(Command::StatusRequest);
     let fs = frames(&m, 5, Mtu::Classic);
-    let crc = crc32(&[2, 6, 1]).to_le_bytes();
+    let crc = crc32(&[3, 6, 1]).to_le_bytes();
     assert_eq!(fs.len(), 2);
-    assert_eq!(fs[0], [0x80, 5, 7, 2, 6, 1, crc[0], crc[1]]);
+    assert_eq!(fs[0], [0x80, 5, 7, 3, 6, 1, crc[0], crc[1]]);
     assert_eq!(fs[1], [0x41, 5, crc[2], crc[3], 0, 0, 0, 0]);
     let fd = frames(&m, 5, Mtu::Fd);
-    let mut one = vec![0xc0, 5, 7, 2, 6, 1, crc[0], crc[1], crc[2], crc[3]];
+    let mut one = vec![0xc0, 5, 7, 3, 6, 1, crc[0], crc[1], crc[2], crc[3]];
     one.resize(64, 0);
     assert_eq!(fd, [one]);
     // An estimate on CAN FD: one 32-byte frame on RESULT.
@@ -499,8 +533,8 @@ fn known_frames() {
     let fd = frames(&e, 1, Mtu::Fd);
     assert_eq!(fd.len(), 1);
     assert_eq!(fd[0].len(), 32);
-    // header c0 01 len 25 | version 2, Estimate | wheel 2, t_us 7 ..
-    assert_eq!(fd[0][..7], [0xc0, 1, 25, 2, 0x82, 2, 7]);
+    // header c0 01 len 25 | version 3, Estimate | wheel 2, t_us 7 ..
+    assert_eq!(fd[0][..7], [0xc0, 1, 25, 3, 0x82, 2, 7]);
     assert_eq!(fd[0][10..14], 0.5f32.to_le_bytes());
     assert_eq!(fd[0][14..18], 0.25f32.to_le_bytes());
     assert_eq!(fd[0][18], 0, "state Identifiable");

@@ -4,7 +4,7 @@ use crate::tyre;
 use clap::Subcommand;
 use gough::proto::{
     id, Ack, CompactBatch, CompactMeasurement, CompactResults, CompactWheelResult, Feed, Msg,
-    MsgType, Mtu, Reassembler, Segmenter, MSG_BUF,
+    MsgType, Mtu, Reassembler, Segmenter, Settings, MSG_BUF,
 };
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -107,7 +107,12 @@ pub fn run(cmd: ProtoCmd) -> Result<(), String> {
                 batches(&t.params.cast::<f32>(), &rows, &mut msgs)?;
                 sent.clear();
             }
-            let replies = replay::host_f32(&t.params.cast::<f32>(), &rows, Backend32::Fast);
+            let replies = replay::host_f32(
+                &t.params.cast::<f32>(),
+                &Settings::default(),
+                &rows,
+                Backend32::Fast,
+            )?;
             for (m, r) in sent.iter().zip(&replies) {
                 msgs.push(*m);
                 msgs.push(match r.answer {
@@ -167,7 +172,7 @@ fn batches(
         sent.push(b);
     }
     // The pipeline runs per wheel in time order, as the device does wheel by wheel.
-    let replies = replay::host_f32(p, &carried, Backend32::Fast);
+    let replies = replay::host_f32(p, &Settings::default(), &carried, Backend32::Fast)?;
     let mut r = replies.iter();
     for b in sent {
         let mut res = CompactResults {

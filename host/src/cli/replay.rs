@@ -4,7 +4,7 @@ use crate::device::{Device, SlcanTcp};
 use crate::replay::{self, Answer, Backend32};
 use crate::tyre;
 use clap::Args;
-use gough::proto::EstimateState;
+use gough::proto::{AckCode, EstimateState, Msg, MsgType, Settings};
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
@@ -33,6 +33,11 @@ pub struct ReplayArgs {
     /// Allowed difference for `--check`, in units in the last place of f32.
     #[arg(long, default_value_t = 0)]
     pub max_ulps: u64,
+    /// The car's wheelbase [m], sent to the device in its `Settings` after the upload: the rear
+    /// wheels' estimators get the front-to-rear preview (`--check` runs the same). Without it no
+    /// settings are sent (the device's defaults: every wheel alone).
+    #[arg(long, allow_negative_numbers = true)]
+    pub wheelbase: Option<f32>,
     /// Math backend the firmware was built with, for `--check` (the default build: fast).
     #[arg(long, value_enum, default_value_t = Backend32::Fast)]
     pub backend: Backend32,
@@ -43,6 +48,16 @@ pub struct ReplayArgs {
 
 /// `gough replay`
 pub fn run(a: ReplayArgs) -> Result<(), String> {
+    let settings = Settings {
+        wheelbase: a.wheelbase.unwrap_or(0.0),
+        ..Settings::default()
+    };
+    if a.wheelbase.is_some() && !matches!(settings.wheelbase(), Ok(Some(_))) {
+        return Err(format!(
+            "--wheelbase {}: not a positive number",
+            settings.wheelbase
+        ));
+    }
     let t = tyre::load(&a.tir)?;
     let text = std::fs::read(&a.tir).map_err(|e| format!("{}: {e}", a.tir.display()))?;
     let log = replay::read_log(&a.log).map_err(|e| e.to_string())?;
@@ -70,6 +85,16 @@ pub fn run(a: ReplayArgs) -> Result<(), String> {
         text.len(),
         t0.elapsed().as_secs_f64()
     );
+    if a.wheelbase.is_some() {
+        dev.send(&Msg::Settings(settings))?;
+        match dev.wait_ack(MsgType::Settings, Duration::from_secs(20))? {
+            AckCode::Ok => eprintln!(
+                "settings: wheelbase {} m (front-to-rear preview)",
+                settings.wheelbase
+            ),
+            c => return Err(format!("the device refused the settings: {c:?}")),
+        }
+    }
     let t1 = Instant::now();
     let got = replay::stream(&mut dev, &log, a.window)?;
     let n_forces = got
@@ -116,7 +141,7 @@ pub fn run(a: ReplayArgs) -> Result<(), String> {
     }
     if a.check {
         let p32 = t.params.cast::<f32>();
-        let host = replay::host_f32(&p32, &log, a.backend);
+        let host = replay::host_f32(&p32, &settings, &log, a.backend)?;
         let w = replay::compare(&host, &got)?;
         eprintln!(
             "check: device answers = host f32 run ({}): forces worst {} ulp; estimates worst {} ulp ({} rows)",
