@@ -442,6 +442,13 @@ fn bench_says_where_the_latency_goes() {
             && text.contains(" of 3 cases and "),
         "{text}"
     );
+    // The bank against each other estimator, case by case, on the measures.
+    assert!(
+        text.contains("## The bank against the others, case by case")
+            && text.contains("bank against slip-slope: ws level or ahead on ")
+            && text.contains(" of 3 cases; p95 on "),
+        "{text}"
+    );
     // Each method's identifiable share, over all samples and those at utilisation ≥ 0.5.
     assert!(
         text.contains("bank: identifiable on ")

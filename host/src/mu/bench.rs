@@ -795,11 +795,13 @@ pub fn run(a: BenchArgs) -> Result<(), String> {
     // Identifiable samples over the suite: (identifiable, all, identifiable at utilisation
     // ≥ 0.5, all at ≥ 0.5).
     let mut shares = [(0usize, 0usize, 0usize, 0usize); METHODS.len()];
+    let mut per_case: Vec<(&Case, Vec<Metrics>)> = Vec::new();
     for c in &cases {
         bar.set_message(format!("{} on {}", c.manoeuvre, c.road));
         let log = simulate_case(&p, c)?;
         let traces: Vec<WheelTrace> = (0..4).map(|w| measure(&log, w, &sensors, a.seed)).collect();
         let mut ms = Vec::new();
+        let mut fl_ests: Vec<Vec<Estimate<f64>>> = Vec::new();
         for (m, method) in METHODS.iter().enumerate() {
             let ests: Vec<Vec<Estimate<f64>>> = if m == 0 {
                 let (ests, holds): (Vec<_>, Vec<_>) = traces
@@ -878,6 +880,7 @@ pub fn run(a: BenchArgs) -> Result<(), String> {
                 (a, b) => a.or(b),
             };
             ms.push(mt);
+            fl_ests.push(ests.into_iter().next().unwrap_or_default());
         }
         // "Better than both peers where they produce an estimate": compare p95 error.
         for peer in &ms[1..3] {
@@ -894,18 +897,19 @@ pub fn run(a: BenchArgs) -> Result<(), String> {
                 c.manoeuvre,
                 c.road.replace(['=', '+', '@', '.', ',', '/'], "_")
             );
-            let ests: Vec<Estimate<f64>> = run_gough(&p, &tables, 0, &traces[0], &cfg).0;
+            // The front-left wheel's estimates, the bank's and the table estimator's.
             plot_mu(
                 &traces[0],
-                &[("gough", &ests)],
+                &[("bank", &fl_ests[3]), ("gough (table)", &fl_ests[0])],
                 &a.out.join(format!("mu_{name}.png")),
                 &format!("{} on {} (front left)", c.manoeuvre, c.road),
             )?;
         }
+        per_case.push((c, ms));
         bar.inc(1);
     }
     bar.finish_and_clear();
-    let mut summary = format!("\nGough estimator at or below both peers' p95 error in {gough_wins} of {comparable} comparisons where a peer produced an estimate.\n");
+    let mut summary = format!("\nThe table estimator (`gough`) at or below both peers' p95 error in {gough_wins} of {comparable} comparisons where a peer produced an estimate.\n");
     for (m, name) in METHODS.iter().enumerate() {
         let _ = writeln!(
             summary,
@@ -937,6 +941,7 @@ pub fn run(a: BenchArgs) -> Result<(), String> {
         );
     }
     md.push_str(&summary);
+    md.push_str(&against_the_others(&per_case));
     if !a.set.is_empty() {
         let _ = writeln!(
             md,
@@ -964,6 +969,87 @@ pub fn run(a: BenchArgs) -> Result<(), String> {
         a.out.display()
     );
     Ok(())
+}
+
+/// "The bank against the others, case by case": for each case, every measure on which another
+/// estimator does better than the bank (index 3 of [`METHODS`]) — more wheel-surfaces within
+/// ±0.1 within [`TARGET_LATENCY`], a lower p95 error or a smaller share off by more than
+/// [`GROSS`] while identifiable (where it is identifiable at all), a shorter median latency —
+/// and per other estimator how many cases the bank is level or ahead on each measure.
+pub fn against_the_others(per_case: &[(&Case, Vec<Metrics>)]) -> String {
+    const BANK: usize = 3;
+    let mut md = format!(
+        "\n## The bank against the others, case by case\n\nWhere another estimator does better than the bank on one of the issue's measures: wheel-surfaces within ±0.1 within {TARGET_LATENCY} s of utilisation 0.5 (ws), p95 error while identifiable (p95, with the identifiable samples n), share of the case's samples identifiable and off by > {GROSS} (gross), median latency (latency). Cases not listed: the bank level or ahead on all four.\n\n| manoeuvre | road | behind on |\n|---|---|---|\n"
+    );
+    // Per other estimator: [ws, p95, gross, latency] as (bank level or ahead, comparable).
+    let mut tally = [[(0usize, 0usize); 4]; METHODS.len()];
+    for (c, ms) in per_case {
+        let Some(b) = ms.get(BANK) else { continue };
+        let mut behind = Vec::new();
+        for (m, o) in ms.iter().enumerate().filter(|&(m, _)| m != BANK) {
+            let name = METHODS[m];
+            let t = &mut tally[m];
+            t[0].1 += 1;
+            if o.ws_within > b.ws_within {
+                behind.push(format!("{name}: ws {} > {}", o.ws_within, b.ws_within));
+            } else {
+                t[0].0 += 1;
+            }
+            if let (Some(x), Some(y)) = (o.err_p95, b.err_p95) {
+                t[1].1 += 1;
+                if x < y {
+                    behind.push(format!(
+                        "{name}: p95 {x:.3} < {y:.3} (n {} vs {})",
+                        o.n_identifiable, b.n_identifiable
+                    ));
+                } else {
+                    t[1].0 += 1;
+                }
+            }
+            if o.n_identifiable > 0 {
+                t[2].1 += 1;
+                if o.gross < b.gross {
+                    behind.push(format!(
+                        "{name}: gross {:.2} % < {:.2} %",
+                        100.0 * o.gross,
+                        100.0 * b.gross
+                    ));
+                } else {
+                    t[2].0 += 1;
+                }
+            }
+            if let Some(x) = o.latency {
+                t[3].1 += 1;
+                match b.latency {
+                    Some(y) if y <= x => t[3].0 += 1,
+                    y => behind.push(format!(
+                        "{name}: latency {x:.3} < {} s (over {} vs {} wheel-surfaces)",
+                        fmt(y, 3),
+                        o.ws_within,
+                        b.ws_within
+                    )),
+                }
+            }
+        }
+        if !behind.is_empty() {
+            let _ = writeln!(
+                md,
+                "| {} | {} | {} |",
+                c.manoeuvre,
+                c.road,
+                behind.join("; ")
+            );
+        }
+    }
+    md.push('\n');
+    for (m, t) in tally.iter().enumerate().filter(|&(m, _)| m != BANK) {
+        let _ = writeln!(
+            md,
+            "bank against {}: ws level or ahead on {} of {} cases; p95 on {} of {} (both identifiable); gross on {} of {} ({} identifiable); latency on {} of {} ({} with one).",
+            METHODS[m], t[0].0, t[0].1, t[1].0, t[1].1, t[2].0, t[2].1, METHODS[m], t[3].0, t[3].1, METHODS[m]
+        );
+    }
+    md
 }
 
 /// The "where the latency goes" table (Markdown, and CSV with one row per case and a total).
@@ -1285,6 +1371,90 @@ pub fn plot_gough(p: &Params<f64>, log: &Log, w: usize, path: &Path) -> Result<(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The comparison lists exactly the measures on which another estimator beats the bank,
+    /// and counts the rest level or ahead; an estimator never identifiable is not compared on
+    /// p95 or gross.
+    #[test]
+    fn the_comparison_lists_where_the_bank_is_behind() {
+        let bank = Metrics {
+            n_identifiable: 1000,
+            err_p95: Some(0.02),
+            gross: 0.004,
+            latency: Some(0.05),
+            ws_within: 3,
+            ws_total: 4,
+            ..Metrics::default()
+        };
+        let silent = Metrics {
+            ws_total: 4,
+            ..Metrics::default()
+        };
+        let better_p95 = Metrics {
+            n_identifiable: 20,
+            err_p95: Some(0.01),
+            gross: 0.0,
+            latency: Some(0.5),
+            ws_within: 1,
+            ws_total: 4,
+            ..Metrics::default()
+        };
+        let more_ws = Metrics {
+            n_identifiable: 50,
+            err_p95: Some(0.05),
+            gross: 0.01,
+            latency: Some(0.0),
+            ws_within: 4,
+            ws_total: 4,
+            ..Metrics::default()
+        };
+        let case = Case {
+            manoeuvre: "slalom",
+            road: "mu=0.1".into(),
+        };
+        let level = Case {
+            manoeuvre: "slalom",
+            road: "mu=0.5".into(),
+        };
+        let md = against_the_others(&[
+            (
+                &case,
+                vec![better_p95, silent.clone(), more_ws, bank.clone()],
+            ),
+            (
+                &level,
+                vec![silent.clone(), silent, Metrics::default(), bank],
+            ),
+        ]);
+        let row = md
+            .lines()
+            .find(|l| l.starts_with("| slalom | mu=0.1 |"))
+            .unwrap();
+        assert!(
+            row.contains("gough: p95 0.010 < 0.020 (n 20 vs 1000)"),
+            "{row}"
+        );
+        assert!(row.contains("gough: gross 0.00 % < 0.40 %"), "{row}");
+        assert!(
+            !row.contains("gough: ws") && !row.contains("gough: latency"),
+            "{row}"
+        );
+        assert!(row.contains("slip-slope: ws 4 > 3"), "{row}");
+        assert!(row.contains("slip-slope: latency 0.000 < 0.050 s"), "{row}");
+        assert!(!row.contains("hsu-gerdes"), "{row}");
+        assert!(!md.contains("| slalom | mu=0.5 |"), "{md}");
+        assert!(md.contains("bank against gough: ws level or ahead on 2 of 2 cases; p95 on 0 of 1 (both identifiable); gross on 0 of 1 (gough identifiable); latency on 1 of 1"), "{md}");
+        assert!(
+            md.contains(
+                "bank against hsu-gerdes: ws level or ahead on 2 of 2 cases; p95 on 0 of 0"
+            ),
+            "{md}"
+        );
+        assert!(
+            md.contains("bank against slip-slope: ws level or ahead on 1 of 2 cases"),
+            "{md}"
+        );
+    }
 
     /// The bundled MF 6.1 tyre, as the bench runs it.
     fn bundled_tyre() -> Params<f64> {
