@@ -33,10 +33,10 @@ pub struct ReplayArgs {
     /// Allowed difference for `--check`, in units in the last place of f32.
     #[arg(long, default_value_t = 0)]
     pub max_ulps: u64,
-    /// The car's wheelbase [m], sent to the device in its `Settings` after the upload: the rear
-    /// wheels' estimators get the front-to-rear preview (`--check` runs the same). Without it no
-    /// settings are sent (the device's defaults: every wheel alone).
-    #[arg(long, allow_negative_numbers = true)]
+    /// The car's wheelbase \[m\], sent to the device in its `Settings` after the upload: the
+    /// rear wheels' estimators get the front-to-rear preview (`--check` runs the same). Without
+    /// it no settings are sent (the device's defaults: every wheel alone).
+    #[arg(long, value_name = "M", allow_negative_numbers = true)]
     pub wheelbase: Option<f32>,
     /// Math backend the firmware was built with, for `--check` (the default build: fast).
     #[arg(long, value_enum, default_value_t = Backend32::Fast)]
