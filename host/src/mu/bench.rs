@@ -657,10 +657,7 @@ pub fn metrics(traces: &[WheelTrace], ests: &[Vec<Estimate<f64>>]) -> Metrics {
     }
     let n = errs.len();
     let err_mean = (n > 0).then(|| errs.iter().sum::<f64>() / n as f64);
-    let err_p95 = (n > 0).then(|| {
-        errs.sort_by(f64::total_cmp);
-        errs[((n as f64 * 0.95) as usize).min(n - 1)]
-    });
+    let err_p95 = p95(errs);
     Metrics {
         n_identifiable: n,
         err_mean,
@@ -676,6 +673,60 @@ pub fn metrics(traces: &[WheelTrace], ests: &[Vec<Estimate<f64>>]) -> Metrics {
         n_samples: samples,
         n_util_hi: util_hi,
         n_identifiable_util_hi: ident_hi,
+    }
+}
+
+/// The 95th percentile of `errs` (the bench's rank: the sample at ⌊0.95·n⌋), none if empty.
+fn p95(mut errs: Vec<f64>) -> Option<f64> {
+    let n = errs.len();
+    (n > 0).then(|| {
+        errs.sort_by(f64::total_cmp);
+        errs[((n as f64 * 0.95) as usize).min(n - 1)]
+    })
+}
+
+/// Two estimators on the samples both call identifiable (like for like).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Common {
+    /// Samples both call identifiable (all wheels).
+    pub n: usize,
+    /// 95th percentile |error| of the first (the bank) and the second over those samples.
+    pub p95: (Option<f64>, Option<f64>),
+    /// Of those samples, the ones off by more than [`GROSS`]: the first's and the second's.
+    pub gross: (usize, usize),
+    /// Median latency \[s\] of the first and the second over the wheel-surfaces both settle on
+    /// (as [`segment_latency`] takes it), and how many those are.
+    pub latency: (Option<f64>, Option<f64>, usize),
+}
+
+/// [`Common`] of estimates `a` and `b` (per wheel, as [`metrics`] takes them) against the traces.
+pub fn common(traces: &[WheelTrace], a: &[Vec<Estimate<f64>>], b: &[Vec<Estimate<f64>>]) -> Common {
+    let (mut ea, mut eb) = (Vec::new(), Vec::new());
+    let (mut la, mut lb) = (Vec::new(), Vec::new());
+    for ((tr, a), b) in traces.iter().zip(a).zip(b) {
+        for (s, e) in segments(&tr.mu_true) {
+            if let (Some(x), Some(y)) = (segment_latency(tr, a, s, e), segment_latency(tr, b, s, e))
+            {
+                la.push(x);
+                lb.push(y);
+            }
+        }
+        for (i, (x, y)) in a.iter().zip(b).enumerate() {
+            if x.state == State::Identifiable && y.state == State::Identifiable {
+                if let Some(&mu) = tr.mu_true.get(i) {
+                    ea.push((x.mu - mu).abs());
+                    eb.push((y.mu - mu).abs());
+                }
+            }
+        }
+    }
+    let gross = |e: &[f64]| e.iter().filter(|&&x| x > GROSS).count();
+    let n_ws = la.len();
+    Common {
+        n: ea.len(),
+        gross: (gross(&ea), gross(&eb)),
+        p95: (p95(ea), p95(eb)),
+        latency: (median(la), median(lb), n_ws),
     }
 }
 
@@ -795,13 +846,13 @@ pub fn run(a: BenchArgs) -> Result<(), String> {
     // Identifiable samples over the suite: (identifiable, all, identifiable at utilisation
     // ≥ 0.5, all at ≥ 0.5).
     let mut shares = [(0usize, 0usize, 0usize, 0usize); METHODS.len()];
-    let mut per_case: Vec<(&Case, Vec<Metrics>)> = Vec::new();
+    let mut per_case: Vec<(&Case, Vec<Metrics>, Vec<Common>)> = Vec::new();
     for c in &cases {
         bar.set_message(format!("{} on {}", c.manoeuvre, c.road));
         let log = simulate_case(&p, c)?;
         let traces: Vec<WheelTrace> = (0..4).map(|w| measure(&log, w, &sensors, a.seed)).collect();
         let mut ms = Vec::new();
-        let mut fl_ests: Vec<Vec<Estimate<f64>>> = Vec::new();
+        let mut all_ests: Vec<Vec<Vec<Estimate<f64>>>> = Vec::new();
         for (m, method) in METHODS.iter().enumerate() {
             let ests: Vec<Vec<Estimate<f64>>> = if m == 0 {
                 let (ests, holds): (Vec<_>, Vec<_>) = traces
@@ -880,8 +931,13 @@ pub fn run(a: BenchArgs) -> Result<(), String> {
                 (a, b) => a.or(b),
             };
             ms.push(mt);
-            fl_ests.push(ests.into_iter().next().unwrap_or_default());
+            all_ests.push(ests);
         }
+        // Each other estimator against the bank on the samples both call identifiable.
+        let commons: Vec<Common> = all_ests
+            .iter()
+            .map(|e| common(&traces, &all_ests[3], e))
+            .collect();
         // "Better than both peers where they produce an estimate": compare p95 error.
         for peer in &ms[1..3] {
             if let (Some(g), Some(q)) = (ms[0].err_p95, peer.err_p95) {
@@ -900,12 +956,15 @@ pub fn run(a: BenchArgs) -> Result<(), String> {
             // The front-left wheel's estimates, the bank's and the table estimator's.
             plot_mu(
                 &traces[0],
-                &[("bank", &fl_ests[3]), ("gough (table)", &fl_ests[0])],
+                &[
+                    ("bank", &all_ests[3][0]),
+                    ("gough (table)", &all_ests[0][0]),
+                ],
                 &a.out.join(format!("mu_{name}.png")),
                 &format!("{} on {} (front left)", c.manoeuvre, c.road),
             )?;
         }
-        per_case.push((c, ms));
+        per_case.push((c, ms, commons));
         bar.inc(1);
     }
     bar.finish_and_clear();
@@ -975,59 +1034,87 @@ pub fn run(a: BenchArgs) -> Result<(), String> {
 /// estimator does better than the bank (index 3 of [`METHODS`]) — more wheel-surfaces within
 /// ±0.1 within [`TARGET_LATENCY`], a lower p95 error or a smaller share off by more than
 /// [`GROSS`] while identifiable (where it is identifiable at all), a shorter median latency —
-/// and per other estimator how many cases the bank is level or ahead on each measure.
-pub fn against_the_others(per_case: &[(&Case, Vec<Metrics>)]) -> String {
+/// the p95 error and the count off by more than [`GROSS`] also like for like, on the samples
+/// both call identifiable ([`Common`], `commons[m]`), and per other estimator how many cases
+/// the bank is level or ahead on each measure.
+pub fn against_the_others(per_case: &[(&Case, Vec<Metrics>, Vec<Common>)]) -> String {
     const BANK: usize = 3;
     let mut md = format!(
-        "\n## The bank against the others, case by case\n\nWhere another estimator does better than the bank on one of the issue's measures: wheel-surfaces within ±0.1 within {TARGET_LATENCY} s of utilisation 0.5 (ws), p95 error while identifiable (p95, with the identifiable samples n), share of the case's samples identifiable and off by > {GROSS} (gross), median latency (latency). Cases not listed: the bank level or ahead on all four.\n\n| manoeuvre | road | behind on |\n|---|---|---|\n"
+        "\n## The bank against the others, case by case\n\nWhere another estimator does better than the bank on one of the issue's measures: wheel-surfaces within ±0.1 within {TARGET_LATENCY} s of utilisation 0.5 (ws), p95 error while identifiable (p95, with the identifiable samples n; and like for like, on the samples both call identifiable), share of the case's samples identifiable and off by > {GROSS} (gross; like for like: count off by > {GROSS} on the samples both call identifiable), median latency (latency; like for like: over the wheel-surfaces both settle on). Cases not listed: the bank level or ahead on all of them.\n\n| manoeuvre | road | behind on |\n|---|---|---|\n"
     );
-    // Per other estimator: [ws, p95, gross, latency] as (bank level or ahead, comparable).
-    let mut tally = [[(0usize, 0usize); 4]; METHODS.len()];
-    for (c, ms) in per_case {
+    // Per other estimator: [ws, p95, gross, latency, and p95, gross, latency like for like]
+    // as (bank level or ahead, comparable).
+    let mut tally = [[(0usize, 0usize); 7]; METHODS.len()];
+    let level = |t: &mut (usize, usize), ok: bool| {
+        t.1 += 1;
+        t.0 += usize::from(ok);
+    };
+    for (c, ms, commons) in per_case {
         let Some(b) = ms.get(BANK) else { continue };
         let mut behind = Vec::new();
         for (m, o) in ms.iter().enumerate().filter(|&(m, _)| m != BANK) {
             let name = METHODS[m];
             let t = &mut tally[m];
-            t[0].1 += 1;
+            let cm = commons.get(m).cloned().unwrap_or_default();
+            level(&mut t[0], o.ws_within <= b.ws_within);
             if o.ws_within > b.ws_within {
                 behind.push(format!("{name}: ws {} > {}", o.ws_within, b.ws_within));
-            } else {
-                t[0].0 += 1;
             }
             if let (Some(x), Some(y)) = (o.err_p95, b.err_p95) {
-                t[1].1 += 1;
+                level(&mut t[1], y <= x);
                 if x < y {
                     behind.push(format!(
                         "{name}: p95 {x:.3} < {y:.3} (n {} vs {})",
                         o.n_identifiable, b.n_identifiable
                     ));
-                } else {
-                    t[1].0 += 1;
+                }
+            }
+            if let (Some(y), Some(x)) = cm.p95 {
+                level(&mut t[4], y <= x);
+                if x < y {
+                    behind.push(format!(
+                        "{name}: p95 like for like {x:.3} < {y:.3} (n {})",
+                        cm.n
+                    ));
                 }
             }
             if o.n_identifiable > 0 {
-                t[2].1 += 1;
+                level(&mut t[2], b.gross <= o.gross);
                 if o.gross < b.gross {
                     behind.push(format!(
                         "{name}: gross {:.2} % < {:.2} %",
                         100.0 * o.gross,
                         100.0 * b.gross
                     ));
-                } else {
-                    t[2].0 += 1;
+                }
+            }
+            if cm.n > 0 {
+                level(&mut t[5], cm.gross.0 <= cm.gross.1);
+                if cm.gross.1 < cm.gross.0 {
+                    behind.push(format!(
+                        "{name}: off by > {GROSS} like for like {} < {} (n {})",
+                        cm.gross.1, cm.gross.0, cm.n
+                    ));
+                }
+            }
+            if let (Some(y), Some(x), n) = cm.latency {
+                level(&mut t[6], y <= x);
+                if x < y {
+                    behind.push(format!(
+                        "{name}: latency like for like {x:.3} < {y:.3} s (over {n} wheel-surfaces)"
+                    ));
                 }
             }
             if let Some(x) = o.latency {
-                t[3].1 += 1;
-                match b.latency {
-                    Some(y) if y <= x => t[3].0 += 1,
-                    y => behind.push(format!(
+                let ok = b.latency.is_some_and(|y| y <= x);
+                level(&mut t[3], ok);
+                if !ok {
+                    behind.push(format!(
                         "{name}: latency {x:.3} < {} s (over {} vs {} wheel-surfaces)",
-                        fmt(y, 3),
+                        fmt(b.latency, 3),
                         o.ws_within,
                         b.ws_within
-                    )),
+                    ));
                 }
             }
         }
@@ -1043,10 +1130,11 @@ pub fn against_the_others(per_case: &[(&Case, Vec<Metrics>)]) -> String {
     }
     md.push('\n');
     for (m, t) in tally.iter().enumerate().filter(|&(m, _)| m != BANK) {
+        let name = METHODS[m];
         let _ = writeln!(
             md,
-            "bank against {}: ws level or ahead on {} of {} cases; p95 on {} of {} (both identifiable); gross on {} of {} ({} identifiable); latency on {} of {} ({} with one).",
-            METHODS[m], t[0].0, t[0].1, t[1].0, t[1].1, t[2].0, t[2].1, METHODS[m], t[3].0, t[3].1, METHODS[m]
+            "bank against {name}: ws level or ahead on {} of {} cases; p95 on {} of {} (both identifiable; like for like on {} of {}); gross on {} of {} ({name} identifiable; like for like on {} of {}); latency on {} of {} ({name} with one; like for like on {} of {}).",
+            t[0].0, t[0].1, t[1].0, t[1].1, t[4].0, t[4].1, t[2].0, t[2].1, t[5].0, t[5].1, t[3].0, t[3].1, t[6].0, t[6].1
         );
     }
     md
@@ -1416,14 +1504,34 @@ mod tests {
             manoeuvre: "slalom",
             road: "mu=0.5".into(),
         };
+        // Like for like: on the 20 samples both call identifiable, the bank's p95 is lower than
+        // the table estimator's, and slip-slope is off by > 0.2 less often.
+        let like = vec![
+            Common {
+                n: 20,
+                p95: (Some(0.005), Some(0.01)),
+                gross: (0, 0),
+                latency: (Some(0.04), Some(0.5), 1),
+            },
+            Common::default(),
+            Common {
+                n: 50,
+                p95: (Some(0.01), Some(0.05)),
+                gross: (3, 1),
+                latency: (Some(0.05), Some(0.0), 3),
+            },
+            Common::default(),
+        ];
         let md = against_the_others(&[
             (
                 &case,
                 vec![better_p95, silent.clone(), more_ws, bank.clone()],
+                like,
             ),
             (
                 &level,
                 vec![silent.clone(), silent, Metrics::default(), bank],
+                vec![Common::default(); 4],
             ),
         ]);
         let row = md
@@ -1442,8 +1550,13 @@ mod tests {
         assert!(row.contains("slip-slope: ws 4 > 3"), "{row}");
         assert!(row.contains("slip-slope: latency 0.000 < 0.050 s"), "{row}");
         assert!(!row.contains("hsu-gerdes"), "{row}");
+        assert!(!row.contains("gough: p95 like for like"), "{row}");
+        assert!(
+            row.contains("slip-slope: off by > 0.2 like for like 1 < 3 (n 50)"),
+            "{row}"
+        );
         assert!(!md.contains("| slalom | mu=0.5 |"), "{md}");
-        assert!(md.contains("bank against gough: ws level or ahead on 2 of 2 cases; p95 on 0 of 1 (both identifiable); gross on 0 of 1 (gough identifiable); latency on 1 of 1"), "{md}");
+        assert!(md.contains("bank against gough: ws level or ahead on 2 of 2 cases; p95 on 0 of 1 (both identifiable; like for like on 1 of 1); gross on 0 of 1 (gough identifiable; like for like on 1 of 1); latency on 1 of 1 (gough with one; like for like on 1 of 1)"), "{md}");
         assert!(
             md.contains(
                 "bank against hsu-gerdes: ws level or ahead on 2 of 2 cases; p95 on 0 of 0"
