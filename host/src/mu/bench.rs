@@ -65,6 +65,15 @@ pub struct BenchArgs {
     /// wheel alone.
     #[arg(long, value_name = "W", default_value_t = 0.9)]
     pub preview: f64,
+    /// Shift every surface's μ in the suite by D (0.025: midway between two of the bank's
+    /// hypotheses, which the suite's own surfaces coincide with); |D| ≤ 0.05.
+    #[arg(
+        long,
+        value_name = "D",
+        allow_negative_numbers = true,
+        default_value_t = 0.0
+    )]
+    pub mu_shift: f64,
 }
 
 impl BenchArgs {
@@ -742,42 +751,53 @@ pub struct Case {
 /// The suite: every manoeuvre on μ = 1.0, 0.7, 0.5, 0.3, 0.1, plus surface changes, plus the
 /// straight ABS stop (the `abs-split` manoeuvre on one surface) on each μ.
 pub fn suite() -> Vec<Case> {
+    suite_shifted(0.0)
+}
+
+/// [`suite`] with every surface's μ shifted by `d` (`gough mu bench --mu-shift`): with
+/// `d` = 0.025 each lies midway between two of the bank's hypotheses (0.10, 0.15, …), which the
+/// suite's own surfaces all coincide with. `d` = 0 gives the suite's road specs unchanged.
+pub fn suite_shifted(d: f64) -> Vec<Case> {
+    let m = |mu: f64| -> String {
+        let v = ((mu + d) * 1e6).round() / 1e6;
+        format!("{v:?}")
+    };
     let mut v = Vec::new();
-    for m in [
+    for man in [
         "step-steer",
         "sine-dwell",
         "brake-in-turn",
         "constant-radius",
         "slalom",
     ] {
-        for mu in ["1.0", "0.7", "0.5", "0.3", "0.1"] {
+        for mu in [1.0, 0.7, 0.5, 0.3, 0.1] {
             v.push(Case {
-                manoeuvre: m,
-                road: format!("mu={mu}"),
+                manoeuvre: man,
+                road: format!("mu={}", m(mu)),
             });
         }
     }
     v.push(Case {
         manoeuvre: "abs-split",
-        road: "split=0.9/0.2".into(),
+        road: format!("split={}/{}", m(0.9), m(0.2)),
     });
     v.push(Case {
         manoeuvre: "sine-dwell",
-        road: "mu=1.0+patch=0.4@45..300".into(),
+        road: format!("mu={}+patch={}@45..300", m(1.0), m(0.4)),
     });
     v.push(Case {
         manoeuvre: "slalom",
-        road: "step=1.0@0,0.3@90".into(),
+        road: format!("step={}@0,{}@90", m(1.0), m(0.3)),
     });
     v.push(Case {
         manoeuvre: "constant-radius",
-        road: "mu=0.9+patch=0.3@-5..5".into(),
+        road: format!("mu={}+patch={}@-5..5", m(0.9), m(0.3)),
     });
     // Straight ABS stops (the μ-split stop's braking on one surface): μ from Fx against κ.
-    for mu in ["1.0", "0.7", "0.5", "0.3", "0.1"] {
+    for mu in [1.0, 0.7, 0.5, 0.3, 0.1] {
         v.push(Case {
             manoeuvre: "abs-split",
-            road: format!("mu={mu}"),
+            road: format!("mu={}", m(mu)),
         });
     }
     v
@@ -821,7 +841,13 @@ pub fn run(a: BenchArgs) -> Result<(), String> {
     let t = crate::tyre::load(&a.tir)?;
     let p = t.params;
     let tables = Tables::new(&p)?;
-    let mut cases = suite();
+    if !(a.mu_shift.is_finite() && a.mu_shift.abs() <= 0.05) {
+        return Err(format!(
+            "--mu-shift {}: expected a value from -0.05 to 0.05",
+            a.mu_shift
+        ));
+    }
+    let mut cases = suite_shifted(a.mu_shift);
     if let Some(n) = a.cases {
         cases.truncate(n);
     }
@@ -1006,6 +1032,13 @@ pub fn run(a: BenchArgs) -> Result<(), String> {
             md,
             "\nThe Gough estimator ran with these settings changed from their defaults: {}.",
             a.set.join(", ")
+        );
+    }
+    if a.mu_shift != 0.0 {
+        let _ = writeln!(
+            md,
+            "\nEvery surface of the suite shifted by {:+} (the road specs above are the shifted ones).",
+            a.mu_shift
         );
     }
     if sensors != Sensors::default() {
@@ -1459,6 +1492,34 @@ pub fn plot_gough(p: &Params<f64>, log: &Log, w: usize, path: &Path) -> Result<(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// `--mu-shift`: every surface of the suite moved by the same amount, the specs unchanged
+    /// at 0; the shifted ones lie midway between the bank's hypotheses.
+    #[test]
+    fn the_shifted_suite_moves_every_surface() {
+        let roads =
+            |d: f64| -> Vec<String> { suite_shifted(d).into_iter().map(|c| c.road).collect() };
+        assert_eq!(
+            roads(0.0),
+            suite().into_iter().map(|c| c.road).collect::<Vec<_>>()
+        );
+        assert!(roads(0.0).contains(&"step=1.0@0,0.3@90".to_string()));
+        let r = roads(0.025);
+        assert_eq!(r.len(), suite().len());
+        for want in [
+            "mu=1.025",
+            "mu=0.125",
+            "split=0.925/0.225",
+            "mu=1.025+patch=0.425@45..300",
+            "step=1.025@0,0.325@90",
+            "mu=0.925+patch=0.325@-5..5",
+        ] {
+            assert!(r.contains(&want.to_string()), "{want}: {r:?}");
+        }
+        for c in suite_shifted(0.025) {
+            sim::Road::parse(&c.road).unwrap();
+        }
+    }
 
     /// The comparison lists exactly the measures on which another estimator beats the bank,
     /// and counts the rest level or ahead; an estimator never identifiable is not compared on
