@@ -1456,6 +1456,29 @@ pub(crate) mod tests {
         slips_stream(p, mu, |t| (alpha(t), 0.0), 20.0, n, t0_us)
     }
 
+    /// A known defect (docs/estimator.md, "Off the grid"; `gough mu bench --mu-shift 0.025`):
+    /// on a surface midway between two hypotheses, held near its limit, a far surface explains
+    /// the forces at another slip angle and is reported identifiable. `--ignored` runs it; the
+    /// per-cell μ offset prototyped there is what should make it pass.
+    #[test]
+    #[ignore = "known defect: surfaces between the hypotheses (docs/estimator.md, Off the grid)"]
+    fn a_surface_between_two_hypotheses_is_never_read_as_a_far_one() {
+        let p = tyre();
+        let mut worst = std::vec::Vec::new();
+        for mu in [0.125, 0.325, 0.525] {
+            let peak = -0.08 * mu / 0.525;
+            let s = noisy(stream(&p, mu, |t| peak * (t / 1.0).min(1.0), 5000, 0));
+            let est = run(&p, &s);
+            let off = est
+                .iter()
+                .filter(|e| e.state == State::Identifiable && (e.mu - mu).abs() > 0.2)
+                .count();
+            worst.push((mu, off));
+        }
+        std::println!("identifiable and off by > 0.2 (μ, samples of 5,000): {worst:?}");
+        assert!(worst.iter().all(|&(_, n)| n == 0), "{worst:?}");
+    }
+
     fn run(p: &Params<f64>, s: &[Sample<f64>]) -> Vec<Estimate<f64>> {
         let mut e = Bank::new::<Libm>(p, None, Config::default()).unwrap();
         s.iter().map(|x| e.update::<Libm>(p, x)).collect()
