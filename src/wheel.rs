@@ -38,8 +38,8 @@
 //!
 //! Of the protocol's [`Settings`]: `fallback_mu` is the bank's prior `mu_prior` (the μ of a
 //! `Fallback` estimate; when it is a positive number, [`estimator_config`]); `limits` applies
-//! to the forces only; `wheelbase` starts the front-to-rear preview between a [`Car`]'s axles. The tyre is taken as its file describes it on
-//! every wheel (`side` None), as for the forces.
+//! to the forces only; `wheelbase` starts the front-to-rear preview between a [`Car`]'s axles.
+//! The tyre is taken as its file describes it on every wheel (`side` None), as for the forces.
 use crate::math::Backend;
 use crate::mf::{self, Input, Options, Output, Params};
 use crate::mu::bank::{self, Bank, BuildError};
@@ -438,23 +438,21 @@ impl Car {
 
     /// (Re)starts the four estimators for tyre `p` with settings `s` ([`estimator_config`]),
     /// and the preview over `s`'s wheelbase when it gives one; all forget what they learnt.
-    /// Settings whose wheelbase is out of range are refused ([`AckCode::BadSettings`]) and
-    /// nothing changes; on a tyre without friction no estimator runs
-    /// ([`StartError::Tyre`]).
+    /// Settings whose wheelbase is out of range ([`Settings::wheelbase`]) are refused
+    /// ([`StartError::Settings`]) and nothing changes; on a tyre without friction no estimator
+    /// runs ([`StartError::Tyre`]).
     pub fn start_estimators<M: Backend<f32>>(
         &mut self,
         p: &Params<f32>,
         s: &Settings,
     ) -> Result<(), StartError> {
-        let preview = match s.wheelbase() {
-            Ok(None) => None,
-            Ok(Some(l)) => match Preview::new(preview::Config::with_wheelbase(l)) {
-                Ok(pv) => Some([pv.clone(), pv]),
-                Err(_) => return Err(StartError::Settings),
-            },
-            Err(_) => return Err(StartError::Settings),
-        };
-        self.preview = preview;
+        let preview = s
+            .wheelbase()
+            .map_err(|_| StartError::Settings)?
+            .map(|l| Preview::new(preview::Config::with_wheelbase(l)))
+            .transpose()
+            .map_err(|_| StartError::Settings)?;
+        self.preview = preview.map(|pv| [pv.clone(), pv]);
         let mut out = Ok(());
         for w in self.wheels.iter_mut() {
             if let Err(e) = w.start_estimator::<M>(p, s) {

@@ -190,11 +190,6 @@ impl App {
         Ok(())
     }
 
-    /// The settings in use.
-    pub fn settings(&self) -> &Settings {
-        &self.settings
-    }
-
     /// Wheel `i`'s estimator (0..=3), if it runs: its state, μy0 of the tyre
     /// (`Bank::mu0`), its count of refused samples (`Bank::bad_samples`).
     pub fn estimator(&self, i: usize) -> Option<&gough::mu::bank::Bank<f32>> {

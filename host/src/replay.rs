@@ -187,23 +187,25 @@ pub fn host_f32(
     log: &[Measurement],
     backend: Backend32,
 ) -> Result<Vec<Reply>, String> {
-    settings.wheelbase().map_err(|_| {
-        format!(
-            "wheelbase {} m: not 0 or a positive number",
-            settings.wheelbase
-        )
-    })?;
-    Ok(match backend {
+    match backend {
         Backend32::Fast => run::<Fast>(p, settings, log),
         Backend32::Libm => run::<Libm>(p, settings, log),
-    })
+    }
 }
 
-fn run<M: Backend<f32>>(p: &Params<f32>, settings: &Settings, log: &[Measurement]) -> Vec<Reply> {
+fn run<M: Backend<f32>>(
+    p: &Params<f32>,
+    settings: &Settings,
+    log: &[Measurement],
+) -> Result<Vec<Reply>, String> {
     let mut car = wheel::Car::new();
-    // As the device: a tyre without friction gets forces and no estimates.
-    let _ = car.start_estimators::<M>(p, settings);
-    log.iter()
+    // As the device: settings out of range are refused; a tyre without friction gets forces
+    // and no estimates.
+    if let Err(e @ wheel::StartError::Settings) = car.start_estimators::<M>(p, settings) {
+        return Err(format!("wheelbase {} m: {e}", settings.wheelbase));
+    }
+    Ok(log
+        .iter()
         .map(|m| {
             let answer = match car.forces::<M>(p, settings.limits, m) {
                 Ok(f) => Answer::Forces(f),
@@ -214,7 +216,7 @@ fn run<M: Backend<f32>>(p: &Params<f32>, settings: &Settings, log: &[Measurement
                 estimate: car.estimate::<M>(p, m),
             }
         })
-        .collect()
+        .collect())
 }
 
 /// Distance in units in the last place between two f32 (0 when equal; large across signs).

@@ -310,6 +310,8 @@ pub fn measure(log: &Log, w: usize, s: &Sensors, seed: u64) -> WheelTrace {
 
 /// The estimators compared.
 pub const METHODS: [&str; 4] = ["gough", "hsu-gerdes", "slip-slope", "bank"];
+/// Index of the bank (the product's estimator) in [`METHODS`].
+const BANK: usize = 3;
 
 /// The Gough tables of the left and right wheels: the simulation mounts the tyre on both sides
 /// (mirrored where the side differs from the file's TYRESIDE), so does the estimator.
@@ -888,7 +890,7 @@ pub fn run(a: BenchArgs) -> Result<(), String> {
                     .unzip();
                 tallies.push((c, hold_tally(&traces, &ests, &holds)));
                 ests
-            } else if m == 3 {
+            } else if m == BANK {
                 run_banks(&p, &traces, a.preview()?)
             } else {
                 traces
@@ -959,10 +961,18 @@ pub fn run(a: BenchArgs) -> Result<(), String> {
             ms.push(mt);
             all_ests.push(ests);
         }
-        // Each other estimator against the bank on the samples both call identifiable.
+        // Each other estimator against the bank on the samples both call identifiable (the
+        // bank's own entry left empty).
         let commons: Vec<Common> = all_ests
             .iter()
-            .map(|e| common(&traces, &all_ests[3], e))
+            .enumerate()
+            .map(|(m, e)| {
+                if m == BANK {
+                    Common::default()
+                } else {
+                    common(&traces, &all_ests[BANK], e)
+                }
+            })
             .collect();
         // "Better than both peers where they produce an estimate": compare p95 error.
         for peer in &ms[1..3] {
@@ -983,7 +993,7 @@ pub fn run(a: BenchArgs) -> Result<(), String> {
             plot_mu(
                 &traces[0],
                 &[
-                    ("bank", &all_ests[3][0]),
+                    ("bank", &all_ests[BANK][0]),
                     ("gough (table)", &all_ests[0][0]),
                 ],
                 &a.out.join(format!("mu_{name}.png")),
@@ -1071,17 +1081,12 @@ pub fn run(a: BenchArgs) -> Result<(), String> {
 /// both call identifiable ([`Common`], `commons[m]`), and per other estimator how many cases
 /// the bank is level or ahead on each measure.
 pub fn against_the_others(per_case: &[(&Case, Vec<Metrics>, Vec<Common>)]) -> String {
-    const BANK: usize = 3;
     let mut md = format!(
         "\n## The bank against the others, case by case\n\nWhere another estimator does better than the bank on one of the issue's measures: wheel-surfaces within ±0.1 within {TARGET_LATENCY} s of utilisation 0.5 (ws), p95 error while identifiable (p95, with the identifiable samples n; and like for like, on the samples both call identifiable), share of the case's samples identifiable and off by > {GROSS} (gross; like for like: count off by > {GROSS} on the samples both call identifiable), median latency (latency; like for like: over the wheel-surfaces both settle on). Cases not listed: the bank level or ahead on all of them.\n\n| manoeuvre | road | behind on |\n|---|---|---|\n"
     );
     // Per other estimator: [ws, p95, gross, latency, and p95, gross, latency like for like]
     // as (bank level or ahead, comparable).
     let mut tally = [[(0usize, 0usize); 7]; METHODS.len()];
-    let level = |t: &mut (usize, usize), ok: bool| {
-        t.1 += 1;
-        t.0 += usize::from(ok);
-    };
     for (c, ms, commons) in per_case {
         let Some(b) = ms.get(BANK) else { continue };
         let mut behind = Vec::new();
@@ -1089,66 +1094,57 @@ pub fn against_the_others(per_case: &[(&Case, Vec<Metrics>, Vec<Common>)]) -> St
             let name = METHODS[m];
             let t = &mut tally[m];
             let cm = commons.get(m).cloned().unwrap_or_default();
-            level(&mut t[0], o.ws_within <= b.ws_within);
-            if o.ws_within > b.ws_within {
-                behind.push(format!("{name}: ws {} > {}", o.ws_within, b.ws_within));
-            }
-            if let (Some(x), Some(y)) = (o.err_p95, b.err_p95) {
-                level(&mut t[1], y <= x);
-                if x < y {
-                    behind.push(format!(
-                        "{name}: p95 {x:.3} < {y:.3} (n {} vs {})",
-                        o.n_identifiable, b.n_identifiable
-                    ));
+            // One comparable measure: counted, and listed when the bank is behind.
+            let mut measure = |i: usize, ok: bool, why: &dyn Fn() -> String| {
+                t[i].1 += 1;
+                t[i].0 += usize::from(ok);
+                if !ok {
+                    behind.push(format!("{name}: {}", why()));
                 }
+            };
+            measure(0, o.ws_within <= b.ws_within, &|| {
+                format!("ws {} > {}", o.ws_within, b.ws_within)
+            });
+            if let (Some(x), Some(y)) = (o.err_p95, b.err_p95) {
+                measure(1, y <= x, &|| {
+                    format!(
+                        "p95 {x:.3} < {y:.3} (n {} vs {})",
+                        o.n_identifiable, b.n_identifiable
+                    )
+                });
             }
             if let (Some(y), Some(x)) = cm.p95 {
-                level(&mut t[4], y <= x);
-                if x < y {
-                    behind.push(format!(
-                        "{name}: p95 like for like {x:.3} < {y:.3} (n {})",
-                        cm.n
-                    ));
-                }
+                measure(4, y <= x, &|| {
+                    format!("p95 like for like {x:.3} < {y:.3} (n {})", cm.n)
+                });
             }
             if o.n_identifiable > 0 {
-                level(&mut t[2], b.gross <= o.gross);
-                if o.gross < b.gross {
-                    behind.push(format!(
-                        "{name}: gross {:.2} % < {:.2} %",
-                        100.0 * o.gross,
-                        100.0 * b.gross
-                    ));
-                }
+                measure(2, b.gross <= o.gross, &|| {
+                    format!("gross {:.2} % < {:.2} %", 100.0 * o.gross, 100.0 * b.gross)
+                });
             }
             if cm.n > 0 {
-                level(&mut t[5], cm.gross.0 <= cm.gross.1);
-                if cm.gross.1 < cm.gross.0 {
-                    behind.push(format!(
-                        "{name}: off by > {GROSS} like for like {} < {} (n {})",
+                measure(5, cm.gross.0 <= cm.gross.1, &|| {
+                    format!(
+                        "off by > {GROSS} like for like {} < {} (n {})",
                         cm.gross.1, cm.gross.0, cm.n
-                    ));
-                }
+                    )
+                });
             }
             if let (Some(y), Some(x), n) = cm.latency {
-                level(&mut t[6], y <= x);
-                if x < y {
-                    behind.push(format!(
-                        "{name}: latency like for like {x:.3} < {y:.3} s (over {n} wheel-surfaces)"
-                    ));
-                }
+                measure(6, y <= x, &|| {
+                    format!("latency like for like {x:.3} < {y:.3} s (over {n} wheel-surfaces)")
+                });
             }
             if let Some(x) = o.latency {
-                let ok = b.latency.is_some_and(|y| y <= x);
-                level(&mut t[3], ok);
-                if !ok {
-                    behind.push(format!(
-                        "{name}: latency {x:.3} < {} s (over {} vs {} wheel-surfaces)",
+                measure(3, b.latency.is_some_and(|y| y <= x), &|| {
+                    format!(
+                        "latency {x:.3} < {} s (over {} vs {} wheel-surfaces)",
                         fmt(b.latency, 3),
                         o.ws_within,
                         b.ws_within
-                    ));
-                }
+                    )
+                });
             }
         }
         if !behind.is_empty() {
