@@ -2,9 +2,14 @@
 //! exact Magic Formula.
 //!
 //! ## Method
-//! - **Hypotheses** ("cells"): [`CELLS`] road surfaces μ = `mu_lo + k·mu_step` on the tyre file's
-//!   scale (architecture.md: λμx = λμy = μ/μy0). Each is the wheel's own Magic Formula on that
-//!   surface — no table: load, camber and combined slip enter through the model.
+//! - **Hypotheses** ("cells"): [`CELLS`] intervals of road surface μ = `mu_lo + k·mu_step` ±
+//!   `mu_step`/2 on the tyre file's scale (architecture.md: λμx = λμy = μ/μy0). Each is the
+//!   wheel's own Magic Formula on its surface — no table: load, camber and combined slip enter
+//!   through the model. A cell's surface within its interval is fitted (below), so that a road
+//!   between two centres has a cell that is that road: with fixed points, near the limit both
+//!   neighbours misfit every batch a little and a far surface that explains the same forces at
+//!   another slip angle won (`gough mu bench --mu-shift 0.025`: 57 % of a case's samples
+//!   identifiable and off by more than 0.2).
 //! - **Batches**: the estimator works on means of `batch` samples (10 at 1 kHz: a 100 Hz
 //!   estimator). Each batch's Fz, Fx, Fy, Mz, γ, Vx and the κ′ implied by the measured κ are
 //!   averaged; their σ is the sensor noise over √n plus a model-error term.
@@ -22,7 +27,14 @@
 //!   the brush model's slip angle for the batch's |Fy| on its own surface, or a point of a scan
 //!   (at most [`RESEEDS`] per batch in turn); a cell still in contention (ℓ within
 //!   `exclude_nll` of the best) always tries the brush seed, so that a cell that lost its slips
-//!   (a fast reversal out of the saturated range) is not excluded for it.
+//!   (a fast reversal out of the saturated range) is not excluded for it. After the slip step,
+//!   the cell's surface offset (within ±`mu_step`/2) takes one recursive-least-squares step on
+//!   the residuals the slip step leaves: their slope in μ comes from the friction stage at
+//!   μ + 0.005 (one more evaluation; cells held at `switch_nll`, out of reach, skip it),
+//!   the earlier batches' information is kept and forgotten as ℓ is, and a weak prior
+//!   (σ 0.25) about the centre bounds the step while the batches say nothing of μ.
+//!   Intervals cost some discrimination: a cell more than 0.1 away can come 0.025 nearer, and
+//!   is excluded only when that nearer surface is.
 //! - **Likelihood with memory**: each cell's negative log-likelihood ℓ is the sum of its batches'
 //!   χ²/2 (each capped at `chi2_cap`, so that one batch the model cannot represent — a transient
 //!   faster than the batch — never decides), forgotten at the rate exp(−Δt/`memory` −
@@ -30,8 +42,8 @@
 //!   best cell: a surface once excluded can return within a few batches when the road changes
 //!   (a switching hypothesis, as in an interacting-multiple-model filter over a discrete grid).
 //!   A batch that no cell explains (`chi2_explain`) is not used.
-//! - **Estimate**: the minimum of ℓ, refined by the parabola through its neighbours; σ from ℓ's
-//!   curvature and the spread of the posterior exp(−ℓ), with a floor for the grid.
+//! - **Estimate**: the surface of the cell at the minimum of ℓ (centre plus offset); σ from ℓ's
+//!   curvature and the spread of the posterior exp(−ℓ) over the cells' surfaces, with a floor.
 //!
 //! ## States ([`State`])
 //! - `Identifiable`: 1.96·σ ≤ 0.1 by the estimator's own account (`sigma_identifiable`),
@@ -90,6 +102,11 @@ pub const CELLS: usize = 25;
 /// Cells out of contention per batch that may try a seed when their own fit is poor (cells in
 /// contention always may).
 pub const RESEEDS: usize = 6;
+/// Step in μ \[-\] of the finite difference that gives the residuals' slope in a cell's surface.
+const MU_DIFF: f64 = 0.005;
+/// Prior information on a cell's surface offset \[1/μ²\]: σ 0.25 about the cell's centre, weak
+/// beside one informative batch; it bounds the step while the batches say nothing of μ.
+const OFFSET_PRIOR: f64 = 16.0;
 /// Slip angles \[rad\] a poorly fitting cell tries in turn (on the side of the lateral force).
 const SCAN: [f64; 8] = [0.01, 0.02, 0.035, 0.05, 0.08, 0.12, 0.2, 0.35];
 /// A cell out of contention is fitted on every `VISIT`th batch.
@@ -322,6 +339,10 @@ struct Cell<F> {
     nll: F,
     /// Trust-region radius of the next step (α′ \[rad\] and κ′ alike).
     damp: F,
+    /// The surface's offset from the cell's centre \[-\], fitted within ±`mu_step`/2.
+    dmu: F,
+    /// Information on `dmu` from the batches fitted so far \[1/μ²\], forgotten as ℓ is.
+    info: F,
 }
 
 /// Sums of one batch.
@@ -476,6 +497,8 @@ impl<F: Float> Bank<F> {
             kappa: F::ZERO,
             nll: F::ZERO,
             damp: F::from_f64(0.02),
+            dmu: F::ZERO,
+            info: F::ZERO,
         };
         Ok(Bank {
             fnomin: params.fnomin,
@@ -543,7 +566,7 @@ impl<F: Float> Bank<F> {
         let mut out = [(F::ZERO, F::ZERO, F::ZERO, F::ZERO, F::ZERO); CELLS];
         for (k, o) in out.iter_mut().enumerate() {
             if let (Some(c), Some(x)) = (self.cells.get(k), self.chi2.get(k)) {
-                *o = (self.mu_of(k), c.alpha, c.kappa, c.nll, *x);
+                *o = (self.mu_c(k), c.alpha, c.kappa, c.nll, *x);
             }
         }
         out
@@ -590,6 +613,11 @@ impl<F: Float> Bank<F> {
     /// μ of cell `k`.
     fn mu_of(&self, k: usize) -> F {
         self.cfg.mu_lo + self.cfg.mu_step * F::from_index(k as u16)
+    }
+
+    /// Cell `k`'s surface: its centre plus its fitted offset.
+    fn mu_c(&self, k: usize) -> F {
+        self.mu_of(k) + self.cells.get(k).map_or(F::ZERO, |c| c.dmu)
     }
 
     /// Takes one sample of a wheel with tyre `params` (those the bank was built with) and
@@ -905,10 +933,11 @@ impl<F: Float> Bank<F> {
 
     /// One Gauss–Newton step of cell `k` on batch `b`; returns the batch's χ² after it.
     fn fit_cell<M: Backend<F>>(&mut self, k: usize, b: &Batch<F>) -> F {
-        let lambda = self.mu_of(k) / self.mu_y0;
         let Some(cell) = self.cells.get(k).copied() else {
             return F::ZERO;
         };
+        let mu_c = self.mu_of(k) + cell.dmu;
+        let lambda = mu_c / self.mu_y0;
         let Some(prep) = self.prep.as_ref() else {
             return F::ZERO;
         };
@@ -919,6 +948,23 @@ impl<F: Float> Bank<F> {
             None => return self.cfg.chi2_cap,
         };
         let chi0 = norm2(&r0);
+        // The slope of the residuals in the cell's surface μ, from the friction stage at a
+        // nearby μ (a cell held at the cap, out of reach of the best, keeps its offset).
+        let h = F::from_f64(MU_DIFF);
+        let jmu = if cell.nll < self.cfg.switch_nll {
+            let lam2 = (mu_c + h) / self.mu_y0;
+            let mu2 = prep.with_mu(self.lmux * lam2, self.lmuy * lam2);
+            self.residuals::<M>(&mu2, b, cell.alpha, cell.kappa, false)
+                .map(|(rb, _)| {
+                    let mut j = [F::ZERO; 4];
+                    for ((o, x), y) in j.iter_mut().zip(r0.iter()).zip(rb.iter()) {
+                        *o = (*x - *y) / h;
+                    }
+                    j
+                })
+        } else {
+            None
+        };
         // Normal equations of the 2 unknowns (α′, κ′): (JᵀJ + damping·diag) Δ = Jᵀr.
         let (mut h00, mut h01, mut h11, mut g0, mut g1) =
             (F::ZERO, F::ZERO, F::ZERO, F::ZERO, F::ZERO);
@@ -991,6 +1037,36 @@ impl<F: Float> Bank<F> {
                 }
             }
         }
+        // Then the surface within the cell: one linear step of its offset on the residuals the
+        // slip step leaves (predicted by the slopes), within ±mu_step/2.
+        if let Some(jm) = jmu {
+            let (sa, sk) = (next.alpha - cell.alpha, next.kappa - cell.kappa);
+            let (mut jj, mut jr, mut rr) = (F::ZERO, F::ZERO, F::ZERO);
+            let mut rp = [F::ZERO; 4];
+            for (((o, r), j), m) in rp.iter_mut().zip(r0.iter()).zip(jac.iter()).zip(jm.iter()) {
+                *o = *r - j[0] * sa - j[1] * sk;
+                jj += *m * *m;
+                jr += *m * *o;
+                rr += *o * *o;
+            }
+            // Recursive least squares over the batches (the information of the earlier ones,
+            // forgotten as ℓ is, in `info`) with a weak prior about the cell's centre: the
+            // offset follows what the recent batches together say, not the latest batch's noise.
+            let half = F::HALF * self.cfg.mu_step;
+            let p0 = F::from_f64(OFFSET_PRIOR);
+            let nd = clamp(
+                cell.dmu + (jr - p0 * cell.dmu) / (cell.info + jj + p0),
+                half,
+            );
+            let d = nd - cell.dmu;
+            let mut pred = F::ZERO;
+            for (o, m) in rp.iter().zip(jm.iter()) {
+                pred += (*o - *m * d).sq();
+            }
+            next.dmu = nd;
+            next.info = cell.info + jj;
+            chi = (chi + (pred - rr)).max(F::ZERO);
+        }
         // A cell still in contention (ℓ within `exclude_nll` of the best) that fits poorly has
         // most likely lost its slips (a fast reversal out of the saturated range, where the
         // force says little of α′): it always tries the brush model's slip angle for the
@@ -1042,7 +1118,7 @@ impl<F: Float> Bank<F> {
     /// its slips (e.g. deep in the saturated range after a fast reversal on a slippery road).
     fn brush_alpha<M: Backend<F>>(&self, k: usize, b: &Batch<F>) -> F {
         let cap = F::from_f64(SCAN.last().copied().unwrap_or(0.35));
-        let mu_fz = self.mu_of(k) * b.fz;
+        let mu_fz = self.mu_c(k) * b.fz;
         let kya = self.prep.as_ref().map_or(F::ZERO, |p| p.k_ya().abs());
         if !(mu_fz > F::ZERO && kya > F::ZERO) {
             return F::from_f64(SCAN.first().copied().unwrap_or(0.01));
@@ -1123,6 +1199,7 @@ impl<F: Float> Bank<F> {
         let d = M::exp(-x);
         for c in self.cells.iter_mut() {
             c.nll *= d;
+            c.info *= d;
         }
     }
 
@@ -1231,14 +1308,13 @@ impl<F: Float> Bank<F> {
         }
         let nll = |k: usize| self.cells.get(k).map(|c| c.nll);
         let h = c.mu_step;
-        let mut mu = self.mu_of(m);
+        // The best cell's own surface (its centre and fitted offset).
+        let mu = self.mu_c(m);
         let mut var_curv = F::from_f64(f64::MAX);
         if let (Some(l0), Some(l1), Some(l2)) = (m.checked_sub(1).and_then(nll), nll(m), nll(m + 1))
         {
             let curv = l0 - l1 - l1 + l2;
             if curv > F::ZERO {
-                let shift = F::HALF * (l0 - l2) / curv;
-                mu += h * shift.max(-F::HALF).min(F::HALF);
                 var_curv = h * h / curv;
             }
         } else if let (Some(l1), Some(ln)) = (
@@ -1261,14 +1337,14 @@ impl<F: Float> Bank<F> {
         let mut far_open = false;
         let mut excluded = 0usize;
         for (k, cell) in self.cells.iter().enumerate() {
-            let mk = self.mu_of(k);
+            let mk = self.mu_of(k) + cell.dmu;
             let w = M::exp(-cell.nll);
             sw += w;
             s1 += w * mk;
             s2 += w * mk * mk;
             if cell.nll <= c.exclude_nll {
                 mu_min = mu_min.min(mk);
-                if (mk - mu).abs() > F::from_f64(0.1) + F::HALF * h {
+                if (mk - mu).abs() > F::from_f64(0.1) {
                     far_open = true;
                 }
             } else {
@@ -1456,12 +1532,11 @@ pub(crate) mod tests {
         slips_stream(p, mu, |t| (alpha(t), 0.0), 20.0, n, t0_us)
     }
 
-    /// A known defect (docs/estimator.md, "Off the grid"; `gough mu bench --mu-shift 0.025`):
-    /// on a surface midway between two hypotheses, held near its limit, a far surface explains
-    /// the forces at another slip angle and is reported identifiable. `--ignored` runs it; the
-    /// per-cell μ offset prototyped there is what should make it pass.
+    /// On a surface midway between two cells' centres, held near its limit, no far surface is
+    /// reported identifiable (docs/estimator.md, "Off the grid"; `gough mu bench --mu-shift
+    /// 0.025`). With fixed hypotheses (before the fitted offsets) μ 0.125 was: 36 of 5,000
+    /// samples identifiable and off by more than 0.2.
     #[test]
-    #[ignore = "known defect: surfaces between the hypotheses (docs/estimator.md, Off the grid)"]
     fn a_surface_between_two_hypotheses_is_never_read_as_a_far_one() {
         let p = tyre();
         let mut worst = std::vec::Vec::new();
@@ -1469,14 +1544,26 @@ pub(crate) mod tests {
             let peak = -0.08 * mu / 0.525;
             let s = noisy(stream(&p, mu, |t| peak * (t / 1.0).min(1.0), 5000, 0));
             let est = run(&p, &s);
+            let ident = |e: &&Estimate<f64>| e.state == State::Identifiable;
             let off = est
                 .iter()
-                .filter(|e| e.state == State::Identifiable && (e.mu - mu).abs() > 0.2)
+                .filter(ident)
+                .filter(|e| (e.mu - mu).abs() > 0.2)
                 .count();
-            worst.push((mu, off));
+            let near = est
+                .iter()
+                .filter(ident)
+                .filter(|e| (e.mu - mu).abs() <= 0.05)
+                .count();
+            worst.push((mu, off, near));
         }
-        std::println!("identifiable and off by > 0.2 (μ, samples of 5,000): {worst:?}");
-        assert!(worst.iter().all(|&(_, n)| n == 0), "{worst:?}");
+        // (μ, identifiable and off by > 0.2, identifiable within ±0.05; samples of 5,000)
+        std::println!("{worst:?}");
+        // Never confidently wrong, and read on each.
+        assert!(
+            worst.iter().all(|&(_, off, near)| off == 0 && near > 500),
+            "{worst:?}"
+        );
     }
 
     fn run(p: &Params<f64>, s: &[Sample<f64>]) -> Vec<Estimate<f64>> {
