@@ -80,7 +80,7 @@
 /**
  * Bytes of a `gough_estimator_t` (one wheel's bank estimator, `gough::mu::bank::Bank`).
  */
-#define GOUGH_ESTIMATOR_SIZE 1728
+#define GOUGH_ESTIMATOR_SIZE 1792
 
 /**
  * Bytes of a `gough_rx_t` (a reassembler of one CAN identifier's messages).

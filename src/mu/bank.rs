@@ -447,6 +447,8 @@ pub struct Bank<F> {
     held: Option<(F, F)>,
     age_s: F,
     age_m: F,
+    /// Distance \[m\] rolled between the last two identifiable estimates, taken at the later.
+    gap_m: F,
     /// Time \[s\] and distance \[m\] since the last batch that used `inform_util` of the
     /// reported surface.
     quiet_s: F,
@@ -528,6 +530,7 @@ impl<F: Float> Bank<F> {
             held: None,
             age_s: F::ZERO,
             age_m: F::ZERO,
+            gap_m: F::ZERO,
             quiet_s: F::ZERO,
             quiet_m: F::ZERO,
             est: Estimate {
@@ -575,6 +578,13 @@ impl<F: Float> Bank<F> {
     /// The estimate of the last [`Bank::update`] (its `change` set only on that update).
     pub fn current(&self) -> Estimate<F> {
         self.est
+    }
+
+    /// Distance \[m\] rolled between the last identifiable estimate before the current one and
+    /// the current one: on a change of surface ([`Estimate::change`]), about how far back the
+    /// old surface's reading ended — where this wheel met the new one.
+    pub fn identification_gap(&self) -> F {
+        self.gap_m
     }
 
     /// The likelihood profile: ℓ per cell, the likeliest at 0 — what a wheel that follows this
@@ -1377,6 +1387,7 @@ impl<F: Float> Bank<F> {
                 .held
                 .is_some_and(|(prev, _)| (mu - prev).abs() > c.change_min + F::TWO * sigma);
             self.held = Some((mu, sigma));
+            self.gap_m = self.age_m;
             self.age_s = F::ZERO;
             self.age_m = F::ZERO;
             self.est = Estimate {
