@@ -946,7 +946,7 @@ impl<F: Float> Bank<F> {
         let Some(cell) = self.cells.get(k).copied() else {
             return F::ZERO;
         };
-        let mu_c = self.mu_of(k) + cell.dmu;
+        let mu_c = self.mu_c(k);
         let lambda = mu_c / self.mu_y0;
         let Some(prep) = self.prep.as_ref() else {
             return F::ZERO;
@@ -1047,8 +1047,8 @@ impl<F: Float> Bank<F> {
                 }
             }
         }
-        // Then the surface within the cell: one linear step of its offset on the residuals the
-        // slip step leaves (predicted by the slopes), within ±mu_step/2.
+        // Then the surface within the cell: a step of its offset on the residuals the slip step
+        // leaves (predicted by the slopes), within ±mu_step/2.
         if let Some(jm) = jmu {
             let (sa, sk) = (next.alpha - cell.alpha, next.kappa - cell.kappa);
             let (mut jj, mut jr, mut rr) = (F::ZERO, F::ZERO, F::ZERO);
@@ -1347,7 +1347,7 @@ impl<F: Float> Bank<F> {
         let mut far_open = false;
         let mut excluded = 0usize;
         for (k, cell) in self.cells.iter().enumerate() {
-            let mk = self.mu_of(k) + cell.dmu;
+            let mk = self.mu_c(k);
             let w = M::exp(-cell.nll);
             sw += w;
             s1 += w * mk;

@@ -139,10 +139,11 @@ impl<F: Float> Preview<F> {
     /// After the front wheel's update: queues its profile when the estimate that update
     /// returned ([`Bank::current`]) is a new identification.
     pub fn front(&mut self, front: &Bank<F>) {
-        self.front_with(front, &front.current());
+        self.front_with(front, &front.current(), front.identification_gap());
     }
 
-    fn front_with(&mut self, front: &Bank<F>, est: &Estimate<F>) {
+    /// As [`Preview::front`], with the front's estimate `est` and identification gap `gap` \[m\].
+    fn front_with(&mut self, front: &Bank<F>, est: &Estimate<F>, gap: F) {
         match est.state {
             State::Fallback => self.identified = false,
             State::NotIdentifiable => {}
@@ -153,10 +154,7 @@ impl<F: Float> Preview<F> {
                     // that, and its own batches on the new surface then add to the reading
                     // instead of being mixed away.
                     let behind = if est.change {
-                        front
-                            .identification_gap()
-                            .max(F::ZERO)
-                            .min(self.cfg.wheelbase)
+                        gap.max(F::ZERO).min(self.cfg.wheelbase)
                     } else {
                         F::ZERO
                     };
@@ -383,9 +381,9 @@ mod tests {
         let b = Bank::new::<Libm>(&p, None, BankConfig::default()).unwrap();
         let mut rear = b.clone();
         let mut pv = Preview::new(Config::with_wheelbase(2.0)).unwrap();
-        pv.front_with(&b, &identified(false));
+        pv.front_with(&b, &identified(false), 0.0);
         // Identifiable again without a change: nothing new.
-        pv.front_with(&b, &identified(false));
+        pv.front_with(&b, &identified(false), 0.0);
         assert_eq!(pv.pending(), 1);
         // Without Vx nothing moves; at 10 m/s 2 m take 200 ms.
         for t in 0..500 {
@@ -402,13 +400,13 @@ mod tests {
         // 200 steps of 10 mm from t = 500 ms (the clock ran on without a speed).
         assert!(matches!(arrived, Some(699..=700)), "{arrived:?}");
         // A change of surface is new; so is an identification after a fallback.
-        pv.front_with(&b, &identified(true));
+        pv.front_with(&b, &identified(true), 0.0);
         let fb = Estimate {
             state: State::Fallback,
             ..identified(false)
         };
-        pv.front_with(&b, &fb);
-        pv.front_with(&b, &identified(false));
+        pv.front_with(&b, &fb, 0.0);
+        pv.front_with(&b, &identified(false), 0.0);
         assert_eq!(pv.pending(), 2);
         // Reversing carries them away: dropped beyond two wheelbases.
         for t in 800..1300 {
@@ -416,14 +414,57 @@ mod tests {
         }
         assert_eq!((pv.pending(), pv.dropped(), pv.handed()), (0, 2, 1));
         // A gap longer than MAX_GAP_US moves nothing.
-        pv.front_with(&b, &identified(true));
+        pv.front_with(&b, &identified(true), 0.0);
         pv.rear::<Libm>(&mut rear, &at(100_000, Some(10.0)));
         assert_eq!(pv.pending(), 1);
         // At most QUEUE readings on their way: a further one replaces the oldest.
         for _ in 0..QUEUE {
-            pv.front_with(&b, &identified(true));
+            pv.front_with(&b, &identified(true), 0.0);
         }
         assert_eq!((pv.pending(), pv.dropped()), (QUEUE, 3));
+    }
+
+    #[test]
+    fn a_change_is_placed_where_the_front_met_it_never_ahead_of_an_earlier_reading() {
+        let p = tyre();
+        let b = Bank::new::<Libm>(&p, None, BankConfig::default()).unwrap();
+        let mut rear = b.clone();
+        let mut pv = Preview::new(Config::with_wheelbase(2.0)).unwrap();
+        // A first identification rolls the whole wheelbase whatever the gap (no old surface).
+        pv.front_with(&b, &identified(false), 0.5);
+        // A change read 0.5 m after the front met it: 1.5 m to roll, but not ahead of the first.
+        pv.front_with(&b, &identified(true), 0.5);
+        // One 0.5 m beyond a wheelbase (a long gap) would be due at once: after the others.
+        pv.front_with(&b, &identified(true), 2.5);
+        assert_eq!(pv.pending(), 3);
+        let mut handed_at = Vec::new();
+        for t in 0..300 {
+            let before = pv.handed();
+            pv.rear::<Libm>(&mut rear, &at(t, Some(10.0)));
+            if pv.handed() > before {
+                handed_at.push((t, pv.handed() - before));
+            }
+        }
+        // 10 mm per step from the second sample on: all three arrive with the first, 2 m on.
+        assert_eq!(handed_at, [(200, 3)]);
+        // Reversing 2.1 m carries all three beyond two wheelbases at once (the queue in
+        // order: its back is the farthest).
+        let mut pv = Preview::new(Config::with_wheelbase(2.0)).unwrap();
+        pv.front_with(&b, &identified(false), 0.0);
+        pv.front_with(&b, &identified(true), 0.5);
+        pv.front_with(&b, &identified(true), 2.5);
+        for t in 1000..1211 {
+            pv.rear::<Libm>(&mut rear, &at(t, Some(-10.0)));
+        }
+        assert_eq!((pv.pending(), pv.dropped(), pv.handed()), (0, 3, 0));
+        // Alone, a change with a 0.5 m gap arrives 0.5 m (50 steps) sooner than a wheelbase.
+        let mut pv = Preview::new(Config::with_wheelbase(2.0)).unwrap();
+        pv.front_with(&b, &identified(true), 0.5);
+        let arrived = (300..600).find(|&t| {
+            pv.rear::<Libm>(&mut rear, &at(t, Some(10.0)));
+            pv.handed() == 1
+        });
+        assert_eq!(arrived, Some(450));
     }
 
     #[test]
