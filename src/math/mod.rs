@@ -104,6 +104,13 @@ pub trait Float:
     /// A small index as a value (exact for `i` < 2¹⁶): a grid position, with no conversion
     /// through `f64`.
     fn from_index(i: u16) -> Self;
+    /// `us` microseconds in seconds. The floats divide by 10⁶ in their own precision
+    /// (correctly rounded for `us` < 2²⁴ in `f32`, all `u32` in `f64`): no soft `f64` on a
+    /// device whose FPU is single precision.
+    #[inline]
+    fn from_micros(us: u32) -> Self {
+        Self::from_f64(f64::from(us) * 1e-6)
+    }
     /// The larger of two values; NaN-free inputs assumed (callers check finiteness first).
     #[inline]
     fn max(self, other: Self) -> Self {
@@ -204,6 +211,10 @@ macro_rules! impl_float {
             #[inline]
             fn from_index(i: u16) -> Self {
                 <$t>::from(i)
+            }
+            #[inline]
+            fn from_micros(us: u32) -> Self {
+                us as $t / 1e6
             }
         }
     };

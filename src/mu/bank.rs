@@ -111,6 +111,10 @@ const OFFSET_PRIOR: f64 = 16.0;
 const SCAN: [f64; 8] = [0.01, 0.02, 0.035, 0.05, 0.08, 0.12, 0.2, 0.35];
 /// A cell out of contention is fitted on every `VISIT`th batch.
 pub const VISIT: usize = 4;
+
+/// A sample's work ([`Bank::update`]): at least this many slots of a cell's fit (one for a
+/// reading from ahead, one for the load stage on a sample that closes a batch).
+pub const SLOTS: usize = 3;
 /// A Gauss–Newton step no longer than this \[rad, -\] in α′ and κ′ …
 pub const TRUST_STEP: f64 = 0.002;
 /// … whose linear model predicts a fall of χ² below this is taken without a trial evaluation
@@ -467,6 +471,11 @@ pub struct Bank<F> {
     first: Option<u8>,
     /// The cell fitted first, skipped in the rotation.
     skip: Option<u8>,
+    /// Cells of the pending batch fitted so far.
+    fitted: usize,
+    /// A reading from ahead ([`Bank::preview`]: profile, weight) not yet mixed in: it takes
+    /// one of a sample's slots in [`Bank::work`], as a cell's fit does.
+    mixing: Option<([F; CELLS], F)>,
 }
 
 impl<F: Float> Bank<F> {
@@ -546,6 +555,8 @@ impl<F: Float> Bank<F> {
             floor_batches: 0,
             first: None,
             skip: None,
+            fitted: 0,
+            mixing: None,
         })
     }
 
@@ -605,11 +616,26 @@ impl<F: Float> Bank<F> {
     /// reading excludes (ℓ′ above `hold_nll`) is dropped. The estimate follows at the end of the
     /// batch being fitted. A profile that is not finite and non-negative, or a weight outside
     /// (0, 1), is ignored.
+    ///
+    /// The mixture is not computed here: the reading waits for a slot in the next samples'
+    /// work (it costs about half a cell's fit; [`Bank::update`] gives it a slot of its own, or
+    /// the first it can spare without pushing the batch's last fits onto the sample that
+    /// closes the next batch — within a few samples, all mixed before the batch's estimate).
+    /// While one waits ([`Bank::previewing`]) a second one first mixes the waiting one in, at
+    /// once: hand one per sample, as [`crate::mu::preview::Preview::rear`] does.
     pub fn preview<M: Backend<F>>(&mut self, profile: &[F; CELLS], p: F) {
         let ok = profile.iter().all(|x| x.is_finite() && *x >= F::ZERO);
         if ok && p > F::ZERO && p < F::ONE {
-            self.mix::<M>(profile, p);
+            if let Some((pf, w)) = self.mixing.take() {
+                self.mix::<M>(&pf, w);
+            }
+            self.mixing = Some((*profile, p));
         }
+    }
+
+    /// Whether a reading from ahead ([`Bank::preview`]) waits to be mixed in.
+    pub fn previewing(&self) -> bool {
+        self.mixing.is_some()
     }
 
     /// The cell nearest μ `mu`.
@@ -664,7 +690,7 @@ impl<F: Float> Bank<F> {
         if dt_us > MAX_GAP_US {
             self.acc = Acc::new();
             self.kappa_lag = None;
-            self.age::<M>(F::from_f64(dt_us as f64 * 1e-6), F::ZERO);
+            self.age::<M>(F::from_micros(dt_us), F::ZERO);
         }
         if let Some(vx) = s.vx {
             if vx.abs() < self.cfg.vx_min {
@@ -673,7 +699,7 @@ impl<F: Float> Bank<F> {
                 return self.est;
             }
         }
-        let dt = F::from_f64(f64::from(dt_us.min(MAX_GAP_US)) * 1e-6);
+        let dt = F::from_micros(dt_us.min(MAX_GAP_US));
         // κ′ from the measured κ: first-order lag over σκ/|Vx| (eq. 20 for a constant σκ).
         if let Some(k) = s.kappa {
             let lag = match (self.kappa_lag, s.vx) {
@@ -768,6 +794,7 @@ impl<F: Float> Bank<F> {
                 self.finish::<M>(&b);
             }
             self.next = 0;
+            self.fitted = 0;
             self.reseeds = 0;
         }
         self.est
@@ -864,7 +891,7 @@ impl<F: Float> Bank<F> {
             fy: force(a.fy, sq_fy),
             mz: (mz, smz),
             kappa,
-            dt: F::from_f64(f64::from(a.us) * 1e-6),
+            dt: F::from_micros(a.us),
             dist: a.dist,
         }
     }
@@ -896,19 +923,49 @@ impl<F: Float> Bank<F> {
         self.skip = None;
     }
 
-    /// Fits the next cells of the pending batch; finishes the batch after the last.
+    /// Fits the next cells of the pending batch (and mixes in a waiting reading from ahead);
+    /// finishes the batch after the last.
+    ///
+    /// A sample has `per` = ⌈active cells/batch⌉ slots of a cell's fit, at least [`SLOTS`]; the
+    /// sample that closes a batch spends one on the load stage of the next. A waiting reading
+    /// takes a free slot, or one of this sample's fits if the samples before the closing one
+    /// have room for it; otherwise it waits for the next sample.
     fn work<M: Backend<F>>(&mut self) {
-        let Some(b) = self.pending else { return };
-        let per = self
-            .n_active
-            .div_ceil(usize::from(self.cfg.batch.max(1)))
-            .max(1);
+        let batch = usize::from(self.cfg.batch.max(1));
+        let Some(b) = self.pending else {
+            if let Some((pf, w)) = self.mixing.take() {
+                self.mix::<M>(&pf, w);
+            }
+            return;
+        };
+        let per = self.n_active.div_ceil(batch).max(1);
+        let mut fits = per;
+        if self.mixing.is_some() {
+            let n = usize::from(self.acc.n);
+            let closing = usize::from(n + 1 >= batch);
+            let left = self.n_active.saturating_sub(self.fitted);
+            let planned = per.min(left);
+            let room = per.max(SLOTS) > planned + closing;
+            // One fit fewer now: the samples after this one, short of the closing one, take it.
+            let later = batch.saturating_sub(n + 2);
+            let spare = closing == 0 && planned > 1 && per * later > left - planned;
+            if room || spare {
+                if !room {
+                    fits = planned - 1;
+                }
+                if let Some((pf, w)) = self.mixing.take() {
+                    self.mix::<M>(&pf, w);
+                }
+            }
+        }
+        let per = fits;
         let mut done = 0;
         // The likeliest cell first: when it no longer explains the new batch, an identifiable
         // estimate is withdrawn on the batch's first fitted sample instead of after the last.
         if let Some(k8) = self.first.take() {
             let k = usize::from(k8);
             done += 1;
+            self.fitted += 1;
             self.skip = Some(k8);
             let chi2 = self.fit_cell::<M>(k, &b);
             if let Some(slot) = self.chi2.get_mut(k) {
@@ -928,6 +985,7 @@ impl<F: Float> Bank<F> {
             if self.skip.map(usize::from) != Some(k) && self.active.get(k).copied().unwrap_or(false)
             {
                 done += 1;
+                self.fitted += 1;
                 let chi2 = self.fit_cell::<M>(k, &b);
                 if let Some(slot) = self.chi2.get_mut(k) {
                     *slot = chi2;
@@ -1644,6 +1702,39 @@ pub(crate) mod tests {
                 assert!((e.mu - 0.5).abs() <= 0.1, "{e:?}");
             }
         }
+    }
+
+    /// A reading from ahead waits at most one sample for a slot of the rear's work (`work`),
+    /// wherever in a batch's fit it arrives; a second one arriving while one waits mixes that
+    /// one in first.
+    #[test]
+    fn a_reading_from_ahead_is_mixed_in_within_a_sample() {
+        let p = tyre();
+        let s = stream(&p, 0.5, |t| 0.1 * (t / 0.5).min(1.0), 1500, 0);
+        let mut b = Bank::new::<Libm>(&p, None, Config::default()).unwrap();
+        let profile: [f64; CELLS] = core::array::from_fn(|k| 0.5 * (k as f64 - 4.0).powi(2));
+        let mut waits = [0usize; 3];
+        for (i, x) in s.iter().enumerate() {
+            if i >= 300 {
+                let mut r = b.clone();
+                r.preview::<Libm>(&profile, 0.9);
+                assert!(r.previewing());
+                let n = s[i..].iter().take_while(|y| {
+                    r.update::<Libm>(&p, y);
+                    r.previewing()
+                });
+                let n = n.count();
+                assert!(n <= 1, "sample {i}: waited {n} samples");
+                waits[n] += 1;
+                let mut r = b.clone();
+                r.preview::<Libm>(&profile, 0.9);
+                r.preview::<Libm>(&profile, 0.5);
+                assert!(r.previewing());
+            }
+            b.update::<Libm>(&p, x);
+        }
+        // Mostly at once; a wait only on the samples that close a batch with fits to do.
+        assert!(waits[0] > 10 * waits[1], "{waits:?}");
     }
 
     #[test]

@@ -176,8 +176,8 @@ impl<F: Float> Preview<F> {
     }
 
     /// Before the rear wheel's update with sample `s`: rolls the readings on by the distance
-    /// the rear wheel covered since its last sample and hands those that have arrived to
-    /// `rear`.
+    /// the rear wheel covered since its last sample and hands `rear` the nearest that has
+    /// arrived, if it has mixed in the last one ([`Bank::previewing`]): one per sample.
     pub fn rear<M: Backend<F>>(&mut self, rear: &mut Bank<F>, s: &Sample<F>) {
         let dt_us = self.last_t.map(|t| s.t_us.wrapping_sub(t));
         self.last_t = Some(s.t_us);
@@ -187,19 +187,20 @@ impl<F: Float> Preview<F> {
         if dt_us == 0 || dt_us > MAX_GAP_US || !vx.is_finite() {
             return;
         }
-        let ds = vx * F::from_f64(f64::from(dt_us) * 1e-6);
+        let ds = vx * F::from_micros(dt_us);
         for r in self.queue.iter_mut() {
             r.left -= ds;
         }
         // All readings roll alike, so the oldest is the nearest: arrivals leave at the front,
-        // readings a reversal has carried too far away at the back.
-        while let Some(r) = self.queue.front() {
-            if r.left > F::ZERO {
-                break;
+        // readings a reversal has carried too far away at the back. One per sample, and only
+        // when the bank has mixed the last one in (its mixture takes a slot of a sample's
+        // work, `Bank::preview`): others that have arrived wait here, in order.
+        if let Some(r) = self.queue.front() {
+            if r.left <= F::ZERO && !rear.previewing() {
+                rear.preview::<M>(&r.profile, self.cfg.weight);
+                self.handed = self.handed.wrapping_add(1);
+                self.queue.pop_front();
             }
-            rear.preview::<M>(&r.profile, self.cfg.weight);
-            self.handed = self.handed.wrapping_add(1);
-            self.queue.pop_front();
         }
         let far = F::TWO * self.cfg.wheelbase;
         while self.queue.back().is_some_and(|r| r.left > far) {
@@ -440,13 +441,21 @@ mod tests {
         let mut handed_at = Vec::new();
         for t in 0..300 {
             let before = pv.handed();
-            pv.rear::<Libm>(&mut rear, &at(t, Some(10.0)));
+            let s = at(t, Some(10.0));
+            pv.rear::<Libm>(&mut rear, &s);
             if pv.handed() > before {
                 handed_at.push((t, pv.handed() - before));
             }
+            // (The rear's update mixes the reading in; until then the next one waits.)
+            if t != 201 {
+                rear.update::<Libm>(&p, &s);
+            }
         }
-        // 10 mm per step from the second sample on: all three arrive with the first, 2 m on.
-        assert_eq!(handed_at, [(200, 3)]);
+        // 10 mm per step from the second sample on: all three arrive with the first, 2 m on,
+        // and are handed one per sample as the rear mixes each in (none on a sample after
+        // which the rear did not).
+        assert_eq!(handed_at, [(200, 1), (201, 1), (203, 1)]);
+        assert!(!rear.previewing());
         // Reversing 2.1 m carries all three beyond two wheelbases at once (the queue in
         // order: its back is the farthest).
         let mut pv = Preview::new(Config::with_wheelbase(2.0)).unwrap();

@@ -386,21 +386,41 @@ fn bank_figures<M: Backend<f32>>(
             let Some(est) = est.as_mut() else {
                 return State::Fallback;
             };
-            let s = bank::Sample {
-                t_us: m.t_us,
-                fz: m.fz,
-                fy: m.fy,
-                mz: m.mz,
-                fx: m.fx,
-                kappa: m.kappa,
-                vx: m.vx,
-                gamma: m.gamma,
-            };
-            est.update::<M>(p, &s).state
+            est.update::<M>(p, &gough::wheel::sample::<M>(p, m)).state
         },
     );
     hprintln!(
         "bench: mu_bank_{}_{} mean={} worst={} ram={}",
+        name,
+        stream_name,
+        e.mean,
+        e.max,
+        size_of::<Bank<f32>>()
+    );
+    // A rear wheel's bank told by the preview (`Bank::preview`) every 7th sample — far more
+    // often than a front wheel identifies anew, and at every phase of a batch's fit: the
+    // mixture takes a slot of a sample's work (`bank::SLOTS`), so the worst sample stays the
+    // bank's own. The reading is the rear's own profile one sample before (what a front
+    // wheel on the same road reports), taken and handed inside the timed step.
+    let e = per_sample(
+        id + 1,
+        clock,
+        stream,
+        || Bank::new::<M>(p, None, bank::Config::default()).ok().map(|b| (b, 0u32)),
+        |st, m| {
+            let Some((est, i)) = st.as_mut() else {
+                return State::Fallback;
+            };
+            *i = i.wrapping_add(1);
+            if *i % 7 == 0 {
+                let profile = est.profile();
+                est.preview::<M>(&profile, 0.9);
+            }
+            est.update::<M>(p, &gough::wheel::sample::<M>(p, m)).state
+        },
+    );
+    hprintln!(
+        "bench: mu_bank_previewed_{}_{} mean={} worst={} ram={}",
         name,
         stream_name,
         e.mean,
@@ -555,8 +575,8 @@ fn main() -> ! {
 }
 
 /// The front-to-rear preview (`gough::mu::preview`) with backend `M`: a reading handed to a
-/// rear wheel's bank (`Bank::preview`, the mixture over the cells; at most one per rear sample
-/// in practice, a few per change of surface), and the rear's per-sample roll-on with a full
+/// rear wheel's bank (`Bank::preview`) and mixed over the cells by its next update (one per
+/// rear sample at most, a few per change of surface), and the rear's per-sample roll-on with a full
 /// queue and nothing arriving (`Preview::rear`). `bench: mu_preview_mix_<name> mean=<n>
 /// worst=<n> ram=<Preview bytes>` and `bench: mu_preview_roll_<name> …` lines.
 fn preview_figures<M: Backend<f32>>(
@@ -592,9 +612,22 @@ fn preview_figures<M: Backend<f32>>(
         bench_stop(id);
         ((sum / K as f64) as u32, max as u32)
     };
+    // Handed over, then mixed in by the next update's work (a sample with no contact, so
+    // that the update does nothing else).
+    let none = bank::Sample {
+        t_us: 0,
+        fz: 0.0,
+        fy: 0.0,
+        mz: 0.0,
+        fx: None,
+        kappa: None,
+        vx: None,
+        gamma: None,
+    };
     let (mean, worst) = timed(&mut |i| {
         let w = if i % 2 == 0 { 0.9 } else { 0.5 };
         b.preview::<M>(core::hint::black_box(&profile), w);
+        b.update::<M>(p, core::hint::black_box(&none));
     });
     hprintln!(
         "bench: mu_preview_mix_{} mean={} worst={} ram={}",
