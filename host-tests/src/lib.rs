@@ -11,8 +11,10 @@ pub fn root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
 }
 
-/// The `gough` binary of package `gough-host`, built (once per test process) in the profile
-/// and target folder of the tests that ask for it.
+/// The `gough` binary of package `gough-host`, built (once per test process) in the profile of
+/// the tests that ask for it, where `cargo build -p gough-host --bin gough` puts it
+/// (`target/debug/gough`): the steps of `cargo xtask test-all` after the host tests that run
+/// the binary then find it built (with `--target` it was a second build of the host crate).
 pub fn gough_bin() -> &'static Path {
     static BIN: OnceLock<PathBuf> = OnceLock::new();
     BIN.get_or_init(|| {
@@ -21,7 +23,6 @@ pub fn gough_bin() -> &'static Path {
             .package("gough-host")
             .bin("gough")
             .current_release()
-            .current_target()
             .run()
             .unwrap_or_else(|e| panic!("cannot build the gough binary: {e}"));
         run.path().to_path_buf()

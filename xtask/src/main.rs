@@ -274,22 +274,22 @@ fn pytest(tests: &[&str], passed: &mut u64, failed: &mut u64) -> Result<(), Stri
 fn test_all() -> Result<(), String> {
     let (mut passed, mut failed) = (0u64, 0u64);
     ensure_targets()?;
-    for t in TARGETS {
-        step(&format!(
-            "core builds for {t} (no_std, no alloc), default and all backends"
-        ));
-        run(cargo().args(["build", "-p", "gough", "--release", "--target", t]))?;
-        run(cargo().args([
-            "build",
-            "-p",
-            "gough",
-            "--release",
-            "--target",
-            t,
-            "--features",
-            "fast,micromath,fixed",
-        ]))?;
-    }
+    step(&format!(
+        "core compiles for {} (no_std, no alloc; cargo check), default and all backends",
+        TARGETS.join(", ")
+    ));
+    // Checked, not built: the firmware, M0/M3 and C API steps below build the core for each
+    // of these targets with the backends they run. The three targets in one cargo run each, so
+    // that they are checked side by side (101 s built one target after another on a fresh clone,
+    // 47 s checked together, on the 2-core machine).
+    let targets: Vec<&str> = TARGETS.iter().flat_map(|t| ["--target", t]).collect();
+    run(cargo()
+        .args(["check", "-p", "gough", "--release"])
+        .args(&targets))?;
+    run(cargo()
+        .args(["check", "-p", "gough", "--release"])
+        .args(&targets)
+        .args(["--features", "fast,micromath,fixed"]))?;
     step("formatting");
     run(cargo().args(["fmt", "--all", "--check"]))?;
     step("lints (the core denies unwrap/expect/panic/indexing outside tests)");
