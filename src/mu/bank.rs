@@ -476,6 +476,8 @@ pub struct Bank<F> {
     /// A reading from ahead ([`Bank::preview`]: profile, weight) not yet mixed in: it takes
     /// one of a sample's slots in [`Bank::work`], as a cell's fit does.
     mixing: Option<([F; CELLS], F)>,
+    /// Whether that reading has waited a sample for a slot.
+    mix_waited: bool,
 }
 
 impl<F: Float> Bank<F> {
@@ -557,6 +559,7 @@ impl<F: Float> Bank<F> {
             skip: None,
             fitted: 0,
             mixing: None,
+            mix_waited: false,
         })
     }
 
@@ -929,11 +932,13 @@ impl<F: Float> Bank<F> {
     /// A sample has `per` = ⌈active cells/batch⌉ slots of a cell's fit, at least [`SLOTS`]; the
     /// sample that closes a batch spends one on the load stage of the next. A waiting reading
     /// takes a free slot, or one of this sample's fits if the samples before the closing one
-    /// have room for it; otherwise it waits for the next sample.
+    /// have room for it; otherwise it waits for the next sample, and no longer (then it takes a
+    /// slot of its own: with one sample per batch every sample closes one).
     fn work<M: Backend<F>>(&mut self) {
         let batch = usize::from(self.cfg.batch.max(1));
         let Some(b) = self.pending else {
             if let Some((pf, w)) = self.mixing.take() {
+                self.mix_waited = false;
                 self.mix::<M>(&pf, w);
             }
             return;
@@ -949,13 +954,18 @@ impl<F: Float> Bank<F> {
             // One fit fewer now: the samples after this one, short of the closing one, take it.
             let later = batch.saturating_sub(n + 2);
             let spare = closing == 0 && planned > 1 && per * later > left - planned;
-            if room || spare {
-                if !room {
+            // (A reading that waited a sample already is mixed in now, in a slot of its own:
+            // with one sample per batch every sample closes one, and no later one has room.)
+            if room || spare || self.mix_waited {
+                if !room && spare {
                     fits = planned - 1;
                 }
+                self.mix_waited = false;
                 if let Some((pf, w)) = self.mixing.take() {
                     self.mix::<M>(&pf, w);
                 }
+            } else {
+                self.mix_waited = true;
             }
         }
         let per = fits;
@@ -1735,6 +1745,23 @@ pub(crate) mod tests {
         }
         // Mostly at once; a wait only on the samples that close a batch with fits to do.
         assert!(waits[0] > 10 * waits[1], "{waits:?}");
+        // One sample per batch (the 100 Hz configuration): every sample closes a batch and
+        // fits every cell in contention, and a reading still waits one sample at most.
+        let cfg = Config {
+            batch: 1,
+            ..Config::default()
+        };
+        let mut b = Bank::new::<Libm>(&p, None, cfg).unwrap();
+        for (i, x) in s.iter().enumerate().step_by(10) {
+            if i >= 300 && i % 50 == 0 {
+                let mut r = b.clone();
+                r.preview::<Libm>(&profile, 0.9);
+                r.update::<Libm>(&p, x);
+                r.update::<Libm>(&p, x);
+                assert!(!r.previewing(), "sample {i}");
+            }
+            b.update::<Libm>(&p, x);
+        }
     }
 
     #[test]
