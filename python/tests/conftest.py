@@ -20,4 +20,18 @@ def gough_cli():
     def run(*args):
         return subprocess.run([exe, *map(str, args)], check=True, capture_output=True, text=True)
 
+    def start(*args):
+        """The CLI started in the background (for a test that computes the Python side
+        meanwhile); `finish` waits for it."""
+        return subprocess.Popen(
+            [exe, *map(str, args)], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
+        )
+
+    def finish(proc):
+        out, err = proc.communicate()
+        assert proc.returncode == 0, f"{proc.args}: exit {proc.returncode}: {err}"
+        return out
+
+    run.start = start
+    run.finish = finish
     return run
