@@ -389,6 +389,28 @@ impl_backend!(Libm, f64, {
 mod tests {
     use super::*;
 
+    /// `from_micros` in `f32` is the nearest `f32` to us/10⁶ (below 2²⁴ µs), as the doc says;
+    /// in `f64` it divides (the host's figures did not move when it replaced `us * 1e-6`).
+    #[test]
+    fn micros_are_correctly_rounded() {
+        let exact = |us: u32| f64::from(us) / 1e6;
+        for us in (0..20_000).chain((0..16_777_216).step_by(9_973)) {
+            let x = <f32 as Float>::from_micros(us);
+            let e = exact(us);
+            let err = |y: f32| (f64::from(y) - e).abs();
+            for n in [
+                f32::from_bits(x.to_bits() + 1),
+                f32::from_bits(x.to_bits().saturating_sub(1)),
+            ] {
+                assert!(
+                    err(x) <= err(n),
+                    "{us} µs: {x} is not the nearest f32 to {e}"
+                );
+            }
+            assert_eq!(<f64 as Float>::from_micros(us), e);
+        }
+    }
+
     #[test]
     fn sign_conventions() {
         assert_eq!(0.0f64.sign(), 0.0);

@@ -629,9 +629,7 @@ impl<F: Float> Bank<F> {
     pub fn preview<M: Backend<F>>(&mut self, profile: &[F; CELLS], p: F) {
         let ok = profile.iter().all(|x| x.is_finite() && *x >= F::ZERO);
         if ok && p > F::ZERO && p < F::ONE {
-            if let Some((pf, w)) = self.mixing.take() {
-                self.mix::<M>(&pf, w);
-            }
+            self.mix_waiting::<M>();
             self.mixing = Some((*profile, p));
         }
     }
@@ -937,10 +935,7 @@ impl<F: Float> Bank<F> {
     fn work<M: Backend<F>>(&mut self) {
         let batch = usize::from(self.cfg.batch.max(1));
         let Some(b) = self.pending else {
-            if let Some((pf, w)) = self.mixing.take() {
-                self.mix_waited = false;
-                self.mix::<M>(&pf, w);
-            }
+            self.mix_waiting::<M>();
             return;
         };
         let per = self.n_active.div_ceil(batch).max(1);
@@ -960,15 +955,11 @@ impl<F: Float> Bank<F> {
                 if !room && spare {
                     fits = planned - 1;
                 }
-                self.mix_waited = false;
-                if let Some((pf, w)) = self.mixing.take() {
-                    self.mix::<M>(&pf, w);
-                }
+                self.mix_waiting::<M>();
             } else {
                 self.mix_waited = true;
             }
         }
-        let per = fits;
         let mut done = 0;
         // The likeliest cell first: when it no longer explains the new batch, an identifiable
         // estimate is withdrawn on the batch's first fitted sample instead of after the last.
@@ -988,7 +979,7 @@ impl<F: Float> Bank<F> {
                 self.est.change = false;
             }
         }
-        while self.next < CELLS && done < per {
+        while self.next < CELLS && done < fits {
             // Rotated order, so that the re-seeds of successive batches go to different cells.
             let k = (self.next + self.reseed_from) % CELLS;
             self.next += 1;
@@ -1346,6 +1337,14 @@ impl<F: Float> Bank<F> {
             if r.is_finite() && r > F::ZERO {
                 self.peak_ratio = r;
             }
+        }
+    }
+
+    /// Mixes in the reading from ahead that waits, if any.
+    fn mix_waiting<M: Backend<F>>(&mut self) {
+        self.mix_waited = false;
+        if let Some((pf, w)) = self.mixing.take() {
+            self.mix::<M>(&pf, w);
         }
     }
 
@@ -1723,7 +1722,7 @@ pub(crate) mod tests {
         let s = stream(&p, 0.5, |t| 0.1 * (t / 0.5).min(1.0), 1500, 0);
         let mut b = Bank::new::<Libm>(&p, None, Config::default()).unwrap();
         let profile: [f64; CELLS] = core::array::from_fn(|k| 0.5 * (k as f64 - 4.0).powi(2));
-        let mut waits = [0usize; 3];
+        let mut waits = [0usize; 2];
         for (i, x) in s.iter().enumerate() {
             if i >= 300 {
                 let mut r = b.clone();
@@ -1736,9 +1735,13 @@ pub(crate) mod tests {
                 let n = n.count();
                 assert!(n <= 1, "sample {i}: waited {n} samples");
                 waits[n] += 1;
+                // The first is mixed in by the second's arrival (the likelihoods move at once),
+                // the second waits.
                 let mut r = b.clone();
                 r.preview::<Libm>(&profile, 0.9);
+                assert_eq!(r.profile(), b.profile());
                 r.preview::<Libm>(&profile, 0.5);
+                assert_ne!(r.profile(), b.profile(), "sample {i}");
                 assert!(r.previewing());
             }
             b.update::<Libm>(&p, x);
