@@ -455,6 +455,37 @@ fn bench_says_where_the_latency_goes() {
             && text.contains(" % of those at utilisation 0.5 or more ("),
         "{text}"
     );
+    // Every wheel-surface of the bank with its latency (`wheels.csv`), as many as the bank's
+    // rows of `table.csv` count, and the misses listed in the table.
+    assert!(
+        text.contains("## Wheel-surfaces the bank does not read within 0.15 s"),
+        "{text}"
+    );
+    let wheels = std::fs::read_to_string(dir.join("bench/wheels.csv")).unwrap();
+    let rows: Vec<Vec<&str>> = wheels
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').collect())
+        .collect();
+    let table = std::fs::read_to_string(dir.join("bench/table.csv")).unwrap();
+    let (within, total) = table
+        .lines()
+        .filter(|l| l.contains(",bank,"))
+        .map(|l| {
+            let f: Vec<&str> = l.rsplitn(3, ',').collect();
+            (
+                f[1].parse::<usize>().unwrap(),
+                f[0].parse::<usize>().unwrap(),
+            )
+        })
+        .fold((0, 0), |(a, b), (c, d)| (a + c, b + d));
+    assert!(total > 0);
+    assert_eq!(rows.len(), total, "{wheels}");
+    assert_eq!(
+        rows.iter().filter(|r| r[8] == "true").count(),
+        within,
+        "{wheels}"
+    );
     run("bound");
     let holds = std::fs::read_to_string(dir.join("bench/holds.csv")).unwrap();
     let mut lines = holds.lines();

@@ -611,6 +611,55 @@ pub fn segment_latency(tr: &WheelTrace, est: &[Estimate<f64>], a: usize, b: usiz
     latency_from(tr, a, b, settled(tr, est, a, b)?)
 }
 
+/// One wheel on one stretch of constant true μ that reaches utilisation 0.5 (a
+/// "wheel-surface", as [`metrics`] counts them).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct WheelSurface {
+    /// Wheel index (0–3: FL, FR, RL, RR).
+    pub wheel: usize,
+    /// True μ of the stretch.
+    pub mu: f64,
+    /// Time of the stretch's first row \[s\].
+    pub t_start: f64,
+    /// Time of the stretch's last row \[s\].
+    pub t_end: f64,
+    /// Time the utilisation first reaches 0.5 on it \[s\].
+    pub t_util05: f64,
+    /// From then until the estimate stays within ±0.1 \[s\] (none: it never does for 50 rows).
+    pub latency: Option<f64>,
+}
+
+impl WheelSurface {
+    /// Within ±0.1 within [`TARGET_LATENCY`].
+    pub fn within(&self) -> bool {
+        self.latency.is_some_and(|l| l <= TARGET_LATENCY + 1e-9)
+    }
+}
+
+/// Every wheel-surface of a case's traces with its latency (estimates `ests[w]` of wheel `w`).
+pub fn wheel_surfaces(traces: &[WheelTrace], ests: &[Vec<Estimate<f64>>]) -> Vec<WheelSurface> {
+    let mut out = Vec::new();
+    for (w, (tr, est)) in traces.iter().zip(ests).enumerate() {
+        if est.len() != tr.rows.len() {
+            continue;
+        }
+        for (a, b) in segments(&tr.mu_true) {
+            let Some(i5) = (a..b).find(|&i| tr.util[i] >= 0.5) else {
+                continue;
+            };
+            out.push(WheelSurface {
+                wheel: w,
+                mu: tr.mu_true[a],
+                t_start: tr.rows[a].t,
+                t_end: tr.rows[b - 1].t,
+                t_util05: tr.rows[i5].t,
+                latency: segment_latency(tr, est, a, b),
+            });
+        }
+    }
+    out
+}
+
 /// Metrics of estimates `est` against the trace(s).
 pub fn metrics(traces: &[WheelTrace], ests: &[Vec<Estimate<f64>>]) -> Metrics {
     let mut errs = Vec::new();
@@ -858,6 +907,9 @@ pub fn run(a: BenchArgs) -> Result<(), String> {
     let _ = writeln!(md, "| manoeuvre | road | estimator | identifiable samples | mean err | p95 err | within 2σ | off by > 0.2 | util when within ±0.1 | latency from util 0.5 [s] | detect change [s] | false alarms |");
     let _ = writeln!(md, "|---|---|---|---|---|---|---|---|---|---|---|---|");
     let mut csv = String::from("manoeuvre,road,estimator,n_identifiable,err_mean,err_p95,within_2sigma,gross,util_within,latency_s,detect_s,false_alarms,ws_within,ws_total\n");
+    let mut wheels_csv =
+        String::from("manoeuvre,road,wheel,mu,t_start_s,t_end_s,t_util05_s,latency_s,within\n");
+    let mut misses: Vec<(&Case, WheelSurface)> = Vec::new();
     let bar = indicatif::ProgressBar::new(cases.len() as u64);
     let mut tallies: Vec<(&Case, HoldTally)> = Vec::new();
     let mut gough_wins = 0;
@@ -900,6 +952,26 @@ pub fn run(a: BenchArgs) -> Result<(), String> {
                     .collect()
             };
             let mt = metrics(&traces, &ests);
+            if m == BANK {
+                for x in wheel_surfaces(&traces, &ests) {
+                    let _ = writeln!(
+                        wheels_csv,
+                        "{},{},{},{},{:.3},{:.3},{:.3},{},{}",
+                        csv_field(c.manoeuvre),
+                        csv_field(&c.road),
+                        WHEELS.get(x.wheel).copied().unwrap_or("?"),
+                        x.mu,
+                        x.t_start,
+                        x.t_end,
+                        x.t_util05,
+                        fmt(x.latency, 3),
+                        x.within()
+                    );
+                    if !x.within() {
+                        misses.push((c, x));
+                    }
+                }
+            }
             let _ = writeln!(
                 md,
                 "| {} | {} | {} | {} | {} | {} | {} | {:.2} % | {} | {} | {} | {} |",
@@ -1037,6 +1109,7 @@ pub fn run(a: BenchArgs) -> Result<(), String> {
     }
     md.push_str(&summary);
     md.push_str(&against_the_others(&per_case));
+    md.push_str(&misses_table(&misses));
     if !a.set.is_empty() {
         let _ = writeln!(
             md,
@@ -1065,12 +1138,45 @@ pub fn run(a: BenchArgs) -> Result<(), String> {
     std::fs::write(a.out.join("table.md"), &md).map_err(|e| e.to_string())?;
     std::fs::write(a.out.join("table.csv"), &csv).map_err(|e| e.to_string())?;
     std::fs::write(a.out.join("holds.csv"), &holds_csv).map_err(|e| e.to_string())?;
+    std::fs::write(a.out.join("wheels.csv"), &wheels_csv).map_err(|e| e.to_string())?;
     print!("{md}");
     eprintln!(
-        "-> {}/table.md, table.csv, holds.csv, mu_*.png",
+        "-> {}/table.md, table.csv, wheels.csv, holds.csv, mu_*.png",
         a.out.display()
     );
     Ok(())
+}
+
+/// Wheel names in the order of the traces.
+const WHEELS: [&str; 4] = ["fl", "fr", "rl", "rr"];
+
+/// "Wheel-surfaces the bank does not read within 150 ms": one row per miss (`wheels.csv` has
+/// every wheel-surface).
+fn misses_table(misses: &[(&Case, WheelSurface)]) -> String {
+    let mut md = format!(
+        "\n## Wheel-surfaces the bank does not read within {TARGET_LATENCY} s\n\n\
+         Each wheel on each stretch of one μ that reaches utilisation 0.5, where the bank's estimate \
+         does not stay within ±0.1 from at most {TARGET_LATENCY} s after that (out/mu_bench/wheels.csv \
+         lists every wheel-surface):\n\n\
+         | manoeuvre | road | wheel | μ | stretch [s] | utilisation 0.5 at [s] | latency [s] |\n\
+         |---|---|---|---|---|---|---|\n"
+    );
+    for (c, x) in misses {
+        let _ = writeln!(
+            md,
+            "| {} | {} | {} | {} | {:.3}–{:.3} | {:.3} | {} |",
+            c.manoeuvre,
+            c.road,
+            WHEELS.get(x.wheel).copied().unwrap_or("?"),
+            x.mu,
+            x.t_start,
+            x.t_end,
+            x.t_util05,
+            x.latency
+                .map_or("never for 50 rows".into(), |l| format!("{l:.3}")),
+        );
+    }
+    md
 }
 
 /// "The bank against the others, case by case": for each case, every measure on which another
@@ -1998,6 +2104,61 @@ mod tests {
         let none = vec![e(0.8, 0.4, State::Fallback); n];
         let m = metrics(std::slice::from_ref(&tr), std::slice::from_ref(&none));
         assert_eq!((m.n_identifiable, m.within_2sigma), (0, None));
+    }
+
+    /// The per-wheel listing (`wheels.csv`, the misses table) counts what [`metrics`] counts: a
+    /// stretch of μ 0.5 read 100 ms after utilisation 0.5, one of μ 0.2 read 200 ms after it, a
+    /// third below utilisation 0.5 (not a wheel-surface).
+    #[test]
+    fn the_wheel_listing_agrees_with_the_metrics() {
+        let n = 3000;
+        let mu = |i: usize| [0.5, 0.2, 0.9][i / 1000];
+        let tr = WheelTrace {
+            rows: (0..n)
+                .map(|i| Row {
+                    t: i as f64 * 1e-3,
+                    fz: 4000.0,
+                    fy: 0.0,
+                    mz: 0.0,
+                    fx: 0.0,
+                    vx: 20.0,
+                    alpha: f64::NAN,
+                    kappa: f64::NAN,
+                })
+                .collect(),
+            mu_true: (0..n).map(mu).collect(),
+            // Utilisation 0.5 from 300 ms into each of the first two stretches, 0.2 on the third.
+            util: (0..n)
+                .map(|i| {
+                    if i < 2000 && i % 1000 >= 300 {
+                        0.7
+                    } else {
+                        0.2
+                    }
+                })
+                .collect(),
+            gamma: vec![0.0; n],
+            kappa_meas: vec![0.0; n],
+        };
+        let read_from = |i: usize| if i < 1000 { 400 } else { 1500 };
+        let est: Vec<_> = (0..n)
+            .map(|i| Estimate {
+                mu: if i >= read_from(i) { mu(i) } else { 1.2 },
+                sigma: 0.02,
+                sigma_model: 0.0,
+                state: State::Identifiable,
+                change: false,
+            })
+            .collect();
+        let ws = wheel_surfaces(std::slice::from_ref(&tr), std::slice::from_ref(&est));
+        assert_eq!(ws.len(), 2, "{ws:?}");
+        assert_eq!((ws[0].wheel, ws[0].mu, ws[0].t_util05), (0, 0.5, 0.3));
+        assert!((ws[0].latency.unwrap() - 0.1).abs() < 1e-9 && ws[0].within());
+        assert!((ws[1].t_util05 - 1.3).abs() < 1e-9);
+        assert!((ws[1].latency.unwrap() - 0.2).abs() < 1e-9 && !ws[1].within());
+        let m = metrics(std::slice::from_ref(&tr), std::slice::from_ref(&est));
+        assert_eq!(m.ws_total, ws.len());
+        assert_eq!(m.ws_within, ws.iter().filter(|x| x.within()).count());
     }
 
     /// Straight running with a static camber makes points that read like ice at full sliding:
