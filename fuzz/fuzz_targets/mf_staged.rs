@@ -68,6 +68,12 @@ where
         ];
         assert!(F::all_finite(&all), "{all:?}");
     }
+    // Both scalings times s at s = 1 (the friction estimator's slope in a surface), with the
+    // file's λμx, λμy in proportion to `lmu`.
+    if let Ok((f, d)) = prep.eval_d_scale::<Libm>(lmu * p.lmux, lmu * p.lmuy, i.kappa, i.alpha) {
+        let all = [f.fx, f.fy, f.mz, d.lmu.fx, d.lmu.fy, d.lmu.mz];
+        assert!(F::all_finite(&all), "{all:?}");
+    }
 }
 
 fuzz_target!(|data: &[u8]| {

@@ -223,7 +223,12 @@ impl Tally {
 
 #[test]
 fn slopes_are_central_differences() {
-    let (mut tk, mut ta, mut tm) = (Tally::default(), Tally::default(), Tally::default());
+    let (mut tk, mut ta, mut tm, mut ts) = (
+        Tally::default(),
+        Tally::default(),
+        Tally::default(),
+        Tally::default(),
+    );
     for (path, tyre, opts) in sweeps() {
         if opts.turn_slip {
             continue;
@@ -286,9 +291,36 @@ fn slopes_are_central_differences() {
                     floor,
                 );
             }
+            // Both scalings times s (the friction estimator's slope in a road's μ), at s = 1,
+            // also where the file's λμx and λμy differ.
+            let (vs, ds) = prep
+                .eval_d_scale::<Libm>(p.lmux, p.lmuy, i.kappa, i.alpha)
+                .unwrap();
+            assert_eq!(vs, plain);
+            assert_eq!(
+                ds.slip, d,
+                "the κ, α slopes do not depend on carrying the scale"
+            );
+            let times = |s: f64| {
+                let mut q = p.clone();
+                q.lmux = p.lmux * s;
+                q.lmuy = p.lmuy * s;
+                at(i.kappa, i.alpha, &q)
+            };
+            ts.check(
+                &format!("d/ds {what}"),
+                ds.lmu,
+                diffs(&times, 1.0, h),
+                floor,
+            );
         }
     }
-    for (name, t) in [("kappa", &tk), ("alpha", &ta), ("lambda_mu", &tm)] {
+    for (name, t) in [
+        ("kappa", &tk),
+        ("alpha", &ta),
+        ("lambda_mu", &tm),
+        ("scale", &ts),
+    ] {
         println!(
             "d/d{name}: {} points within {:.1e} relative of central differences; {} kinks (one-sided slopes checked)",
             t.n, t.worst, t.kinks

@@ -132,7 +132,8 @@ pub struct Slopes<F> {
 pub struct SlopesMu<F> {
     /// ∂/∂κ, ∂/∂α.
     pub slip: Slopes<F>,
-    /// ∂/∂λμ with λμx* = λμy* = λμ \[N, N·m per unit λμ\].
+    /// ∂/∂λμ with λμx* = λμy* = λμ \[N, N·m per unit λμ\] ([`Prepared::eval_d_mu`]), or
+    /// ∂/∂s with both scaled by s ([`Prepared::eval_d_scale`]).
     pub lmu: Partials<F>,
 }
 
@@ -317,12 +318,42 @@ impl<F: Float> Prepared<F> {
         kappa: F,
         alpha: F,
     ) -> Result<(Forces<F>, SlopesMu<F>), EvalError> {
+        let l = Dual::<F, 3>::var(lmu, 2);
+        self.eval_d3::<M>(l, l, kappa, alpha)
+    }
+
+    /// The friction stage at λμx* = `lmux_star`·s, λμy* = `lmuy_star`·s and the slip stage at
+    /// s = 1, with the slopes in κ, α and, in [`SlopesMu::lmu`], ∂/∂s: the slope in a road's
+    /// friction relative to its value (a surface μ scales both λμx and λμy, architecture.md:
+    /// ∂/∂μ = ∂/∂s / μ), where the file's λμx and λμy differ.
+    pub fn eval_d_scale<M: Backend<F>>(
+        &self,
+        lmux_star: F,
+        lmuy_star: F,
+        kappa: F,
+        alpha: F,
+    ) -> Result<(Forces<F>, SlopesMu<F>), EvalError> {
+        let scaled = |l: F| Dual::<F, 3> {
+            v: l,
+            d: [F::ZERO, F::ZERO, l],
+        };
+        self.eval_d3::<M>(scaled(lmux_star), scaled(lmuy_star), kappa, alpha)
+    }
+
+    /// The friction stage at dual λμx*, λμy* (direction 2) and the slip stage with κ, α as
+    /// directions 0 and 1.
+    fn eval_d3<M: Backend<F>>(
+        &self,
+        lmux_star: Dual<F, 3>,
+        lmuy_star: Dual<F, 3>,
+        kappa: F,
+        alpha: F,
+    ) -> Result<(Forces<F>, SlopesMu<F>), EvalError> {
         check_slips(kappa, alpha)?;
-        if !lmu.is_finite() {
+        if !(lmux_star.v.is_finite() && lmuy_star.v.is_finite()) {
             return Err(EvalError::NonFinite(InputField::P));
         }
-        let l = Dual::<F, 3>::var(lmu, 2);
-        let mu = self.view().mu_stage::<Dual<F, 3>>(l, l);
+        let mu = self.view().mu_stage::<Dual<F, 3>>(lmux_star, lmuy_star);
         let f = self.view().slip::<Dual<F, 3>, Dual<F, 3>, M>(
             &mu,
             Dual::var(kappa, 0),

@@ -29,8 +29,9 @@
 //!   `exclude_nll` of the best) always tries the brush seed, so that a cell that lost its slips
 //!   (a fast reversal out of the saturated range) is not excluded for it. After the slip step,
 //!   the cell's surface offset (within ±`mu_step`/2) takes one recursive-least-squares step on
-//!   the residuals the slip step leaves: their slope in μ comes from the friction stage at
-//!   μ + 0.005 (one more evaluation; cells held at `switch_nll`, out of reach, skip it),
+//!   the residuals the slip step leaves: their slope in μ comes with the slip slopes from one
+//!   evaluation in dual numbers of three directions (`Prepared::eval_d_scale`; cells held at
+//!   `switch_nll`, out of reach, take the two-direction one and keep their offset),
 //!   the earlier batches' information is kept and forgotten as ℓ is, and a weak prior
 //!   (σ 0.25) about the centre bounds the step while the batches say nothing of μ.
 //!   Intervals cost some discrimination: a cell more than 0.1 away can come 0.025 nearer, and
@@ -98,7 +99,7 @@
 //! docs/estimator.md ("Cost on the device") for the figures the firmware bench measures.
 
 use crate::math::{Backend, Float};
-use crate::mf::prepared::{Mu, Operating, Prepared};
+use crate::mf::prepared::{Mu, Operating, Prepared, Slopes};
 use crate::mf::{self, Input, Options, Params, Side};
 
 /// Number of surface hypotheses.
@@ -106,8 +107,6 @@ pub const CELLS: usize = 25;
 /// Cells out of contention per batch that may try a seed when their own fit is poor (cells in
 /// contention always may).
 pub const RESEEDS: usize = 6;
-/// Step in μ \[-\] of the finite difference that gives the residuals' slope in a cell's surface.
-const MU_DIFF: f64 = 0.005;
 /// Prior information on a cell's surface offset \[1/μ²\]: σ 0.25 about the cell's centre, weak
 /// beside one informative batch; it bounds the step while the batches say nothing of μ.
 const OFFSET_PRIOR: f64 = 16.0;
@@ -1037,29 +1036,22 @@ impl<F: Float> Bank<F> {
             return F::ZERO;
         };
         // The friction stage of this surface: λμx = λμy = μ/μy0 times the file's (architecture.md).
-        let mu = prep.with_mu(self.lmux * lambda, self.lmuy * lambda);
-        let (r0, jac) = match self.residuals::<M>(&mu, b, cell.alpha, cell.kappa, true) {
-            Some(x) => x,
-            None => return self.cfg.chi2_cap,
+        let (lx, ly) = (self.lmux * lambda, self.lmuy * lambda);
+        let mu = prep.with_mu(lx, ly);
+        // The residuals, their slopes in (α′, κ′) and — but for a cell held at the cap, out of
+        // reach of the best, which keeps its offset — in the cell's surface μ: the friction
+        // stage in dual numbers too (∂/∂μ = ∂/∂s / μ with both scalings times s).
+        let fitted = if cell.nll < self.cfg.switch_nll && mu_c > F::from_f64(1e-3) {
+            self.residuals_mu::<M>(lx, ly, mu_c, b, cell.alpha, cell.kappa)
+                .map(|(r, j, jm)| (r, j, Some(jm)))
+        } else {
+            self.residuals::<M>(&mu, b, cell.alpha, cell.kappa, true)
+                .map(|(r, j)| (r, j, None))
+        };
+        let Some((r0, jac, jmu)) = fitted else {
+            return self.cfg.chi2_cap;
         };
         let chi0 = norm2(&r0);
-        // The slope of the residuals in the cell's surface μ, from the friction stage at a
-        // nearby μ (a cell held at the cap, out of reach of the best, keeps its offset).
-        let h = F::from_f64(MU_DIFF);
-        let jmu = if cell.nll < self.cfg.switch_nll {
-            let lam2 = (mu_c + h) / self.mu_y0;
-            let mu2 = prep.with_mu(self.lmux * lam2, self.lmuy * lam2);
-            self.residuals::<M>(&mu2, b, cell.alpha, cell.kappa, false)
-                .map(|(rb, _)| {
-                    let mut j = [F::ZERO; 4];
-                    for ((o, x), y) in j.iter_mut().zip(r0.iter()).zip(rb.iter()) {
-                        *o = (*x - *y) / h;
-                    }
-                    j
-                })
-        } else {
-            None
-        };
         // Normal equations of the 2 unknowns (α′, κ′): (JᵀJ + damping·diag) Δ = Jᵀr.
         let (mut h00, mut h01, mut h11, mut g0, mut g1) =
             (F::ZERO, F::ZERO, F::ZERO, F::ZERO, F::ZERO);
@@ -1245,15 +1237,7 @@ impl<F: Float> Bank<F> {
         let mut j = [[F::ZERO; 2]; 4];
         let f = if jac {
             let (f, d) = prep.eval_d::<M>(mu, kappa, alpha).ok()?;
-            let sx = b.fx.map_or(F::ZERO, |(_, s)| F::ONE / s);
-            j[0] = [d.alpha.fx * sx, d.kappa.fx * sx];
-            j[1] = [d.alpha.fy / b.fy.1, d.kappa.fy / b.fy.1];
-            j[2] = [d.alpha.mz / b.mz.1, d.kappa.mz / b.mz.1];
-            j[3] = match (b.kappa, b.fx) {
-                (Some((_, s)), _) => [F::ZERO, F::ONE / s],
-                (None, None) => [F::ZERO, F::ONE / F::from_f64(0.01)],
-                (None, Some(_)) => [F::ZERO, F::ZERO],
-            };
+            j = Self::jac_of(b, &d);
             f
         } else {
             prep.eval_with::<M>(mu, kappa, alpha).ok()?
@@ -1265,6 +1249,54 @@ impl<F: Float> Bank<F> {
             return None;
         }
         Some((self.res_of(b, &m, kappa), j))
+    }
+
+    /// [`Bank::residuals`] with the slopes, at λμx* = `lx`, λμy* = `ly` (surface `mu_c`), and
+    /// the slopes of the model's part in the surface μ (one evaluation in dual numbers of three
+    /// directions, [`Prepared::eval_d_scale`]).
+    #[allow(clippy::type_complexity)]
+    fn residuals_mu<M: Backend<F>>(
+        &self,
+        lx: F,
+        ly: F,
+        mu_c: F,
+        b: &Batch<F>,
+        alpha: F,
+        kappa: F,
+    ) -> Option<([F; 4], [[F; 2]; 4], [F; 4])> {
+        let prep = self.prep.as_ref()?;
+        let (f, d) = prep.eval_d_scale::<M>(lx, ly, kappa, alpha).ok()?;
+        let j = Self::jac_of(b, &d.slip);
+        let inv = F::ONE / mu_c;
+        let jm = [
+            b.fx.map_or(F::ZERO, |(_, s)| d.lmu.fx * inv / s),
+            d.lmu.fy * inv / b.fy.1,
+            d.lmu.mz * inv / b.mz.1,
+            F::ZERO,
+        ];
+        let m = [f.fx, f.fy, f.mz];
+        if !F::all_finite(&m)
+            || !F::all_finite(&[j[0][0], j[0][1], j[1][0], j[1][1], j[2][0], j[2][1]])
+            || !F::all_finite(&jm)
+        {
+            return None;
+        }
+        Some((self.res_of(b, &m, kappa), j, jm))
+    }
+
+    /// The slopes of the normalised residuals' model part in (α′, κ′), from the slip stage's.
+    fn jac_of(b: &Batch<F>, d: &Slopes<F>) -> [[F; 2]; 4] {
+        let sx = b.fx.map_or(F::ZERO, |(_, s)| F::ONE / s);
+        [
+            [d.alpha.fx * sx, d.kappa.fx * sx],
+            [d.alpha.fy / b.fy.1, d.kappa.fy / b.fy.1],
+            [d.alpha.mz / b.mz.1, d.kappa.mz / b.mz.1],
+            match (b.kappa, b.fx) {
+                (Some((_, s)), _) => [F::ZERO, F::ONE / s],
+                (None, None) => [F::ZERO, F::ONE / F::from_f64(0.01)],
+                (None, Some(_)) => [F::ZERO, F::ZERO],
+            },
+        ]
     }
 
     fn res_of(&self, b: &Batch<F>, f: &[F; 3], kappa: F) -> [F; 4] {
