@@ -411,6 +411,22 @@ struct Batch<F> {
     dist: F,
 }
 
+/// What one [`Bank::update`]'s calls of `work` did (tests of the per-sample budget).
+#[cfg(test)]
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+struct WorkTrace {
+    /// Cells fitted over the update.
+    fits: usize,
+    /// Cells fitted by the calls that finish a batch that did not end before the next closed.
+    forced_fits: usize,
+    /// The most cells fitted (and readings mixed in) by one call.
+    load: usize,
+    /// The same, over the calls that also finished their batch.
+    load_finishing: usize,
+    /// A call refitted every cell (the likeliest did not explain the batch).
+    refit: bool,
+}
+
 /// One wheel's friction estimator. A few hundred bytes of state and a reference to the tyre's
 /// parameters; no allocation; bounded work per sample.
 #[derive(Debug, Clone)]
@@ -482,6 +498,9 @@ pub struct Bank<F> {
     mixing: Option<([F; CELLS], F)>,
     /// Whether that reading has waited a sample for a slot.
     mix_waited: bool,
+    /// What the last [`Bank::update`]'s work did (tests of the per-sample budget).
+    #[cfg(test)]
+    trace: WorkTrace,
 }
 
 impl<F: Float> Bank<F> {
@@ -564,6 +583,8 @@ impl<F: Float> Bank<F> {
             fitted: 0,
             mixing: None,
             mix_waited: false,
+            #[cfg(test)]
+            trace: WorkTrace::default(),
         })
     }
 
@@ -665,6 +686,10 @@ impl<F: Float> Bank<F> {
     /// returns the current estimate.
     pub fn update<M: Backend<F>>(&mut self, params: &Params<F>, s: &Sample<F>) -> Estimate<F> {
         self.est.change = false;
+        #[cfg(test)]
+        {
+            self.trace = WorkTrace::default();
+        }
         // Spread the pending batch's fit over this sample.
         self.work::<M>();
         let finite = F::all_finite(&[s.fz, s.fy, s.mz])
@@ -750,7 +775,13 @@ impl<F: Float> Bank<F> {
                 // The previous batch's fit did not finish (cannot happen with ⌈CELLS/batch⌉
                 // cells per sample); finish it now rather than lose it.
                 while self.pending.is_some() {
+                    #[cfg(test)]
+                    let before = self.trace.fits;
                     self.work::<M>();
+                    #[cfg(test)]
+                    {
+                        self.trace.forced_fits += self.trace.fits - before;
+                    }
                 }
             }
             // Every cell's κ′ follows the measured κ′ from batch to batch (its own offset kept),
@@ -997,6 +1028,10 @@ impl<F: Float> Bank<F> {
                 self.n_active = CELLS;
                 let per_all = CELLS.div_ceil(batch);
                 slots = per_all.max(SLOTS);
+                #[cfg(test)]
+                {
+                    self.trace.refit = true;
+                }
                 fits = fits
                     .max(per_all.saturating_sub(usize::from(mixed)))
                     .max(CELLS.saturating_sub((batch - 1) * per_all));
@@ -1018,7 +1053,17 @@ impl<F: Float> Bank<F> {
         }
         // The batch's finish takes a slot too: a sample whose fits (and mixture) filled its
         // slots leaves it to the next sample.
-        if self.next >= CELLS && done + usize::from(mixed) < slots {
+        let finish = self.next >= CELLS && done + usize::from(mixed) < slots;
+        #[cfg(test)]
+        {
+            let load = done + usize::from(mixed);
+            self.trace.fits += done;
+            self.trace.load = self.trace.load.max(load);
+            if finish {
+                self.trace.load_finishing = self.trace.load_finishing.max(load);
+            }
+        }
+        if finish {
             self.pending = None;
             self.reseed_from = (self.reseed_from + 7) % CELLS;
             self.finish::<M>(&b);
@@ -1856,6 +1901,57 @@ pub(crate) mod tests {
             }
             assert!(refit.is_some_and(|k| k < 20), "change at {n} ms: {refit:?}");
             assert!(read.is_some_and(|k| k <= 80), "change at {n} ms: {read:?}");
+        }
+    }
+
+    /// The per-sample budget's structure, on streams that make every kind of sample: a slalom
+    /// on μ 1.0 onto 0.3 (the refit of every cell) with sensor noise, the rear's own profile
+    /// handed to it every 7th sample (the bench's stress of the preview). At 1 kHz (batches of
+    /// 10) no sample fits more than ⌈CELLS/batch⌉ cells (at least [`SLOTS`]) counting a mixture
+    /// as one, a sample that finishes a batch fits fewer than that, and no batch's fit is left
+    /// for the next batch's close; with one sample per batch (100 Hz) the last holds too.
+    #[test]
+    fn no_sample_takes_more_than_its_slots() {
+        let p = tyre();
+        let alpha = |t: f64| 0.06 * (core::f64::consts::TAU * 0.5 * t).sin();
+        let n = 2850;
+        let mut s = stream(&p, 1.0, alpha, n, 0);
+        s.extend(stream(
+            &p,
+            0.3,
+            |t| alpha(t + n as f64 * 1e-3),
+            1500,
+            n as u32 * 1000,
+        ));
+        let s = noisy(s);
+        for batch in [10u16, 1] {
+            let cfg = Config {
+                batch,
+                ..Config::default()
+            };
+            let slots = CELLS.div_ceil(usize::from(batch)).max(SLOTS);
+            let mut b = Bank::new::<Libm>(&p, None, cfg).unwrap();
+            let (mut refits, mut finishing, mut full) = (0, 0, 0);
+            for (i, x) in s.iter().enumerate() {
+                if i % 7 == 0 {
+                    let profile = b.profile();
+                    b.preview::<Libm>(&profile, 0.9);
+                }
+                b.update::<Libm>(&p, x);
+                let t = b.trace;
+                refits += usize::from(t.refit);
+                assert_eq!(t.forced_fits, 0, "batch {batch}, sample {i}: {t:?}");
+                if batch > 1 {
+                    assert!(t.load <= slots, "sample {i}: {t:?}");
+                    assert!(t.load_finishing < slots, "sample {i}: {t:?}");
+                    full += usize::from(t.load == slots);
+                    finishing += usize::from(t.load_finishing > 0);
+                }
+            }
+            assert!(refits > 0, "batch {batch}: the stream refits every cell");
+            if batch > 1 {
+                assert!(full > 100 && finishing > 100, "{full} {finishing}");
+            }
         }
     }
 
