@@ -468,9 +468,11 @@ pub struct Bank<F> {
     sigma_kappa_len: F,
     /// Whether any batch has been used.
     evidence: bool,
-    /// The last identifiable μ and its σ (held while not identifiable; the change flag's
-    /// reference), and the time \[s\] and distance \[m\] since.
+    /// The last identifiable μ and its σ, held while not identifiable (dropped when the
+    /// evidence turns against it), and the time \[s\] and distance \[m\] since.
     held: Option<(F, F)>,
+    /// The last identifiable μ, never dropped: the change flag's reference.
+    last_mu: Option<F>,
     age_s: F,
     age_m: F,
     /// Distance \[m\] rolled between the last two identifiable estimates, taken at the later.
@@ -564,6 +566,7 @@ impl<F: Float> Bank<F> {
             sigma_kappa_len: F::from_f64(0.3),
             evidence: false,
             held: None,
+            last_mu: None,
             age_s: F::ZERO,
             age_m: F::ZERO,
             gap_m: F::ZERO,
@@ -1559,10 +1562,13 @@ impl<F: Float> Bank<F> {
             c.mu_lo
         };
         if identifiable {
+            // Against the last identifiable value, also when the held one was dropped on the
+            // way (the evidence turned against it: what a change of surface does).
             let change = self
-                .held
-                .is_some_and(|(prev, _)| (mu - prev).abs() > c.change_min + F::TWO * sigma);
+                .last_mu
+                .is_some_and(|prev| (mu - prev).abs() > c.change_min + F::TWO * sigma);
             self.held = Some((mu, sigma));
+            self.last_mu = Some(mu);
             self.gap_m = self.age_m;
             self.age_s = F::ZERO;
             self.age_m = F::ZERO;
@@ -1908,6 +1914,32 @@ pub(crate) mod tests {
             assert!(refit.is_some_and(|k| k < 20), "change at {n} ms: {refit:?}");
             assert!(read.is_some_and(|k| k <= 80), "change at {n} ms: {read:?}");
         }
+    }
+
+    /// The change flag compares with the last identifiable value, also when the value held
+    /// after it was dropped on the way — by the evidence turning against it, or here by a
+    /// force it cannot produce (μ 0.3 → 1.0 at α 0.1 rad, as in the test below): the first
+    /// identification of the new road is flagged, nothing before it. Compared with the held
+    /// value, the flag was lost (and the preview handed the rear wheel nothing; `gough mu
+    /// bench`: 8–10 change flags per seed, 25 with this, each a change of road).
+    #[test]
+    fn a_change_is_flagged_also_when_the_held_value_was_dropped() {
+        let p = tyre();
+        let n = 1500;
+        let mut s = stream(&p, 0.3, |t| 0.1 * (t / 0.5).min(1.0), n, 0);
+        s.extend(stream(&p, 1.0, |_| 0.1, 500, n as u32 * 1000));
+        let est = run(&p, &s);
+        assert!(est[..n].iter().all(|e| !e.change));
+        // The first identification that is not the old road's.
+        let first = est[n..]
+            .iter()
+            .position(|e| e.state == State::Identifiable && (e.mu - 0.3).abs() > 0.1)
+            .map(|k| est[n + k]);
+        assert!(
+            first.is_some_and(|e| e.change && (e.mu - 1.0).abs() <= 0.1),
+            "{first:?}"
+        );
+        assert_eq!(est.iter().filter(|e| e.change).count(), 1);
     }
 
     /// The per-sample budget's structure, on streams that make every kind of sample: a slalom

@@ -660,6 +660,35 @@ pub fn wheel_surfaces(traces: &[WheelTrace], ests: &[Vec<Estimate<f64>>]) -> Vec
     out
 }
 
+/// Change flags that declare a change of surface where the road did not change (false change
+/// alarms): a flag is a true one when the road under the wheel differs from the road on which
+/// the estimator's previous identification began (the run of identifiable samples it changes
+/// from) and the new value is within ±0.1 of it. A correction on one road (a wrong value
+/// replaced by the right one), a flag to a wrong value, or one without any earlier
+/// identification is false; a change identified late — the road changed seconds before, the
+/// old identification held meanwhile — is a true one (its lateness is the latency's and the
+/// "detect change" column's).
+pub fn false_change_flags(tr: &WheelTrace, est: &[Estimate<f64>]) -> usize {
+    // True μ where the current identification began.
+    let mut began: Option<f64> = None;
+    let mut false_flags = 0;
+    for (i, e) in est.iter().enumerate() {
+        let Some(&now) = tr.mu_true.get(i) else {
+            break;
+        };
+        if e.change {
+            let road_changed = began.is_some_and(|m| (m - now).abs() > 1e-9);
+            if !(road_changed && (e.mu - now).abs() <= 0.1) {
+                false_flags += 1;
+            }
+        }
+        if e.state == State::Identifiable && (e.change || began.is_none()) {
+            began = Some(now);
+        }
+    }
+    false_flags
+}
+
 /// Metrics of estimates `est` against the trace(s).
 pub fn metrics(traces: &[WheelTrace], ests: &[Vec<Estimate<f64>>]) -> Metrics {
     let mut errs = Vec::new();
@@ -674,6 +703,7 @@ pub fn metrics(traces: &[WheelTrace], ests: &[Vec<Estimate<f64>>]) -> Metrics {
             continue;
         }
         samples += est.len();
+        false_alarms += false_change_flags(tr, est);
         for (i, e) in est.iter().enumerate() {
             if tr.util[i] >= 0.5 {
                 util_hi += 1;
@@ -697,11 +727,6 @@ pub fn metrics(traces: &[WheelTrace], ests: &[Vec<Estimate<f64>>]) -> Metrics {
                     ws_within += 1;
                 }
             }
-            // false alarms: change flags more than 0.3 s into a segment whose μ does not change
-            let settle = tr.rows[a].t + 0.3;
-            false_alarms += (a..b)
-                .filter(|&i| est[i].change && tr.rows[i].t > settle)
-                .count();
             let Some(ok) = settled(tr, est, a, b) else {
                 continue;
             };
@@ -2104,6 +2129,63 @@ mod tests {
         let none = vec![e(0.8, 0.4, State::Fallback); n];
         let m = metrics(std::slice::from_ref(&tr), std::slice::from_ref(&none));
         assert_eq!((m.n_identifiable, m.within_2sigma), (0, None));
+    }
+
+    /// A change flag is false unless the road changed since the identification it changes from
+    /// began and the new value is right: a late true one counts as true; a correction on one
+    /// road, a flag to a wrong value and a flag without an earlier identification as false.
+    #[test]
+    fn false_change_flags_are_those_without_a_change_of_road() {
+        let n = 400;
+        // Road 0.9 for 200 samples, then 0.3.
+        let road = |i: usize| if i < 200 { 0.9 } else { 0.3 };
+        let tr = WheelTrace {
+            rows: (0..n)
+                .map(|i| Row {
+                    t: i as f64 * 1e-3,
+                    fz: 4000.0,
+                    fy: 0.0,
+                    mz: 0.0,
+                    fx: 0.0,
+                    vx: 20.0,
+                    alpha: f64::NAN,
+                    kappa: f64::NAN,
+                })
+                .collect(),
+            mu_true: (0..n).map(road).collect(),
+            util: vec![0.7; n],
+            gamma: vec![0.0; n],
+            kappa_meas: vec![0.0; n],
+        };
+        let e = |mu: f64, change: bool| Estimate {
+            mu,
+            sigma: 0.02,
+            sigma_model: 0.0,
+            state: State::Identifiable,
+            change,
+        };
+        let run = |flags: &[(usize, f64)]| {
+            let mut mu = 0.5;
+            let est: Vec<_> = (0..n)
+                .map(|i| match flags.iter().find(|(k, _)| *k == i) {
+                    Some(&(_, m)) => {
+                        mu = m;
+                        e(m, true)
+                    }
+                    None => e(mu, false),
+                })
+                .collect();
+            false_change_flags(&tr, &est)
+        };
+        // Read 0.5 on 0.9 from the start, corrected at 50 (no change of road: false), the change
+        // read at 350, 150 samples late (true).
+        assert_eq!(run(&[(50, 0.9), (350, 0.3)]), 1);
+        // The change read as 0.6 (wrong value: false).
+        assert_eq!(run(&[(50, 0.9), (350, 0.6)]), 2);
+        // Only the late true one.
+        assert_eq!(run(&[(350, 0.3)]), 0);
+        // A flag on the very first sample has no identification to change from.
+        assert_eq!(run(&[(0, 0.9)]), 1);
     }
 
     /// The per-wheel listing (`wheels.csv`, the misses table) counts what [`metrics`] counts: a
