@@ -1916,6 +1916,34 @@ pub(crate) mod tests {
         }
     }
 
+    /// Issue 39's dry → ice step, at nine phases of a slalom (the step at full lateral force,
+    /// on the way down, at a zero crossing, on the way up): the ice (μ 0.1) is read —
+    /// identifiable within ±0.1, and within ±0.1 from then on — within 150 ms of meeting it at
+    /// every phase (69–138 ms; at the zero crossing the slowest), and that first identification
+    /// carries the change flag; no flag on the dry road before.
+    #[test]
+    fn a_dry_to_ice_step_is_read_and_flagged_within_150_ms() {
+        let p = tyre();
+        let alpha = |t: f64| 0.06 * (core::f64::consts::TAU * 0.5 * t).sin();
+        for n in [2650usize, 2700, 2750, 2800, 2850, 2900, 3000, 3100, 3300] {
+            let mut s = stream(&p, 1.0, alpha, n, 0);
+            let shifted = |t: f64| alpha(t + n as f64 * 1e-3);
+            s.extend(stream(&p, 0.1, shifted, 900, n as u32 * 1000));
+            let est = run(&p, &noisy(s));
+            assert!(est[..n].iter().all(|e| !e.change), "step at {n} ms");
+            let read = est[n..]
+                .iter()
+                .position(|e| e.state == State::Identifiable && (e.mu - 0.1).abs() <= 0.1);
+            assert!(read.is_some_and(|k| k <= 150), "step at {n} ms: {read:?}");
+            let k = read.unwrap_or(0);
+            assert!(est[n + k].change, "step at {n} ms: {:?}", est[n + k]);
+            assert!(
+                est[n + k..].iter().all(|e| (e.mu - 0.1).abs() <= 0.1),
+                "step at {n} ms"
+            );
+        }
+    }
+
     /// The change flag compares with the last identifiable value, also when the value held
     /// after it was dropped on the way — by the evidence turning against it, or here by a
     /// force it cannot produce (μ 0.3 → 1.0 at α 0.1 rad, as in the test below): the first
