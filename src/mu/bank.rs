@@ -1714,6 +1714,33 @@ pub(crate) mod tests {
             .collect()
     }
 
+    /// A noisy slalom (α = 0.06 rad·sin(π·t), bench noise) on μ 1.0 for `n` samples, then `len`
+    /// more on `mu`: a change of road at the phase `n` picks.
+    fn slalom_onto(p: &Params<f64>, mu: f64, n: usize, len: usize) -> Vec<Sample<f64>> {
+        let alpha = |t: f64| 0.06 * (core::f64::consts::TAU * 0.5 * t).sin();
+        let mut s = stream(p, 1.0, alpha, n, 0);
+        s.extend(stream(
+            p,
+            mu,
+            |t| alpha(t + n as f64 * 1e-3),
+            len,
+            n as u32 * 1000,
+        ));
+        noisy(s)
+    }
+
+    /// Samples of [`onto_grippier`] on μ 0.3, before the change.
+    const ONTO_GRIPPIER: usize = 1500;
+
+    /// A wheel identified on μ 0.3 in a turn (α ramped to 0.1 rad), then 0.5 s on μ 1.0 at α
+    /// 0.1 rad: |Fy| near 1.0·Fz, a force the old estimate cannot produce.
+    fn onto_grippier(p: &Params<f64>) -> Vec<Sample<f64>> {
+        let n = ONTO_GRIPPIER;
+        let mut s = stream(p, 0.3, |t| 0.1 * (t / 0.5).min(1.0), n, 0);
+        s.extend(stream(p, 1.0, |_| 0.1, 500, n as u32 * 1000));
+        s
+    }
+
     /// Samples of a freely rolling wheel (κ 0) at slip angle α(t), 20 m/s.
     fn stream(
         p: &Params<f64>,
@@ -1890,12 +1917,8 @@ pub(crate) mod tests {
     #[test]
     fn a_drop_in_friction_refits_every_cell_at_once() {
         let p = tyre();
-        let alpha = |t: f64| 0.06 * (core::f64::consts::TAU * 0.5 * t).sin();
         for n in [2650usize, 2700, 2750, 2800, 2850, 2900, 3100, 3300] {
-            let mut s = stream(&p, 1.0, alpha, n, 0);
-            let shifted = |t: f64| alpha(t + n as f64 * 1e-3);
-            s.extend(stream(&p, 0.3, shifted, 900, n as u32 * 1000));
-            let s = noisy(s);
+            let s = slalom_onto(&p, 0.3, n, 900);
             let mut b = Bank::new::<Libm>(&p, None, Config::default()).unwrap();
             let (mut refit, mut read) = (None, None);
             for (i, x) in s.iter().enumerate() {
@@ -1924,12 +1947,8 @@ pub(crate) mod tests {
     #[test]
     fn a_dry_to_ice_step_is_read_and_flagged_within_150_ms() {
         let p = tyre();
-        let alpha = |t: f64| 0.06 * (core::f64::consts::TAU * 0.5 * t).sin();
         for n in [2650usize, 2700, 2750, 2800, 2850, 2900, 3000, 3100, 3300] {
-            let mut s = stream(&p, 1.0, alpha, n, 0);
-            let shifted = |t: f64| alpha(t + n as f64 * 1e-3);
-            s.extend(stream(&p, 0.1, shifted, 900, n as u32 * 1000));
-            let est = run(&p, &noisy(s));
+            let est = run(&p, &slalom_onto(&p, 0.1, n, 900));
             assert!(est[..n].iter().all(|e| !e.change), "step at {n} ms");
             let read = est[n..]
                 .iter()
@@ -1953,10 +1972,8 @@ pub(crate) mod tests {
     #[test]
     fn a_change_is_flagged_also_when_the_held_value_was_dropped() {
         let p = tyre();
-        let n = 1500;
-        let mut s = stream(&p, 0.3, |t| 0.1 * (t / 0.5).min(1.0), n, 0);
-        s.extend(stream(&p, 1.0, |_| 0.1, 500, n as u32 * 1000));
-        let est = run(&p, &s);
+        let n = ONTO_GRIPPIER;
+        let est = run(&p, &onto_grippier(&p));
         assert!(est[..n].iter().all(|e| !e.change));
         // The first identification that is not the old road's.
         let first = est[n..]
@@ -1981,17 +1998,8 @@ pub(crate) mod tests {
     #[test]
     fn no_sample_takes_more_than_its_slots() {
         let p = tyre();
-        let alpha = |t: f64| 0.06 * (core::f64::consts::TAU * 0.5 * t).sin();
         let n = 2850;
-        let mut s = stream(&p, 1.0, alpha, n, 0);
-        s.extend(stream(
-            &p,
-            0.3,
-            |t| alpha(t + n as f64 * 1e-3),
-            1500,
-            n as u32 * 1000,
-        ));
-        let s = noisy(s);
+        let s = slalom_onto(&p, 0.3, n, 1500);
         for batch in [10u16, 7, 5, 3, 2, 1] {
             let cfg = Config {
                 batch,
@@ -2032,10 +2040,8 @@ pub(crate) mod tests {
     fn a_force_the_estimate_cannot_produce_ends_the_identification_at_once() {
         let p = tyre();
         // Identified on μ 0.3, then the wheel runs onto μ 1.0 at α 0.1 rad: |Fy| near 1.0·Fz.
-        let n = 1500;
-        let mut s = stream(&p, 0.3, |t| 0.1 * (t / 0.5).min(1.0), n, 0);
-        s.extend(stream(&p, 1.0, |_| 0.1, 500, n as u32 * 1000));
-        let est = run(&p, &s);
+        let n = ONTO_GRIPPIER;
+        let est = run(&p, &onto_grippier(&p));
         let before = est[n - 1];
         assert_eq!(before.state, State::Identifiable, "{before:?}");
         assert!((before.mu - 0.3).abs() < 0.05, "{before:?}");

@@ -2084,12 +2084,11 @@ mod tests {
         }
     }
 
-    /// The error metrics count identifiable samples only; "within 2σ" is the share of them
-    /// whose error is at most twice the σ they report.
-    #[test]
-    fn metrics_count_errors_and_their_sigma() {
-        let n = 6;
-        let tr = WheelTrace {
+    /// A trace at 1 kHz with true μ `mu_true` and utilisation `util` per row (its measured
+    /// channels constant: the metrics read the estimates against the truth only).
+    fn flat_trace(mu_true: Vec<f64>, util: Vec<f64>) -> WheelTrace {
+        let n = mu_true.len();
+        WheelTrace {
             rows: (0..n)
                 .map(|i| Row {
                     t: i as f64 * 1e-3,
@@ -2102,11 +2101,19 @@ mod tests {
                     kappa: f64::NAN,
                 })
                 .collect(),
-            mu_true: vec![0.5; n],
-            util: vec![0.6; n],
+            mu_true,
+            util,
             gamma: vec![0.0; n],
             kappa_meas: vec![0.0; n],
-        };
+        }
+    }
+
+    /// The error metrics count identifiable samples only; "within 2σ" is the share of them
+    /// whose error is at most twice the σ they report.
+    #[test]
+    fn metrics_count_errors_and_their_sigma() {
+        let n = 6;
+        let tr = flat_trace(vec![0.5; n], vec![0.6; n]);
         let e = |mu: f64, sigma: f64, state: State| Estimate {
             mu,
             sigma,
@@ -2139,24 +2146,7 @@ mod tests {
         let n = 400;
         // Road 0.9 for 200 samples, then 0.3.
         let road = |i: usize| if i < 200 { 0.9 } else { 0.3 };
-        let tr = WheelTrace {
-            rows: (0..n)
-                .map(|i| Row {
-                    t: i as f64 * 1e-3,
-                    fz: 4000.0,
-                    fy: 0.0,
-                    mz: 0.0,
-                    fx: 0.0,
-                    vx: 20.0,
-                    alpha: f64::NAN,
-                    kappa: f64::NAN,
-                })
-                .collect(),
-            mu_true: (0..n).map(road).collect(),
-            util: vec![0.7; n],
-            gamma: vec![0.0; n],
-            kappa_meas: vec![0.0; n],
-        };
+        let tr = flat_trace((0..n).map(road).collect(), vec![0.7; n]);
         let e = |mu: f64, change: bool| Estimate {
             mu,
             sigma: 0.02,
@@ -2195,33 +2185,15 @@ mod tests {
     fn the_wheel_listing_agrees_with_the_metrics() {
         let n = 3000;
         let mu = |i: usize| [0.5, 0.2, 0.9][i / 1000];
-        let tr = WheelTrace {
-            rows: (0..n)
-                .map(|i| Row {
-                    t: i as f64 * 1e-3,
-                    fz: 4000.0,
-                    fy: 0.0,
-                    mz: 0.0,
-                    fx: 0.0,
-                    vx: 20.0,
-                    alpha: f64::NAN,
-                    kappa: f64::NAN,
-                })
-                .collect(),
-            mu_true: (0..n).map(mu).collect(),
-            // Utilisation 0.5 from 300 ms into each of the first two stretches, 0.2 on the third.
-            util: (0..n)
-                .map(|i| {
-                    if i < 2000 && i % 1000 >= 300 {
-                        0.7
-                    } else {
-                        0.2
-                    }
-                })
-                .collect(),
-            gamma: vec![0.0; n],
-            kappa_meas: vec![0.0; n],
-        };
+        // Utilisation 0.5 from 300 ms into each of the first two stretches, 0.2 on the third.
+        let util = (0..n).map(|i| {
+            if i < 2000 && i % 1000 >= 300 {
+                0.7
+            } else {
+                0.2
+            }
+        });
+        let tr = flat_trace((0..n).map(mu).collect(), util.collect());
         let read_from = |i: usize| if i < 1000 { 400 } else { 1500 };
         let est: Vec<_> = (0..n)
             .map(|i| Estimate {
