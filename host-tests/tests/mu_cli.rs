@@ -449,6 +449,11 @@ fn bench_says_where_the_latency_goes() {
             && text.contains(" of 3 cases; p95 on "),
         "{text}"
     );
+    // Change flags counted, and the false ones among them.
+    assert!(
+        text.contains(" false change alarms of ") && text.contains(" change flags; worst p95"),
+        "{text}"
+    );
     // Each method's identifiable share, over all samples and those at utilisation ≥ 0.5.
     assert!(
         text.contains("bank: identifiable on ")

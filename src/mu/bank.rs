@@ -1968,7 +1968,8 @@ pub(crate) mod tests {
     /// force it cannot produce (μ 0.3 → 1.0 at α 0.1 rad, as in the test below): the first
     /// identification of the new road is flagged, nothing before it. Compared with the held
     /// value, the flag was lost (and the preview handed the rear wheel nothing; `gough mu
-    /// bench`: 8–10 change flags per seed, 25 with this, each a change of road).
+    /// bench` counts 25 change flags per seed with this, each a change of road; a scratch
+    /// listing found 8–10 before).
     #[test]
     fn a_change_is_flagged_also_when_the_held_value_was_dropped() {
         let p = tyre();

@@ -15,7 +15,8 @@
 //!   within ±0.1 (median over wheels);
 //! - for surfaces that change: the time from the wheel entering the new surface to the estimate
 //!   staying within ±0.1 of it;
-//! - false change alarms on constant surfaces (the Gough estimator's `change` flag).
+//! - change flags, and the false ones among them ([`false_change_flags`]: no change of road
+//!   since the identification they change from, or a wrong new value).
 
 use super::peers::{HsuGerdes, Row, SlipSlope};
 use super::table_estimator::{Config, Estimate, GoughTable, Hold, MuEstimator, Sample, State};
@@ -546,8 +547,10 @@ pub struct Metrics {
     pub latency: Option<f64>,
     /// Median time from a change of surface to staying within ±0.1 of the new μ \[s\].
     pub detect: Option<f64>,
-    /// Change alarms on constant surfaces.
+    /// Change flags without a change of road, or to a wrong value ([`false_change_flags`]).
     pub false_alarms: usize,
+    /// Change flags raised.
+    pub change_flags: usize,
     /// Wheel-surfaces (a wheel on one stretch of constant μ) whose utilisation reaches 0.5.
     pub ws_total: usize,
     /// Of those, the ones whose estimate settles within ±0.1 within [`TARGET_LATENCY`] of it.
@@ -693,7 +696,7 @@ pub fn false_change_flags(tr: &WheelTrace, est: &[Estimate<f64>]) -> usize {
 pub fn metrics(traces: &[WheelTrace], ests: &[Vec<Estimate<f64>>]) -> Metrics {
     let mut errs = Vec::new();
     let (mut utils, mut lats, mut dets) = (Vec::new(), Vec::new(), Vec::new());
-    let mut false_alarms = 0;
+    let (mut false_alarms, mut change_flags) = (0, 0);
     let mut covered = 0;
     let (mut gross, mut samples) = (0usize, 0usize);
     let (mut ws_total, mut ws_within) = (0, 0);
@@ -704,6 +707,7 @@ pub fn metrics(traces: &[WheelTrace], ests: &[Vec<Estimate<f64>>]) -> Metrics {
         }
         samples += est.len();
         false_alarms += false_change_flags(tr, est);
+        change_flags += est.iter().filter(|e| e.change).count();
         for (i, e) in est.iter().enumerate() {
             if tr.util[i] >= 0.5 {
                 util_hi += 1;
@@ -755,6 +759,7 @@ pub fn metrics(traces: &[WheelTrace], ests: &[Vec<Estimate<f64>>]) -> Metrics {
         latency: median(lats),
         detect: median(dets),
         false_alarms,
+        change_flags,
         n_samples: samples,
         n_util_hi: util_hi,
         n_identifiable_util_hi: ident_hi,
@@ -946,6 +951,7 @@ pub fn run(a: BenchArgs) -> Result<(), String> {
     let mut ws_issue = [(0usize, 0usize); METHODS.len()];
     let issue_cases = cases.iter().filter(|c| !straight_stop(c)).count();
     let mut alarms = [0usize; METHODS.len()];
+    let mut flags = [0usize; METHODS.len()];
     let mut worst: [Option<f64>; METHODS.len()] = [None; METHODS.len()];
     let mut worst_gross = [0.0f64; METHODS.len()];
     // Identifiable samples over the suite: (identifiable, all, identifiable at utilisation
@@ -1046,6 +1052,7 @@ pub fn run(a: BenchArgs) -> Result<(), String> {
                 ws_issue[m].1 += mt.ws_total;
             }
             alarms[m] += mt.false_alarms;
+            flags[m] += mt.change_flags;
             shares[m].0 += mt.n_identifiable;
             shares[m].1 += mt.n_samples;
             shares[m].2 += mt.n_identifiable_util_hi;
@@ -1105,12 +1112,13 @@ pub fn run(a: BenchArgs) -> Result<(), String> {
     for (m, name) in METHODS.iter().enumerate() {
         let _ = writeln!(
             summary,
-            "{name}: within ±0.1 within {TARGET_LATENCY} s of utilisation 0.5 on {} of {} cases and {} of {} wheel-surfaces; {} false change alarms; worst p95 error {}; worst share of samples identifiable and off by > {GROSS}: {:.2} %.",
+            "{name}: within ±0.1 within {TARGET_LATENCY} s of utilisation 0.5 on {} of {} cases and {} of {} wheel-surfaces; {} false change alarms of {} change flags; worst p95 error {}; worst share of samples identifiable and off by > {GROSS}: {:.2} %.",
             within[m],
             cases.len(),
             ws[m].0,
             ws[m].1,
             alarms[m],
+            flags[m],
             fmt(worst[m], 3),
             100.0 * worst_gross[m],
         );
