@@ -334,3 +334,38 @@ fn slopes_are_central_differences() {
         );
     }
 }
+
+/// A scaling that is not finite is refused with `NonFinite(P)`, as `eval_d_mu` refuses one, and
+/// a bad slip before it; never a NaN out.
+#[test]
+fn a_scaled_friction_stage_refuses_what_is_not_finite() {
+    use gough::mf::InputField;
+    let p = params("MagicFormula61_Parameters");
+    let op = Operating {
+        fz: p.fnomin,
+        gamma: 0.0,
+        phit: 0.0,
+        vx: 20.0,
+        p: None,
+    };
+    let prep = Prepared::new::<Libm>(&p, &op, &Options::default()).unwrap();
+    for (lx, ly) in [
+        (f64::NAN, 1.0),
+        (1.0, f64::INFINITY),
+        (f64::NEG_INFINITY, f64::NAN),
+    ] {
+        assert_eq!(
+            prep.eval_d_scale::<Libm>(lx, ly, 0.0, 0.01).err(),
+            Some(EvalError::NonFinite(InputField::P)),
+            "{lx} {ly}"
+        );
+    }
+    assert!(matches!(
+        prep.eval_d_scale::<Libm>(1.0, 1.0, f64::NAN, 0.01),
+        Err(EvalError::NonFinite(_))
+    ));
+    let (f, d) = prep.eval_d_scale::<Libm>(0.3, 0.25, 0.0, 0.01).unwrap();
+    assert!([f.fx, f.fy, f.mz, d.lmu.fx, d.lmu.fy, d.lmu.mz]
+        .iter()
+        .all(|v| v.is_finite()));
+}

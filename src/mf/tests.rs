@@ -528,6 +528,7 @@ macro_rules! float_props {
                     for r in [
                         prep.eval_d::<Libm>(&mu, i.kappa, i.alpha).map(|(f, d)| [f.fx, f.fy, f.mz, f.t, f.m_zr, d.kappa.fx, d.kappa.fy, d.kappa.mz, d.alpha.fx, d.alpha.fy, d.alpha.mz]),
                         prep.eval_d_mu::<Libm>(lmu as $t, i.kappa, i.alpha).map(|(f, d)| [f.fx, f.fy, f.mz, d.slip.kappa.fx, d.slip.kappa.fy, d.slip.kappa.mz, d.slip.alpha.fx, d.slip.alpha.fy, d.slip.alpha.mz, d.lmu.fx, d.lmu.fy]),
+                        prep.eval_d_scale::<Libm>(lmu as $t, 0.8 * lmu as $t, i.kappa, i.alpha).map(|(f, d)| [f.fx, f.fy, f.mz, d.slip.kappa.fx, d.slip.kappa.fy, d.slip.kappa.mz, d.slip.alpha.fx, d.slip.alpha.fy, d.slip.alpha.mz, d.lmu.fx, d.lmu.fy]),
                     ] {
                         match r {
                             Ok(vs) => for v in vs { prop_assert!(v.is_finite()); },
