@@ -75,6 +75,17 @@ pub struct BenchArgs {
         default_value_t = 0.0
     )]
     pub mu_shift: f64,
+    /// A tyre model that is not the tyre: NAME=DELTA adds DELTA to the `.tir` parameter NAME
+    /// of the estimators' copy of the file only (e.g. `PHY1=0.002`: its horizontal shift 2 mrad
+    /// off), the simulation keeps the file; repeatable, or comma-separated. How the estimators
+    /// fare when the file they are given is wrong.
+    #[arg(
+        long = "model-error",
+        value_name = "NAME=DELTA",
+        value_delimiter = ',',
+        allow_hyphen_values = true
+    )]
+    pub model_error: Vec<String>,
 }
 
 impl BenchArgs {
@@ -912,6 +923,34 @@ pub fn simulate_case(p: &Params<f64>, c: &Case) -> Result<Log, String> {
     sim::simulate(&cfg, p, false)
 }
 
+/// The estimators' tyre model under `--model-error`: `p` with each NAME=DELTA added to the
+/// parameter NAME (a `.tir` key, any case). Refuses an unknown name, a DELTA that is not a
+/// finite number, and a result the `.tir` checks refuse.
+pub fn model_with_error(p: &Params<f64>, errors: &[String]) -> Result<Params<f64>, String> {
+    let mut q = p.clone();
+    for kv in errors {
+        let (name, v) = kv
+            .split_once('=')
+            .ok_or_else(|| format!("--model-error {kv}: expected NAME=DELTA"))?;
+        let key = gough::mf::Key::from_name(name.trim())
+            .ok_or_else(|| format!("--model-error {kv}: no .tir parameter '{}'", name.trim()))?;
+        let d: f64 = v
+            .trim()
+            .parse()
+            .ok()
+            .filter(|d: &f64| d.is_finite())
+            .ok_or_else(|| format!("--model-error {kv}: '{}' is not a finite number", v.trim()))?;
+        q.set(key, q.get(key) + d);
+    }
+    gough::tir::validate(&q).map_err(|(k, why)| {
+        format!(
+            "--model-error: the estimators' tyre is not a valid one ({}: {why:?})",
+            k.name()
+        )
+    })?;
+    Ok(q)
+}
+
 /// Runs the benchmark.
 pub fn run(a: BenchArgs) -> Result<(), String> {
     let mut cfg = Config::default();
@@ -920,7 +959,10 @@ pub fn run(a: BenchArgs) -> Result<(), String> {
     }
     let sensors = a.sensors()?;
     let t = crate::tyre::load(&a.tir)?;
-    let p = t.params;
+    // `sim`: the tyre the simulation runs; `p`: the estimators' model of it (the same file
+    // unless `--model-error`).
+    let sim = t.params;
+    let p = model_with_error(&sim, &a.model_error)?;
     let tables = Tables::new(&p)?;
     if !(a.mu_shift.is_finite() && a.mu_shift.abs() <= 0.05) {
         return Err(format!(
@@ -934,6 +976,14 @@ pub fn run(a: BenchArgs) -> Result<(), String> {
     }
     std::fs::create_dir_all(&a.out).map_err(|e| format!("{}: {e}", a.out.display()))?;
     let mut md = String::new();
+    if !a.model_error.is_empty() {
+        let _ = writeln!(
+            md,
+            "Model error (`--model-error`): the estimators' tyre is {} with {}; the simulation's is the file.\n",
+            a.tir.display(),
+            a.model_error.join(", ")
+        );
+    }
     let _ = writeln!(md, "| manoeuvre | road | estimator | identifiable samples | mean err | p95 err | within 2σ | off by > 0.2 | util when within ±0.1 | latency from util 0.5 [s] | detect change [s] | false alarms |");
     let _ = writeln!(md, "|---|---|---|---|---|---|---|---|---|---|---|---|");
     let mut csv = String::from("manoeuvre,road,estimator,n_identifiable,err_mean,err_p95,within_2sigma,gross,util_within,latency_s,detect_s,false_alarms,ws_within,ws_total\n");
@@ -960,7 +1010,7 @@ pub fn run(a: BenchArgs) -> Result<(), String> {
     let mut per_case: Vec<(&Case, Vec<Metrics>, Vec<Common>)> = Vec::new();
     for c in &cases {
         bar.set_message(format!("{} on {}", c.manoeuvre, c.road));
-        let log = simulate_case(&p, c)?;
+        let log = simulate_case(&sim, c)?;
         let traces: Vec<WheelTrace> = (0..4).map(|w| measure(&log, w, &sensors, a.seed)).collect();
         let mut ms = Vec::new();
         let mut all_ests: Vec<Vec<Vec<Estimate<f64>>>> = Vec::new();
@@ -2026,6 +2076,28 @@ mod tests {
             "rows 10..=160 (the deadline's row 160 included)"
         );
         assert_eq!(t.identifiable, 151 - 70);
+    }
+
+    /// `--model-error` adds each delta to its parameter (any case) and to nothing else.
+    #[test]
+    fn a_model_error_changes_its_parameters_only() {
+        let p = crate::tyre::load(std::path::Path::new(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../host-tests/data/tyres/MagicFormula61_Parameters.tir"
+        )))
+        .unwrap()
+        .params;
+        let q = model_with_error(&p, &["PHY1=0.002".into(), "pvy1 = -0.01".into()]).unwrap();
+        assert!((q.phy1 - p.phy1 - 0.002).abs() < 1e-15);
+        assert!((q.pvy1 - p.pvy1 + 0.01).abs() < 1e-15);
+        let mut back = q.clone();
+        back.phy1 = p.phy1;
+        back.pvy1 = p.pvy1;
+        assert_eq!(back, p);
+        assert_eq!(model_with_error(&p, &[]).unwrap(), p);
+        for bad in ["PHY1", "NOPE=1", "PHY1=x", "PHY1=NaN", "FNOMIN=-1e9"] {
+            assert!(model_with_error(&p, &[bad.into()]).is_err(), "{bad}");
+        }
     }
 
     /// Every field of the estimator's `Config` can be set by name (and only it), to the value
