@@ -1013,3 +1013,79 @@ fn a_four_wheel_log_runs_each_wheel_and_the_preview() {
         "--wheelbase 0:",
     );
 }
+
+/// `gough mu calibrate` puts right a file whose force shift is 2 mrad off, from a log of a
+/// surface of known μ: the bench's step steer on μ 1.0, its left-hand wheels (the outer ones,
+/// near the limit) written as a car log as the file describes the tyre (a right-hand one: Fy,
+/// Mz and γ mirrored), the file's PHY1 moved by +0.002. `auto` fits PHY1 and
+/// QHZ1, takes PHY1 (the smaller χ²) and writes a file whose PHY1 is within 1 mrad of the
+/// tyre's own; a μ the log never comes near is a one-line error.
+#[test]
+fn calibrate_puts_a_shifted_file_right() {
+    use gough_host::mu::bench::{measure, simulate_case, suite, Sensors};
+    use gough_host::mu::calibrate::set_in_tir;
+    let dir = tmp("calibrate");
+    std::fs::create_dir_all(&dir).unwrap();
+    let text = std::fs::read_to_string(tyre()).unwrap();
+    let p = gough_host::tyre::load(Path::new(&tyre())).unwrap().params;
+    let wrong = dir.join("wrong.tir");
+    std::fs::write(
+        &wrong,
+        set_in_tir(&text, gough::mf::Key::PHY1, p.phy1 + 0.002).unwrap(),
+    )
+    .unwrap();
+    let log = simulate_case(&p, &suite()[0]).unwrap();
+    let mut csv = String::from("t,wheel,fz,fy,mz,fx,vx,kappa,gamma\n");
+    let tr: Vec<_> = [0, 2]
+        .map(|w| (w, measure(&log, w, &Sensors::default(), 1)))
+        .into_iter()
+        .collect();
+    for i in 0..tr[0].1.rows.len() {
+        for (w, t) in &tr {
+            let r = &t.rows[i];
+            csv += &format!(
+                "{},{w},{},{},{},{},{},{},{}\n",
+                r.t, r.fz, -r.fy, -r.mz, r.fx, r.vx, t.kappa_meas[i], -t.gamma[i]
+            );
+        }
+    }
+    let log_path = dir.join("log.csv");
+    std::fs::write(&log_path, csv).unwrap();
+    let out = dir.join("calibrated.tir");
+    let (w, l, o) = (
+        wrong.to_str().unwrap(),
+        log_path.to_str().unwrap(),
+        out.to_str().unwrap(),
+    );
+    let r = gough(&[
+        "mu",
+        "calibrate",
+        "--tir",
+        w,
+        "--log",
+        l,
+        "--mu",
+        "1.0",
+        "--out",
+        o,
+    ]);
+    let stdout = String::from_utf8_lossy(&r.stdout);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    println!("{stdout}");
+    assert!(
+        stdout.contains("PHY1: ") && stdout.contains("QHZ1: "),
+        "{stdout}"
+    );
+    assert!(stdout.contains("(PHY1 = "), "{stdout}");
+    let q = gough_host::tyre::load(&out).unwrap().params;
+    assert!(
+        (q.phy1 - p.phy1).abs() < 0.001,
+        "{} against {}",
+        q.phy1,
+        p.phy1
+    );
+    one_line_error(
+        &["mu", "calibrate", "--tir", w, "--log", l, "--mu", "3.0"],
+        "near the limit",
+    );
+}

@@ -28,6 +28,43 @@ pub enum MuCmd {
     /// its rows (exact model, the bench's noise) 150 ms after the utilisation reaches 0.5, beside
     /// the Gough estimator's latency, wheel by wheel.
     Bound(crate::mu::bound::BoundArgs),
+    /// Calibrate the tyre file's registration of Mz against Fy on a log of a surface whose μ is
+    /// known: the offset of PHY1 (the force's horizontal shift) or QHZ1 (the trail's) that best
+    /// explains the measured Fy and Mz near the limit, and the file with it.
+    ///
+    /// LOG columns as `gough mu estimate` reads them (with `wheel` for several wheels, each
+    /// taken as the file describes the tyre).
+    Calibrate(CalibrateArgs),
+}
+
+/// Arguments of `gough mu calibrate`.
+#[derive(Args)]
+pub struct CalibrateArgs {
+    /// Tyre property file (.tir).
+    #[arg(long)]
+    pub tir: PathBuf,
+    /// Measurement log (CSV) on one surface.
+    #[arg(long)]
+    pub log: PathBuf,
+    /// The surface's friction μ, on the file's scale (as the estimator reports it).
+    #[arg(long)]
+    pub mu: f64,
+    /// The parameter to fit: `auto` fits PHY1 and QHZ1 and takes the one that explains the log
+    /// better; or any `.tir` key.
+    #[arg(long, default_value = "auto")]
+    pub param: String,
+    /// The offsets tried: ±RANGE about the file's value.
+    #[arg(long, default_value_t = 0.005)]
+    pub range: f64,
+    /// Force sensor noise, rms, as a fraction of Fz.
+    #[arg(long, default_value_t = 0.01)]
+    pub noise_f: f64,
+    /// Aligning-torque sensor noise, rms \[N·m\].
+    #[arg(long, default_value_t = 2.0)]
+    pub noise_mz: f64,
+    /// Write the calibrated file here.
+    #[arg(long)]
+    pub out: Option<PathBuf>,
 }
 
 /// Arguments of `gough mu map`.
@@ -180,6 +217,7 @@ pub fn run(cmd: MuCmd) -> Result<(), String> {
         MuCmd::Bench(b) => crate::mu::bench::run(b),
         MuCmd::Demo(d) => crate::mu::bench::demo(d),
         MuCmd::Bound(b) => crate::mu::bound::run(b),
+        MuCmd::Calibrate(a) => calibrate(&a),
         MuCmd::Map(a) => {
             if !a.gamma.is_finite() {
                 return Err(format!("--gamma {}: not a finite angle [rad]", a.gamma));
@@ -205,4 +243,87 @@ pub fn run(cmd: MuCmd) -> Result<(), String> {
             Ok(())
         }
     }
+}
+
+/// `gough mu calibrate`.
+fn calibrate(a: &CalibrateArgs) -> Result<(), String> {
+    use crate::mu::calibrate::{self, Noise, WheelLog};
+    use gough::mf::Key;
+    let t = tyre::load(&a.tir)?;
+    let text = std::fs::read_to_string(&a.tir)
+        .map_err(|e| format!("{}: cannot read: {e}", a.tir.display()))?;
+    let ((rows, gamma, _), wheels) = read_car_log(&a.log)?;
+    let noise = Noise {
+        f_rel: a.noise_f,
+        mz: a.noise_mz,
+    };
+    if !(noise.f_rel.is_finite() && noise.f_rel > 0.0 && noise.mz.is_finite() && noise.mz > 0.0) {
+        return Err("--noise-f and --noise-mz must be positive".into());
+    }
+    // Each wheel's rows in time order, as the file describes the tyre.
+    let per: Vec<(Vec<_>, Vec<f64>)> = (0..4)
+        .map(|w| {
+            let idx: Vec<usize> = (0..rows.len()).filter(|&i| wheels[i] == w).collect();
+            (
+                idx.iter().map(|&i| rows[i]).collect(),
+                idx.iter().map(|&i| gamma[i]).collect(),
+            )
+        })
+        .collect();
+    let logs: Vec<WheelLog> = per
+        .iter()
+        .filter(|(r, _)| !r.is_empty())
+        .map(|(r, g)| WheelLog {
+            rows: r,
+            gamma: g,
+            mounted: None,
+        })
+        .collect();
+    let keys: Vec<Key> = if a.param.eq_ignore_ascii_case("auto") {
+        vec![Key::PHY1, Key::QHZ1]
+    } else {
+        vec![Key::from_name(&a.param)
+            .ok_or_else(|| format!("--param {}: no .tir parameter of that name", a.param))?]
+    };
+    let mut best: Option<calibrate::Fit> = None;
+    for &k in &keys {
+        let f = calibrate::calibrate(&t.params, k, a.mu, &logs, &noise, a.range)?;
+        println!(
+            "{}: {:+.6} ± {:.6} (1σ) → {:.6}; χ² {:.1} against {:.1} at the file's {:.6} ({} batches of {} rows at utilisation ≥ {} of μ {})",
+            k.name(),
+            f.delta,
+            f.sigma,
+            t.params.get(k) + f.delta,
+            f.chi2,
+            f.chi2_file,
+            t.params.get(k),
+            f.batches,
+            calibrate::BATCH,
+            calibrate::UTIL_MIN,
+            a.mu
+        );
+        if best.as_ref().is_none_or(|b| f.chi2 < b.chi2) {
+            best = Some(f);
+        }
+    }
+    let f = best.ok_or("no parameter")?;
+    if let Some(out) = &a.out {
+        let v = t.params.get(f.key) + f.delta;
+        let new = calibrate::set_in_tir(&text, f.key, v)?;
+        if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
+            std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+        }
+        std::fs::write(out, new).map_err(|e| format!("{}: {e}", out.display()))?;
+        // What was written reads back as a tyre with the calibrated value.
+        let back = tyre::load(out)?;
+        if back.params.get(f.key) != v {
+            return Err(format!(
+                "{}: {} did not read back",
+                out.display(),
+                f.key.name()
+            ));
+        }
+        println!("-> {} ({} = {v})", out.display(), f.key.name());
+    }
+    Ok(())
 }

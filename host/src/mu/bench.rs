@@ -1478,7 +1478,14 @@ pub fn demo(a: DemoArgs) -> Result<(), String> {
             fmt(m.util_within, 2)
         );
         if w == 0 {
-            // The front-left wheel's measured channels as a LOG for `gough mu estimate`.
+            // The front-left wheel's measured channels as a LOG for `gough mu estimate`, which
+            // takes a log as the file describes the tyre: mirrored (α, γ, Fy, Mz negated) when
+            // the file's tyre is a right-hand one.
+            let s = if p.mirrored_on(Some(gough::mf::Side::Left)) {
+                -1.0
+            } else {
+                1.0
+            };
             let rows: Vec<Vec<f64>> = tr
                 .rows
                 .iter()
@@ -1486,7 +1493,18 @@ pub fn demo(a: DemoArgs) -> Result<(), String> {
                 .zip(&tr.mu_true)
                 .zip(&tr.kappa_meas)
                 .map(|(((r, &g), &m), &k)| {
-                    vec![r.t, r.fz, r.fy, r.mz, r.fx, r.vx, k, r.alpha, g, m]
+                    vec![
+                        r.t,
+                        r.fz,
+                        s * r.fy,
+                        s * r.mz,
+                        r.fx,
+                        r.vx,
+                        k,
+                        s * r.alpha,
+                        s * g,
+                        m,
+                    ]
                 })
                 .collect();
             crate::csvio::write(

@@ -4,6 +4,7 @@
 //! ([`bench`](mod@bench)). Nothing here re-implements the core's estimator.
 pub mod bench;
 pub mod bound;
+pub mod calibrate;
 pub mod map;
 pub mod peers;
 pub mod table_estimator;
