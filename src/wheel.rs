@@ -41,7 +41,7 @@
 //! to the forces only; `wheelbase` starts the front-to-rear preview between a [`Car`]'s axles.
 //! The tyre is taken as its file describes it on every wheel (`side` None), as for the forces.
 use crate::math::Backend;
-use crate::mf::{self, Input, Options, Output, Params};
+use crate::mf::{self, Input, Options, Output, Params, Side};
 use crate::mu::bank::{self, Bank, BuildError};
 use crate::mu::preview::{self, Preview};
 use crate::proto::{AckCode, Estimate, EstimateState, Forces, Measurement, Settings};
@@ -78,6 +78,7 @@ struct Kin {
 pub struct Wheel {
     defl: Option<Deflection>,
     est: Option<Bank<f32>>,
+    mounted: Option<Side>,
 }
 
 impl Default for Wheel {
@@ -185,14 +186,17 @@ fn forces_of(m: &Measurement, o: &Output<f32>) -> Forces {
 }
 
 /// The steady-state answer (no filter): the Magic Formula at the measured slips.
+/// `mounted`: the side the tyre is on (`None`: as the file describes it), see [`Wheel::mounted`].
 pub fn steady<M: Backend<f32>>(
     p: &Params<f32>,
     limits: bool,
+    mounted: Option<Side>,
     m: &Measurement,
 ) -> Result<Forces, AckCode> {
     let input = m.mf_input(p).ok_or(AckCode::NoSlip)?;
     let opts = Options {
         limits,
+        mounted,
         moments: false, // the Forces message carries Fx, Fy, Mz
         ..Options::default()
     };
@@ -200,12 +204,26 @@ pub fn steady<M: Backend<f32>>(
 }
 
 impl Wheel {
-    /// No filter state, no estimator.
+    /// No filter state, no estimator; the tyre as its file describes it (see [`Wheel::mounted`]).
     pub const fn new() -> Self {
+        Wheel::on(None)
+    }
+
+    /// [`Wheel::new`] for a wheel on side `mounted`: where it differs from the file's
+    /// `TYRESIDE` the Magic Formula and the estimator mirror the tyre (α, γ in, Fy, Mz out:
+    /// `Options::mounted`, `Bank::new`), so that the wheel takes and gives its signals in its own
+    /// ISO-W axes. `None`: as the file describes it (the other side's signals arrive mirrored).
+    pub const fn on(mounted: Option<Side>) -> Self {
         Wheel {
             defl: None,
             est: None,
+            mounted,
         }
+    }
+
+    /// The side the tyre is mounted on (`None`: as its file describes it).
+    pub fn mounted(&self) -> Option<Side> {
+        self.mounted
     }
 
     /// Forgets the filter's deflections (the next sample starts it in the steady state).
@@ -221,7 +239,7 @@ impl Wheel {
         s: &Settings,
     ) -> Result<(), BuildError> {
         self.est = None;
-        self.est = Some(Bank::new::<M>(p, None, estimator_config(s))?);
+        self.est = Some(Bank::new::<M>(p, self.mounted, estimator_config(s))?);
         Ok(())
     }
 
@@ -256,7 +274,7 @@ impl Wheel {
     ) -> Result<Forces, AckCode> {
         let Some(k) = kinematics::<M>(p, m) else {
             self.defl = None;
-            return steady::<M>(p, limits, m);
+            return steady::<M>(p, limits, self.mounted, m);
         };
         let gamma = m.gamma.unwrap_or(0.0);
         let input = |kappa: f32, alpha: f32| Input {
@@ -278,6 +296,7 @@ impl Wheel {
                 let opts = Options {
                     limits,
                     transient: true,
+                    mounted: self.mounted,
                     moments: false, // the Forces message carries Fx, Fy, Mz
                     ..Options::default()
                 };
@@ -298,6 +317,7 @@ impl Wheel {
         self.defl = None;
         let opts = Options {
             limits,
+            mounted: self.mounted,
             moments: false, // the Forces message carries Fx, Fy, Mz
             ..Options::default()
         };
@@ -396,6 +416,10 @@ impl core::error::Error for StartError {}
 ///
 /// The wheelbase comes with the protocol's `Settings` (v3); with `0` (the default) every wheel
 /// estimates alone.
+///
+/// Each wheel is mounted on its side ([`Wheel::on`]: FL, RL left, FR, RR right): the tyre
+/// file describes one side's tyre (`TYRESIDE`), the other side's is its mirror image, and every
+/// wheel's signals are taken and given in its own ISO-W axes.
 #[derive(Debug, Clone)]
 pub struct Car {
     wheels: [Wheel; 4],
@@ -408,13 +432,19 @@ impl Default for Car {
     }
 }
 
-const NO_WHEEL: Wheel = Wheel::new();
+/// Wheels 0–3 (FL, FR, RL, RR) on their sides.
+const WHEELS_ON: [Wheel; 4] = [
+    Wheel::on(Some(Side::Left)),
+    Wheel::on(Some(Side::Right)),
+    Wheel::on(Some(Side::Left)),
+    Wheel::on(Some(Side::Right)),
+];
 
 impl Car {
     /// No filter state, no estimators, no preview.
     pub const fn new() -> Self {
         Car {
-            wheels: [NO_WHEEL; 4],
+            wheels: WHEELS_ON,
             preview: None,
         }
     }

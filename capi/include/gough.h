@@ -186,6 +186,19 @@
 #define GOUGH_WHEEL_ESTIMATOR 1
 
 /**
+ * `gough_wheel_init` option: the wheel is on the vehicle's left. Its signals are taken and its
+ * forces given in its own ISO-W axes, the tyre mirrored where the file's TYRESIDE is right.
+ * Without `GOUGH_WHEEL_LEFT` or `GOUGH_WHEEL_RIGHT` the tyre is as its file describes it (the
+ * other side's signals must then arrive mirrored: Fy, Mz, α, γ negated).
+ */
+#define GOUGH_WHEEL_LEFT 2
+
+/**
+ * `gough_wheel_init` option: the wheel is on the vehicle's right (see `GOUGH_WHEEL_LEFT`).
+ */
+#define GOUGH_WHEEL_RIGHT 4
+
+/**
  * `gough_msg_t::kind`: no message (`gough_rx_feed`: not complete yet).
  */
 #define GOUGH_MSG_NONE 0
@@ -835,9 +848,11 @@ int32_t gough_mf_eval_f64(const struct gough_params_t *p,
  * Magic Formula (limits on) → forces, and, with `GOUGH_WHEEL_ESTIMATOR` in `options`, the
  * friction estimator (the bank, as `gough_estimator_init`, with the prior μ 0.3 of the
  * protocol's default `Settings`) on the measured Fz, Fy, Mz, Fx, κ (or κ from ω), Vx, γ —
- * never α. **`p` must outlive the wheel** and stay unchanged while it runs. `GOUGH_E_MODEL`:
- * the estimator was asked for and the tyre gives no usable friction (the wheel is then not
- * initialised); `GOUGH_E_ARG`: an unknown option bit.
+ * never α. `GOUGH_WHEEL_LEFT` or `GOUGH_WHEEL_RIGHT` mounts the tyre on that side (the Magic
+ * Formula and the estimator mirror it where the file describes the other side's tyre), as the
+ * firmware mounts its four wheels. **`p` must outlive the wheel** and stay unchanged while it
+ * runs. `GOUGH_E_MODEL`: the estimator was asked for and the tyre gives no usable friction (the
+ * wheel is then not initialised); `GOUGH_E_ARG`: an unknown option bit, or both sides.
  */
 int32_t gough_wheel_init(struct gough_wheel_t *w, const struct gough_params_t *p, uint32_t options);
 

@@ -28,7 +28,7 @@
 use core::mem::{align_of, size_of};
 use core::ptr;
 use core_gough::math::{Fast, Libm};
-use core_gough::mf::{self, EvalError, Input, Options, Params};
+use core_gough::mf::{self, EvalError, Input, Options, Params, Side};
 use core_gough::mu::bank::{self, Bank};
 use core_gough::mu::preview::{self, Preview};
 use core_gough::proto::{self, Feed, Msg, Mtu, Reassembler, Segmenter, Settings, MSG_BUF};
@@ -642,6 +642,13 @@ pub const GOUGH_EST_NONE: u32 = 2;
 /// `gough_wheel_init` option: run the friction estimator (the bank) on the wheel's
 /// measurements.
 pub const GOUGH_WHEEL_ESTIMATOR: u32 = 1;
+/// `gough_wheel_init` option: the wheel is on the vehicle's left. Its signals are taken and its
+/// forces given in its own ISO-W axes, the tyre mirrored where the file's TYRESIDE is right.
+/// Without `GOUGH_WHEEL_LEFT` or `GOUGH_WHEEL_RIGHT` the tyre is as its file describes it (the
+/// other side's signals must then arrive mirrored: Fy, Mz, α, γ negated).
+pub const GOUGH_WHEEL_LEFT: u32 = 2;
+/// `gough_wheel_init` option: the wheel is on the vehicle's right (see `GOUGH_WHEEL_LEFT`).
+pub const GOUGH_WHEEL_RIGHT: u32 = 4;
 
 /// A friction estimate.
 #[repr(C)]
@@ -716,9 +723,11 @@ fn estimate_c(e: &proto::Estimate) -> gough_estimate_t {
 /// Magic Formula (limits on) → forces, and, with `GOUGH_WHEEL_ESTIMATOR` in `options`, the
 /// friction estimator (the bank, as `gough_estimator_init`, with the prior μ 0.3 of the
 /// protocol's default `Settings`) on the measured Fz, Fy, Mz, Fx, κ (or κ from ω), Vx, γ —
-/// never α. **`p` must outlive the wheel** and stay unchanged while it runs. `GOUGH_E_MODEL`:
-/// the estimator was asked for and the tyre gives no usable friction (the wheel is then not
-/// initialised); `GOUGH_E_ARG`: an unknown option bit.
+/// never α. `GOUGH_WHEEL_LEFT` or `GOUGH_WHEEL_RIGHT` mounts the tyre on that side (the Magic
+/// Formula and the estimator mirror it where the file describes the other side's tyre), as the
+/// firmware mounts its four wheels. **`p` must outlive the wheel** and stay unchanged while it
+/// runs. `GOUGH_E_MODEL`: the estimator was asked for and the tyre gives no usable friction (the
+/// wheel is then not initialised); `GOUGH_E_ARG`: an unknown option bit, or both sides.
 #[no_mangle]
 pub unsafe extern "C" fn gough_wheel_init(
     w: *mut gough_wheel_t,
@@ -731,12 +740,20 @@ pub unsafe extern "C" fn gough_wheel_init(
         if w.is_null() {
             return Err(GOUGH_E_NULL);
         }
-        if options & !GOUGH_WHEEL_ESTIMATOR != 0 {
+        let sides = GOUGH_WHEEL_LEFT | GOUGH_WHEEL_RIGHT;
+        if options & !(GOUGH_WHEEL_ESTIMATOR | sides) != 0 || options & sides == sides {
             return Err(GOUGH_E_ARG);
         }
+        let mounted = if options & GOUGH_WHEEL_LEFT != 0 {
+            Some(Side::Left)
+        } else if options & GOUGH_WHEEL_RIGHT != 0 {
+            Some(Side::Right)
+        } else {
+            None
+        };
         // SAFETY: non-null; unmark, so that a failure leaves it unusable.
         unsafe { w.cast::<u32>().write(0) };
-        let mut wheel = Wheel::new();
+        let mut wheel = Wheel::on(mounted);
         if options & GOUGH_WHEEL_ESTIMATOR != 0 {
             wheel
                 .start_estimator::<Fast>(&params.p32, &Settings::default())

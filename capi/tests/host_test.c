@@ -260,7 +260,9 @@ static void errors(const char *root) {
           "null wheel params");
     CHECK(gough_wheel_init(&wheel, &bad, GOUGH_WHEEL_ESTIMATOR) == GOUGH_E_UNINIT,
           "unparsed wheel params");
-    CHECK(gough_wheel_init(&wheel, &p, 2u) == GOUGH_E_ARG, "unknown wheel option");
+    CHECK(gough_wheel_init(&wheel, &p, 8u) == GOUGH_E_ARG, "unknown wheel option");
+    CHECK(gough_wheel_init(&wheel, &p, GOUGH_WHEEL_LEFT | GOUGH_WHEEL_RIGHT) == GOUGH_E_ARG,
+          "both sides");
     CHECK(gough_estimator_init(NULL, &p) == GOUGH_E_NULL, "null estimator");
     CHECK(gough_estimator_init(&est, NULL) == GOUGH_E_NULL, "null estimator params");
     CHECK(gough_rx_init(NULL) == GOUGH_E_NULL, "null rx");
@@ -283,6 +285,23 @@ static void errors(const char *root) {
               e.mu_min > 0.0f && e.mu_min <= e.mu,
           "wheel step: Fy %g mu %g mu_min %g state %d flags %u", (double)f.fy, (double)e.mu,
           (double)e.mu_min, e.state, e.flags);
+    /* Mounted on a side: the right (the bundled file's own) is the file's tyre to the bit; the
+     * left mirrors it (α, γ in, Fy, Mz out), which the file's shifts make differ. */
+    {
+        static gough_wheel_t wl, wr, wf;
+        gough_forces_t fl, fr, ff;
+        gough_estimate_t el;
+        CHECK(gough_wheel_init(&wl, &p, GOUGH_WHEEL_LEFT) == GOUGH_OK &&
+                  gough_wheel_init(&wr, &p, GOUGH_WHEEL_RIGHT) == GOUGH_OK &&
+                  gough_wheel_init(&wf, &p, 0) == GOUGH_OK,
+              "wheels on their sides");
+        CHECK(gough_wheel_step(&wl, &m, &fl, &el) == GOUGH_OK &&
+                  gough_wheel_step(&wr, &m, &fr, &el) == GOUGH_OK &&
+                  gough_wheel_step(&wf, &m, &ff, &el) == GOUGH_OK,
+              "steps on their sides");
+        CHECK(fr.fy == ff.fy && fr.mz == ff.mz && fl.fy < 0.0f && fl.fy != ff.fy,
+              "left %g right %g file %g", (double)fl.fy, (double)fr.fy, (double)ff.fy);
+    }
     CHECK(gough_wheel_step(NULL, &m, &f, &e) == GOUGH_E_NULL, "null wheel step");
     CHECK(gough_wheel_step(&wheel, NULL, &f, &e) == GOUGH_E_NULL, "null measurement");
     CHECK(gough_wheel_step(&wheel, &m, NULL, &e) == GOUGH_E_NULL, "null forces");

@@ -474,9 +474,10 @@ impl App {
         r
     }
 
-    /// The steady-state forces of one sample, without the filter (the selftest's oracle point).
+    /// The steady-state forces of one sample, without the filter (the selftest's oracle point:
+    /// the tyre as its file describes it, whichever wheel the sample names).
     pub fn evaluate(&self, m: &Measurement) -> Result<Forces, AckCode> {
         let p = self.params.as_ref().ok_or(AckCode::NoParams)?;
-        wheel::steady::<Math>(p, self.settings.limits, m)
+        wheel::steady::<Math>(p, self.settings.limits, None, m)
     }
 }

@@ -211,13 +211,19 @@ def main():
         inp, out = os.path.join(d, "in.csv"), os.path.join(d, "out.csv")
         with open(inp, "w") as f:
             f.write("in_Fz,in_kappa,in_alpha,in_gamma,in_phit,in_Vx,in_P\n")
-            for _, fz, al, ka, vx in cases:
+            # The firmware mounts each wheel on its side (FL, RL left; the bundled file's tyre
+            # is a right-hand one): a left wheel is the file's tyre mirrored — evaluated at −α
+            # (γ is 0), Fy and Mz negated — which is what `mf::eval` does when it mirrors.
+            for w, fz, al, ka, vx in cases:
+                al = -al if w % 2 == 0 else al
                 f.write(f"{f32(fz)!r},{f32(ka)!r},{f32(al)!r},0,0,{f32(vx)!r},0\n")
         subprocess.run([a.gough, "mf", "eval", "--tir", a.tir, "--input", inp, "--output", out,
                         "--precision", "f32"], check=True, capture_output=True)
         with open(out) as f:
             expected = [(f32(float(r["Fx"])), f32(float(r["Fy"])), f32(float(r["Mz"])))
                         for r in csv.DictReader(f)]
+            expected = [(fx, -fy, -mz) if c[0] % 2 == 0 else (fx, fy, mz)
+                        for c, (fx, fy, mz) in zip(cases, expected)]
 
     bus = None
     for _ in range(100):

@@ -1,7 +1,7 @@
 //! The firmware's per-wheel pipeline (`gough::wheel`) on the host: what it must do, checked
 //! against the core directly — the replay test only shows that device and host agree.
 use gough::math::Fast;
-use gough::mf::{self, Input, Options, Params};
+use gough::mf::{self, Input, Options, Params, Side};
 use gough::mu::bank::{self, Bank, BuildError};
 use gough::proto::{AckCode, EstimateState, Measurement, Settings, Wheel as WheelId};
 use gough::wheel::{effective_radius, estimator_config, Wheel};
@@ -12,16 +12,35 @@ fn tyre() -> Params<f32> {
 }
 
 fn steady(p: &Params<f32>, fz: f32, alpha: f32, kappa: f32, vx: f32) -> mf::Output<f32> {
+    steady_on(p, None, fz, alpha, kappa, 0.0, vx)
+}
+
+/// [`steady`] with camber `gamma`, for a tyre mounted on `side` (`None`: as the file describes
+/// it), without Mx, My (as the wheel pipeline evaluates it).
+fn steady_on(
+    p: &Params<f32>,
+    side: Option<Side>,
+    fz: f32,
+    alpha: f32,
+    kappa: f32,
+    gamma: f32,
+    vx: f32,
+) -> mf::Output<f32> {
+    let opts = Options {
+        mounted: side,
+        moments: false,
+        ..Options::default()
+    };
     let input = Input {
         fz,
         kappa,
         alpha,
-        gamma: 0.0,
+        gamma,
         phit: 0.0,
         vx,
         p: None,
     };
-    mf::eval::<f32, Fast>(p, &input, &Options::default()).unwrap()
+    mf::eval::<f32, Fast>(p, &input, &opts).unwrap()
 }
 
 fn meas(t_us: u32, alpha: f32, kappa: f32, vx: f32) -> Measurement {
@@ -369,7 +388,18 @@ fn onto_ice(p: &Params<f32>, n: u32) -> Vec<Measurement> {
             let rear = w >= 2;
             let on_ice = i >= 1500 + if rear { lag } else { 0 };
             let alpha = if rear { -0.01 } else { -0.05 } * (i as f32 / 500.0).min(1.0);
-            let o = steady(if on_ice { &ice } else { p }, 5000.0, alpha, 0.0, 20.0);
+            // Each wheel's forces in its own axes: the tyre mounted on its side, as the car
+            // takes them.
+            let side = Some(if w % 2 == 0 { Side::Left } else { Side::Right });
+            let o = steady_on(
+                if on_ice { &ice } else { p },
+                side,
+                5000.0,
+                alpha,
+                0.0,
+                0.0,
+                20.0,
+            );
             out.push(Measurement {
                 wheel: id,
                 t_us: 1000 * i,
@@ -431,7 +461,10 @@ fn the_car_hands_what_a_front_wheel_read_to_the_rear_wheel_behind_it() {
     // The same, written out with the core's pieces: banks and two previews.
     let cfg = estimator_config(&with);
     let mut banks: Vec<_> = (0..4)
-        .map(|_| Bank::new::<Fast>(&p, None, cfg).unwrap())
+        .map(|w| {
+            let side = if w % 2 == 0 { Side::Left } else { Side::Right };
+            Bank::new::<Fast>(&p, Some(side), cfg).unwrap()
+        })
         .collect();
     let pv = Preview::new(preview::Config::with_wheelbase(2.9f32)).unwrap();
     let mut pvs = [pv.clone(), pv];
@@ -472,4 +505,40 @@ fn the_car_hands_what_a_front_wheel_read_to_the_rear_wheel_behind_it() {
         );
     }
     assert!(rear_differs > 0);
+}
+
+/// The car mounts each wheel on its side: a measurement without kinematics of the front-left
+/// wheel (a left-hand wheel; the bundled file's tyre is a right-hand one) is answered with the
+/// tyre mirrored — Fy, Mz of α, γ mirrored — the front-right's as the file describes it; a
+/// `Wheel::new` takes the file's side, `Wheel::on` the one given.
+#[test]
+fn the_car_mounts_each_wheel_on_its_side() {
+    use gough::wheel::Car;
+    let p = tyre();
+    let mut car = Car::new();
+    for (id, side) in [
+        (WheelId::FrontLeft, Side::Left),
+        (WheelId::FrontRight, Side::Right),
+        (WheelId::RearLeft, Side::Left),
+        (WheelId::RearRight, Side::Right),
+    ] {
+        let m = Measurement {
+            wheel: id,
+            fz: 5000.0,
+            alpha: Some(0.05),
+            kappa: Some(-0.02),
+            gamma: Some(0.02),
+            ..Measurement::default()
+        };
+        assert_eq!(car.wheel(id.index()).unwrap().mounted(), Some(side));
+        let f = car.forces::<Fast>(&p, false, &m).unwrap();
+        let want = steady_on(&p, Some(side), 5000.0, 0.05, -0.02, 0.02, p.longvl);
+        assert_eq!((f.fx, f.fy, f.mz), (want.fx, want.fy, want.mz), "{id:?}");
+        let own = steady_on(&p, None, 5000.0, 0.05, -0.02, 0.02, p.longvl);
+        if side == Side::Left {
+            assert!((f.fy - own.fy).abs() > 1.0, "{} {}", f.fy, own.fy);
+        }
+    }
+    assert_eq!(Wheel::new().mounted(), None);
+    assert_eq!(Wheel::on(Some(Side::Left)).mounted(), Some(Side::Left));
 }

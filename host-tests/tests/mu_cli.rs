@@ -872,21 +872,7 @@ fn a_four_wheel_log_runs_each_wheel_and_the_preview() {
     let n = write_car_log(&log);
     let tir = tyre();
     let run = |out: &str, extra: &[&str]| -> Vec<(f64, usize, f64, String)> {
-        let out = tmp(out);
-        let mut args = vec![
-            "mu",
-            "estimate",
-            "--tir",
-            &tir,
-            "--log",
-            log.to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-        ];
-        args.extend_from_slice(extra);
-        let o = gough(&args);
-        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-        let text = std::fs::read_to_string(&out).unwrap();
+        let text = estimate_to(&log, &tmp(out), extra);
         let mut lines = text.lines();
         assert_eq!(lines.next(), Some("t,wheel,mu,sigma,state"));
         lines
@@ -1016,8 +1002,8 @@ fn a_four_wheel_log_runs_each_wheel_and_the_preview() {
 
 /// `gough mu calibrate` puts right a file whose force shift is 2 mrad off, from a log of a
 /// surface of known μ: the bench's step steer on μ 1.0, its left-hand wheels (the outer ones,
-/// near the limit) written as a car log as the file describes the tyre (a right-hand one: Fy,
-/// Mz and γ mirrored), the file's PHY1 moved by +0.002. `auto` fits PHY1 and
+/// near the limit) written as a car's log (each wheel in its own axes: the bundled file's
+/// right-hand tyre is mirrored for them), the file's PHY1 moved by +0.002. `auto` fits PHY1 and
 /// QHZ1, takes PHY1 (the smaller χ²) and writes a file whose PHY1 is within 1 mrad of the
 /// tyre's own; a μ the log never comes near is a one-line error.
 #[test]
@@ -1045,7 +1031,7 @@ fn calibrate_puts_a_shifted_file_right() {
             let r = &t.rows[i];
             csv += &format!(
                 "{},{w},{},{},{},{},{},{},{}\n",
-                r.t, r.fz, -r.fy, -r.mz, r.fx, r.vx, t.kappa_meas[i], -t.gamma[i]
+                r.t, r.fz, r.fy, r.mz, r.fx, r.vx, t.kappa_meas[i], t.gamma[i]
             );
         }
     }
@@ -1088,4 +1074,85 @@ fn calibrate_puts_a_shifted_file_right() {
         &["mu", "calibrate", "--tir", w, "--log", l, "--mu", "3.0"],
         "near the limit",
     );
+}
+
+/// `--side`: a one-wheel log of a left-hand wheel in its own axes (Fy, Mz, α negated against
+/// the bundled right-hand file's) with `--side left` gives the estimates the same log in the
+/// file's axes gives with the default `--side file`, to the digit; `--side right` on the file's
+/// own side too. A car's log refuses `--side`.
+#[test]
+fn a_wheel_on_the_other_side_is_mounted_by_side() {
+    let dir = tmp("side");
+    std::fs::create_dir_all(&dir).unwrap();
+    let file_axes = dir.join("file.csv");
+    write_log(&file_axes);
+    let text = std::fs::read_to_string(&file_axes).unwrap();
+    let mut left = String::new();
+    for (i, line) in text.lines().enumerate() {
+        if i == 0 {
+            left += line;
+        } else {
+            let c: Vec<&str> = line.split(',').collect();
+            let neg = |s: &str| format!("{}", -s.parse::<f64>().unwrap());
+            left += &format!(
+                "{},{},{},{},{},{},{},{}",
+                c[0],
+                c[1],
+                neg(c[2]),
+                neg(c[3]),
+                c[4],
+                c[5],
+                neg(c[6]),
+                c[7]
+            );
+        }
+        left += "\n";
+    }
+    let left_axes = dir.join("left.csv");
+    std::fs::write(&left_axes, left).unwrap();
+    let tir = tyre();
+    let run =
+        |log: &Path, side: &str, out: &str| estimate_to(log, &dir.join(out), &["--side", side]);
+    let want = run(&file_axes, "file", "a.csv");
+    assert!(want.contains(",identifiable"), "the log is read");
+    assert_eq!(run(&left_axes, "left", "b.csv"), want);
+    assert_eq!(run(&file_axes, "right", "c.csv"), want);
+    assert_ne!(run(&left_axes, "file", "d.csv"), want);
+    let car = dir.join("car.csv");
+    std::fs::write(&car, "t,wheel,fz,fy,mz\n0,0,4000,0,0\n0,1,4000,0,0\n").unwrap();
+    one_line_error(
+        &[
+            "mu",
+            "estimate",
+            "--tir",
+            &tir,
+            "--log",
+            car.to_str().unwrap(),
+            "--out",
+            dir.join("e.csv").to_str().unwrap(),
+            "--side",
+            "left",
+        ],
+        "--side is a one-wheel log's",
+    );
+}
+
+/// `gough mu estimate` of the bundled tyre on `log` into `out` with `extra` arguments; the
+/// estimates' CSV.
+fn estimate_to(log: &Path, out: &Path, extra: &[&str]) -> String {
+    let tir = tyre();
+    let mut args = vec![
+        "mu",
+        "estimate",
+        "--tir",
+        &tir,
+        "--log",
+        log.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    args.extend_from_slice(extra);
+    let o = gough(&args);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    std::fs::read_to_string(out).unwrap()
 }

@@ -286,9 +286,14 @@ fn _estimate_mu<'py>(
     let est = py
         .detach(|| {
             if car {
-                mu::estimate_car(params, &rows, &wheels, has_fx, &gamma, prec, wheelbase)
+                // A car's log mounts each wheel on its side, as `gough mu estimate` does.
+                let several = wheels.iter().any(|&w| w != 0);
+                let mounted = if several { mu::CAR } else { [None; 4] };
+                mu::estimate_car(
+                    params, &rows, &wheels, has_fx, &gamma, prec, wheelbase, mounted,
+                )
             } else {
-                mu::estimate(params, &rows, has_fx, &gamma, method, prec).map(|(e, _)| e)
+                mu::estimate(params, &rows, has_fx, &gamma, method, prec, None).map(|(e, _)| e)
             }
         })
         .map_err(PyValueError::new_err)?;

@@ -138,9 +138,13 @@ static gough_forces_t forces[REPLAY_ROWS];
 static gough_estimate_t estimates[REPLAY_ROWS];
 static int32_t codes[REPLAY_ROWS];
 
+/* Wheels 0-3 (FL, FR, RL, RR) on their sides, as the firmware mounts them. */
+static uint32_t side_of(int k) { return (k % 2 == 0) ? GOUGH_WHEEL_LEFT : GOUGH_WHEEL_RIGHT; }
+
 static void start_wheels(void) {
     for (int k = 0; k < 4; k++) {
-        if (gough_wheel_init(&wheels[k], &params, GOUGH_WHEEL_ESTIMATOR) != GOUGH_OK) fails++;
+        if (gough_wheel_init(&wheels[k], &params, GOUGH_WHEEL_ESTIMATOR | side_of(k)) != GOUGH_OK)
+            fails++;
     }
 }
 
@@ -194,7 +198,8 @@ int main(void) {
           "gough_mf_eval_f64 matches the MFeval oracle within the f64 budget");
 
     /* 3. the pipeline over the replay stream */
-    STACK("gough_wheel_init", gough_wheel_init(&wheels[0], &params, GOUGH_WHEEL_ESTIMATOR));
+    STACK("gough_wheel_init",
+          gough_wheel_init(&wheels[0], &params, GOUGH_WHEEL_ESTIMATOR | side_of(0)));
     start_wheels();
     for (uint32_t i = 0; i < REPLAY_ROWS; i++) codes[i] = step(i);
     for (uint32_t i = 0; i < REPLAY_ROWS; i++) {

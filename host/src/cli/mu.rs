@@ -33,7 +33,7 @@ pub enum MuCmd {
     /// explains the measured Fy and Mz near the limit, and the file with it.
     ///
     /// LOG columns as `gough mu estimate` reads them (with `wheel` for several wheels, each
-    /// taken as the file describes the tyre).
+    /// mounted on its side; one wheel's log as the file describes the tyre).
     Calibrate(CalibrateArgs),
 }
 
@@ -116,6 +116,33 @@ pub struct EstimateArgs {
     /// it gets there (`gough::mu::preview`). Bank method only.
     #[arg(long, value_name = "M")]
     pub wheelbase: Option<f64>,
+    /// The side of a one-wheel log's wheel: `file` takes the signals as the tyre file describes
+    /// the tyre (a wheel on the other side's signals mirrored: Fy, Mz, α, γ negated); `left` or
+    /// `right` takes them in the wheel's own ISO-W axes and mirrors the tyre where the file's
+    /// TYRESIDE differs. A car's log (a `wheel` column) mounts FL, RL left and FR, RR right.
+    #[arg(long, value_enum, default_value_t = SideArg::File)]
+    pub side: SideArg,
+}
+
+/// `--side` of `gough mu estimate`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum SideArg {
+    /// As the tyre file describes the tyre.
+    File,
+    /// A left-hand wheel, in its own axes.
+    Left,
+    /// A right-hand wheel, in its own axes.
+    Right,
+}
+
+impl SideArg {
+    fn side(self) -> Option<gough::mf::Side> {
+        match self {
+            SideArg::File => None,
+            SideArg::Left => Some(gough::mf::Side::Left),
+            SideArg::Right => Some(gough::mf::Side::Right),
+        }
+    }
 }
 
 /// Runs a `gough mu` subcommand.
@@ -141,7 +168,18 @@ pub fn run(cmd: MuCmd) -> Result<(), String> {
                     }
                 ));
             }
+            if several && a.side != SideArg::File {
+                return Err(format!(
+                    "{}: --side is a one-wheel log's; a car's log mounts each wheel on its side",
+                    a.log.display()
+                ));
+            }
             let (est, holds) = if several || a.wheelbase.is_some() {
+                let mounted = if several {
+                    crate::mu::CAR
+                } else {
+                    [a.side.side(); 4]
+                };
                 let e = estimate_car(
                     &t.params,
                     &rows,
@@ -150,10 +188,19 @@ pub fn run(cmd: MuCmd) -> Result<(), String> {
                     &gamma,
                     a.precision,
                     a.wheelbase,
+                    mounted,
                 )?;
                 (e, Vec::new())
             } else {
-                estimate(&t.params, &rows, present[0], &gamma, a.method, a.precision)?
+                estimate(
+                    &t.params,
+                    &rows,
+                    present[0],
+                    &gamma,
+                    a.method,
+                    a.precision,
+                    a.side.side(),
+                )?
             };
             let wheel_col = several;
             if let Some(dir) = a.out.parent().filter(|d| !d.as_os_str().is_empty()) {
@@ -270,13 +317,17 @@ fn calibrate(a: &CalibrateArgs) -> Result<(), String> {
             )
         })
         .collect();
+    // A car's log mounts each wheel on its side (as `gough mu estimate` does); one wheel's log
+    // is taken as the file describes the tyre.
+    let several = wheels.iter().any(|&w| w != 0);
     let logs: Vec<WheelLog> = per
         .iter()
-        .filter(|(r, _)| !r.is_empty())
-        .map(|(r, g)| WheelLog {
+        .enumerate()
+        .filter(|(_, (r, _))| !r.is_empty())
+        .map(|(w, (r, g))| WheelLog {
             rows: r,
             gamma: g,
-            mounted: None,
+            mounted: if several { crate::mu::CAR[w] } else { None },
         })
         .collect();
     let keys: Vec<Key> = if a.param.eq_ignore_ascii_case("auto") {

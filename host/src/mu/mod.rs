@@ -30,6 +30,15 @@ pub fn table<F: Float, M: Backend<F>>(
     Ok(t)
 }
 
+/// The sides of a car's wheels 0–3 (FL, FR, RL, RR): how [`estimate_car`] mounts the tyre
+/// on each wheel of a car's log, as `gough::wheel::Car` does on the device.
+pub const CAR: [Option<Side>; 4] = [
+    Some(Side::Left),
+    Some(Side::Right),
+    Some(Side::Left),
+    Some(Side::Right),
+];
+
 /// Which estimator.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
 pub enum Method {
@@ -126,8 +135,11 @@ fn read_rows(path: &Path, per_wheel: bool) -> Result<(Log, Vec<usize>), String> 
 /// The bank over a log of up to four wheels (`wheels[i]`: row `i`'s wheel, 0–3 = FL, FR, RL,
 /// RR), row by row as a car's controller runs it: a bank per wheel (mounted as the file
 /// describes the tyre, as on the device), and with `wheelbase` \[m\] the front-to-rear preview
-/// ([`gough::mu::preview`]) from each front wheel to the rear wheel on its side. In f64 or f32
-/// (`Libm`, as [`estimate`]); a one-wheel log gives [`estimate`]'s bank estimates.
+/// ([`gough::mu::preview`]) from each front wheel to the rear wheel on its side. Wheel `w`'s
+/// tyre is mounted on `mounted[w]` ([`CAR`] for a car's log; `None`: as the file describes it).
+/// In f64 or f32 (`Libm`, as [`estimate`]); a one-wheel log gives [`estimate`]'s bank
+/// estimates.
+#[allow(clippy::too_many_arguments)]
 pub fn estimate_car(
     p: &Params<f64>,
     rows: &[Row],
@@ -136,12 +148,19 @@ pub fn estimate_car(
     gamma: &[f64],
     prec: Precision,
     wheelbase: Option<f64>,
+    mounted: [Option<Side>; 4],
 ) -> Result<Vec<Estimate<f64>>, String> {
     match prec {
-        Precision::F64 => run_car::<f64, Libm>(p, rows, wheels, has_fx, gamma, wheelbase),
-        Precision::F32 => {
-            run_car::<f32, Libm>(&p.cast::<f32>(), rows, wheels, has_fx, gamma, wheelbase)
-        }
+        Precision::F64 => run_car::<f64, Libm>(p, rows, wheels, has_fx, gamma, wheelbase, mounted),
+        Precision::F32 => run_car::<f32, Libm>(
+            &p.cast::<f32>(),
+            rows,
+            wheels,
+            has_fx,
+            gamma,
+            wheelbase,
+            mounted,
+        ),
     }
 }
 
@@ -152,6 +171,7 @@ fn run_car<F: gough::math::Float, M: gough::math::Backend<F>>(
     has_fx: bool,
     gamma: &[f64],
     wheelbase: Option<f64>,
+    mounted: [Option<Side>; 4],
 ) -> Result<Vec<Estimate<f64>>, String> {
     use gough::mu::preview::{self, Preview};
     if wheels.len() != rows.len() {
@@ -162,8 +182,10 @@ fn run_car<F: gough::math::Float, M: gough::math::Backend<F>>(
         ));
     }
     let has_kappa = rows.iter().any(|r| r.kappa.is_finite());
-    let new = || bank::Bank::new::<M>(p, None, bank::Config::default()).map_err(|e| e.to_string());
-    let mut banks = [new()?, new()?, new()?, new()?];
+    let new = |w: usize| {
+        bank::Bank::new::<M>(p, mounted[w], bank::Config::default()).map_err(|e| e.to_string())
+    };
+    let mut banks = [new(0)?, new(1)?, new(2)?, new(3)?];
     let mut pvs = match wheelbase {
         Some(l) => {
             let pv = Preview::new(preview::Config::with_wheelbase(F::from_f64(l)))
@@ -245,7 +267,9 @@ pub fn bank_estimate(b: bank::Estimate<f64>) -> Estimate<f64> {
 pub type Run = (Vec<Estimate<f64>>, Vec<Option<Hold>>);
 
 /// Runs one estimator over rows; returns one estimate per row and, for the Gough method, why
-/// each held estimate was held (`MuEstimator::last_hold`; empty for the peers).
+/// each held estimate was held (`MuEstimator::last_hold`; empty for the peers). `side`: the
+/// side the wheel is on (`None`: as the file describes the tyre; the bank and the table
+/// estimator mirror it for the other side, the peers take the signals as they are).
 pub fn estimate(
     p: &Params<f64>,
     rows: &[Row],
@@ -253,18 +277,28 @@ pub fn estimate(
     gamma: &[f64],
     method: Method,
     prec: Precision,
+    side: Option<Side>,
 ) -> Result<Run, String> {
     // Per-row camber when the log has it (NaN = not logged → the estimator's default).
     let g_of = |i: usize| gamma.get(i).copied().filter(|g| g.is_finite());
     let cfg = Config::<f64>::default();
     match method {
         Method::Bank => Ok((
-            estimate_car(p, rows, &vec![0; rows.len()], has_fx, gamma, prec, None)?,
+            estimate_car(
+                p,
+                rows,
+                &vec![0; rows.len()],
+                has_fx,
+                gamma,
+                prec,
+                None,
+                [side; 4],
+            )?,
             Vec::new(),
         )),
         Method::Gough => match prec {
             Precision::F64 => {
-                let table = table::<f64, Libm>(p, None)?;
+                let table = table::<f64, Libm>(p, side)?;
                 let mut est = MuEstimator::for_tyre(&table, p, cfg);
                 Ok(rows
                     .iter()
@@ -285,7 +319,7 @@ pub fn estimate(
             }
             Precision::F32 => {
                 let p32 = p.cast::<f32>();
-                let table = table::<f32, Libm>(&p32, None)?;
+                let table = table::<f32, Libm>(&p32, side)?;
                 let cfg32 = Config::<f32>::default();
                 let mut est = MuEstimator::for_tyre(&table, &p32, cfg32);
                 Ok(rows
