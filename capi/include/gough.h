@@ -872,9 +872,19 @@ int32_t gough_wheel_step(struct gough_wheel_t *w,
  * Starts the friction estimator (`gough::mu::bank::Bank`, default settings, the tyre as the
  * file describes it) of one wheel on tyre `p`. **`p` must outlive the estimator** and stay
  * unchanged while it runs (the estimator keeps a pointer to it). `GOUGH_E_MODEL`: the tyre
- * gives no usable friction.
+ * gives no usable friction. `gough_estimator_init_on` mounts it on a side.
  */
 int32_t gough_estimator_init(struct gough_estimator_t *e, const struct gough_params_t *p);
+
+/**
+ * `gough_estimator_init` for a wheel on a side: `options` `GOUGH_WHEEL_LEFT` or
+ * `GOUGH_WHEEL_RIGHT` (its samples in the wheel's own ISO-W axes, the tyre mirrored where the
+ * file describes the other side's), or 0 (as the file describes the tyre). `GOUGH_E_ARG`: any
+ * other bit, or both sides.
+ */
+int32_t gough_estimator_init_on(struct gough_estimator_t *e,
+                                const struct gough_params_t *p,
+                                uint32_t options);
 
 /**
  * One sample into the estimator; `*out` gets the estimate after it. A sample with a

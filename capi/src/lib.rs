@@ -719,6 +719,22 @@ fn estimate_c(e: &proto::Estimate) -> gough_estimate_t {
     }
 }
 
+/// The side `GOUGH_WHEEL_LEFT`/`RIGHT` in `options` asks for (`None`: neither); `GOUGH_E_ARG`
+/// for both, or for a bit outside them and `other`.
+fn side_of(options: u32, other: u32) -> Result<Option<Side>, i32> {
+    let sides = GOUGH_WHEEL_LEFT | GOUGH_WHEEL_RIGHT;
+    if options & !(other | sides) != 0 || options & sides == sides {
+        return Err(GOUGH_E_ARG);
+    }
+    Ok(if options & GOUGH_WHEEL_LEFT != 0 {
+        Some(Side::Left)
+    } else if options & GOUGH_WHEEL_RIGHT != 0 {
+        Some(Side::Right)
+    } else {
+        None
+    })
+}
+
 /// Starts one wheel's pipeline on tyre `p`: the transient filter (relaxation lengths) → the
 /// Magic Formula (limits on) → forces, and, with `GOUGH_WHEEL_ESTIMATOR` in `options`, the
 /// friction estimator (the bank, as `gough_estimator_init`, with the prior μ 0.3 of the
@@ -740,17 +756,7 @@ pub unsafe extern "C" fn gough_wheel_init(
         if w.is_null() {
             return Err(GOUGH_E_NULL);
         }
-        let sides = GOUGH_WHEEL_LEFT | GOUGH_WHEEL_RIGHT;
-        if options & !(GOUGH_WHEEL_ESTIMATOR | sides) != 0 || options & sides == sides {
-            return Err(GOUGH_E_ARG);
-        }
-        let mounted = if options & GOUGH_WHEEL_LEFT != 0 {
-            Some(Side::Left)
-        } else if options & GOUGH_WHEEL_RIGHT != 0 {
-            Some(Side::Right)
-        } else {
-            None
-        };
+        let mounted = side_of(options, GOUGH_WHEEL_ESTIMATOR)?;
         // SAFETY: non-null; unmark, so that a failure leaves it unusable.
         unsafe { w.cast::<u32>().write(0) };
         let mut wheel = Wheel::on(mounted);
@@ -885,13 +891,28 @@ fn sample(s: &gough_sample_t) -> Result<bank::Sample<f32>, i32> {
 /// Starts the friction estimator (`gough::mu::bank::Bank`, default settings, the tyre as the
 /// file describes it) of one wheel on tyre `p`. **`p` must outlive the estimator** and stay
 /// unchanged while it runs (the estimator keeps a pointer to it). `GOUGH_E_MODEL`: the tyre
-/// gives no usable friction.
+/// gives no usable friction. `gough_estimator_init_on` mounts it on a side.
 #[no_mangle]
 pub unsafe extern "C" fn gough_estimator_init(
     e: *mut gough_estimator_t,
     p: *const gough_params_t,
 ) -> i32 {
+    // SAFETY: the caller's pointers, as documented above.
+    unsafe { gough_estimator_init_on(e, p, 0) }
+}
+
+/// `gough_estimator_init` for a wheel on a side: `options` `GOUGH_WHEEL_LEFT` or
+/// `GOUGH_WHEEL_RIGHT` (its samples in the wheel's own ISO-W axes, the tyre mirrored where the
+/// file describes the other side's), or 0 (as the file describes the tyre). `GOUGH_E_ARG`: any
+/// other bit, or both sides.
+#[no_mangle]
+pub unsafe extern "C" fn gough_estimator_init_on(
+    e: *mut gough_estimator_t,
+    p: *const gough_params_t,
+    options: u32,
+) -> i32 {
     ret(|| {
+        let mounted = side_of(options, 0)?;
         // SAFETY: a params storage or null; the caller keeps it alive (documented).
         let params: &'static ParamsIn = unsafe { get(p, MAGIC_PARAMS)? };
         if e.is_null() {
@@ -899,7 +920,7 @@ pub unsafe extern "C" fn gough_estimator_init(
         }
         // SAFETY: non-null; unmark, so that a failure leaves it unusable.
         unsafe { e.cast::<u32>().write(0) };
-        let bank = Bank::new::<Fast>(&params.p32, None, bank::Config::default())
+        let bank = Bank::new::<Fast>(&params.p32, mounted, bank::Config::default())
             .map_err(|_| GOUGH_E_MODEL)?;
         // SAFETY: non-null, GOUGH_ESTIMATOR_SIZE bytes aligned to 8.
         unsafe { put(e, MAGIC_EST, EstIn { bank, params }) };

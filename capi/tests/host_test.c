@@ -403,6 +403,39 @@ static void errors(const char *root) {
               "front %g (%d), rear %g (%d)", (double)ef.mu, ef.state, (double)er.mu, er.state);
     }
 
+    /* The estimator on a side: a left wheel's samples in its own axes (Fy, Mz, γ the mirror of
+     * the right-hand file's) into gough_estimator_init_on(.., GOUGH_WHEEL_LEFT) give, estimate
+     * for estimate, what the same samples in the file's axes give gough_estimator_init. */
+    {
+        static gough_estimator_t el, ef2;
+        CHECK(gough_estimator_init_on(&el, &p, GOUGH_WHEEL_LEFT | GOUGH_WHEEL_RIGHT) == GOUGH_E_ARG &&
+                  gough_estimator_init_on(&el, &p, 8u) == GOUGH_E_ARG,
+              "estimator options");
+        CHECK(gough_estimator_init_on(&el, &p, GOUGH_WHEEL_LEFT) == GOUGH_OK &&
+                  gough_estimator_init(&ef2, &p) == GOUGH_OK,
+              "estimators on a side");
+        int same = 1, ok = 1, identifiable = 0;
+        for (uint32_t i = 0; i < 1500; i++) {
+            float a = 0.06f * (i < 600 ? (float)i / 600.0f : 1.0f);
+            gough_mf_input_t mi = {5000.0f, 0.0f, a, 0.02f, 0.0f, 20.0f, 0.0f};
+            gough_mf_output_t o;
+            ok &= gough_mf_eval(&p, &mi, 111, &o) == GOUGH_OK;
+            gough_sample_t x = {1000u * i, 5000.0f, o.fy, o.mz, o.fx, 0.0f, 20.0f, 0.02f,
+                                GOUGH_HAS_FX | GOUGH_HAS_VX | GOUGH_HAS_GAMMA};
+            gough_sample_t y = x;
+            y.fy = -x.fy;
+            y.mz = -x.mz;
+            y.gamma = -x.gamma;
+            gough_estimate_t a1, a2;
+            ok &= gough_estimator_update(&ef2, &x, &a1) == GOUGH_OK;
+            ok &= gough_estimator_update(&el, &y, &a2) == GOUGH_OK;
+            same &= a1.mu == a2.mu && a1.sigma == a2.sigma && a1.state == a2.state;
+            identifiable |= a1.state == GOUGH_STATE_IDENTIFIABLE;
+        }
+        CHECK(ok && same && identifiable, "left = mirrored file axes: ok %d same %d identifiable %d",
+              ok, same, identifiable);
+    }
+
     /* The protocol. */
     gough_msg_t msg, got;
     memset(&msg, 0, sizeof msg);
