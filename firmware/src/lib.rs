@@ -21,7 +21,7 @@ pub mod mps2;
 pub mod stack;
 
 /// Firmware version reported in `Status` (major, minor, patch).
-pub const VERSION: [u8; 3] = [0, 3, 0];
+pub const VERSION: [u8; 3] = [0, 4, 0];
 
 /// The parameter set a device boots with, until one is uploaded.
 pub const BUNDLED_TIR: &str =
