@@ -39,11 +39,13 @@
 //! Of the protocol's [`Settings`]: `fallback_mu` is the bank's prior `mu_prior` (the μ of a
 //! `Fallback` estimate; when it is a positive number, [`estimator_config`]); `limits` applies
 //! to the forces only; `wheelbase` starts the front-to-rear preview between a [`Car`]'s axles.
-//! The tyre is taken as its file describes it on every wheel (`side` None), as for the forces.
+//! A [`Car`] mounts each wheel's tyre on its side ([`Wheel::on`]), for the forces and the
+//! estimate alike; a lone [`Wheel::new`] takes it as its file describes it.
 use crate::math::Backend;
 use crate::mf::{self, Input, Options, Output, Params, Side};
 use crate::mu::bank::{self, Bank, BuildError};
 use crate::mu::preview::{self, Preview};
+use crate::proto::Wheel as WheelId;
 use crate::proto::{AckCode, Estimate, EstimateState, Forces, Measurement, Settings};
 use crate::relax::{self, DampingSpeed, Kinematics, Sigma, Transient};
 
@@ -417,7 +419,7 @@ impl core::error::Error for StartError {}
 /// The wheelbase comes with the protocol's `Settings` (v3); with `0` (the default) every wheel
 /// estimates alone.
 ///
-/// Each wheel is mounted on its side ([`Wheel::on`]: FL, RL left, FR, RR right): the tyre
+/// Each wheel is mounted on its side ([`Wheel::on`], [`WheelId::side`]: FL, RL left, FR, RR right): the tyre
 /// file describes one side's tyre (`TYRESIDE`), the other side's is its mirror image, and every
 /// wheel's signals are taken and given in its own ISO-W axes.
 #[derive(Debug, Clone)]
@@ -432,12 +434,12 @@ impl Default for Car {
     }
 }
 
-/// Wheels 0–3 (FL, FR, RL, RR) on their sides.
+/// Wheels 0–3 (FL, FR, RL, RR) on their sides ([`WheelId::side`]).
 const WHEELS_ON: [Wheel; 4] = [
-    Wheel::on(Some(Side::Left)),
-    Wheel::on(Some(Side::Right)),
-    Wheel::on(Some(Side::Left)),
-    Wheel::on(Some(Side::Right)),
+    Wheel::on(Some(WheelId::FrontLeft.side())),
+    Wheel::on(Some(WheelId::FrontRight.side())),
+    Wheel::on(Some(WheelId::RearLeft.side())),
+    Wheel::on(Some(WheelId::RearRight.side())),
 ];
 
 impl Car {

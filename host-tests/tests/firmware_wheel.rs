@@ -390,7 +390,7 @@ fn onto_ice(p: &Params<f32>, n: u32) -> Vec<Measurement> {
             let alpha = if rear { -0.01 } else { -0.05 } * (i as f32 / 500.0).min(1.0);
             // Each wheel's forces in its own axes: the tyre mounted on its side, as the car
             // takes them.
-            let side = Some(if w % 2 == 0 { Side::Left } else { Side::Right });
+            let side = Some(id.side());
             let o = steady_on(
                 if on_ice { &ice } else { p },
                 side,
@@ -461,10 +461,7 @@ fn the_car_hands_what_a_front_wheel_read_to_the_rear_wheel_behind_it() {
     // The same, written out with the core's pieces: banks and two previews.
     let cfg = estimator_config(&with);
     let mut banks: Vec<_> = (0..4)
-        .map(|w| {
-            let side = if w % 2 == 0 { Side::Left } else { Side::Right };
-            Bank::new::<Fast>(&p, Some(side), cfg).unwrap()
-        })
+        .map(|w| Bank::new::<Fast>(&p, Some(WheelId::ALL[w].side()), cfg).unwrap())
         .collect();
     let pv = Preview::new(preview::Config::with_wheelbase(2.9f32)).unwrap();
     let mut pvs = [pv.clone(), pv];

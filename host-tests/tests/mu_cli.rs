@@ -1005,7 +1005,8 @@ fn a_four_wheel_log_runs_each_wheel_and_the_preview() {
 /// near the limit) written as a car's log (each wheel in its own axes: the bundled file's
 /// right-hand tyre is mirrored for them), the file's PHY1 moved by +0.002. `auto` fits PHY1 and
 /// QHZ1, takes PHY1 (the smaller χ²) and writes a file whose PHY1 is within 1 mrad of the
-/// tyre's own; a μ the log never comes near is a one-line error.
+/// tyre's own; a μ the log never comes near, an unknown parameter or a noise that is not
+/// positive is a one-line error.
 #[test]
 fn calibrate_puts_a_shifted_file_right() {
     use gough_host::mu::bench::{measure, simulate_case, suite, Sensors};
@@ -1070,10 +1071,16 @@ fn calibrate_puts_a_shifted_file_right() {
         q.phy1,
         p.phy1
     );
-    one_line_error(
-        &["mu", "calibrate", "--tir", w, "--log", l, "--mu", "3.0"],
-        "near the limit",
-    );
+    // A μ the log never comes near, an unknown parameter, a noise that is not positive.
+    for (extra, says) in [
+        (&["--mu", "3.0"][..], "near the limit"),
+        (&["--mu", "1.0", "--param", "PHZ9"][..], "no .tir parameter"),
+        (&["--mu", "1.0", "--noise-f", "0"][..], "noise"),
+    ] {
+        let mut args = vec!["mu", "calibrate", "--tir", w, "--log", l];
+        args.extend_from_slice(extra);
+        one_line_error(&args, says);
+    }
 }
 
 /// `--side`: a one-wheel log of a left-hand wheel in its own axes (Fy, Mz, α negated against

@@ -287,8 +287,7 @@ fn _estimate_mu<'py>(
         .detach(|| {
             if car {
                 // A car's log mounts each wheel on its side, as `gough mu estimate` does.
-                let several = wheels.iter().any(|&w| w != 0);
-                let mounted = if several { mu::CAR } else { [None; 4] };
+                let mounted = mu::mounting(&wheels, None);
                 mu::estimate_car(
                     params, &rows, &wheels, has_fx, &gamma, prec, wheelbase, mounted,
                 )

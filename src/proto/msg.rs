@@ -8,7 +8,7 @@
 
 use super::crc::crc32;
 use super::{Error, PROTO_VERSION};
-use crate::mf::{Input, Params};
+use crate::mf::{Input, Params, Side};
 use core::fmt;
 use postcard::experimental::max_size::MaxSize;
 use serde::de::DeserializeOwned;
@@ -126,6 +126,14 @@ impl Wheel {
     /// The wheel of an index 0..=3.
     pub fn from_index(i: usize) -> Option<Wheel> {
         Wheel::ALL.get(i).copied()
+    }
+    /// The side of the car the wheel is on: front and rear left on the left, the others on
+    /// the right (the side a tyre is mounted on, `mf::Options::mounted`).
+    pub const fn side(self) -> Side {
+        match self {
+            Wheel::FrontLeft | Wheel::RearLeft => Side::Left,
+            Wheel::FrontRight | Wheel::RearRight => Side::Right,
+        }
     }
 }
 

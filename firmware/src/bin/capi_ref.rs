@@ -16,7 +16,7 @@ use core::sync::atomic::{AtomicU32, Ordering};
 use cortex_m::peripheral::{syst::SystClkSource, SYST};
 use cortex_m_rt::{entry, exception};
 use cortex_m_semihosting::hprintln;
-use gough::mf::{self, Input, Options, Side};
+use gough::mf::{self, Input, Options};
 use gough::mu::bank::{self, Bank};
 use gough::proto::{self, AckCode, Forces, Measurement, Msg, Mtu, Segmenter, Settings};
 use gough::wheel::Wheel;
@@ -168,12 +168,7 @@ fn main() -> ! {
     // Four wheels on their sides with their estimators, as `gough_wheel_init(..,
     // GOUGH_WHEEL_ESTIMATOR | GOUGH_WHEEL_LEFT or _RIGHT)`.
     let fresh = || {
-        let mut w = [
-            Wheel::on(Some(Side::Left)),
-            Wheel::on(Some(Side::Right)),
-            Wheel::on(Some(Side::Left)),
-            Wheel::on(Some(Side::Right)),
-        ];
+        let mut w = proto::Wheel::ALL.map(|id| Wheel::on(Some(id.side())));
         for x in &mut w {
             if x.start_estimator::<Math>(p, &Settings::default()).is_err() {
                 mps2::exit(false);

@@ -175,11 +175,7 @@ pub fn run(cmd: MuCmd) -> Result<(), String> {
                 ));
             }
             let (est, holds) = if several || a.wheelbase.is_some() {
-                let mounted = if several {
-                    crate::mu::CAR
-                } else {
-                    [a.side.side(); 4]
-                };
+                let mounted = crate::mu::mounting(&wheels, a.side.side());
                 let e = estimate_car(
                     &t.params,
                     &rows,
@@ -304,10 +300,7 @@ fn calibrate(a: &CalibrateArgs) -> Result<(), String> {
         f_rel: a.noise_f,
         mz: a.noise_mz,
     };
-    if !(noise.f_rel.is_finite() && noise.f_rel > 0.0 && noise.mz.is_finite() && noise.mz > 0.0) {
-        return Err("--noise-f and --noise-mz must be positive".into());
-    }
-    // Each wheel's rows in time order, as the file describes the tyre.
+    // Each wheel's rows in time order.
     let per: Vec<(Vec<_>, Vec<f64>)> = (0..4)
         .map(|w| {
             let idx: Vec<usize> = (0..rows.len()).filter(|&i| wheels[i] == w).collect();
@@ -319,7 +312,7 @@ fn calibrate(a: &CalibrateArgs) -> Result<(), String> {
         .collect();
     // A car's log mounts each wheel on its side (as `gough mu estimate` does); one wheel's log
     // is taken as the file describes the tyre.
-    let several = wheels.iter().any(|&w| w != 0);
+    let mounted = crate::mu::mounting(&wheels, None);
     let logs: Vec<WheelLog> = per
         .iter()
         .enumerate()
@@ -327,7 +320,7 @@ fn calibrate(a: &CalibrateArgs) -> Result<(), String> {
         .map(|(w, (r, g))| WheelLog {
             rows: r,
             gamma: g,
-            mounted: if several { crate::mu::CAR[w] } else { None },
+            mounted: mounted[w],
         })
         .collect();
     let keys: Vec<Key> = if a.param.eq_ignore_ascii_case("auto") {

@@ -384,13 +384,8 @@ pub fn run_bank(p: &Params<f64>, w: usize, tr: &WheelTrace) -> Vec<Estimate<f64>
 }
 
 fn new_bank(p: &Params<f64>, w: usize) -> Option<gough::mu::bank::Bank<f64>> {
-    use gough::mf::Side;
-    let side = if w.is_multiple_of(2) {
-        Side::Left
-    } else {
-        Side::Right
-    };
-    gough::mu::bank::Bank::new::<Libm>(p, Some(side), gough::mu::bank::Config::default()).ok()
+    let side = gough::proto::Wheel::from_index(w).map(|x| x.side());
+    gough::mu::bank::Bank::new::<Libm>(p, side, gough::mu::bank::Config::default()).ok()
 }
 
 /// Row `i` of a trace as the bank's sample (Fx, measured κ, Vx, camber).
@@ -1427,7 +1422,6 @@ pub fn demo(a: DemoArgs) -> Result<(), String> {
     let log = simulate_case(&p, &case)?;
     let sensors = Sensors::default();
     std::fs::create_dir_all(&a.out).map_err(|e| format!("{}: {e}", a.out.display()))?;
-    let names = ["fl", "fr", "rl", "rr"];
     let mut csv = String::from("t,wheel,mu_true,mu,sigma,state,util\n");
     println!(
         "{} on '{}' ({}), estimator at every wheel (noise: Mz 2 N·m, F 1 % Fz, 10 ms lag; rear wheels told what the front ones read, {:.1} m later):",
@@ -1444,7 +1438,7 @@ pub fn demo(a: DemoArgs) -> Result<(), String> {
         &traces,
         Some(gough::mu::preview::Config::with_wheelbase(sim_wheelbase())),
     );
-    for (w, ((name, tr), est)) in names.iter().zip(traces).zip(ests).enumerate() {
+    for (w, ((name, tr), est)) in WHEELS.iter().zip(traces).zip(ests).enumerate() {
         for (i, e) in est.iter().enumerate().step_by(10) {
             let _ = writeln!(
                 csv,

@@ -76,8 +76,6 @@ pub struct Fit {
     pub chi2_file: f64,
     /// Batches used.
     pub batches: usize,
-    /// (δ, χ²) over the grid.
-    pub curve: Vec<(f64, f64)>,
 }
 
 struct Batch {
@@ -138,6 +136,8 @@ fn batches(wheels: &[WheelLog], mu: f64, noise: &Noise) -> Vec<Batch> {
                 mz,
                 kappa: if kappa.is_finite() { kappa } else { 0.0 },
                 gamma: if gamma.is_finite() { gamma } else { 0.0 },
+                // Without Vx, any speed well above VXLOW: the transient evaluation skips the
+                // low-speed reductions, the only place the speed enters.
                 vx: if vx.is_finite() { vx } else { 20.0 },
                 // The batch mean's noise plus the bank's model-error terms (Config's defaults).
                 sf: noise.f_rel * fz / n + 0.01 * fy.abs() + 0.005 * fz,
@@ -205,8 +205,8 @@ fn surface(p: &Params<f64>, key: Key, d: f64, mu: f64, mu_y0: f64) -> Params<f64
 }
 
 /// Fits the offset of `key` (e.g. `PHY1`, `QHZ1`) within ±`range` on `wheels`, logged on a
-/// surface of friction `mu` (the file's scale). Errors: μ or the range not positive and
-/// finite, fewer than [`MIN_BATCHES`] batches near the limit, the minimum at the grid's edge
+/// surface of friction `mu` (the file's scale). Errors: μ, the range or a noise not positive
+/// and finite, fewer than [`MIN_BATCHES`] batches near the limit, the minimum at the grid's edge
 /// (the offset lies beyond ±`range`), a χ² without curvature there.
 pub fn calibrate(
     p: &Params<f64>,
@@ -221,6 +221,12 @@ pub fn calibrate(
     }
     if !(range.is_finite() && range > 0.0 && range <= 0.1) {
         return Err(format!("range {range}: expected a value in (0, 0.1]"));
+    }
+    if !(noise.f_rel.is_finite() && noise.f_rel > 0.0 && noise.mz.is_finite() && noise.mz > 0.0) {
+        return Err(format!(
+            "noise {} of Fz, {} N·m: expected positive numbers",
+            noise.f_rel, noise.mz
+        ));
     }
     let mu_y0 = crate::sim::vehicle::mu_y0(p)?;
     let bs = batches(wheels, mu, noise);
@@ -289,7 +295,6 @@ pub fn calibrate(
         chi2: c1 - 0.25 * (c0 - c2) * shift / h,
         chi2_file: curve[STEPS].1,
         batches: bs.len(),
-        curve,
     })
 }
 
@@ -357,7 +362,7 @@ mod tests {
             .map(|(w, t)| WheelLog {
                 rows: &t.rows,
                 gamma: &t.gamma,
-                mounted: Some(if w % 2 == 0 { Side::Left } else { Side::Right }),
+                mounted: gough::proto::Wheel::from_index(w).map(|x| x.side()),
             })
             .collect()
     }
@@ -403,6 +408,14 @@ mod tests {
             assert!(calibrate(&p, Key::PHY1, mu, &ws, &n, 0.005).is_err());
         }
         assert!(calibrate(&p, Key::PHY1, 1.0, &ws, &n, f64::INFINITY).is_err());
+        for bad in [(0.0, 2.0), (0.01, -1.0), (f64::NAN, 2.0)] {
+            let noise = Noise {
+                f_rel: bad.0,
+                mz: bad.1,
+            };
+            let e = calibrate(&p, Key::PHY1, 1.0, &ws, &noise, 0.005).unwrap_err();
+            assert!(e.contains("noise"), "{e}");
+        }
     }
 
     /// The value is replaced on its own line, the comment kept, and the file reads back with

@@ -30,14 +30,17 @@ pub fn table<F: Float, M: Backend<F>>(
     Ok(t)
 }
 
-/// The sides of a car's wheels 0–3 (FL, FR, RL, RR): how [`estimate_car`] mounts the tyre
-/// on each wheel of a car's log, as `gough::wheel::Car` does on the device.
-pub const CAR: [Option<Side>; 4] = [
-    Some(Side::Left),
-    Some(Side::Right),
-    Some(Side::Left),
-    Some(Side::Right),
-];
+/// How the tyre is mounted on wheels 0–3 of a log whose rows are of `wheels`: a car's log (a
+/// wheel other than 0) each wheel on its side (`gough::proto::Wheel::side`, as
+/// `gough::wheel::Car` on the device), one wheel's log on `side` (`None`: as the file describes
+/// the tyre).
+pub fn mounting(wheels: &[usize], side: Option<Side>) -> [Option<Side>; 4] {
+    if wheels.iter().any(|&w| w != 0) {
+        gough::proto::Wheel::ALL.map(|w| Some(w.side()))
+    } else {
+        [side; 4]
+    }
+}
 
 /// Which estimator.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
@@ -133,10 +136,10 @@ fn read_rows(path: &Path, per_wheel: bool) -> Result<(Log, Vec<usize>), String> 
 }
 
 /// The bank over a log of up to four wheels (`wheels[i]`: row `i`'s wheel, 0–3 = FL, FR, RL,
-/// RR), row by row as a car's controller runs it: a bank per wheel (mounted as the file
-/// describes the tyre, as on the device), and with `wheelbase` \[m\] the front-to-rear preview
-/// ([`gough::mu::preview`]) from each front wheel to the rear wheel on its side. Wheel `w`'s
-/// tyre is mounted on `mounted[w]` ([`CAR`] for a car's log; `None`: as the file describes it).
+/// RR), row by row as a car's controller runs it: a bank per wheel, and with `wheelbase` \[m\]
+/// the front-to-rear preview ([`gough::mu::preview`]) from each front wheel to the rear wheel on
+/// its side. Wheel `w`'s tyre is mounted on `mounted[w]` ([`mounting`]; `None`: as the file
+/// describes it).
 /// In f64 or f32 (`Libm`, as [`estimate`]); a one-wheel log gives [`estimate`]'s bank
 /// estimates.
 #[allow(clippy::too_many_arguments)]
