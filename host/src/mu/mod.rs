@@ -7,6 +7,7 @@ pub mod bound;
 pub mod calibrate;
 pub mod map;
 pub mod peers;
+pub mod scenario;
 pub mod table_estimator;
 
 use crate::csvio;
