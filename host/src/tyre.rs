@@ -25,3 +25,15 @@ pub fn load(path: &Path) -> Result<Tyre, String> {
         warnings,
     })
 }
+
+/// The bundled MF 6.1 tyre (`host-tests/data/tyres/MagicFormula61_Parameters.tir`), as the
+/// bench and the demo run it; for the unit tests.
+#[cfg(test)]
+pub(crate) fn bundled() -> Params<f64> {
+    load(Path::new(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../host-tests/data/tyres/MagicFormula61_Parameters.tir"
+    )))
+    .expect("the bundled tyre")
+    .params
+}

@@ -258,7 +258,7 @@ pub fn run(cmd: MuCmd) -> Result<(), String> {
             Ok(())
         }
         MuCmd::Bench(b) => crate::mu::bench::run(b),
-        MuCmd::Demo(d) => crate::mu::bench::demo(d),
+        MuCmd::Demo(d) => crate::mu::demo::demo(d),
         MuCmd::Bound(b) => crate::mu::bound::run(b),
         MuCmd::Calibrate(a) => calibrate(&a),
         MuCmd::Map(a) => {

@@ -5,6 +5,7 @@
 pub mod bench;
 pub mod bound;
 pub mod calibrate;
+pub mod demo;
 pub mod map;
 pub mod peers;
 pub mod scenario;

@@ -1,0 +1,603 @@
+//! The bench's measures of an estimator's estimates against the truth of a case's wheel traces:
+//! error while identifiable, how honest σ is, utilisation and latency to within ±0.1 of the
+//! truth, change flags and the false ones among them, wheel-surfaces read in time, and two
+//! estimators on the samples both call identifiable.
+
+use super::super::table_estimator::{Estimate, Hold, State};
+use super::sensors::WheelTrace;
+
+/// Where the Gough estimator's latency goes on one case: over each wheel's surfaces that reach
+/// utilisation 0.5, the samples of the target's window — from that moment until the estimate
+/// settles within ±0.1, at most [`TARGET_LATENCY`] — by what the estimator reported.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct HoldTally {
+    /// Samples held, per [`Hold::ALL`] reason.
+    pub held: [usize; Hold::ALL.len()],
+    /// Samples reported identifiable but not yet (for good) within ±0.1.
+    pub identifiable: usize,
+    /// Wheel-surfaces that reach utilisation 0.5.
+    pub windows: usize,
+    /// Of them, those whose estimate settles within ±0.1 within [`TARGET_LATENCY`].
+    pub within: usize,
+}
+
+/// The latency target: within ±0.1 this long after utilisation 0.5 \[s\].
+pub const TARGET_LATENCY: f64 = 0.150;
+
+impl HoldTally {
+    /// All samples of the windows.
+    pub fn total(&self) -> usize {
+        self.held.iter().sum::<usize>() + self.identifiable
+    }
+
+    /// Adds another tally's samples and windows.
+    pub fn add(&mut self, o: &HoldTally) {
+        for (a, b) in self.held.iter_mut().zip(o.held) {
+            *a += b;
+        }
+        self.identifiable += o.identifiable;
+        self.windows += o.windows;
+        self.within += o.within;
+    }
+
+    /// Shares of the samples \[held per [`Hold::ALL`] reason…, identifiable\] (0 when empty).
+    pub fn shares(&self) -> Vec<f64> {
+        let n = self.total().max(1) as f64;
+        self.held
+            .iter()
+            .chain([&self.identifiable])
+            .map(|&k| k as f64 / n)
+            .collect()
+    }
+}
+
+/// [`HoldTally`] of the Gough estimator's estimates `est` and reasons `holds` on the traces.
+pub fn hold_tally(
+    traces: &[WheelTrace],
+    ests: &[Vec<Estimate<f64>>],
+    holds: &[Vec<Option<Hold>>],
+) -> HoldTally {
+    let mut out = HoldTally::default();
+    for ((tr, est), hs) in traces.iter().zip(ests).zip(holds) {
+        if est.len() != tr.rows.len() || hs.len() != tr.rows.len() {
+            continue;
+        }
+        for (a, b) in segments(&tr.mu_true) {
+            let Some(i5) = (a..b).find(|&i| tr.util[i] >= 0.5) else {
+                continue;
+            };
+            let ok = settled(tr, est, a, b);
+            let deadline = tr.rows[i5].t + TARGET_LATENCY;
+            let mut end = (i5..b).find(|&i| tr.rows[i].t > deadline).unwrap_or(b);
+            if let Some(ok) = ok {
+                end = end.min(ok.max(i5));
+            }
+            for h in &hs[i5..end] {
+                match h.and_then(|h| Hold::ALL.iter().position(|&x| x == h)) {
+                    Some(k) => out.held[k] += 1,
+                    None => out.identifiable += 1,
+                }
+            }
+            out.windows += 1;
+            let lat = ok.and_then(|ok| latency_from(tr, a, b, ok));
+            out.within += usize::from(lat.is_some_and(|l| l <= TARGET_LATENCY));
+        }
+    }
+    out
+}
+
+/// An identifiable estimate off by more than this is a gross error \[-\].
+pub const GROSS: f64 = 0.2;
+
+/// Metrics of one estimator on one case (all wheels).
+#[derive(Debug, Clone, Default)]
+pub struct Metrics {
+    /// Samples called identifiable.
+    pub n_identifiable: usize,
+    /// Mean |error| while identifiable.
+    pub err_mean: Option<f64>,
+    /// 95th percentile |error| while identifiable.
+    pub err_p95: Option<f64>,
+    /// Share of the identifiable samples with |error| ≤ 2σ (σ as reported).
+    pub within_2sigma: Option<f64>,
+    /// Share of all the case's samples that are identifiable and off by more than 0.2 (the
+    /// issue's limit: at most 0.5 %).
+    pub gross: f64,
+    /// Median utilisation at which the estimate first stays within ±0.1.
+    pub util_within: Option<f64>,
+    /// Median latency from utilisation 0.5 to staying within ±0.1 \[s\].
+    pub latency: Option<f64>,
+    /// Median time from a change of surface to staying within ±0.1 of the new μ \[s\].
+    pub detect: Option<f64>,
+    /// Change flags without a change of road, or to a wrong value ([`false_change_flags`]).
+    pub false_alarms: usize,
+    /// Change flags raised.
+    pub change_flags: usize,
+    /// Wheel-surfaces (a wheel on one stretch of constant μ) whose utilisation reaches 0.5.
+    pub ws_total: usize,
+    /// Of those, the ones whose estimate settles within ±0.1 within [`TARGET_LATENCY`] of it.
+    pub ws_within: usize,
+    /// Samples of the case (all wheels).
+    pub n_samples: usize,
+    /// Samples at a utilisation of 0.5 or more.
+    pub n_util_hi: usize,
+    /// Of those, the identifiable ones.
+    pub n_identifiable_util_hi: usize,
+}
+
+pub(crate) fn median(mut v: Vec<f64>) -> Option<f64> {
+    if v.is_empty() {
+        return None;
+    }
+    v.sort_by(f64::total_cmp);
+    Some(v[v.len() / 2])
+}
+
+/// Segments of constant true μ: (start, end) index ranges.
+pub(crate) fn segments(mu: &[f64]) -> Vec<(usize, usize)> {
+    let mut out = Vec::new();
+    let mut s = 0;
+    for i in 1..=mu.len() {
+        if i == mu.len() || (mu[i] - mu[s]).abs() > 1e-9 {
+            out.push((s, i));
+            s = i;
+        }
+    }
+    out
+}
+
+/// First row of segment `a..b` from which the reported estimate stays within ±0.1 of the truth
+/// to the segment's end, held for at least 50 rows ("stays").
+fn settled(tr: &WheelTrace, est: &[Estimate<f64>], a: usize, b: usize) -> Option<usize> {
+    let mut first_ok = None;
+    for i in (a..b).rev() {
+        let e = &est[i];
+        if e.state == State::Fallback || (e.mu - tr.mu_true[i]).abs() > 0.1 {
+            break;
+        }
+        first_ok = Some(i);
+    }
+    first_ok.filter(|&ok| b - ok >= 50)
+}
+
+/// Time from the utilisation first reaching 0.5 in segment `a..b` to row `ok` \[s\].
+fn latency_from(tr: &WheelTrace, a: usize, b: usize, ok: usize) -> Option<f64> {
+    (a..b)
+        .find(|&i| tr.util[i] >= 0.5)
+        .map(|i5| (tr.rows[ok].t - tr.rows[i5].t).max(0.0))
+}
+
+/// Latency of one wheel on segment `a..b` (rows of constant true μ): from the utilisation
+/// first reaching 0.5 to the estimate staying within ±0.1 \[s\], as [`metrics`] takes it.
+pub fn segment_latency(tr: &WheelTrace, est: &[Estimate<f64>], a: usize, b: usize) -> Option<f64> {
+    if est.len() != tr.rows.len() {
+        return None;
+    }
+    latency_from(tr, a, b, settled(tr, est, a, b)?)
+}
+
+/// One wheel on one stretch of constant true μ that reaches utilisation 0.5 (a
+/// "wheel-surface", as [`metrics`] counts them).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct WheelSurface {
+    /// Wheel index (0–3: FL, FR, RL, RR).
+    pub wheel: usize,
+    /// True μ of the stretch.
+    pub mu: f64,
+    /// Time of the stretch's first row \[s\].
+    pub t_start: f64,
+    /// Time of the stretch's last row \[s\].
+    pub t_end: f64,
+    /// Time the utilisation first reaches 0.5 on it \[s\].
+    pub t_util05: f64,
+    /// From then until the estimate stays within ±0.1 \[s\] (none: it never does for 50 rows).
+    pub latency: Option<f64>,
+}
+
+impl WheelSurface {
+    /// Within ±0.1 within [`TARGET_LATENCY`].
+    pub fn within(&self) -> bool {
+        self.latency.is_some_and(|l| l <= TARGET_LATENCY + 1e-9)
+    }
+}
+
+/// Every wheel-surface of a case's traces with its latency (estimates `ests[w]` of wheel `w`).
+pub fn wheel_surfaces(traces: &[WheelTrace], ests: &[Vec<Estimate<f64>>]) -> Vec<WheelSurface> {
+    let mut out = Vec::new();
+    for (w, (tr, est)) in traces.iter().zip(ests).enumerate() {
+        if est.len() != tr.rows.len() {
+            continue;
+        }
+        for (a, b) in segments(&tr.mu_true) {
+            let Some(i5) = (a..b).find(|&i| tr.util[i] >= 0.5) else {
+                continue;
+            };
+            out.push(WheelSurface {
+                wheel: w,
+                mu: tr.mu_true[a],
+                t_start: tr.rows[a].t,
+                t_end: tr.rows[b - 1].t,
+                t_util05: tr.rows[i5].t,
+                latency: segment_latency(tr, est, a, b),
+            });
+        }
+    }
+    out
+}
+
+/// Change flags that declare a change of surface where the road did not change (false change
+/// alarms): a flag is a true one when the road under the wheel differs from the road on which
+/// the estimator's previous identification began (the run of identifiable samples it changes
+/// from) and the new value is within ±0.1 of it. A correction on one road (a wrong value
+/// replaced by the right one), a flag to a wrong value, or one without any earlier
+/// identification is false; a change identified late — the road changed seconds before, the
+/// old identification held meanwhile — is a true one (its lateness is the latency's and the
+/// "detect change" column's).
+pub fn false_change_flags(tr: &WheelTrace, est: &[Estimate<f64>]) -> usize {
+    // True μ where the current identification began.
+    let mut began: Option<f64> = None;
+    let mut false_flags = 0;
+    for (i, e) in est.iter().enumerate() {
+        let Some(&now) = tr.mu_true.get(i) else {
+            break;
+        };
+        if e.change {
+            let road_changed = began.is_some_and(|m| (m - now).abs() > 1e-9);
+            if !(road_changed && (e.mu - now).abs() <= 0.1) {
+                false_flags += 1;
+            }
+        }
+        if e.state == State::Identifiable && (e.change || began.is_none()) {
+            began = Some(now);
+        }
+    }
+    false_flags
+}
+
+/// Metrics of estimates `est` against the trace(s).
+pub fn metrics(traces: &[WheelTrace], ests: &[Vec<Estimate<f64>>]) -> Metrics {
+    let mut errs = Vec::new();
+    let (mut utils, mut lats, mut dets) = (Vec::new(), Vec::new(), Vec::new());
+    let (mut false_alarms, mut change_flags) = (0, 0);
+    let mut covered = 0;
+    let (mut gross, mut samples) = (0usize, 0usize);
+    let (mut ws_total, mut ws_within) = (0, 0);
+    let (mut util_hi, mut ident_hi) = (0, 0);
+    for (tr, est) in traces.iter().zip(ests) {
+        if est.len() != tr.rows.len() {
+            continue;
+        }
+        samples += est.len();
+        false_alarms += false_change_flags(tr, est);
+        change_flags += est.iter().filter(|e| e.change).count();
+        for (i, e) in est.iter().enumerate() {
+            if tr.util[i] >= 0.5 {
+                util_hi += 1;
+                ident_hi += usize::from(e.state == State::Identifiable);
+            }
+            if e.state == State::Identifiable {
+                let err = (e.mu - tr.mu_true[i]).abs();
+                errs.push(err);
+                covered += usize::from(err <= 2.0 * e.sigma);
+                gross += usize::from(err > GROSS);
+            }
+        }
+        let segs = segments(&tr.mu_true);
+        for (k, &(a, b)) in segs.iter().enumerate() {
+            if tr.util[a..b].iter().any(|&u| u >= 0.5) {
+                ws_total += 1;
+                if settled(tr, est, a, b)
+                    .and_then(|ok| latency_from(tr, a, b, ok))
+                    .is_some_and(|l| l <= TARGET_LATENCY + 1e-9)
+                {
+                    ws_within += 1;
+                }
+            }
+            let Some(ok) = settled(tr, est, a, b) else {
+                continue;
+            };
+            let umax = tr.util[a..=ok].iter().copied().fold(0.0, f64::max);
+            utils.push(umax);
+            if let Some(l) = latency_from(tr, a, b, ok) {
+                lats.push(l);
+            }
+            if k > 0 {
+                dets.push(tr.rows[ok].t - tr.rows[a].t);
+            }
+        }
+    }
+    let n = errs.len();
+    let err_mean = (n > 0).then(|| errs.iter().sum::<f64>() / n as f64);
+    let err_p95 = p95(errs);
+    Metrics {
+        n_identifiable: n,
+        err_mean,
+        err_p95,
+        within_2sigma: (n > 0).then(|| covered as f64 / n as f64),
+        gross: gross as f64 / samples.max(1) as f64,
+        ws_total,
+        ws_within,
+        util_within: median(utils),
+        latency: median(lats),
+        detect: median(dets),
+        false_alarms,
+        change_flags,
+        n_samples: samples,
+        n_util_hi: util_hi,
+        n_identifiable_util_hi: ident_hi,
+    }
+}
+
+/// The 95th percentile of `errs` (the bench's rank: the sample at ⌊0.95·n⌋), none if empty.
+fn p95(mut errs: Vec<f64>) -> Option<f64> {
+    let n = errs.len();
+    (n > 0).then(|| {
+        errs.sort_by(f64::total_cmp);
+        errs[((n as f64 * 0.95) as usize).min(n - 1)]
+    })
+}
+
+/// Two estimators on the samples both call identifiable (like for like).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Common {
+    /// Samples both call identifiable (all wheels).
+    pub n: usize,
+    /// 95th percentile |error| of the first (the bank) and the second over those samples.
+    pub p95: (Option<f64>, Option<f64>),
+    /// Of those samples, the ones off by more than [`GROSS`]: the first's and the second's.
+    pub gross: (usize, usize),
+    /// Median latency \[s\] of the first and the second over the wheel-surfaces both settle on
+    /// (as [`segment_latency`] takes it), and how many those are.
+    pub latency: (Option<f64>, Option<f64>, usize),
+}
+
+/// [`Common`] of estimates `a` and `b` (per wheel, as [`metrics`] takes them) against the traces.
+pub fn common(traces: &[WheelTrace], a: &[Vec<Estimate<f64>>], b: &[Vec<Estimate<f64>>]) -> Common {
+    let (mut ea, mut eb) = (Vec::new(), Vec::new());
+    let (mut la, mut lb) = (Vec::new(), Vec::new());
+    for ((tr, a), b) in traces.iter().zip(a).zip(b) {
+        for (s, e) in segments(&tr.mu_true) {
+            if let (Some(x), Some(y)) = (segment_latency(tr, a, s, e), segment_latency(tr, b, s, e))
+            {
+                la.push(x);
+                lb.push(y);
+            }
+        }
+        for (i, (x, y)) in a.iter().zip(b).enumerate() {
+            if x.state == State::Identifiable && y.state == State::Identifiable {
+                if let Some(&mu) = tr.mu_true.get(i) {
+                    ea.push((x.mu - mu).abs());
+                    eb.push((y.mu - mu).abs());
+                }
+            }
+        }
+    }
+    let gross = |e: &[f64]| e.iter().filter(|&&x| x > GROSS).count();
+    let n_ws = la.len();
+    Common {
+        n: ea.len(),
+        gross: (gross(&ea), gross(&eb)),
+        p95: (p95(ea), p95(eb)),
+        latency: (median(la), median(lb), n_ws),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::super::peers::Row;
+    use super::*;
+
+    /// The tally's window: from the utilisation first reaching 0.5 to the estimate settling
+    /// (at most 150 ms), every sample counted once, by its reason; a surface that never reaches
+    /// utilisation 0.5 has no window.
+    #[test]
+    fn hold_tally_counts_the_window_by_reason() {
+        // 1 kHz, 400 rows; two surfaces: μ 0.5 (rows 0..300), μ 0.3 (300..400).
+        let n = 400;
+        let row = |i: usize| Row {
+            t: i as f64 * 1e-3,
+            fz: 4000.0,
+            vx: 20.0,
+            ..Row::default()
+        };
+        let mu_true: Vec<f64> = (0..n).map(|i| if i < 300 { 0.5 } else { 0.3 }).collect();
+        // Utilisation 0.5 from row 10 on the first surface; never on the second.
+        let util: Vec<f64> = (0..n)
+            .map(|i| if (10..300).contains(&i) { 0.6 } else { 0.2 })
+            .collect();
+        let tr = WheelTrace {
+            rows: (0..n).map(row).collect(),
+            mu_true,
+            util,
+            gamma: vec![0.0; n],
+            kappa_meas: vec![0.0; n],
+        };
+        let est = |mu: f64, state: State| Estimate {
+            mu,
+            sigma: 0.01,
+            sigma_model: 0.0,
+            state,
+            change: false,
+        };
+        // Rows 0..40 no excitation, 40..70 ambiguous, 70..80 confirming, 80..100 identifiable but
+        // 0.2 off, from 100 on within ±0.1 (settled at row 100: latency 90 ms).
+        let (mut ests, mut holds) = (Vec::new(), Vec::new());
+        for i in 0..n {
+            let (e, h) = match i {
+                0..40 => (est(0.8, State::Fallback), Some(Hold::NoExcitation)),
+                40..70 => (est(0.8, State::Fallback), Some(Hold::Ambiguous)),
+                70..80 => (est(0.8, State::Fallback), Some(Hold::Confirming)),
+                80..100 => (est(0.7, State::Identifiable), None),
+                _ => (est(mu_true_at(i), State::Identifiable), None),
+            };
+            ests.push(e);
+            holds.push(h);
+        }
+        fn mu_true_at(i: usize) -> f64 {
+            if i < 300 {
+                0.5
+            } else {
+                0.3
+            }
+        }
+        let t = hold_tally(std::slice::from_ref(&tr), &[ests.clone()], &[holds.clone()]);
+        let k = |h: Hold| t.held[Hold::ALL.iter().position(|&x| x == h).unwrap()];
+        assert_eq!((t.windows, t.within), (1, 1));
+        assert_eq!(
+            (
+                k(Hold::NoExcitation),
+                k(Hold::Ambiguous),
+                k(Hold::Confirming),
+                t.identifiable
+            ),
+            (30, 30, 10, 20)
+        );
+        assert_eq!(t.total(), 90);
+        // Settling later than 150 ms: the window stops at the deadline, and it is not within.
+        for e in &mut ests[100..300] {
+            e.mu = 0.7;
+        }
+        for e in &mut ests[250..300] {
+            e.mu = 0.5;
+        }
+        let t = hold_tally(std::slice::from_ref(&tr), &[ests], &[holds]);
+        assert_eq!((t.windows, t.within), (1, 0));
+        assert_eq!(
+            t.total(),
+            151,
+            "rows 10..=160 (the deadline's row 160 included)"
+        );
+        assert_eq!(t.identifiable, 151 - 70);
+    }
+
+    /// A trace at 1 kHz with true μ `mu_true` and utilisation `util` per row (its measured
+    /// channels constant: the metrics read the estimates against the truth only).
+    fn flat_trace(mu_true: Vec<f64>, util: Vec<f64>) -> WheelTrace {
+        let n = mu_true.len();
+        WheelTrace {
+            rows: (0..n)
+                .map(|i| Row {
+                    t: i as f64 * 1e-3,
+                    fz: 4000.0,
+                    fy: 0.0,
+                    mz: 0.0,
+                    fx: 0.0,
+                    vx: 20.0,
+                    alpha: f64::NAN,
+                    kappa: f64::NAN,
+                })
+                .collect(),
+            mu_true,
+            util,
+            gamma: vec![0.0; n],
+            kappa_meas: vec![0.0; n],
+        }
+    }
+
+    /// The error metrics count identifiable samples only; "within 2σ" is the share of them
+    /// whose error is at most twice the σ they report.
+    #[test]
+    fn metrics_count_errors_and_their_sigma() {
+        let n = 6;
+        let tr = flat_trace(vec![0.5; n], vec![0.6; n]);
+        let e = |mu: f64, sigma: f64, state: State| Estimate {
+            mu,
+            sigma,
+            sigma_model: 0.0,
+            state,
+            change: false,
+        };
+        let est = vec![
+            e(0.8, 0.4, State::Fallback),
+            e(0.55, 0.03, State::Identifiable), // 0.05 ≤ 0.06
+            e(0.6, 0.03, State::Identifiable),  // 0.10 > 0.06
+            e(0.6, 0.03, State::NotIdentifiable),
+            e(0.48, 0.011, State::Identifiable), // 0.02 ≤ 0.022
+            e(0.5, 0.05, State::Identifiable),
+        ];
+        let m = metrics(std::slice::from_ref(&tr), std::slice::from_ref(&est));
+        assert_eq!(m.n_identifiable, 4);
+        assert_eq!(m.within_2sigma, Some(0.75));
+        assert!((m.err_mean.unwrap() - 0.17 / 4.0).abs() < 1e-12);
+        let none = vec![e(0.8, 0.4, State::Fallback); n];
+        let m = metrics(std::slice::from_ref(&tr), std::slice::from_ref(&none));
+        assert_eq!((m.n_identifiable, m.within_2sigma), (0, None));
+    }
+
+    /// A change flag is false unless the road changed since the identification it changes from
+    /// began and the new value is right: a late true one counts as true; a correction on one
+    /// road, a flag to a wrong value and a flag without an earlier identification as false.
+    #[test]
+    fn false_change_flags_are_those_without_a_change_of_road() {
+        let n = 400;
+        // Road 0.9 for 200 samples, then 0.3.
+        let road = |i: usize| if i < 200 { 0.9 } else { 0.3 };
+        let tr = flat_trace((0..n).map(road).collect(), vec![0.7; n]);
+        let e = |mu: f64, change: bool| Estimate {
+            mu,
+            sigma: 0.02,
+            sigma_model: 0.0,
+            state: State::Identifiable,
+            change,
+        };
+        let run = |flags: &[(usize, f64)]| {
+            let mut mu = 0.5;
+            let est: Vec<_> = (0..n)
+                .map(|i| match flags.iter().find(|(k, _)| *k == i) {
+                    Some(&(_, m)) => {
+                        mu = m;
+                        e(m, true)
+                    }
+                    None => e(mu, false),
+                })
+                .collect();
+            false_change_flags(&tr, &est)
+        };
+        // Read 0.5 on 0.9 from the start, corrected at 50 (no change of road: false), the change
+        // read at 350, 150 samples late (true).
+        assert_eq!(run(&[(50, 0.9), (350, 0.3)]), 1);
+        // The change read as 0.6 (wrong value: false).
+        assert_eq!(run(&[(50, 0.9), (350, 0.6)]), 2);
+        // Only the late true one.
+        assert_eq!(run(&[(350, 0.3)]), 0);
+        // A flag on the very first sample has no identification to change from.
+        assert_eq!(run(&[(0, 0.9)]), 1);
+    }
+
+    /// The per-wheel listing (`wheels.csv`, the misses table) counts what [`metrics`] counts: a
+    /// stretch of μ 0.5 read 100 ms after utilisation 0.5, one of μ 0.2 read 200 ms after it, a
+    /// third below utilisation 0.5 (not a wheel-surface).
+    #[test]
+    fn the_wheel_listing_agrees_with_the_metrics() {
+        let n = 3000;
+        let mu = |i: usize| [0.5, 0.2, 0.9][i / 1000];
+        // Utilisation 0.5 from 300 ms into each of the first two stretches, 0.2 on the third.
+        let util = (0..n).map(|i| {
+            if i < 2000 && i % 1000 >= 300 {
+                0.7
+            } else {
+                0.2
+            }
+        });
+        let tr = flat_trace((0..n).map(mu).collect(), util.collect());
+        let read_from = |i: usize| if i < 1000 { 400 } else { 1500 };
+        let est: Vec<_> = (0..n)
+            .map(|i| Estimate {
+                mu: if i >= read_from(i) { mu(i) } else { 1.2 },
+                sigma: 0.02,
+                sigma_model: 0.0,
+                state: State::Identifiable,
+                change: false,
+            })
+            .collect();
+        let ws = wheel_surfaces(std::slice::from_ref(&tr), std::slice::from_ref(&est));
+        assert_eq!(ws.len(), 2, "{ws:?}");
+        assert_eq!((ws[0].wheel, ws[0].mu, ws[0].t_util05), (0, 0.5, 0.3));
+        assert!((ws[0].latency.unwrap() - 0.1).abs() < 1e-9 && ws[0].within());
+        assert!((ws[1].t_util05 - 1.3).abs() < 1e-9);
+        assert!((ws[1].latency.unwrap() - 0.2).abs() < 1e-9 && !ws[1].within());
+        let m = metrics(std::slice::from_ref(&tr), std::slice::from_ref(&est));
+        assert_eq!(m.ws_total, ws.len());
+        assert_eq!(m.ws_within, ws.iter().filter(|x| x.within()).count());
+    }
+}

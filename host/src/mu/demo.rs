@@ -1,0 +1,143 @@
+//! `gough mu demo`: the product's main job on one command — a manoeuvre on a road whose
+//! friction changes, the estimator at every wheel (with the bench's sensor model), a short table
+//! on the terminal, the estimates, a log and plots.
+
+use super::bench::plots::{plot_gough, plot_mu};
+use super::bench::tables::{fmt, WHEELS};
+use super::bench::{
+    measure, metrics, run_banks, sim_wheelbase, simulate_case, Case, DemoArgs, Sensors, WheelTrace,
+};
+use super::table_estimator::{Estimate, State};
+use crate::sim;
+use std::fmt::Write as _;
+
+/// The product's main job on one command: a manoeuvre on a road whose friction changes, the
+/// estimator at every wheel, a short table, plots.
+pub fn demo(a: DemoArgs) -> Result<(), String> {
+    let t = crate::tyre::load(&a.tir)?;
+    let p = t.params;
+    let case = Case {
+        manoeuvre: sim::MANOEUVRES
+            .iter()
+            .copied()
+            .find(|m| *m == a.manoeuvre)
+            .ok_or_else(|| {
+                format!(
+                    "unknown manoeuvre '{}' (one of {})",
+                    a.manoeuvre,
+                    sim::MANOEUVRES.join(", ")
+                )
+            })?,
+        road: a.road.clone(),
+    };
+    let log = simulate_case(&p, &case)?;
+    let sensors = Sensors::default();
+    std::fs::create_dir_all(&a.out).map_err(|e| format!("{}: {e}", a.out.display()))?;
+    let mut csv = String::from("t,wheel,mu_true,mu,sigma,state,util\n");
+    println!(
+        "{} on '{}' ({}), estimator at every wheel (noise: Mz 2 N·m, F 1 % Fz, 10 ms lag; rear wheels told what the front ones read, {:.1} m later):",
+        case.manoeuvre,
+        case.road,
+        p.version.name(),
+        sim_wheelbase()
+    );
+    println!("wheel | true μ (start → end) | estimate at end | state | max utilisation | within ±0.1 from util");
+    let mut first: Option<(WheelTrace, Vec<Estimate<f64>>)> = None;
+    let traces: Vec<WheelTrace> = (0..4).map(|w| measure(&log, w, &sensors, a.seed)).collect();
+    let ests = run_banks(
+        &p,
+        &traces,
+        Some(gough::mu::preview::Config::with_wheelbase(sim_wheelbase())),
+    );
+    for (w, ((name, tr), est)) in WHEELS.iter().zip(traces).zip(ests).enumerate() {
+        for (i, e) in est.iter().enumerate().step_by(10) {
+            let _ = writeln!(
+                csv,
+                "{:.3},{},{:.3},{:.4},{:.4},{},{:.3}",
+                tr.rows[i].t,
+                name,
+                tr.mu_true[i],
+                e.mu,
+                e.sigma,
+                e.state.name(),
+                tr.util[i]
+            );
+        }
+        let m = metrics(std::slice::from_ref(&tr), std::slice::from_ref(&est));
+        let last = est.last().copied().unwrap_or(Estimate {
+            mu: f64::NAN,
+            sigma: f64::NAN,
+            sigma_model: f64::NAN,
+            state: State::Fallback,
+            change: false,
+        });
+        println!(
+            "{:5} | {:.2} → {:.2} | {:.3} ± {:.3} | {} | {:.2} | {}",
+            name,
+            tr.mu_true.first().copied().unwrap_or(f64::NAN),
+            tr.mu_true.last().copied().unwrap_or(f64::NAN),
+            last.mu,
+            last.sigma,
+            last.state.name(),
+            tr.util.iter().copied().fold(0.0, f64::max),
+            fmt(m.util_within, 2)
+        );
+        if w == 0 {
+            // The front-left wheel's measured channels as a LOG for `gough mu estimate`, which
+            // takes a log as the file describes the tyre: mirrored (α, γ, Fy, Mz negated) when
+            // the file's tyre is a right-hand one.
+            let s = if p.mirrored_on(Some(gough::mf::Side::Left)) {
+                -1.0
+            } else {
+                1.0
+            };
+            let rows: Vec<Vec<f64>> = tr
+                .rows
+                .iter()
+                .zip(&tr.gamma)
+                .zip(&tr.mu_true)
+                .zip(&tr.kappa_meas)
+                .map(|(((r, &g), &m), &k)| {
+                    vec![
+                        r.t,
+                        r.fz,
+                        s * r.fy,
+                        s * r.mz,
+                        r.fx,
+                        r.vx,
+                        k,
+                        s * r.alpha,
+                        s * g,
+                        m,
+                    ]
+                })
+                .collect();
+            crate::csvio::write(
+                &a.out.join("log_fl.csv"),
+                &[
+                    "t", "fz", "fy", "mz", "fx", "vx", "kappa", "alpha", "gamma", "mu",
+                ],
+                &rows,
+            )
+            .map_err(|e| format!("{}: {e}", a.out.display()))?;
+        }
+        if first.is_none() {
+            first = Some((tr, est));
+        }
+    }
+    std::fs::write(a.out.join("estimates.csv"), csv).map_err(|e| e.to_string())?;
+    if let Some((tr, est)) = first {
+        plot_mu(
+            &tr,
+            &[("bank", &est)],
+            &a.out.join("mu.png"),
+            &format!("{} on {} (front left)", case.manoeuvre, case.road),
+        )?;
+        plot_gough(&p, &log, 0, &a.out.join("gough.png"))?;
+    }
+    eprintln!(
+        "-> {}/estimates.csv, log_fl.csv, mu.png, gough.png",
+        a.out.display()
+    );
+    Ok(())
+}
