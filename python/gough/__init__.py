@@ -148,7 +148,9 @@ def estimate_mu(tyre: Tyre, log, method: str = "bank", precision: str = "f64",
     (identifiable, not_identifiable, fallback). A car's log of four wheels has a `wheel` column
     (0–3 = FL, FR, RL, RR, rows interleaved, time increasing per wheel): a bank per wheel, and
     with `wheelbase` [m] each rear wheel is told what its front wheel read (`gough mu estimate
-    --wheelbase`); the DataFrame then has a `wheel` column."""
+    --wheelbase`); the DataFrame then has a `wheel` column. `method`: 'bank' (the product's
+    estimator), or a published peer on one wheel's log, 'hsu-gerdes' or 'slip-slope' (as
+    `gough mu estimate --method`); `precision`: the bank's float path, 'f64' or 'f32'."""
     import pandas as pd
 
     cols = _columns(log)

@@ -2,13 +2,14 @@
 //!
 //! It wraps, never re-implements: `.tir` text goes through `gough::tir::parse`, each point of
 //! `Tyre.eval` through `gough_host::mfrun::eval_row` (what `gough mf eval` runs), a friction
-//! log through `gough_host::mu::estimate` (what `gough mu estimate` runs), a gap log through
+//! log through `gough_host::mu::Method::estimator` (what `gough mu estimate` runs), a gap log through
 //! `gough_host::gap::diagnose` (what `gough gap diagnose` runs). The pure-Python layer does the
 //! broadcasting and the pandas conversions; this module takes and returns flat `float64` arrays.
 use gough::mf::{Options, Params};
+use gough::proto::Wheel;
 use gough_host::gap;
 use gough_host::mfrun::{self, Precision};
-use gough_host::mu::{self, peers::Row, Method};
+use gough_host::mu::{self, Method, Sample, Setup};
 use numpy::{IntoPyArray, PyArray1, PyReadonlyArray1};
 use pyo3::create_exception;
 use pyo3::exceptions::PyValueError;
@@ -162,12 +163,13 @@ type Estimates<'py> = (
     Vec<&'static str>,
 );
 
-/// `gough mu estimate` on columns (NaN = not logged; `has_fx` says whether Fx was logged);
-/// with `wheel` (0–3 per row) and/or `wheelbase` \[m\] a car's four-wheel log with the
-/// front-to-rear preview (`mu::estimate_car`, method bank). Returns (mu, sigma, state names).
+/// `gough mu estimate` on columns (NaN = not logged; `has_fx` says whether Fx was logged), by
+/// the same estimator (`gough_host::mu::Method::estimator`); with `wheel` (0–3 per row) a car's
+/// log, each wheel mounted on its side, and with `wheelbase` \[m\] the bank's front-to-rear
+/// preview. Returns (mu, sigma, state names).
 #[pyfunction]
 #[allow(clippy::too_many_arguments)]
-#[pyo3(signature = (tyre, t, fz, fy, mz, fx, vx, kappa, alpha, gamma, has_fx, method="gough", precision="f64", wheel=None, wheelbase=None))]
+#[pyo3(signature = (tyre, t, fz, fy, mz, fx, vx, kappa, alpha, gamma, has_fx, method="bank", precision="f64", wheel=None, wheelbase=None))]
 fn _estimate_mu<'py>(
     py: Python<'py>,
     tyre: &Tyre,
@@ -186,17 +188,7 @@ fn _estimate_mu<'py>(
     wheel: Option<PyReadonlyArray1<'py, f64>>,
     wheelbase: Option<f64>,
 ) -> PyResult<Estimates<'py>> {
-    let method = match method {
-        "bank" => Method::Bank,
-        "gough" => Method::Gough,
-        "hsu-gerdes" => Method::HsuGerdes,
-        "slip-slope" => Method::SlipSlope,
-        m => {
-            return Err(PyValueError::new_err(format!(
-                "method '{m}': expected bank, gough, hsu-gerdes or slip-slope"
-            )))
-        }
-    };
+    let method = Method::from_name(method).map_err(PyValueError::new_err)?;
     let prec = match precision {
         "f64" => mu::Precision::F64,
         "f32" => mu::Precision::F32,
@@ -226,8 +218,8 @@ fn _estimate_mu<'py>(
     {
         return Err(PyValueError::new_err("columns of different lengths"));
     }
-    let wheels: Vec<usize> = match &wheel {
-        None => vec![0; n],
+    let wheels: Vec<Wheel> = match &wheel {
+        None => vec![Wheel::FrontLeft; n],
         Some(w) => {
             let w = arr(w)?;
             if w.len() != n {
@@ -236,25 +228,27 @@ fn _estimate_mu<'py>(
             w.iter()
                 .enumerate()
                 .map(|(i, &x)| {
-                    if x.fract() == 0.0 && (0.0..=3.0).contains(&x) {
-                        Ok(x as usize)
-                    } else {
-                        Err(PyValueError::new_err(format!(
-                            "row {i}, column wheel: {x} is not 0, 1, 2 or 3"
-                        )))
-                    }
+                    Wheel::from_index(x as usize)
+                        .filter(|_| x.fract() == 0.0 && x >= 0.0)
+                        .ok_or_else(|| {
+                            PyValueError::new_err(format!(
+                                "row {i}, column wheel: {x} is not 0, 1, 2 or 3"
+                            ))
+                        })
                 })
                 .collect::<PyResult<_>>()?
         }
     };
-    let car = wheels.iter().any(|&w| w != 0) || wheelbase.is_some();
-    if car && method != Method::Bank {
+    let car = wheels.iter().any(|&w| w != Wheel::FrontLeft) || wheelbase.is_some();
+    if car && !method.couples_wheels() {
         return Err(PyValueError::new_err(
             "a log of several wheels, or a wheelbase, needs method 'bank'",
         ));
     }
     let mut last = [f64::NEG_INFINITY; 4];
-    let mut rows = Vec::with_capacity(n);
+    let mut log = Vec::with_capacity(n);
+    // A column the log does not have is all NaN (the Python layer fills it so): not measured.
+    let opt = |x: f64| x.is_finite().then_some(x);
     for i in 0..n {
         for (name, v) in [("t", t[i]), ("fz", fz[i]), ("fy", fy[i]), ("mz", mz[i])] {
             if !v.is_finite() {
@@ -264,37 +258,48 @@ fn _estimate_mu<'py>(
             }
         }
         let w = wheels[i];
-        if t[i] <= last[w] {
+        if t[i] <= last[w.index()] {
             return Err(PyValueError::new_err(format!(
                 "row {i}, column t: time does not increase ({} after {})",
-                t[i], last[w]
+                t[i],
+                last[w.index()]
             )));
         }
-        last[w] = t[i];
-        rows.push(Row {
-            t: t[i],
-            fz: fz[i],
-            fy: fy[i],
-            mz: mz[i],
-            fx: fx[i],
-            vx: vx[i],
-            kappa: kappa[i],
-            alpha: alpha[i],
-        });
+        last[w.index()] = t[i];
+        log.push((
+            w,
+            Sample {
+                t: t[i],
+                fz: fz[i],
+                fy: fy[i],
+                mz: mz[i],
+                fx: if has_fx { Some(fx[i]) } else { None },
+                vx: opt(vx[i]),
+                kappa: opt(kappa[i]),
+                alpha: opt(alpha[i]),
+                gamma: opt(gamma[i]),
+            },
+        ));
     }
+    let preview = match wheelbase {
+        Some(l) => {
+            let c = gough::mu::preview::Config::with_wheelbase(l);
+            gough::mu::preview::Preview::new(c)
+                .map_err(|e| PyValueError::new_err(format!("wheelbase {l}: {e}")))?;
+            Some(c)
+        }
+        None => None,
+    };
+    // A car's log mounts each wheel on its side, as `gough mu estimate` does; one wheel's log
+    // is taken as the file describes the tyre.
+    let setup = Setup {
+        precision: prec,
+        mounted: mu::mounting(&wheels, None),
+        preview,
+    };
     let params = &tyre.params;
     let est = py
-        .detach(|| {
-            if car {
-                // A car's log mounts each wheel on its side, as `gough mu estimate` does.
-                let mounted = mu::mounting(&wheels, None);
-                mu::estimate_car(
-                    params, &rows, &wheels, has_fx, &gamma, prec, wheelbase, mounted,
-                )
-            } else {
-                mu::estimate(params, &rows, has_fx, &gamma, method, prec, None).map(|(e, _)| e)
-            }
-        })
+        .detach(|| method.estimator(params, &setup).map(|mut e| e.run(&log)))
         .map_err(PyValueError::new_err)?;
     let m: Vec<f64> = est.iter().map(|e| e.mu).collect();
     let s: Vec<f64> = est.iter().map(|e| e.sigma).collect();

@@ -106,6 +106,6 @@ def test_a_four_wheel_log_equals_cli_with_the_preview(gough_cli, tmp_path):
     np.testing.assert_array_equal(got.mu[front].to_numpy(), alone.mu[front].to_numpy())
     assert (got.mu[~front].to_numpy() != alone.mu[~front].to_numpy()).any()
     with pytest.raises(ValueError, match="needs method 'bank'"):
-        gough.estimate_mu(tyre, log, method="gough")
+        gough.estimate_mu(tyre, log, method="hsu-gerdes")
     with pytest.raises(ValueError, match="column wheel: 4"):
         gough.estimate_mu(tyre, {"t": [0.0], "wheel": [4], "fz": [4e3], "fy": [0.0], "mz": [0.0]})

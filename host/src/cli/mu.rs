@@ -1,8 +1,8 @@
 //! `gough mu ...` subcommands.
-use crate::mu::table_estimator::Hold;
-use crate::mu::{estimate, estimate_car, read_car_log, Method, Precision};
+use crate::mu::{read_log, Method, Precision, Setup};
 use crate::tyre;
 use clap::{Args, Subcommand};
+use gough::proto::Wheel;
 use std::io::Write;
 use std::path::PathBuf;
 
@@ -11,11 +11,11 @@ use std::path::PathBuf;
 pub enum MuCmd {
     /// Run one wheel's friction estimator over a log.
     ///
-    /// LOG columns: t,fz,fy,mz required; fx,vx,kappa,alpha,gamma optional (SI, ISO-W). The Gough
-    /// method never reads alpha. EST columns: t,mu,sigma,state (identifiable, not_identifiable,
-    /// fallback), and hold with `--why`.
+    /// LOG columns: t,fz,fy,mz required; fx,vx,kappa,alpha,gamma optional (SI, ISO-W); with
+    /// `wheel` (0–3 = FL, FR, RL, RR) a car's log. The bank never reads alpha. EST columns:
+    /// t,mu,sigma,state (identifiable, not_identifiable, fallback), with `wheel` for a car's log.
     Estimate(EstimateArgs),
-    /// Benchmark the Gough estimator and its peers on the simulation's manoeuvre suite.
+    /// Benchmark the estimator (the bank) and its peers on the simulation's manoeuvre suite.
     Bench(crate::mu::bench::BenchArgs),
     /// The main job: a simulated manoeuvre on a road whose friction changes, the estimator at
     /// every wheel, a table on the terminal, plots and estimates written.
@@ -26,7 +26,7 @@ pub enum MuCmd {
     Map(MapArgs),
     /// How soon any estimator could know μ on the benchmark's data: the Cramér–Rao bound of
     /// its rows (exact model, the bench's noise) 150 ms after the utilisation reaches 0.5, beside
-    /// the Gough estimator's latency, wheel by wheel.
+    /// the bank's latency (as `gough mu bench` runs it), wheel by wheel.
     Bound(crate::mu::bound::BoundArgs),
     /// Calibrate the tyre file's registration of Mz against Fy on a log of a surface whose μ is
     /// known: the offset of PHY1 (the force's horizontal shift) or QHZ1 (the trail's) that best
@@ -99,18 +99,12 @@ pub struct EstimateArgs {
     /// Output CSV.
     #[arg(long)]
     pub out: PathBuf,
-    /// Float path of the estimator (the bank or the table estimator).
+    /// Float path of the bank (the peers run in f64).
     #[arg(long, value_enum, default_value_t = Precision::F64)]
     pub precision: Precision,
     /// Estimator.
     #[arg(long, value_enum, default_value_t = Method::Bank)]
     pub method: Method,
-    /// Add a column `hold` to EST: which gate held each held estimate (`no_excitation`,
-    /// `settling`, `trail_not_dropped`, `model_uncertain`, `ambiguous`, `confirming`,
-    /// `outlier`, `bad_sample`; empty where identifiable), and a count of each on the
-    /// terminal. Gough method only.
-    #[arg(long)]
-    pub why: bool,
     /// Wheelbase \[m\] of the car a four-wheel log comes from (a `wheel` column, 0–3 = FL, FR,
     /// RL, RR): each rear wheel's estimator is told what the front wheel on its side read when
     /// it gets there (`gough::mu::preview`). Bank method only.
@@ -148,115 +142,7 @@ impl SideArg {
 /// Runs a `gough mu` subcommand.
 pub fn run(cmd: MuCmd) -> Result<(), String> {
     match cmd {
-        MuCmd::Estimate(a) => {
-            if a.why && a.method != Method::Gough {
-                return Err("--why: only the gough method says why it holds an estimate".into());
-            }
-            let t = tyre::load(&a.tir)?;
-            let ((rows, gamma, present), wheels) = read_car_log(&a.log)?;
-            let several = wheels.iter().any(|&w| w != 0);
-            if (several || a.wheelbase.is_some()) && a.method != Method::Bank {
-                return Err(format!(
-                    "{}: the {} method reads one wheel's log{}",
-                    a.log.display(),
-                    clap::ValueEnum::to_possible_value(&a.method)
-                        .map_or_else(String::new, |v| v.get_name().to_string()),
-                    if several {
-                        " (this one has several wheels)"
-                    } else {
-                        "; --wheelbase is the bank's"
-                    }
-                ));
-            }
-            if several && a.side != SideArg::File {
-                return Err(format!(
-                    "{}: --side is a one-wheel log's; a car's log mounts each wheel on its side",
-                    a.log.display()
-                ));
-            }
-            let (est, holds) = if several || a.wheelbase.is_some() {
-                let mounted = crate::mu::mounting(&wheels, a.side.side());
-                let e = estimate_car(
-                    &t.params,
-                    &rows,
-                    &wheels,
-                    present[0],
-                    &gamma,
-                    a.precision,
-                    a.wheelbase,
-                    mounted,
-                )?;
-                (e, Vec::new())
-            } else {
-                estimate(
-                    &t.params,
-                    &rows,
-                    present[0],
-                    &gamma,
-                    a.method,
-                    a.precision,
-                    a.side.side(),
-                )?
-            };
-            let wheel_col = several;
-            if let Some(dir) = a.out.parent().filter(|d| !d.as_os_str().is_empty()) {
-                std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
-            }
-            let tmp = a.out.with_extension("csv.tmp");
-            let write = || -> std::io::Result<()> {
-                let mut w = std::io::BufWriter::new(std::fs::File::create(&tmp)?);
-                writeln!(
-                    w,
-                    "t,{}mu,sigma,state{}",
-                    if wheel_col { "wheel," } else { "" },
-                    if a.why { ",hold" } else { "" }
-                )?;
-                for (i, (r, e)) in rows.iter().zip(&est).enumerate() {
-                    write!(w, "{},", r.t)?;
-                    if wheel_col {
-                        write!(w, "{},", wheels[i])?;
-                    }
-                    write!(w, "{:.6},{:.6},{}", e.mu, e.sigma, e.state.name())?;
-                    if a.why {
-                        let h = holds.get(i).copied().flatten();
-                        write!(w, ",{}", h.map_or("", Hold::name))?;
-                    }
-                    writeln!(w)?;
-                }
-                w.flush()?;
-                std::fs::rename(&tmp, &a.out)
-            };
-            write().map_err(|e| format!("{}: cannot write: {e}", a.out.display()))?;
-            let n_id = est
-                .iter()
-                .filter(|e| e.state == crate::mu::table_estimator::State::Identifiable)
-                .count();
-            let last = est.last().map(|e| (e.mu, e.sigma, e.state.name()));
-            eprintln!(
-                "{} rows, {} identifiable; last: {:?} -> {}",
-                rows.len(),
-                n_id,
-                last,
-                a.out.display()
-            );
-            if a.why {
-                let counts: Vec<String> = Hold::ALL
-                    .iter()
-                    .map(|&h| (h, holds.iter().filter(|&&x| x == Some(h)).count()))
-                    .filter(|&(_, n)| n > 0)
-                    .map(|(h, n)| format!("{} {n}", h.name()))
-                    .collect();
-                eprintln!(
-                    "held: {}",
-                    if counts.is_empty() {
-                        "never".into()
-                    } else {
-                        counts.join(", ")
-                    }
-                );
-            }
-            Ok(())
-        }
+        MuCmd::Estimate(a) => estimate(&a),
         MuCmd::Bench(b) => crate::mu::bench::run(b),
         MuCmd::Demo(d) => crate::mu::demo::demo(d),
         MuCmd::Bound(b) => crate::mu::bound::run(b),
@@ -288,6 +174,77 @@ pub fn run(cmd: MuCmd) -> Result<(), String> {
     }
 }
 
+/// `gough mu estimate`.
+fn estimate(a: &EstimateArgs) -> Result<(), String> {
+    let t = tyre::load(&a.tir)?;
+    let log = read_log(&a.log)?;
+    let wheels: Vec<Wheel> = log.iter().map(|(w, _)| *w).collect();
+    let several = wheels.iter().any(|&w| w != Wheel::FrontLeft);
+    if (several || a.wheelbase.is_some()) && !a.method.couples_wheels() {
+        return Err(format!(
+            "{}: the {} method reads one wheel's log{}",
+            a.log.display(),
+            a.method.name(),
+            if several {
+                " (this one has several wheels)"
+            } else {
+                "; --wheelbase is the bank's"
+            }
+        ));
+    }
+    if several && a.side != SideArg::File {
+        return Err(format!(
+            "{}: --side is a one-wheel log's; a car's log mounts each wheel on its side",
+            a.log.display()
+        ));
+    }
+    let preview = match a.wheelbase {
+        Some(l) => {
+            let c = gough::mu::preview::Config::with_wheelbase(l);
+            gough::mu::preview::Preview::new(c).map_err(|e| format!("--wheelbase {l}: {e}"))?;
+            Some(c)
+        }
+        None => None,
+    };
+    let setup = Setup {
+        precision: a.precision,
+        mounted: crate::mu::mounting(&wheels, a.side.side()),
+        preview,
+    };
+    let est = a.method.estimator(&t.params, &setup)?.run(&log);
+    if let Some(dir) = a.out.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+    }
+    let tmp = a.out.with_extension("csv.tmp");
+    let write = || -> std::io::Result<()> {
+        let mut w = std::io::BufWriter::new(std::fs::File::create(&tmp)?);
+        writeln!(w, "t,{}mu,sigma,state", if several { "wheel," } else { "" })?;
+        for ((wheel, s), e) in log.iter().zip(&est) {
+            write!(w, "{},", s.t)?;
+            if several {
+                write!(w, "{},", wheel.index())?;
+            }
+            writeln!(w, "{:.6},{:.6},{}", e.mu, e.sigma, e.state.name())?;
+        }
+        w.flush()?;
+        std::fs::rename(&tmp, &a.out)
+    };
+    write().map_err(|e| format!("{}: cannot write: {e}", a.out.display()))?;
+    let n_id = est
+        .iter()
+        .filter(|e| e.state == gough::mu::bank::State::Identifiable)
+        .count();
+    let last = est.last().map(|e| (e.mu, e.sigma, e.state.name()));
+    eprintln!(
+        "{} rows, {} identifiable; last: {:?} -> {}",
+        log.len(),
+        n_id,
+        last,
+        a.out.display()
+    );
+    Ok(())
+}
+
 /// `gough mu calibrate`.
 fn calibrate(a: &CalibrateArgs) -> Result<(), String> {
     use crate::mu::calibrate::{self, Noise, WheelLog};
@@ -295,32 +252,27 @@ fn calibrate(a: &CalibrateArgs) -> Result<(), String> {
     let t = tyre::load(&a.tir)?;
     let text = std::fs::read_to_string(&a.tir)
         .map_err(|e| format!("{}: cannot read: {e}", a.tir.display()))?;
-    let ((rows, gamma, _), wheels) = read_car_log(&a.log)?;
+    let log = read_log(&a.log)?;
     let noise = Noise {
         f_rel: a.noise_f,
         mz: a.noise_mz,
     };
-    // Each wheel's rows in time order.
-    let per: Vec<(Vec<_>, Vec<f64>)> = (0..4)
-        .map(|w| {
-            let idx: Vec<usize> = (0..rows.len()).filter(|&i| wheels[i] == w).collect();
-            (
-                idx.iter().map(|&i| rows[i]).collect(),
-                idx.iter().map(|&i| gamma[i]).collect(),
-            )
-        })
+    // Each wheel's samples in time order.
+    let per: Vec<Vec<_>> = Wheel::ALL
+        .iter()
+        .map(|&w| log.iter().filter(|r| r.0 == w).map(|r| r.1).collect())
         .collect();
     // A car's log mounts each wheel on its side (as `gough mu estimate` does); one wheel's log
     // is taken as the file describes the tyre.
+    let wheels: Vec<Wheel> = log.iter().map(|r| r.0).collect();
     let mounted = crate::mu::mounting(&wheels, None);
     let logs: Vec<WheelLog> = per
         .iter()
-        .enumerate()
-        .filter(|(_, (r, _))| !r.is_empty())
-        .map(|(w, (r, g))| WheelLog {
+        .zip(mounted)
+        .filter(|(r, _)| !r.is_empty())
+        .map(|(r, m)| WheelLog {
             rows: r,
-            gamma: g,
-            mounted: mounted[w],
+            mounted: m,
         })
         .collect();
     let keys: Vec<Key> = if a.param.eq_ignore_ascii_case("auto") {

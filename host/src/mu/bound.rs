@@ -10,7 +10,7 @@
 //!   Fz rms, Mz 2 N·m rms; [`Sensors`]), independent between rows.
 //! - **Unknowns**: μ, shared by the rows of a surface, and per row the transient slips α', κ'
 //!   and the true load Fz. They are free per row because a method without a slip sensor (the
-//!   Gough method's premise) cannot pin them. Camber γ and Vx are given exactly, as the bench
+//!   bank's premise) cannot pin them. Camber γ and Vx are given exactly, as the bench
 //!   gives them to the estimator.
 //! - **Model**: the simulation's own — the Magic Formula of the bundled file with λμx = λμy =
 //!   μ/μy0, evaluated as the simulation evaluates it (`Options::transient`, mounted side). So the
@@ -24,11 +24,12 @@
 //!   might.
 //!
 //! A wheel can meet the target only if 1.96·σ_CRB ≤ 0.1 at 150 ms after its utilisation first
-//! reaches 0.5 (a 95 % interval inside ±0.1). The table puts that beside the Gough estimator's
-//! own latency, wheel by wheel, and (`--ml`) beside [`WindowMl`], a maximum-likelihood
+//! reaches 0.5 (a 95 % interval inside ±0.1). The table puts that beside the bank's own latency
+//! (run as `gough mu bench` runs it), wheel by wheel, and (`--ml`) beside [`WindowMl`], a maximum-likelihood
 //! reference with the same exact model that shows whether the bound can be reached.
 
-use super::bench::{self, Sensors, Tables, WheelTrace};
+use super::bench::{self, Sensors, WheelTrace};
+use super::{Method, Setup};
 use crate::sim::Log;
 use clap::Args;
 use gough::math::Libm;
@@ -48,7 +49,7 @@ pub struct BoundArgs {
     /// Output directory (bound.md, bound.csv).
     #[arg(long, default_value = "out/mu_bound")]
     pub out: PathBuf,
-    /// Noise seed of the Gough estimator's run (the bound itself needs no noise).
+    /// Noise seed of the bank's run (the bound itself needs no noise).
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
     /// Only the first N cases of the bench's suite.
@@ -446,7 +447,7 @@ fn refine(m: &Model, s: &Surface, th: &mut [f64; 3], y: &Meas) -> f64 {
     f0
 }
 
-/// One wheel on one surface of a case: what the bound and the Gough estimator say.
+/// One wheel on one surface of a case: what the bound and the bank say.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct WheelBound {
     /// True μ of the surface.
@@ -455,9 +456,9 @@ pub struct WheelBound {
     pub sigma_at_util: f64,
     /// σ_CRB from the surface's rows up to 150 ms later (the target's deadline).
     pub sigma_at_deadline: f64,
-    /// The Gough estimator's latency from utilisation 0.5 to staying within ±0.1 \[s\], if it
+    /// The bank's latency from utilisation 0.5 to staying within ±0.1 \[s\], if it
     /// gets there.
-    pub gough_latency: Option<f64>,
+    pub bank_latency: Option<f64>,
     /// Whether the maximum-likelihood reference ([`WindowMl`]) is within ±0.1 at the deadline
     /// and through the 0.3 s after it (or to the surface's end), when run.
     pub ml_within: Option<bool>,
@@ -474,7 +475,7 @@ impl WheelBound {
 pub const DEADLINE: f64 = 0.150;
 
 /// Bounds of wheel `w` of a simulated case (`tr`: its rows as [`bench::measure`] made them),
-/// one per surface on which its utilisation reaches 0.5. `gough_latency(a, b)` gives the Gough
+/// one per surface on which its utilisation reaches 0.5. `bank_latency(a, b)` gives the bank's
 /// estimator's latency on the surface's rows `a..b`; `ml` (a window length \[s\]) also runs
 /// [`WindowMl`] there.
 pub fn wheel_bounds(
@@ -483,7 +484,7 @@ pub fn wheel_bounds(
     w: usize,
     sens: &Sensors,
     tr: &WheelTrace,
-    gough_latency: &dyn Fn(usize, usize) -> Option<f64>,
+    bank_latency: &dyn Fn(usize, usize) -> Option<f64>,
     ml: Option<f64>,
 ) -> Vec<WheelBound> {
     let util = &tr.util;
@@ -536,7 +537,7 @@ pub fn wheel_bounds(
                 } else {
                     f64::INFINITY // the surface ends before the deadline
                 },
-                gough_latency: gough_latency(a, b),
+                bank_latency: bank_latency(a, b),
                 ml_within: ml
                     .zip(end.filter(|&e| recs[e].t + 1e-9 >= t_dead))
                     .map(|(window, e)| ml_within(m, tr, sens, log.dt, window, e, a + lag..b)),
@@ -565,7 +566,8 @@ fn ml_within(
     let mut est = WindowMl::new(m, 0.05, 0.01, 126, rows, *sens);
     for i in start..stop {
         let r = &tr.rows[i];
-        let mu = est.update(r.fz, r.fx, r.fy, r.mz, tr.gamma[i], r.vx);
+        let v = |x: Option<f64>| x.unwrap_or(f64::NAN);
+        let mu = est.update(r.fz, v(r.fx), r.fy, r.mz, r.gamma.unwrap_or(0.0), v(r.vx));
         if i >= dead && (mu - tr.mu_true[i]).abs() > 0.1 {
             return false;
         }
@@ -584,7 +586,10 @@ pub fn run(a: BoundArgs) -> Result<(), String> {
     };
     let t = crate::tyre::load(&a.tir)?;
     let p = t.params;
-    let tables = Tables::new(&p)?;
+    // The bank as `gough mu bench` runs it: the four wheels with the default preview.
+    let setup = Setup::car(Some(gough::mu::preview::Config::with_wheelbase(
+        bench::sim_wheelbase(),
+    )));
     let sens = Sensors::default();
     let models = [Model::new(&p, Side::Left)?, Model::new(&p, Side::Right)?];
     let mut cases = bench::suite();
@@ -595,31 +600,33 @@ pub fn run(a: BoundArgs) -> Result<(), String> {
     let mut md = String::new();
     let _ = writeln!(
         md,
-        "| manoeuvre | road | wheel | μ | σ_CRB at util 0.5 | σ_CRB 150 ms later | ±0.1 decidable by then | Gough latency [s] | ML within ±0.1 from then |"
+        "| manoeuvre | road | wheel | μ | σ_CRB at util 0.5 | σ_CRB 150 ms later | ±0.1 decidable by then | bank latency [s] | ML within ±0.1 from then |"
     );
     let _ = writeln!(md, "|---|---|---|---|---|---|---|---|---|");
     let mut csv = String::from(
-        "manoeuvre,road,wheel,mu,sigma_at_util,sigma_at_deadline,decidable,gough_latency_s,ml_within\n",
+        "manoeuvre,road,wheel,mu,sigma_at_util,sigma_at_deadline,decidable,bank_latency_s,ml_within\n",
     );
     let names = ["fl", "fr", "rl", "rr"];
-    let (mut n_wheels, mut n_dec, mut n_gough, mut n_ml) = (0, 0, 0, 0);
-    let (mut n_cases, mut case_dec, mut case_gough) = (0, 0, 0);
+    let (mut n_wheels, mut n_dec, mut n_bank, mut n_ml) = (0, 0, 0, 0);
+    let (mut n_cases, mut case_dec, mut case_bank) = (0, 0, 0);
     for c in &cases {
         let log = bench::simulate_case(&p, c)?;
         let mut dec_lat: Vec<f64> = Vec::new();
-        let mut gough_lat: Vec<f64> = Vec::new();
+        let mut bank_lat: Vec<f64> = Vec::new();
         let mut any = false;
-        for (w, name) in names.iter().enumerate() {
-            let tr = bench::measure(&log, w, &sens, a.seed);
-            let est = bench::run_method(0, &p, &tables, w, &tr);
-            let lat = |s: usize, e: usize| bench::segment_latency(&tr, &est, s, e);
+        let traces: Vec<WheelTrace> = (0..4)
+            .map(|w| bench::measure(&log, w, &sens, a.seed))
+            .collect();
+        let ests = bench::run_method(Method::Bank, &p, &setup, &traces)?;
+        for (w, ((name, tr), est)) in names.iter().zip(&traces).zip(&ests).enumerate() {
+            let lat = |s: usize, e: usize| bench::segment_latency(tr, est, s, e);
             let model = &models[usize::from(!w.is_multiple_of(2))];
-            for b in wheel_bounds(model, &log, w, &sens, &tr, &lat, ml) {
+            for b in wheel_bounds(model, &log, w, &sens, tr, &lat, ml) {
                 any = true;
                 n_wheels += 1;
                 n_dec += usize::from(b.decidable());
-                let g_ok = b.gough_latency.is_some_and(|l| l <= DEADLINE);
-                n_gough += usize::from(g_ok);
+                let g_ok = b.bank_latency.is_some_and(|l| l <= DEADLINE);
+                n_bank += usize::from(g_ok);
                 n_ml += usize::from(b.ml_within == Some(true));
                 let ml_cell = |yes: &str, no: &str| match b.ml_within {
                     Some(true) => yes.to_string(),
@@ -629,8 +636,8 @@ pub fn run(a: BoundArgs) -> Result<(), String> {
                 if b.decidable() {
                     dec_lat.push(0.0);
                 }
-                if let Some(l) = b.gough_latency {
-                    gough_lat.push(l);
+                if let Some(l) = b.bank_latency {
+                    bank_lat.push(l);
                 }
                 let f = |s: f64| {
                     if s.is_finite() {
@@ -639,7 +646,7 @@ pub fn run(a: BoundArgs) -> Result<(), String> {
                         "∞".into()
                     }
                 };
-                let gl = b.gough_latency.map_or("–".into(), |l| format!("{l:.3}"));
+                let gl = b.bank_latency.map_or("–".into(), |l| format!("{l:.3}"));
                 let _ = writeln!(
                     md,
                     "| {} | {} | {name} | {:.2} | {} | {} | {} | {gl} | {} |",
@@ -664,7 +671,7 @@ pub fn run(a: BoundArgs) -> Result<(), String> {
                     b.sigma_at_util,
                     b.sigma_at_deadline,
                     b.decidable(),
-                    b.gough_latency.map_or(String::new(), |l| format!("{l:.4}")),
+                    b.bank_latency.map_or(String::new(), |l| format!("{l:.4}")),
                     ml_cell("true", "false"),
                 );
             }
@@ -672,13 +679,13 @@ pub fn run(a: BoundArgs) -> Result<(), String> {
         if any {
             n_cases += 1;
             case_dec += usize::from(!dec_lat.is_empty());
-            case_gough += usize::from(bench::median(gough_lat).is_some_and(|l| l <= DEADLINE));
+            case_bank += usize::from(bench::median(bank_lat).is_some_and(|l| l <= DEADLINE));
         }
         eprintln!("{} on {}: done", c.manoeuvre, c.road);
     }
     let _ = writeln!(
         md,
-        "\nWheel-surfaces reaching utilisation 0.5: {n_wheels}. ±0.1 decidable within 150 ms by an unbiased estimator with the exact model (1.96·σ_CRB ≤ 0.1): {n_dec}. The Gough estimator within ±0.1 within 150 ms: {n_gough}.{}\nCases with a wheel reaching utilisation 0.5: {n_cases}; with at least one wheel decidable: {case_dec}; Gough's median latency ≤ 150 ms (the bench's criterion): {case_gough}.",
+        "\nWheel-surfaces reaching utilisation 0.5: {n_wheels}. ±0.1 decidable within 150 ms by an unbiased estimator with the exact model (1.96·σ_CRB ≤ 0.1): {n_dec}. The bank within ±0.1 within 150 ms: {n_bank}.{}\nCases with a wheel reaching utilisation 0.5: {n_cases}; with at least one wheel decidable: {case_dec}; the bank's median latency ≤ 150 ms (the bench's criterion): {case_bank}.",
         if let Some(w) = ml {
             format!(" The maximum-likelihood reference ({w} s window) within ±0.1 from 150 ms on (through 0.3 s): {n_ml}.")
         } else {

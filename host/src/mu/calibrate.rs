@@ -15,7 +15,7 @@
 //! What it needs: κ in the log, or no longitudinal force to speak of (a batch whose |Fx| is more
 //! than a tenth of its horizontal force is left out without κ); the known μ; enough batches
 //! near the limit ([`MIN_BATCHES`]).
-use super::peers::Row;
+use super::estimator::Sample;
 use gough::math::Libm;
 use gough::mf::{self, Input, Key, Options, Params, Side};
 
@@ -50,13 +50,11 @@ impl Default for Noise {
     }
 }
 
-/// One wheel's rows (in time order), its camber per row \[rad\] (NaN: 0) and how the tyre is
-/// mounted (`None`: as the file describes it, as `gough mu estimate` takes a log).
+/// One wheel's samples (in time order; camber where not logged: 0) and how the tyre is mounted
+/// (`None`: as the file describes it, as `gough mu estimate` takes a log).
 pub struct WheelLog<'a> {
-    /// Rows, time increasing.
-    pub rows: &'a [Row],
-    /// Camber per row \[rad\], NaN where not logged.
-    pub gamma: &'a [f64],
+    /// Samples, time increasing.
+    pub rows: &'a [Sample],
     /// Mounting side (mirroring), `None` for the file's own.
     pub mounted: Option<Side>,
 }
@@ -103,17 +101,16 @@ fn mean(x: impl Iterator<Item = f64>) -> f64 {
 fn batches(wheels: &[WheelLog], mu: f64, noise: &Noise) -> Vec<Batch> {
     let mut out = Vec::new();
     for w in wheels {
-        for (k, r) in w.rows.chunks_exact(BATCH).enumerate() {
-            let g = w.gamma.get(k * BATCH..(k + 1) * BATCH).unwrap_or(&[]);
+        for r in w.rows.chunks_exact(BATCH) {
             let (fz, fy, mz) = (
                 mean(r.iter().map(|x| x.fz)),
                 mean(r.iter().map(|x| x.fy)),
                 mean(r.iter().map(|x| x.mz)),
             );
-            let fx = mean(r.iter().map(|x| x.fx).filter(|v| v.is_finite()));
-            let kappa = mean(r.iter().map(|x| x.kappa).filter(|v| v.is_finite()));
-            let vx = mean(r.iter().map(|x| x.vx).filter(|v| v.is_finite()));
-            let gamma = mean(g.iter().copied().filter(|v| v.is_finite()));
+            let fx = mean(r.iter().filter_map(|x| x.fx).filter(|v| v.is_finite()));
+            let kappa = mean(r.iter().filter_map(|x| x.kappa).filter(|v| v.is_finite()));
+            let vx = mean(r.iter().filter_map(|x| x.vx).filter(|v| v.is_finite()));
+            let gamma = mean(r.iter().filter_map(|x| x.gamma).filter(|v| v.is_finite()));
             if !(fz.is_finite() && fz > 0.0 && fy.is_finite() && mz.is_finite()) {
                 continue;
             }
@@ -356,12 +353,20 @@ mod tests {
             .collect()
     }
 
-    fn wheels(tr: &[WheelTrace]) -> Vec<WheelLog<'_>> {
+    /// Each wheel's samples with the exact slips (κ of a slip sensor, as the calibration's
+    /// tests have always taken them).
+    fn samples(tr: &[WheelTrace]) -> Vec<Vec<Sample>> {
         tr.iter()
+            .map(|t| (0..t.rows.len()).map(|i| t.sample(i, true)).collect())
+            .collect()
+    }
+
+    fn wheels(samples: &[Vec<Sample>]) -> Vec<WheelLog<'_>> {
+        samples
+            .iter()
             .enumerate()
-            .map(|(w, t)| WheelLog {
-                rows: &t.rows,
-                gamma: &t.gamma,
+            .map(|(w, rows)| WheelLog {
+                rows,
                 mounted: gough::proto::Wheel::from_index(w).map(|x| x.side()),
             })
             .collect()
@@ -373,7 +378,7 @@ mod tests {
     #[test]
     fn a_shifted_file_is_put_right_on_a_known_surface() {
         let (_, p) = file();
-        let tr = traces(&p);
+        let tr = samples(&traces(&p));
         let ws = wheels(&tr);
         let mut wrong = p.clone();
         wrong.phy1 += 0.002;
@@ -394,7 +399,7 @@ mod tests {
     #[test]
     fn what_cannot_be_calibrated_is_refused() {
         let (_, p) = file();
-        let tr = traces(&p);
+        let tr = samples(&traces(&p));
         let ws = wheels(&tr);
         let n = Noise::default();
         // On μ 1.0 data called μ 2.0, hardly a batch reaches utilisation 0.5.

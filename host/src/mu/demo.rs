@@ -5,10 +5,11 @@
 use super::bench::plots::{plot_gough, plot_mu};
 use super::bench::tables::{fmt, WHEELS};
 use super::bench::{
-    measure, metrics, run_banks, sim_wheelbase, simulate_case, Case, DemoArgs, Sensors, WheelTrace,
+    measure, metrics, run_method, sim_wheelbase, simulate_case, Case, DemoArgs, Sensors, WheelTrace,
 };
-use super::table_estimator::{Estimate, State};
+use super::{Estimate, Method, Setup};
 use crate::sim;
+use gough::mu::bank::State;
 use std::fmt::Write as _;
 
 /// The product's main job on one command: a manoeuvre on a road whose friction changes, the
@@ -42,13 +43,10 @@ pub fn demo(a: DemoArgs) -> Result<(), String> {
         sim_wheelbase()
     );
     println!("wheel | true μ (start → end) | estimate at end | state | max utilisation | within ±0.1 from util");
-    let mut first: Option<(WheelTrace, Vec<Estimate<f64>>)> = None;
+    let mut first: Option<(WheelTrace, Vec<Estimate>)> = None;
     let traces: Vec<WheelTrace> = (0..4).map(|w| measure(&log, w, &sensors, a.seed)).collect();
-    let ests = run_banks(
-        &p,
-        &traces,
-        Some(gough::mu::preview::Config::with_wheelbase(sim_wheelbase())),
-    );
+    let preview = gough::mu::preview::Config::with_wheelbase(sim_wheelbase());
+    let ests = run_method(Method::Bank, &p, &Setup::car(Some(preview)), &traces)?;
     for (w, ((name, tr), est)) in WHEELS.iter().zip(traces).zip(ests).enumerate() {
         for (i, e) in est.iter().enumerate().step_by(10) {
             let _ = writeln!(
@@ -67,7 +65,6 @@ pub fn demo(a: DemoArgs) -> Result<(), String> {
         let last = est.last().copied().unwrap_or(Estimate {
             mu: f64::NAN,
             sigma: f64::NAN,
-            sigma_model: f64::NAN,
             state: State::Fallback,
             change: false,
         });
@@ -91,23 +88,24 @@ pub fn demo(a: DemoArgs) -> Result<(), String> {
             } else {
                 1.0
             };
+            // Its `alpha` column is the slip sensor's (the bank never reads it).
+            let v = |x: Option<f64>| x.unwrap_or(f64::NAN);
             let rows: Vec<Vec<f64>> = tr
                 .rows
                 .iter()
-                .zip(&tr.gamma)
+                .zip(&tr.slip_sensor)
                 .zip(&tr.mu_true)
-                .zip(&tr.kappa_meas)
-                .map(|(((r, &g), &m), &k)| {
+                .map(|((r, &(alpha, _)), &m)| {
                     vec![
                         r.t,
                         r.fz,
                         s * r.fy,
                         s * r.mz,
-                        r.fx,
-                        r.vx,
-                        k,
-                        s * r.alpha,
-                        s * g,
+                        v(r.fx),
+                        v(r.vx),
+                        v(r.kappa),
+                        s * alpha,
+                        s * v(r.gamma),
                         m,
                     ]
                 })

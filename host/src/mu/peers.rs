@@ -1,5 +1,7 @@
 //! Baseline friction estimators from the literature, implemented from their papers (host only),
-//! to compare the Gough-plot estimator against. Both may use the slip the log provides.
+//! to compare the product's estimator (the bank) against. Both read the slip a slip sensor
+//! gives ([`Method::slip_sensor`](super::Method::slip_sensor)); each runs per wheel
+//! ([`EachWheel`]).
 //!
 //! - [`HsuGerdes`]: Y.-H. J. Hsu, S. M. Laws, J. C. Gerdes, "Estimation of tire slip angle and
 //!   friction limits using steering torque", IEEE Trans. Control Systems Technology 18(4), 2010.
@@ -14,30 +16,11 @@
 //!   μ through a calibration curve — here computed from the same tyre model: the secant slope
 //!   at κ = 0.03 for friction levels 0.05…1.5 (every 0.05; [`MU_RANGE`]).
 
-use super::table_estimator::{Estimate, State};
+use super::estimator::{Estimate, Estimator, Sample};
 use gough::math::Libm;
 use gough::mf::{self, Input, Options, Params};
-
-/// One log row as the peers see it (SI, ISO-W).
-#[derive(Debug, Clone, Copy, Default)]
-pub struct Row {
-    /// Time \[s\].
-    pub t: f64,
-    /// Fz \[N\].
-    pub fz: f64,
-    /// Fy \[N\].
-    pub fy: f64,
-    /// Mz \[N·m\].
-    pub mz: f64,
-    /// Fx \[N\] (0 when not logged).
-    pub fx: f64,
-    /// Vx \[m/s\] (NaN when not logged).
-    pub vx: f64,
-    /// α \[rad\] (NaN when not logged).
-    pub alpha: f64,
-    /// κ \[-\] (NaN when not logged).
-    pub kappa: f64,
-}
+use gough::mu::bank::State;
+use gough::proto::Wheel;
 
 /// The range of μ both peers report (a reading outside it saturates): Hsu–Gerdes' clamp, the
 /// slip-slope calibration's span. Wider than every benchmark surface (μ 0.1…1.0), so that no
@@ -48,11 +31,10 @@ pub struct Row {
 /// (docs/estimator.md, "better than … on every case").
 pub const MU_RANGE: (f64, f64) = (0.05, 1.5);
 
-fn prior() -> Estimate<f64> {
+fn prior() -> Estimate {
     Estimate {
         mu: 0.8,
         sigma: 0.4,
-        sigma_model: 0.0,
         state: State::Fallback,
         change: false,
     }
@@ -126,16 +108,12 @@ impl HsuGerdes {
     }
 
     /// One sample.
-    pub fn update(&mut self, r: &Row) -> Estimate<f64> {
+    pub fn update(&mut self, r: &Sample) -> Estimate {
         let dt = self.last_t.map_or(0.0, |t0| (r.t - t0).clamp(0.0, 1.0));
         self.last_t = Some(r.t);
-        let gated = r.alpha.is_finite()
-            && r.alpha.abs() > 2f64.to_radians()
-            && r.vx.is_finite()
-            && r.vx.abs() > 3.0
-            && r.fz > 0.0
-            && r.fy.abs() > 1e-3 * r.fz;
-        let raw = if gated {
+        let alpha = r.alpha.filter(|a| a.abs() > 2f64.to_radians());
+        let gated = r.vx.is_some_and(|v| v.abs() > 3.0) && r.fz > 0.0 && r.fy.abs() > 1e-3 * r.fz;
+        let raw = if let (Some(alpha), true) = (alpha, gated) {
             // Cα and tp0 at this load from the tyre file (small-slip values).
             eval_at(&self.p, 1.0, r.fz, 1e-4, 0.0).and_then(|o| {
                 let c_alpha = o.k_ya.abs();
@@ -145,7 +123,7 @@ impl HsuGerdes {
                     return None;
                 }
                 // tp = tp0·(1 − Cα·|tan α|/(3·μ·Fz))  →  μ = Cα·|tan α|·tp0 / (3·Fz·(tp0 − tp))
-                let mu = c_alpha * r.alpha.tan().abs() * tp0 / (3.0 * r.fz * (tp0 - tp));
+                let mu = c_alpha * alpha.tan().abs() * tp0 / (3.0 * r.fz * (tp0 - tp));
                 // Physically plausible range only (the linear trail model blows up as tp → tp0).
                 let mu = mu.clamp(MU_RANGE.0, MU_RANGE.1);
                 (mu.is_finite() && mu > 0.0).then_some(mu)
@@ -168,7 +146,6 @@ impl HsuGerdes {
                 Estimate {
                     mu: v,
                     sigma: 0.1,
-                    sigma_model: 0.0,
                     state: State::Identifiable,
                     change: false,
                 }
@@ -177,7 +154,6 @@ impl HsuGerdes {
                 Some(v) => Estimate {
                     mu: v,
                     sigma: 0.2,
-                    sigma_model: 0.0,
                     state: State::NotIdentifiable,
                     change: false,
                 },
@@ -250,17 +226,17 @@ impl SlipSlope {
     }
 
     /// One sample.
-    pub fn update(&mut self, r: &Row) -> Estimate<f64> {
-        let gated = r.kappa.is_finite()
-            && r.kappa.abs() > 0.005
-            && r.kappa.abs() < 0.1
-            && r.fz > 0.0
-            && (!r.vx.is_finite() || r.vx.abs() > 3.0);
-        if gated {
+    pub fn update(&mut self, r: &Sample) -> Estimate {
+        let slip = r
+            .kappa
+            .zip(r.fx)
+            .filter(|(k, _)| k.abs() > 0.005 && k.abs() < 0.1);
+        let gated = r.fz > 0.0 && r.vx.is_none_or(|v| v.abs() > 3.0);
+        if let (Some((kappa, fx)), true) = (slip, gated) {
             // RLS on μn = k·κ (Gustafsson's eq. with the offset omitted: κ is measured
             // relative to free rolling here).
-            let x = r.kappa.abs();
-            let y = (r.fx / r.fz).abs();
+            let x = kappa.abs();
+            let y = (fx / r.fz).abs();
             let g = self.p_rls * x / (self.forget + x * self.p_rls * x);
             self.k += g * (y - self.k * x);
             self.p_rls = (self.p_rls - g * x * self.p_rls) / self.forget;
@@ -268,7 +244,6 @@ impl SlipSlope {
             return Estimate {
                 mu: self.mu_of(self.k),
                 sigma: 0.1,
-                sigma_model: 0.0,
                 state: State::Identifiable,
                 change: false,
             };
@@ -277,13 +252,47 @@ impl SlipSlope {
             Estimate {
                 mu: self.mu_of(self.k),
                 sigma: 0.2,
-                sigma_model: 0.0,
                 state: State::NotIdentifiable,
                 change: false,
             }
         } else {
             prior()
         }
+    }
+}
+
+/// A per-wheel estimator: one sample of one wheel in, that wheel's estimate out.
+pub trait WheelEstimator {
+    /// One sample.
+    fn update(&mut self, s: &Sample) -> Estimate;
+}
+
+impl WheelEstimator for HsuGerdes {
+    fn update(&mut self, s: &Sample) -> Estimate {
+        HsuGerdes::update(self, s)
+    }
+}
+
+impl WheelEstimator for SlipSlope {
+    fn update(&mut self, s: &Sample) -> Estimate {
+        SlipSlope::update(self, s)
+    }
+}
+
+/// A per-wheel estimator at each of a car's four wheels, each on its own samples.
+#[derive(Debug, Clone)]
+pub struct EachWheel<E>([E; 4]);
+
+impl<E: Clone> EachWheel<E> {
+    /// `e` (as built, before any sample) at every wheel.
+    pub fn new(e: E) -> Self {
+        EachWheel([e.clone(), e.clone(), e.clone(), e])
+    }
+}
+
+impl<E: WheelEstimator> Estimator for EachWheel<E> {
+    fn update(&mut self, wheel: Wheel, s: &Sample) -> Estimate {
+        self.0[wheel.index()].update(s)
     }
 }
 
@@ -299,18 +308,18 @@ mod tests {
     }
 
     /// Steady braking at slip `kappa` on surface μ (the file's scale), noise-free, 1 kHz.
-    fn braking(p: &Params<f64>, mu: f64, kappa: f64, n: usize) -> Vec<Row> {
+    fn braking(p: &Params<f64>, mu: f64, kappa: f64, n: usize) -> Vec<Sample> {
         let mu0 = eval_at(p, 1.0, p.fnomin, 0.0, 0.0).expect("mu0").mu_y;
         let o = eval_at(p, mu / mu0, p.fnomin, 0.0, kappa).expect("eval");
         (0..n)
-            .map(|i| Row {
+            .map(|i| Sample {
                 t: i as f64 * 1e-3,
                 fz: p.fnomin,
-                fx: o.fx,
-                vx: 20.0,
-                alpha: 0.0,
-                kappa,
-                ..Row::default()
+                fx: Some(o.fx),
+                vx: Some(20.0),
+                alpha: Some(0.0),
+                kappa: Some(kappa),
+                ..Sample::default()
             })
             .collect()
     }
@@ -336,7 +345,12 @@ mod tests {
         let rows = braking(&p, 0.3, -KAPPA_REF, 50);
         let e = rows
             .iter()
-            .map(|r| s.update(&Row { fx: 0.0, ..*r }))
+            .map(|r| {
+                s.update(&Sample {
+                    fx: Some(0.0),
+                    ..*r
+                })
+            })
             .last()
             .expect("rows");
         assert_eq!(e.mu, MU_RANGE.0);

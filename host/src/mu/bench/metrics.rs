@@ -3,88 +3,12 @@
 //! truth, change flags and the false ones among them, wheel-surfaces read in time, and two
 //! estimators on the samples both call identifiable.
 
-use super::super::table_estimator::{Estimate, Hold, State};
 use super::sensors::WheelTrace;
-
-/// Where the Gough estimator's latency goes on one case: over each wheel's surfaces that reach
-/// utilisation 0.5, the samples of the target's window — from that moment until the estimate
-/// settles within ±0.1, at most [`TARGET_LATENCY`] — by what the estimator reported.
-#[derive(Debug, Clone, Default, PartialEq)]
-pub struct HoldTally {
-    /// Samples held, per [`Hold::ALL`] reason.
-    pub held: [usize; Hold::ALL.len()],
-    /// Samples reported identifiable but not yet (for good) within ±0.1.
-    pub identifiable: usize,
-    /// Wheel-surfaces that reach utilisation 0.5.
-    pub windows: usize,
-    /// Of them, those whose estimate settles within ±0.1 within [`TARGET_LATENCY`].
-    pub within: usize,
-}
+use crate::mu::Estimate;
+use gough::mu::bank::State;
 
 /// The issue's latency target: within ±0.1 this long after utilisation 0.5 \[s\].
 pub const TARGET_LATENCY: f64 = 0.150;
-
-impl HoldTally {
-    /// All samples of the windows.
-    pub fn total(&self) -> usize {
-        self.held.iter().sum::<usize>() + self.identifiable
-    }
-
-    /// Adds another tally's samples and windows.
-    pub fn add(&mut self, o: &HoldTally) {
-        for (a, b) in self.held.iter_mut().zip(o.held) {
-            *a += b;
-        }
-        self.identifiable += o.identifiable;
-        self.windows += o.windows;
-        self.within += o.within;
-    }
-
-    /// Shares of the samples \[held per [`Hold::ALL`] reason…, identifiable\] (0 when empty).
-    pub fn shares(&self) -> Vec<f64> {
-        let n = self.total().max(1) as f64;
-        self.held
-            .iter()
-            .chain([&self.identifiable])
-            .map(|&k| k as f64 / n)
-            .collect()
-    }
-}
-
-/// [`HoldTally`] of the Gough estimator's estimates `est` and reasons `holds` on the traces.
-pub fn hold_tally(
-    traces: &[WheelTrace],
-    ests: &[Vec<Estimate<f64>>],
-    holds: &[Vec<Option<Hold>>],
-) -> HoldTally {
-    let mut out = HoldTally::default();
-    for ((tr, est), hs) in traces.iter().zip(ests).zip(holds) {
-        if est.len() != tr.rows.len() || hs.len() != tr.rows.len() {
-            continue;
-        }
-        for (a, b) in segments(&tr.mu_true) {
-            let Some(i5) = (a..b).find(|&i| tr.util[i] >= 0.5) else {
-                continue;
-            };
-            let ok = settled(tr, est, a, b);
-            let deadline = tr.rows[i5].t + TARGET_LATENCY;
-            let mut end = (i5..b).find(|&i| tr.rows[i].t > deadline).unwrap_or(b);
-            if let Some(ok) = ok {
-                end = end.min(ok.max(i5));
-            }
-            for h in &hs[i5..end] {
-                match h.and_then(|h| Hold::ALL.iter().position(|&x| x == h)) {
-                    Some(k) => out.held[k] += 1,
-                    None => out.identifiable += 1,
-                }
-            }
-            out.windows += 1;
-            let lat = ok.and_then(|ok| latency_from(tr, a, b, ok));
-            out.within += usize::from(lat.is_some_and(|l| l <= TARGET_LATENCY));
-        }
-    }
-    out
-}
 
 /// An identifiable estimate off by more than this is a gross error \[-\].
 pub const GROSS: f64 = 0.2;
@@ -148,7 +72,7 @@ pub(crate) fn segments(mu: &[f64]) -> Vec<(usize, usize)> {
 
 /// First row of segment `a..b` from which the reported estimate stays within ±0.1 of the truth
 /// to the segment's end, held for at least 50 rows ("stays").
-fn settled(tr: &WheelTrace, est: &[Estimate<f64>], a: usize, b: usize) -> Option<usize> {
+fn settled(tr: &WheelTrace, est: &[Estimate], a: usize, b: usize) -> Option<usize> {
     let mut first_ok = None;
     for i in (a..b).rev() {
         let e = &est[i];
@@ -169,7 +93,7 @@ fn latency_from(tr: &WheelTrace, a: usize, b: usize, ok: usize) -> Option<f64> {
 
 /// Latency of one wheel on segment `a..b` (rows of constant true μ): from the utilisation
 /// first reaching 0.5 to the estimate staying within ±0.1 \[s\], as [`metrics`] takes it.
-pub fn segment_latency(tr: &WheelTrace, est: &[Estimate<f64>], a: usize, b: usize) -> Option<f64> {
+pub fn segment_latency(tr: &WheelTrace, est: &[Estimate], a: usize, b: usize) -> Option<f64> {
     if est.len() != tr.rows.len() {
         return None;
     }
@@ -202,7 +126,7 @@ impl WheelSurface {
 }
 
 /// Every wheel-surface of a case's traces with its latency (estimates `ests[w]` of wheel `w`).
-pub fn wheel_surfaces(traces: &[WheelTrace], ests: &[Vec<Estimate<f64>>]) -> Vec<WheelSurface> {
+pub fn wheel_surfaces(traces: &[WheelTrace], ests: &[Vec<Estimate>]) -> Vec<WheelSurface> {
     let mut out = Vec::new();
     for (w, (tr, est)) in traces.iter().zip(ests).enumerate() {
         if est.len() != tr.rows.len() {
@@ -233,7 +157,7 @@ pub fn wheel_surfaces(traces: &[WheelTrace], ests: &[Vec<Estimate<f64>>]) -> Vec
 /// identification is false; a change identified late — the road changed seconds before, the
 /// old identification held meanwhile — is a true one (its lateness is the latency's and the
 /// "detect change" column's).
-pub fn false_change_flags(tr: &WheelTrace, est: &[Estimate<f64>]) -> usize {
+pub fn false_change_flags(tr: &WheelTrace, est: &[Estimate]) -> usize {
     // True μ where the current identification began.
     let mut began: Option<f64> = None;
     let mut false_flags = 0;
@@ -255,7 +179,7 @@ pub fn false_change_flags(tr: &WheelTrace, est: &[Estimate<f64>]) -> usize {
 }
 
 /// Metrics of estimates `est` against the trace(s).
-pub fn metrics(traces: &[WheelTrace], ests: &[Vec<Estimate<f64>>]) -> Metrics {
+pub fn metrics(traces: &[WheelTrace], ests: &[Vec<Estimate>]) -> Metrics {
     let mut errs = Vec::new();
     let (mut utils, mut lats, mut dets) = (Vec::new(), Vec::new(), Vec::new());
     let (mut false_alarms, mut change_flags) = (0, 0);
@@ -352,7 +276,7 @@ pub struct Common {
 }
 
 /// [`Common`] of estimates `a` and `b` (per wheel, as [`metrics`] takes them) against the traces.
-pub fn common(traces: &[WheelTrace], a: &[Vec<Estimate<f64>>], b: &[Vec<Estimate<f64>>]) -> Common {
+pub fn common(traces: &[WheelTrace], a: &[Vec<Estimate>], b: &[Vec<Estimate>]) -> Common {
     let (mut ea, mut eb) = (Vec::new(), Vec::new());
     let (mut la, mut lb) = (Vec::new(), Vec::new());
     for ((tr, a), b) in traces.iter().zip(a).zip(b) {
@@ -382,93 +306,59 @@ pub fn common(traces: &[WheelTrace], a: &[Vec<Estimate<f64>>], b: &[Vec<Estimate
     }
 }
 
+/// One estimator's measures over the suite, added up case by case (the bench's closing lines).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Totals {
+    /// Cases whose median latency is within [`TARGET_LATENCY`].
+    pub within: usize,
+    /// Wheel-surfaces within ±0.1 within [`TARGET_LATENCY`], of those reaching utilisation 0.5.
+    pub ws: (usize, usize),
+    /// [`Totals::within`] over the issue's cases (the suite without the straight ABS stops).
+    pub within_issue: usize,
+    /// [`Totals::ws`] over the issue's cases.
+    pub ws_issue: (usize, usize),
+    /// False change alarms ([`false_change_flags`]).
+    pub alarms: usize,
+    /// Change flags raised.
+    pub flags: usize,
+    /// The worst case's p95 error while identifiable (none: never identifiable).
+    pub worst_p95: Option<f64>,
+    /// The worst case's share of samples identifiable and off by more than [`GROSS`].
+    pub worst_gross: f64,
+    /// Samples identifiable, all samples, identifiable at utilisation ≥ 0.5, all at ≥ 0.5.
+    pub shares: (usize, usize, usize, usize),
+}
+
+impl Totals {
+    /// Adds one case's metrics; `issue_case`: it is one of the issue's cases.
+    pub fn add(&mut self, mt: &Metrics, issue_case: bool) {
+        let in_time = mt.latency.is_some_and(|l| l <= TARGET_LATENCY + 1e-9);
+        self.within += usize::from(in_time);
+        self.ws.0 += mt.ws_within;
+        self.ws.1 += mt.ws_total;
+        if issue_case {
+            self.within_issue += usize::from(in_time);
+            self.ws_issue.0 += mt.ws_within;
+            self.ws_issue.1 += mt.ws_total;
+        }
+        self.alarms += mt.false_alarms;
+        self.flags += mt.change_flags;
+        self.shares.0 += mt.n_identifiable;
+        self.shares.1 += mt.n_samples;
+        self.shares.2 += mt.n_identifiable_util_hi;
+        self.shares.3 += mt.n_util_hi;
+        self.worst_gross = self.worst_gross.max(mt.gross);
+        self.worst_p95 = match (self.worst_p95, mt.err_p95) {
+            (Some(a), Some(b)) => Some(a.max(b)),
+            (a, b) => a.or(b),
+        };
+    }
+}
+
 #[cfg(test)]
 mod tests {
-    use super::super::super::peers::Row;
     use super::*;
-
-    /// The tally's window: from the utilisation first reaching 0.5 to the estimate settling
-    /// (at most 150 ms), every sample counted once, by its reason; a surface that never reaches
-    /// utilisation 0.5 has no window.
-    #[test]
-    fn hold_tally_counts_the_window_by_reason() {
-        // 1 kHz, 400 rows; two surfaces: μ 0.5 (rows 0..300), μ 0.3 (300..400).
-        let n = 400;
-        let row = |i: usize| Row {
-            t: i as f64 * 1e-3,
-            fz: 4000.0,
-            vx: 20.0,
-            ..Row::default()
-        };
-        let mu_true: Vec<f64> = (0..n).map(|i| if i < 300 { 0.5 } else { 0.3 }).collect();
-        // Utilisation 0.5 from row 10 on the first surface; never on the second.
-        let util: Vec<f64> = (0..n)
-            .map(|i| if (10..300).contains(&i) { 0.6 } else { 0.2 })
-            .collect();
-        let tr = WheelTrace {
-            rows: (0..n).map(row).collect(),
-            mu_true,
-            util,
-            gamma: vec![0.0; n],
-            kappa_meas: vec![0.0; n],
-        };
-        let est = |mu: f64, state: State| Estimate {
-            mu,
-            sigma: 0.01,
-            sigma_model: 0.0,
-            state,
-            change: false,
-        };
-        // Rows 0..40 no excitation, 40..70 ambiguous, 70..80 confirming, 80..100 identifiable but
-        // 0.2 off, from 100 on within ±0.1 (settled at row 100: latency 90 ms).
-        let (mut ests, mut holds) = (Vec::new(), Vec::new());
-        for i in 0..n {
-            let (e, h) = match i {
-                0..40 => (est(0.8, State::Fallback), Some(Hold::NoExcitation)),
-                40..70 => (est(0.8, State::Fallback), Some(Hold::Ambiguous)),
-                70..80 => (est(0.8, State::Fallback), Some(Hold::Confirming)),
-                80..100 => (est(0.7, State::Identifiable), None),
-                _ => (est(mu_true_at(i), State::Identifiable), None),
-            };
-            ests.push(e);
-            holds.push(h);
-        }
-        fn mu_true_at(i: usize) -> f64 {
-            if i < 300 {
-                0.5
-            } else {
-                0.3
-            }
-        }
-        let t = hold_tally(std::slice::from_ref(&tr), &[ests.clone()], &[holds.clone()]);
-        let k = |h: Hold| t.held[Hold::ALL.iter().position(|&x| x == h).unwrap()];
-        assert_eq!((t.windows, t.within), (1, 1));
-        assert_eq!(
-            (
-                k(Hold::NoExcitation),
-                k(Hold::Ambiguous),
-                k(Hold::Confirming),
-                t.identifiable
-            ),
-            (30, 30, 10, 20)
-        );
-        assert_eq!(t.total(), 90);
-        // Settling later than 150 ms: the window stops at the deadline, and it is not within.
-        for e in &mut ests[100..300] {
-            e.mu = 0.7;
-        }
-        for e in &mut ests[250..300] {
-            e.mu = 0.5;
-        }
-        let t = hold_tally(std::slice::from_ref(&tr), &[ests], &[holds]);
-        assert_eq!((t.windows, t.within), (1, 0));
-        assert_eq!(
-            t.total(),
-            151,
-            "rows 10..=160 (the deadline's row 160 included)"
-        );
-        assert_eq!(t.identifiable, 151 - 70);
-    }
+    use crate::mu::Sample;
 
     /// A trace at 1 kHz with true μ `mu_true` and utilisation `util` per row (its measured
     /// channels constant: the metrics read the estimates against the truth only).
@@ -476,21 +366,19 @@ mod tests {
         let n = mu_true.len();
         WheelTrace {
             rows: (0..n)
-                .map(|i| Row {
+                .map(|i| Sample {
                     t: i as f64 * 1e-3,
                     fz: 4000.0,
-                    fy: 0.0,
-                    mz: 0.0,
-                    fx: 0.0,
-                    vx: 20.0,
-                    alpha: f64::NAN,
-                    kappa: f64::NAN,
+                    fx: Some(0.0),
+                    vx: Some(20.0),
+                    kappa: Some(0.0),
+                    gamma: Some(0.0),
+                    ..Sample::default()
                 })
                 .collect(),
+            slip_sensor: Vec::new(),
             mu_true,
             util,
-            gamma: vec![0.0; n],
-            kappa_meas: vec![0.0; n],
         }
     }
 
@@ -503,7 +391,6 @@ mod tests {
         let e = |mu: f64, sigma: f64, state: State| Estimate {
             mu,
             sigma,
-            sigma_model: 0.0,
             state,
             change: false,
         };
@@ -536,7 +423,6 @@ mod tests {
         let e = |mu: f64, change: bool| Estimate {
             mu,
             sigma: 0.02,
-            sigma_model: 0.0,
             state: State::Identifiable,
             change,
         };
@@ -585,7 +471,6 @@ mod tests {
             .map(|i| Estimate {
                 mu: if i >= read_from(i) { mu(i) } else { 1.2 },
                 sigma: 0.02,
-                sigma_model: 0.0,
                 state: State::Identifiable,
                 change: false,
             })

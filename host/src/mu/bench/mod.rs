@@ -1,12 +1,14 @@
-//! `gough mu bench` and `gough mu demo`: the estimators against simulated truth.
+//! `gough mu bench`: the estimators against simulated truth.
 //!
-//! The plant is the host vehicle simulation (`crate::sim`) on the bundled tyre; its per-wheel
-//! Fy, Mz, Fz, Fx pass through a sensor model — additive Gaussian noise (Mz 2 N·m rms, Fy, Fx and
-//! Fz 1 % of Fz rms, seeded) and a 10 ms pure delay — before any estimator sees them. The
-//! peers additionally get the (delayed, exact) slip angle and slip ratio, which the Gough method
-//! never reads.
+//! The plant is the host vehicle simulation (`crate::sim`) on the bundled tyre; each case of the
+//! suite ([`cases`]) is a manoeuvre on a road. Its per-wheel Fy, Mz, Fz, Fx pass through a sensor
+//! model ([`sensors`]) — additive Gaussian noise (Mz 2 N·m rms, Fy, Fx and Fz 1 % of Fz rms,
+//! seeded) and a 10 ms pure delay — before any estimator sees them; κ comes with the noise of a
+//! wheel-speed estimate. The peers additionally get the (delayed, exact) slip angle and slip
+//! ratio of a slip sensor, which the bank never reads. Every estimator ([`Method::ALL`]) runs
+//! through [`crate::mu::Estimator`] on the four wheels, sample by sample as a car measures them.
 //!
-//! Metrics per estimator and case, over the four wheels:
+//! Metrics per estimator and case, over the four wheels ([`metrics`](mod@metrics)):
 //! - μ error |μ̂ − μ| (mean and 95th percentile) over the samples the estimator calls
 //!   identifiable, and the share of them within twice the σ reported (whether σ is honest);
 //! - the utilisation |F|/(μ·Fz) (architecture.md) reached when the reported estimate first stays
@@ -17,6 +19,9 @@
 //!   staying within ±0.1 of it;
 //! - change flags, and the false ones among them ([`false_change_flags`]: no change of road
 //!   since the identification they change from, or a wrong new value).
+//!
+//! The tables ([`tables`]) and, for the cases whose surface changes, a plot of the front-left
+//! wheel's estimates ([`plots`]).
 
 pub mod cases;
 pub mod metrics;
@@ -28,22 +33,21 @@ pub use cases::{
     model_with_error, sim_wheelbase, simulate_case, straight_stop, suite, suite_shifted, Case,
 };
 pub use metrics::{
-    common, false_change_flags, hold_tally, metrics, segment_latency, wheel_surfaces, Common,
-    HoldTally, Metrics, WheelSurface, GROSS, TARGET_LATENCY,
+    common, false_change_flags, metrics, segment_latency, wheel_surfaces, Common, Metrics, Totals,
+    WheelSurface, GROSS, TARGET_LATENCY,
 };
 pub(crate) use metrics::{median, segments};
 pub use sensors::{measure, Sensors, WheelTrace};
 pub(crate) use tables::csv_field;
+pub use tables::MethodResult;
 
-use super::peers::{HsuGerdes, SlipSlope};
-use super::table_estimator::{Config, Estimate, GoughTable, MuEstimator};
+use crate::mu::{Estimate, Method, Setup};
 use clap::Args;
-use gough::math::Libm;
 use gough::mf::Params;
+use gough::proto::Wheel;
 use plots::plot_mu;
 use std::fmt::Write as _;
 use std::path::PathBuf;
-use tables::{against_the_others, fmt, hold_tables, misses_table, WHEELS};
 
 /// Arguments of `gough mu bench`.
 #[derive(Args)]
@@ -63,16 +67,12 @@ pub struct BenchArgs {
     /// Only the first N cases (for a quick look).
     #[arg(long)]
     pub cases: Option<usize>,
-    /// A setting of the Gough estimator's `Config` other than its default, as NAME=VALUE
-    /// (the field's name, e.g. `trail_drop_min=0.1`); repeatable, or comma-separated.
-    #[arg(long = "set", value_name = "NAME=VALUE", value_delimiter = ',')]
-    pub set: Vec<String>,
     /// Aligning-torque sensor noise, rms \[N·m\], added to every row the estimators see. The
-    /// sensors, not the estimator: what the estimator assumes is its own `sigma_mz` (`--set`).
+    /// sensors, not the estimators: what the bank assumes is its own configuration's.
     #[arg(long, value_name = "NM", allow_negative_numbers = true, default_value_t = Sensors::default().sigma_mz)]
     pub noise_mz: f64,
-    /// Force sensor noise (Fy, Fx, Fz), rms, as a fraction of Fz \[-\]; the estimator's own
-    /// assumption is `sigma_fy_rel` (`--set`).
+    /// Force sensor noise (Fy, Fx, Fz), rms, as a fraction of Fz \[-\] (the sensors, not the
+    /// estimators' assumption).
     #[arg(long, value_name = "FRACTION", allow_negative_numbers = true, default_value_t = Sensors::default().sigma_rel)]
     pub noise_f: f64,
     /// Pure delay of every measured channel \[s\] (rounded to the simulation's step, 1 ms).
@@ -148,69 +148,6 @@ impl BenchArgs {
     }
 }
 
-/// Sets one field of the estimator's configuration from `NAME=VALUE` (the field's name as in
-/// [`Config`]; SI units as documented there).
-pub fn set_config(c: &mut Config<f64>, kv: &str) -> Result<(), String> {
-    let (k, v) = kv
-        .split_once('=')
-        .ok_or_else(|| format!("--set {kv}: expected NAME=VALUE"))?;
-    let (k, v) = (k.trim(), v.trim());
-    let num = || -> Result<f64, String> {
-        v.parse::<f64>()
-            .ok()
-            .filter(|x| x.is_finite())
-            .ok_or_else(|| format!("--set {k}: '{v}' is not a finite number"))
-    };
-    let count = || -> Result<u16, String> {
-        v.parse::<u16>()
-            .map_err(|_| format!("--set {k}: '{v}' is not a count (0..=65535)"))
-    };
-    let f = match k {
-        "change_count" => {
-            c.change_count = count()?;
-            return Ok(());
-        }
-        "init_count" => {
-            c.init_count = count()?;
-            return Ok(());
-        }
-        "gamma" => &mut c.gamma,
-        "sigma_mz" => &mut c.sigma_mz,
-        "sigma_fy_rel" => &mut c.sigma_fy_rel,
-        "vx_min" => &mut c.vx_min,
-        "fz_min_rel" => &mut c.fz_min_rel,
-        "fy_min_rel" => &mut c.fy_min_rel,
-        "fy_share_min" => &mut c.fy_share_min,
-        "trail_drop_min" => &mut c.trail_drop_min,
-        "trail_drop_abs_min" => &mut c.trail_drop_abs_min,
-        "sigma_max" => &mut c.sigma_max,
-        "trail_model_rel" => &mut c.trail_model_rel,
-        "arm_model_rel" => &mut c.arm_model_rel,
-        "combined_model_rel" => &mut c.combined_model_rel,
-        "combined_force_rel" => &mut c.combined_force_rel,
-        "mzr_model_rel" => &mut c.mzr_model_rel,
-        "q" => &mut c.q,
-        "gate" => &mut c.gate,
-        "gate_sigma_max" => &mut c.gate_sigma_max,
-        "change_min" => &mut c.change_min,
-        "run_gap" => &mut c.run_gap,
-        "mu_prior" => &mut c.mu_prior,
-        "sigma_prior" => &mut c.sigma_prior,
-        "lowpass_tau" => &mut c.lowpass_tau,
-        "settle" => &mut c.settle,
-        "settle_distance" => &mut c.settle_distance,
-        "ambiguity_sigmas" => &mut c.ambiguity_sigmas,
-        "ambiguity_margin" => &mut c.ambiguity_margin,
-        _ => {
-            return Err(format!(
-                "--set {k}: no such setting of the estimator's Config"
-            ))
-        }
-    };
-    *f = num()?;
-    Ok(())
-}
-
 /// Arguments of `gough mu demo`.
 #[derive(Args)]
 pub struct DemoArgs {
@@ -234,145 +171,44 @@ pub struct DemoArgs {
     pub seed: u64,
 }
 
-/// The estimators compared.
-pub const METHODS: [&str; 4] = ["gough", "hsu-gerdes", "slip-slope", "bank"];
-
-/// Index of the bank (the product's estimator) in [`METHODS`].
-pub(super) const BANK: usize = 3;
-
-/// The Gough tables of the left and right wheels: the simulation mounts the tyre on both sides
-/// (mirrored where the side differs from the file's TYRESIDE), so does the estimator.
-pub struct Tables {
-    left: Box<GoughTable<f64>>,
-    right: Box<GoughTable<f64>>,
-}
-
-impl Tables {
-    /// For both sides of the vehicle.
-    pub fn new(p: &Params<f64>) -> Result<Tables, String> {
-        use gough::mf::Side;
-        Ok(Tables {
-            left: super::table::<f64, Libm>(p, Some(Side::Left))?,
-            right: super::table::<f64, Libm>(p, Some(Side::Right))?,
-        })
-    }
-    /// Table of wheel `w` (fl, fr, rl, rr).
-    pub fn wheel(&self, w: usize) -> &GoughTable<f64> {
-        if w.is_multiple_of(2) {
-            &self.left
-        } else {
-            &self.right
-        }
-    }
-}
-
-/// Runs estimator `m` (index into [`METHODS`]) over wheel `w`'s trace.
+/// Runs `method` (set up as `setup`) over a case's wheel traces (fl, fr, rl, rr), sample by
+/// sample as a car measures them: every wheel's sample `i`, then every wheel's `i + 1`; each
+/// wheel's samples as the method sees them ([`WheelTrace::sample`]). An estimate per row per
+/// wheel; an error when the estimator cannot be built or there are more than four traces.
 pub fn run_method(
-    m: usize,
+    method: Method,
     p: &Params<f64>,
-    tables: &Tables,
-    w: usize,
-    tr: &WheelTrace,
-) -> Vec<Estimate<f64>> {
-    match m {
-        0 => run_gough(p, tables, w, tr, &Config::default()).0,
-        3 => run_bank(p, w, tr),
-        1 => match HsuGerdes::new(p) {
-            Some(mut e) => tr.rows.iter().map(|r| e.update(r)).collect(),
-            None => Vec::new(),
-        },
-        _ => match SlipSlope::new(p) {
-            Some(mut e) => tr.rows.iter().map(|r| e.update(r)).collect(),
-            None => Vec::new(),
-        },
-    }
-}
-
-/// The bank estimator over wheel `w`'s trace (mounted on the wheel's side, measured κ), alone.
-pub fn run_bank(p: &Params<f64>, w: usize, tr: &WheelTrace) -> Vec<Estimate<f64>> {
-    let Some(mut e) = new_bank(p, w) else {
-        return Vec::new();
-    };
-    (0..tr.rows.len())
-        .map(|i| super::bank_estimate(e.update::<Libm>(p, &bank_row(tr, i))))
-        .collect()
-}
-
-fn new_bank(p: &Params<f64>, w: usize) -> Option<gough::mu::bank::Bank<f64>> {
-    let side = gough::proto::Wheel::from_index(w).map(|x| x.side());
-    gough::mu::bank::Bank::new::<Libm>(p, side, gough::mu::bank::Config::default()).ok()
-}
-
-/// Row `i` of a trace as the bank's sample (Fx, measured κ, Vx, camber).
-fn bank_row(tr: &WheelTrace, i: usize) -> gough::mu::bank::Sample<f64> {
-    let mut r = tr.rows[i];
-    r.kappa = tr.kappa_meas.get(i).copied().unwrap_or(f64::NAN);
-    super::bank_sample(&r, true, true, tr.gamma.get(i).copied())
-}
-
-/// The bank over a vehicle's four wheels (fl, fr, rl, rr, sampled together), sample by sample
-/// as the firmware runs them: each front wheel, then each rear wheel with what its front wheel
-/// read handed on a wheelbase later ([`gough::mu::preview`], `preview`; `None`: every wheel
-/// alone). Traces of other lengths than four, or not of one length, run wheel by wheel alone.
-pub fn run_banks(
-    p: &Params<f64>,
+    setup: &Setup,
     traces: &[WheelTrace],
-    preview: Option<gough::mu::preview::Config<f64>>,
-) -> Vec<Vec<Estimate<f64>>> {
-    use gough::mu::preview::Preview;
-    let n = traces.first().map_or(0, |t| t.rows.len());
-    let together = traces.len() == 4 && traces.iter().all(|t| t.rows.len() == n);
-    let (Some(cfg), true) = (preview, together) else {
-        return traces
-            .iter()
-            .enumerate()
-            .map(|(w, tr)| run_bank(p, w, tr))
-            .collect();
-    };
-    let banks: Option<Vec<_>> = (0..4).map(|w| new_bank(p, w)).collect();
-    let (Some(mut banks), Ok(pv)) = (banks, Preview::new(cfg)) else {
-        return vec![Vec::new(); traces.len()];
-    };
-    let mut pvs = [pv.clone(), pv];
-    let mut out: Vec<Vec<_>> = (0..4).map(|_| Vec::with_capacity(n)).collect();
+) -> Result<Vec<Vec<Estimate>>, String> {
+    let wheels: Vec<Wheel> = (0..traces.len())
+        .map(|w| Wheel::from_index(w).ok_or(format!("{} wheel traces: at most 4", traces.len())))
+        .collect::<Result<_, _>>()?;
+    let mut e = method.estimator(p, setup)?;
+    let n = traces.iter().map(|t| t.rows.len()).max().unwrap_or(0);
+    let mut out: Vec<Vec<Estimate>> = traces
+        .iter()
+        .map(|t| Vec::with_capacity(t.rows.len()))
+        .collect();
     for i in 0..n {
-        for (w, (bank, o)) in banks.iter_mut().zip(out.iter_mut()).enumerate() {
-            let s = bank_row(&traces[w], i);
-            let e = gough::mu::preview::update::<f64, Libm>(Some(&mut pvs), w, bank, p, &s);
-            o.push(super::bank_estimate(e));
+        for ((tr, o), &w) in traces.iter().zip(&mut out).zip(&wheels) {
+            if i < tr.rows.len() {
+                o.push(e.update(w, &tr.sample(i, method.slip_sensor())));
+            }
         }
     }
-    out
-}
-
-/// The Gough estimator (settings `cfg`) over wheel `w`'s trace: its estimates and, per sample,
-/// why each held estimate was held ([`MuEstimator::last_hold`]).
-pub fn run_gough(
-    p: &Params<f64>,
-    tables: &Tables,
-    w: usize,
-    tr: &WheelTrace,
-    cfg: &Config<f64>,
-) -> super::Run {
-    let mut e = MuEstimator::for_tyre(tables.wheel(w), p, *cfg);
-    (0..tr.rows.len())
-        .map(|i| (e.update::<Libm>(&tr.sample(i)), e.last_hold()))
-        .unzip()
+    Ok(out)
 }
 
 /// Runs the benchmark.
 pub fn run(a: BenchArgs) -> Result<(), String> {
-    let mut cfg = Config::default();
-    for kv in &a.set {
-        set_config(&mut cfg, kv)?;
-    }
     let sensors = a.sensors()?;
+    let setup = Setup::car(a.preview()?);
     let t = crate::tyre::load(&a.tir)?;
     // `sim`: the tyre the simulation runs; `p`: the estimators' model of it (the same file
     // unless `--model-error`).
     let sim = t.params;
     let p = model_with_error(&sim, &a.model_error)?;
-    let tables = Tables::new(&p)?;
     if !(a.mu_shift.is_finite() && a.mu_shift.abs() <= 0.05) {
         return Err(format!(
             "--mu-shift {}: expected a value from -0.05 to 0.05",
@@ -393,221 +229,95 @@ pub fn run(a: BenchArgs) -> Result<(), String> {
             a.model_error.join(", ")
         );
     }
-    let _ = writeln!(md, "| manoeuvre | road | estimator | identifiable samples | mean err | p95 err | within 2σ | off by > 0.2 | util when within ±0.1 | latency from util 0.5 [s] | detect change [s] | false alarms |");
-    let _ = writeln!(md, "|---|---|---|---|---|---|---|---|---|---|---|---|");
-    let mut csv = String::from("manoeuvre,road,estimator,n_identifiable,err_mean,err_p95,within_2sigma,gross,util_within,latency_s,detect_s,false_alarms,ws_within,ws_total\n");
+    md.push_str(tables::MD_HEADER);
+    let mut csv = String::from(tables::CSV_HEADER);
     let mut wheels_csv =
         String::from("manoeuvre,road,wheel,mu,t_start_s,t_end_s,t_util05_s,latency_s,within\n");
     let mut misses: Vec<(&Case, WheelSurface)> = Vec::new();
+    let mut not_run: Vec<(Method, String)> = Vec::new();
     let bar = indicatif::ProgressBar::new(cases.len() as u64);
-    let mut tallies: Vec<(&Case, HoldTally)> = Vec::new();
-    let mut gough_wins = 0;
-    let mut comparable = 0;
-    let mut within = [0usize; METHODS.len()];
-    let mut ws = [(0usize, 0usize); METHODS.len()];
-    // The same over the issue's cases: the suite without the straight ABS stops.
-    let mut within_issue = [0usize; METHODS.len()];
-    let mut ws_issue = [(0usize, 0usize); METHODS.len()];
+    let mut totals: Vec<(Method, Totals)> = Method::ALL
+        .iter()
+        .map(|&m| (m, Totals::default()))
+        .collect();
     let issue_cases = cases.iter().filter(|c| !straight_stop(c)).count();
-    let mut alarms = [0usize; METHODS.len()];
-    let mut flags = [0usize; METHODS.len()];
-    let mut worst: [Option<f64>; METHODS.len()] = [None; METHODS.len()];
-    let mut worst_gross = [0.0f64; METHODS.len()];
-    // Identifiable samples over the suite: (identifiable, all, identifiable at utilisation
-    // ≥ 0.5, all at ≥ 0.5).
-    let mut shares = [(0usize, 0usize, 0usize, 0usize); METHODS.len()];
-    let mut per_case: Vec<(&Case, Vec<Metrics>, Vec<Common>)> = Vec::new();
+    let mut per_case: Vec<(&Case, Vec<MethodResult>)> = Vec::new();
     for c in &cases {
         bar.set_message(format!("{} on {}", c.manoeuvre, c.road));
         let log = simulate_case(&sim, c)?;
         let traces: Vec<WheelTrace> = (0..4).map(|w| measure(&log, w, &sensors, a.seed)).collect();
-        let mut ms = Vec::new();
-        let mut all_ests: Vec<Vec<Vec<Estimate<f64>>>> = Vec::new();
-        for (m, method) in METHODS.iter().enumerate() {
-            let ests: Vec<Vec<Estimate<f64>>> = if m == 0 {
-                let (ests, holds): (Vec<_>, Vec<_>) = traces
-                    .iter()
-                    .enumerate()
-                    .map(|(w, tr)| run_gough(&p, &tables, w, tr, &cfg))
-                    .unzip();
-                tallies.push((c, hold_tally(&traces, &ests, &holds)));
-                ests
-            } else if m == BANK {
-                run_banks(&p, &traces, a.preview()?)
-            } else {
-                traces
-                    .iter()
-                    .enumerate()
-                    .map(|(w, tr)| run_method(m, &p, &tables, w, tr))
-                    .collect()
+        let mut runs: Vec<(Method, Vec<Vec<Estimate>>, Metrics)> = Vec::new();
+        for (m, total) in &mut totals {
+            let ests = match run_method(*m, &p, &setup, &traces) {
+                Ok(e) => e,
+                Err(why) => {
+                    // Not run on this tyre: its rows say nothing was identifiable, and a line
+                    // below the table says why.
+                    if !not_run.iter().any(|(x, _)| x == m) {
+                        not_run.push((*m, why));
+                    }
+                    vec![Vec::new(); traces.len()]
+                }
             };
             let mt = metrics(&traces, &ests);
-            if m == BANK {
+            if *m == Method::Bank {
                 for x in wheel_surfaces(&traces, &ests) {
-                    let _ = writeln!(
-                        wheels_csv,
-                        "{},{},{},{},{:.3},{:.3},{:.3},{},{}",
-                        csv_field(c.manoeuvre),
-                        csv_field(&c.road),
-                        WHEELS.get(x.wheel).copied().unwrap_or("?"),
-                        x.mu,
-                        x.t_start,
-                        x.t_end,
-                        x.t_util05,
-                        fmt(x.latency, 3),
-                        x.within()
-                    );
+                    wheels_csv.push_str(&tables::wheel_row(c, &x));
                     if !x.within() {
                         misses.push((c, x));
                     }
                 }
             }
-            let _ = writeln!(
-                md,
-                "| {} | {} | {} | {} | {} | {} | {} | {:.2} % | {} | {} | {} | {} |",
-                c.manoeuvre,
-                c.road,
-                method,
-                mt.n_identifiable,
-                fmt(mt.err_mean, 3),
-                fmt(mt.err_p95, 3),
-                mt.within_2sigma
-                    .map_or("–".into(), |x| format!("{:.1} %", 100.0 * x)),
-                100.0 * mt.gross,
-                fmt(mt.util_within, 2),
-                fmt(mt.latency, 3),
-                fmt(mt.detect, 3),
-                if m == 0 {
-                    mt.false_alarms.to_string()
-                } else {
-                    "n/a".into()
-                }
-            );
-            let _ = writeln!(
-                csv,
-                "{},{},{},{},{},{},{},{:.5},{},{},{},{},{},{}",
-                csv_field(c.manoeuvre),
-                csv_field(&c.road),
-                method,
-                mt.n_identifiable,
-                fmt(mt.err_mean, 4),
-                fmt(mt.err_p95, 4),
-                fmt(mt.within_2sigma, 4),
-                mt.gross,
-                fmt(mt.util_within, 3),
-                fmt(mt.latency, 4),
-                fmt(mt.detect, 4),
-                mt.false_alarms,
-                mt.ws_within,
-                mt.ws_total
-            );
-            let in_time = mt.latency.is_some_and(|l| l <= TARGET_LATENCY + 1e-9);
-            within[m] += usize::from(in_time);
-            ws[m].0 += mt.ws_within;
-            ws[m].1 += mt.ws_total;
-            if !straight_stop(c) {
-                within_issue[m] += usize::from(in_time);
-                ws_issue[m].0 += mt.ws_within;
-                ws_issue[m].1 += mt.ws_total;
-            }
-            alarms[m] += mt.false_alarms;
-            flags[m] += mt.change_flags;
-            shares[m].0 += mt.n_identifiable;
-            shares[m].1 += mt.n_samples;
-            shares[m].2 += mt.n_identifiable_util_hi;
-            shares[m].3 += mt.n_util_hi;
-            worst_gross[m] = worst_gross[m].max(mt.gross);
-            worst[m] = match (worst[m], mt.err_p95) {
-                (Some(a), Some(b)) => Some(a.max(b)),
-                (a, b) => a.or(b),
-            };
-            ms.push(mt);
-            all_ests.push(ests);
+            md.push_str(&tables::md_row(c, *m, &mt));
+            csv.push_str(&tables::csv_row(c, *m, &mt));
+            total.add(&mt, !straight_stop(c));
+            runs.push((*m, ests, mt));
         }
         // Each other estimator against the bank on the samples both call identifiable (the
         // bank's own entry left empty).
-        let commons: Vec<Common> = all_ests
+        let bank = runs
             .iter()
-            .enumerate()
-            .map(|(m, e)| {
-                if m == BANK {
+            .find(|(m, ..)| *m == Method::Bank)
+            .map(|(_, e, _)| e.clone())
+            .unwrap_or_default();
+        let results = runs
+            .into_iter()
+            .map(|(m, e, metrics)| MethodResult {
+                method: m,
+                metrics,
+                common: if m == Method::Bank {
                     Common::default()
                 } else {
-                    common(&traces, &all_ests[BANK], e)
-                }
+                    common(&traces, &bank, &e)
+                },
             })
             .collect();
-        // "Better than both peers where they produce an estimate": compare p95 error.
-        for peer in &ms[1..3] {
-            if let (Some(g), Some(q)) = (ms[0].err_p95, peer.err_p95) {
-                comparable += 1;
-                if g <= q {
-                    gough_wins += 1;
-                }
-            }
-        }
         if c.road.contains("patch") || c.road.contains("step") {
             let name = format!(
                 "{}_{}",
                 c.manoeuvre,
                 c.road.replace(['=', '+', '@', '.', ',', '/'], "_")
             );
-            // The front-left wheel's estimates, the bank's and the table estimator's.
-            plot_mu(
-                &traces[0],
-                &[
-                    ("bank", &all_ests[BANK][0]),
-                    ("gough (table)", &all_ests[0][0]),
-                ],
-                &a.out.join(format!("mu_{name}.png")),
-                &format!("{} on {} (front left)", c.manoeuvre, c.road),
-            )?;
+            // The front-left wheel's estimates of the bank.
+            if let Some(fl) = bank.first() {
+                plot_mu(
+                    &traces[0],
+                    &[("bank", fl)],
+                    &a.out.join(format!("mu_{name}.png")),
+                    &format!("{} on {} (front left)", c.manoeuvre, c.road),
+                )?;
+            }
         }
-        per_case.push((c, ms, commons));
+        per_case.push((c, results));
         bar.inc(1);
     }
     bar.finish_and_clear();
-    let mut summary = format!("\nThe table estimator (`gough`) at or below both peers' p95 error in {gough_wins} of {comparable} comparisons where a peer produced an estimate.\n");
-    for (m, name) in METHODS.iter().enumerate() {
-        let _ = writeln!(
-            summary,
-            "{name}: within ±0.1 within {TARGET_LATENCY} s of utilisation 0.5 on {} of {} cases and {} of {} wheel-surfaces; {} false change alarms of {} change flags; worst p95 error {}; worst share of samples identifiable and off by > {GROSS}: {:.2} %.",
-            within[m],
-            cases.len(),
-            ws[m].0,
-            ws[m].1,
-            alarms[m],
-            flags[m],
-            fmt(worst[m], 3),
-            100.0 * worst_gross[m],
-        );
-    }
-    for (m, name) in METHODS.iter().enumerate() {
-        let _ = writeln!(
-            summary,
-            "{name}, without the straight ABS stops: within ±0.1 within {TARGET_LATENCY} s of utilisation 0.5 on {} of {issue_cases} cases and {} of {} wheel-surfaces.",
-            within_issue[m], ws_issue[m].0, ws_issue[m].1,
-        );
-    }
-    for (m, name) in METHODS.iter().enumerate() {
-        let (i, n, ih, nh) = shares[m];
-        let pct = |a: usize, b: usize| 100.0 * a as f64 / b.max(1) as f64;
-        let _ = writeln!(
-            summary,
-            "{name}: identifiable on {:.1} % of the suite's samples ({i} of {n}), {:.1} % of those at utilisation 0.5 or more ({ih} of {nh}).",
-            pct(i, n),
-            pct(ih, nh),
-        );
-    }
-    md.push_str(&summary);
-    md.push_str(&against_the_others(&per_case));
-    md.push_str(&misses_table(&misses));
-    if !a.set.is_empty() {
-        let _ = writeln!(
-            md,
-            "\nThe Gough estimator ran with these settings changed from their defaults: {}.",
-            a.set.join(", ")
-        );
+    md.push('\n');
+    md.push_str(&tables::summary(&totals, cases.len(), issue_cases));
+    md.push_str(&tables::against_the_others(&per_case));
+    md.push_str(&tables::misses_table(&misses));
+    for (m, why) in &not_run {
+        let _ = writeln!(md, "\n{} did not run on this tyre: {why}.", m.name());
     }
     if a.mu_shift != 0.0 {
         let _ = writeln!(
@@ -625,137 +335,13 @@ pub fn run(a: BenchArgs) -> Result<(), String> {
             1000.0 * sensors.delay
         );
     }
-    let (holds_md, holds_csv) = hold_tables(&tallies);
-    md.push_str(&holds_md);
     std::fs::write(a.out.join("table.md"), &md).map_err(|e| e.to_string())?;
     std::fs::write(a.out.join("table.csv"), &csv).map_err(|e| e.to_string())?;
-    std::fs::write(a.out.join("holds.csv"), &holds_csv).map_err(|e| e.to_string())?;
     std::fs::write(a.out.join("wheels.csv"), &wheels_csv).map_err(|e| e.to_string())?;
     print!("{md}");
     eprintln!(
-        "-> {}/table.md, table.csv, wheels.csv, holds.csv, mu_*.png",
+        "-> {}/table.md, table.csv, wheels.csv, mu_*.png",
         a.out.display()
     );
     Ok(())
-}
-
-#[cfg(test)]
-mod tests {
-    use super::super::table_estimator::State;
-    use super::*;
-    use crate::tyre::bundled;
-
-    /// Every field of the estimator's `Config` can be set by name (and only it), to the value
-    /// given; a bad value or name is an error naming it.
-    #[test]
-    fn set_config_reaches_every_field() {
-        let names = [
-            "gamma",
-            "sigma_mz",
-            "sigma_fy_rel",
-            "vx_min",
-            "fz_min_rel",
-            "fy_min_rel",
-            "fy_share_min",
-            "trail_drop_min",
-            "trail_drop_abs_min",
-            "sigma_max",
-            "trail_model_rel",
-            "arm_model_rel",
-            "combined_model_rel",
-            "combined_force_rel",
-            "mzr_model_rel",
-            "q",
-            "gate",
-            "gate_sigma_max",
-            "change_min",
-            "change_count",
-            "run_gap",
-            "init_count",
-            "mu_prior",
-            "sigma_prior",
-            "lowpass_tau",
-            "settle",
-            "settle_distance",
-            "ambiguity_sigmas",
-            "ambiguity_margin",
-        ];
-        let mut all = Config::default();
-        for n in names {
-            let mut c = Config::default();
-            set_config(&mut c, &format!("{n}=7")).unwrap();
-            assert_ne!(c, Config::default(), "{n}");
-            set_config(&mut all, &format!(" {n} = 7 ")).unwrap();
-        }
-        // Every field set: the Debug form holds no default value any more but 7s.
-        let dbg = format!("{all:?}");
-        let values: Vec<&str> = dbg
-            .split(", ")
-            .map(|kv| kv.rsplit(": ").next().unwrap().trim_end_matches(" }"))
-            .collect();
-        assert_eq!(values.len(), names.len(), "{dbg}");
-        assert!(values.iter().all(|v| *v == "7.0" || *v == "7"), "{dbg}");
-        for bad in [
-            "q",
-            "q=",
-            "q=nan",
-            "q=inf",
-            "init_count=-1",
-            "init_count=0.5",
-            "nope=1",
-        ] {
-            let e = set_config(&mut Config::default(), bad).unwrap_err();
-            assert!(e.contains(bad.split('=').next().unwrap()), "{bad}: {e}");
-        }
-    }
-
-    /// Straight running with a static camber makes points that read like ice at full sliding:
-    /// the camber thrust alone passes `fy_min_rel` (|Fy|/Fz ≈ 0.05 at 0.85·Fz0) and the
-    /// residual torque leaves a trail of a few mm (Fy ≈ 300 N, Mz ≈ −2 N·m), so the trail looks
-    /// collapsed and the reading says μ ≈ 0.05. Every per-reading check passes many of them
-    /// ([`MuEstimator::raw`] returns a reading: 320 here). They come in runs; it is
-    /// `init_count` that keeps them from becoming an estimate: with it at 1 this test counts
-    /// 22 wrong estimates below a utilisation of 0.2 (and over the whole bench suite, 36; a
-    /// scratch run). At 6 none, but then a burst at higher utilisation in the slalom on μ 1.0
-    /// becomes a wrong estimate (p95 error 0.68 there): 13 stays.
-    #[test]
-    fn straight_running_with_camber_never_reads_ice() {
-        let p = bundled();
-        let tables = Tables::new(&p).unwrap();
-        let (mut hazards, mut wrong, mut right) = (0, 0, 0);
-        for manoeuvre in ["sine-dwell", "slalom"] {
-            let case = Case {
-                manoeuvre,
-                road: "mu=1.0".into(),
-            };
-            let log = simulate_case(&p, &case).unwrap();
-            for w in 0..4 {
-                let tr = measure(&log, w, &Sensors::default(), 1);
-                let est = run_method(0, &p, &tables, w, &tr);
-                let probe = MuEstimator::for_tyre(tables.wheel(w), &p, Config::default());
-                for (i, e) in est.iter().enumerate() {
-                    let low = tr.util[i] < 0.2;
-                    // What one reading of the sample (unfiltered) says.
-                    let raw = probe.raw::<Libm>(&tr.sample(i));
-                    if low && raw.is_some_and(|x| (x.lambda * probe.mu0() - 1.0).abs() > 0.5) {
-                        hazards += 1;
-                    }
-                    if e.state == State::Identifiable {
-                        if (e.mu - tr.mu_true[i]).abs() > 0.1 && low {
-                            wrong += 1;
-                        } else {
-                            right += 1;
-                        }
-                    }
-                }
-            }
-        }
-        println!("ice-like readings below utilisation 0.2: {hazards}; wrong estimates there: {wrong}; other identifiable: {right}");
-        assert!(
-            hazards > 50,
-            "the hazard this test guards is gone ({hazards}): revisit it"
-        );
-        assert_eq!(wrong, 0);
-        assert!(right > 1000);
-    }
 }

@@ -1,16 +1,18 @@
 //! The bench's and the demo's pictures: μ against time, and the Gough plot of a wheel.
 
-use super::super::table_estimator::{Estimate, State};
 use super::sensors::WheelTrace;
+use crate::mu::Estimate;
 use crate::sim::Log;
 use gough::math::Libm;
 use gough::mf::Params;
+use gough::mu::bank::State;
 use std::path::Path;
 
-/// μ against time: truth and estimates (σ band for the first).
+/// μ against time: the truth, the utilisation, and each series of estimates (a line; its
+/// identifiable samples as dots).
 pub fn plot_mu(
     tr: &WheelTrace,
-    series: &[(&str, &Vec<Estimate<f64>>)],
+    series: &[(&str, &[Estimate])],
     path: &Path,
     title: &str,
 ) -> Result<(), String> {

@@ -3,8 +3,7 @@
 //! (noisy), and the exact (delayed) slips a slip sensor would give the peers — and the truth it
 //! is measured against (μ under the wheel, utilisation).
 
-use super::super::peers::Row;
-use super::super::table_estimator::Sample;
+use crate::mu::Sample;
 use crate::rng::Rng;
 use crate::sim::Log;
 
@@ -32,34 +31,34 @@ impl Default for Sensors {
     }
 }
 
-/// One wheel's measured rows (noisy, delayed) and its truth, per logged step.
+/// One wheel's measured samples (noisy, delayed) and its truth, per logged step.
 pub struct WheelTrace {
-    /// What the estimators see.
-    pub rows: Vec<Row>,
+    /// What the car's sensors measure: Fz, Fy, Mz, Fx with the sensors' noise, Vx and the camber γ
+    /// (static plus roll camber, known to an ECU from the suspension kinematics and the roll
+    /// estimate), κ from wheel speed and a vehicle-speed estimate (with its noise), as an ABS
+    /// controller has it; no slip angle. All delayed.
+    pub rows: Vec<Sample>,
+    /// The slips (α \[rad\], κ) a slip sensor measures: exact, delayed (the peers' premise,
+    /// [`Method::slip_sensor`](crate::mu::Method::slip_sensor)).
+    pub slip_sensor: Vec<(f64, f64)>,
     /// True μ under the wheel at the (undelayed) time of each row.
     pub mu_true: Vec<f64>,
     /// True utilisation |F|/(μ·Fz) at each row.
     pub util: Vec<f64>,
-    /// Camber γ \[rad\] (delayed): static plus roll camber, known to an ECU from the suspension
-    /// kinematics and the roll estimate.
-    pub gamma: Vec<f64>,
-    /// Measured longitudinal slip κ (delayed, with the sensor's noise): from wheel speed and a
-    /// vehicle-speed estimate, as an ABS controller has it.
-    pub kappa_meas: Vec<f64>,
 }
 
 impl WheelTrace {
-    /// Row `i` as the Gough estimator's sample (Fx, Vx and camber carried; no slip).
-    pub fn sample(&self, i: usize) -> Sample<f64> {
-        let r = &self.rows[i];
-        Sample {
-            t: r.t,
-            fz: r.fz,
-            fy: r.fy,
-            mz: r.mz,
-            fx: Some(r.fx),
-            vx: Some(r.vx),
-            gamma: self.gamma.get(i).copied(),
+    /// Row `i` as the car's sensors measure it, and with `slip_sensor` the slip sensor's α and
+    /// κ in place of the ABS's κ (what a method that needs one, [`Method::slip_sensor`](crate::mu::Method::slip_sensor), sees).
+    pub fn sample(&self, i: usize, slip_sensor: bool) -> Sample {
+        let s = self.rows[i];
+        match self.slip_sensor.get(i) {
+            Some(&(alpha, kappa)) if slip_sensor => Sample {
+                alpha: Some(alpha),
+                kappa: Some(kappa),
+                ..s
+            },
+            _ => s,
         }
     }
 }
@@ -74,10 +73,9 @@ pub fn measure(log: &Log, w: usize, s: &Sensors, seed: u64) -> WheelTrace {
     let recs = &log.records;
     let mut tr = WheelTrace {
         rows: Vec::with_capacity(recs.len()),
+        slip_sensor: Vec::with_capacity(recs.len()),
         mu_true: Vec::with_capacity(recs.len()),
         util: Vec::with_capacity(recs.len()),
-        gamma: Vec::with_capacity(recs.len()),
-        kappa_meas: Vec::with_capacity(recs.len()),
     };
     // κ's noise has a generator of its own, so that the other channels' noise is unchanged.
     let mut nk = Rng::new(
@@ -88,18 +86,22 @@ pub fn measure(log: &Log, w: usize, s: &Sensors, seed: u64) -> WheelTrace {
         let src = &recs[i.saturating_sub(lag)].wheels[w];
         let fz = src.fz.max(0.0);
         let sr = s.sigma_rel * fz;
-        tr.rows.push(Row {
+        let fz_meas = fz + sr * n.normal();
+        let fy = src.fy + sr * n.normal();
+        let mz = src.mz + s.sigma_mz * n.normal();
+        let fx = src.fx + sr * n.normal();
+        tr.rows.push(Sample {
             t: r.t,
-            fz: fz + sr * n.normal(),
-            fy: src.fy + sr * n.normal(),
-            mz: src.mz + s.sigma_mz * n.normal(),
-            fx: src.fx + sr * n.normal(),
-            vx: src.vx,
-            alpha: src.alpha,
-            kappa: src.kappa,
+            fz: fz_meas,
+            fy,
+            mz,
+            fx: Some(fx),
+            vx: Some(src.vx),
+            kappa: Some(src.kappa + s.sigma_kappa * nk.normal()),
+            alpha: None,
+            gamma: Some(src.gamma),
         });
-        tr.gamma.push(src.gamma);
-        tr.kappa_meas.push(src.kappa + s.sigma_kappa * nk.normal());
+        tr.slip_sensor.push((src.alpha, src.kappa));
         let now = &r.wheels[w];
         tr.mu_true.push(now.mu_true);
         tr.util.push(if now.fz > 0.0 && now.mu_true > 0.0 {
@@ -164,7 +166,7 @@ mod tests {
             let x = &r.wheels[w];
             let (a, b, c) = (&tr.rows[i], &tl.rows[i], &tn.rows[i]);
             assert_eq!(
-                (a.fz, a.fy, a.mz, a.fx),
+                (a.fz, a.fy, a.mz, a.fx.unwrap()),
                 (x.fz, x.fy, x.mz, x.fx),
                 "row {i}"
             );

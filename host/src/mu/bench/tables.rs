@@ -1,10 +1,10 @@
-//! The bench's tables: the comparison of the bank against the others case by case, the
-//! wheel-surfaces it misses, where the table estimator's latency goes, and the CSV fields.
+//! The bench's tables: a row per case and estimator (`table.md`, `table.csv`), the closing
+//! lines per estimator over the suite, the bank against the others case by case, the
+//! wheel-surfaces the bank misses; and the CSV fields.
 
-use super::super::table_estimator::Hold;
 use super::cases::Case;
-use super::metrics::{Common, HoldTally, Metrics, WheelSurface, GROSS, TARGET_LATENCY};
-use super::{BANK, METHODS};
+use super::metrics::{Common, Metrics, Totals, WheelSurface, GROSS, TARGET_LATENCY};
+use crate::mu::Method;
 use std::fmt::Write as _;
 
 /// A CSV field as RFC 4180 has it: quoted (inner quotes doubled) when it holds a comma, a quote
@@ -53,27 +53,152 @@ pub(super) fn misses_table(misses: &[(&Case, WheelSurface)]) -> String {
     md
 }
 
+/// One estimator's results on one case.
+#[derive(Debug, Clone)]
+pub struct MethodResult {
+    /// The estimator.
+    pub method: Method,
+    /// Its metrics over the case's wheels.
+    pub metrics: Metrics,
+    /// It against the bank on the samples both call identifiable (empty for the bank itself).
+    pub common: Common,
+}
+
+/// The header of `table.md`.
+pub const MD_HEADER: &str = "| manoeuvre | road | estimator | identifiable samples | mean err | p95 err | within 2σ | off by > 0.2 | util when within ±0.1 | latency from util 0.5 [s] | detect change [s] |\n|---|---|---|---|---|---|---|---|---|---|---|\n";
+
+/// The header of `table.csv`.
+pub const CSV_HEADER: &str = "manoeuvre,road,estimator,n_identifiable,err_mean,err_p95,within_2sigma,gross,util_within,latency_s,detect_s,false_alarms,ws_within,ws_total\n";
+
+/// The row of `table.md` of estimator `m` on case `c`.
+pub fn md_row(c: &Case, m: Method, mt: &Metrics) -> String {
+    format!(
+        "| {} | {} | {} | {} | {} | {} | {} | {:.2} % | {} | {} | {} |\n",
+        c.manoeuvre,
+        c.road,
+        m.name(),
+        mt.n_identifiable,
+        fmt(mt.err_mean, 3),
+        fmt(mt.err_p95, 3),
+        mt.within_2sigma
+            .map_or("–".into(), |x| format!("{:.1} %", 100.0 * x)),
+        100.0 * mt.gross,
+        fmt(mt.util_within, 2),
+        fmt(mt.latency, 3),
+        fmt(mt.detect, 3),
+    )
+}
+
+/// The row of `table.csv` of estimator `m` on case `c`.
+pub fn csv_row(c: &Case, m: Method, mt: &Metrics) -> String {
+    format!(
+        "{},{},{},{},{},{},{},{:.5},{},{},{},{},{},{}\n",
+        csv_field(c.manoeuvre),
+        csv_field(&c.road),
+        m.name(),
+        mt.n_identifiable,
+        fmt(mt.err_mean, 4),
+        fmt(mt.err_p95, 4),
+        fmt(mt.within_2sigma, 4),
+        mt.gross,
+        fmt(mt.util_within, 3),
+        fmt(mt.latency, 4),
+        fmt(mt.detect, 4),
+        mt.false_alarms,
+        mt.ws_within,
+        mt.ws_total
+    )
+}
+
+/// The row of `wheels.csv` of wheel-surface `x` of case `c`.
+pub fn wheel_row(c: &Case, x: &WheelSurface) -> String {
+    format!(
+        "{},{},{},{},{:.3},{:.3},{:.3},{},{}\n",
+        csv_field(c.manoeuvre),
+        csv_field(&c.road),
+        WHEELS.get(x.wheel).copied().unwrap_or("?"),
+        x.mu,
+        x.t_start,
+        x.t_end,
+        x.t_util05,
+        fmt(x.latency, 3),
+        x.within()
+    )
+}
+
+/// The closing lines over the suite: per estimator (`totals`, in the bench's order) the cases
+/// and wheel-surfaces within ±0.1 within [`TARGET_LATENCY`], the change flags, the worst p95
+/// and gross error; the same without the straight ABS stops; and the identifiable shares.
+/// `cases`: the suite's cases, `issue_cases`: those of them not straight stops.
+pub fn summary(totals: &[(Method, Totals)], cases: usize, issue_cases: usize) -> String {
+    let mut s = String::new();
+    for (m, t) in totals {
+        let _ = writeln!(
+            s,
+            "{}: within ±0.1 within {TARGET_LATENCY} s of utilisation 0.5 on {} of {cases} cases and {} of {} wheel-surfaces; {} false change alarms of {} change flags; worst p95 error {}; worst share of samples identifiable and off by > {GROSS}: {:.2} %.",
+            m.name(),
+            t.within,
+            t.ws.0,
+            t.ws.1,
+            t.alarms,
+            t.flags,
+            fmt(t.worst_p95, 3),
+            100.0 * t.worst_gross,
+        );
+    }
+    for (m, t) in totals {
+        let _ = writeln!(
+            s,
+            "{}, without the straight ABS stops: within ±0.1 within {TARGET_LATENCY} s of utilisation 0.5 on {} of {issue_cases} cases and {} of {} wheel-surfaces.",
+            m.name(),
+            t.within_issue,
+            t.ws_issue.0,
+            t.ws_issue.1,
+        );
+    }
+    for (m, t) in totals {
+        let (i, n, ih, nh) = t.shares;
+        let pct = |a: usize, b: usize| 100.0 * a as f64 / b.max(1) as f64;
+        let _ = writeln!(
+            s,
+            "{}: identifiable on {:.1} % of the suite's samples ({i} of {n}), {:.1} % of those at utilisation 0.5 or more ({ih} of {nh}).",
+            m.name(),
+            pct(i, n),
+            pct(ih, nh),
+        );
+    }
+    s
+}
+
 /// "The bank against the others, case by case": for each case, every measure on which another
-/// estimator does better than the bank (index 3 of [`METHODS`]) — more wheel-surfaces within
-/// ±0.1 within [`TARGET_LATENCY`], a lower p95 error or a smaller share off by more than
-/// [`GROSS`] while identifiable (where it is identifiable at all), a shorter median latency —
-/// the p95 error and the count off by more than [`GROSS`] also like for like, on the samples
-/// both call identifiable ([`Common`], `commons[m]`), and per other estimator how many cases
-/// the bank is level or ahead on each measure.
-pub fn against_the_others(per_case: &[(&Case, Vec<Metrics>, Vec<Common>)]) -> String {
+/// estimator does better than the bank — more wheel-surfaces within ±0.1 within
+/// [`TARGET_LATENCY`], a lower p95 error or a smaller share off by more than [`GROSS`] while
+/// identifiable (where it is identifiable at all), a shorter median latency — the p95 error and
+/// the count off by more than [`GROSS`] also like for like, on the samples both call
+/// identifiable ([`MethodResult::common`]), and per other estimator how many cases the bank is
+/// level or ahead on each measure. A case without the bank's results is left out.
+pub fn against_the_others(per_case: &[(&Case, Vec<MethodResult>)]) -> String {
     let mut md = format!(
         "\n## The bank against the others, case by case\n\nWhere another estimator does better than the bank on one of the issue's measures: wheel-surfaces within ±0.1 within {TARGET_LATENCY} s of utilisation 0.5 (ws), p95 error while identifiable (p95, with the identifiable samples n; and like for like, on the samples both call identifiable), share of the case's samples identifiable and off by > {GROSS} (gross; like for like: count off by > {GROSS} on the samples both call identifiable), median latency (latency; like for like: over the wheel-surfaces both settle on). Cases not listed: the bank level or ahead on all of them.\n\n| manoeuvre | road | behind on |\n|---|---|---|\n"
     );
-    // Per other estimator: [ws, p95, gross, latency, and p95, gross, latency like for like]
-    // as (bank level or ahead, comparable).
-    let mut tally = [[(0usize, 0usize); 7]; METHODS.len()];
-    for (c, ms, commons) in per_case {
-        let Some(b) = ms.get(BANK) else { continue };
+    // Per other estimator (in the bench's order): [ws, p95, gross, latency, and p95, gross,
+    // latency like for like] as (bank level or ahead, comparable).
+    let mut tally: Vec<(Method, [(usize, usize); 7])> = Method::ALL
+        .iter()
+        .filter(|&&m| m != Method::Bank)
+        .map(|&m| (m, [(0, 0); 7]))
+        .collect();
+    for (c, results) in per_case {
+        let Some(b) = results.iter().find(|r| r.method == Method::Bank) else {
+            continue;
+        };
+        let b = &b.metrics;
         let mut behind = Vec::new();
-        for (m, o) in ms.iter().enumerate().filter(|&(m, _)| m != BANK) {
-            let name = METHODS[m];
-            let t = &mut tally[m];
-            let cm = commons.get(m).cloned().unwrap_or_default();
+        for r in results.iter().filter(|r| r.method != Method::Bank) {
+            let Some((_, t)) = tally.iter_mut().find(|(m, _)| *m == r.method) else {
+                continue;
+            };
+            let (name, o, cm) = (r.method.name(), &r.metrics, &r.common);
             // One comparable measure: counted, and listed when the bank is behind.
             let mut measure = |i: usize, ok: bool, why: &dyn Fn() -> String| {
                 t[i].1 += 1;
@@ -138,8 +263,8 @@ pub fn against_the_others(per_case: &[(&Case, Vec<Metrics>, Vec<Common>)]) -> St
         }
     }
     md.push('\n');
-    for (m, t) in tally.iter().enumerate().filter(|&(m, _)| m != BANK) {
-        let name = METHODS[m];
+    for (m, t) in &tally {
+        let name = m.name();
         let _ = writeln!(
             md,
             "bank against {name}: ws level or ahead on {} of {} cases; p95 on {} of {} (both identifiable; like for like on {} of {}); gross on {} of {} ({name} identifiable; like for like on {} of {}); latency on {} of {} ({name} with one; like for like on {} of {}).",
@@ -147,53 +272,6 @@ pub fn against_the_others(per_case: &[(&Case, Vec<Metrics>, Vec<Common>)]) -> St
         );
     }
     md
-}
-
-/// The "where the latency goes" table (Markdown, and CSV with one row per case and a total).
-pub(super) fn hold_tables(tallies: &[(&Case, HoldTally)]) -> (String, String) {
-    let mut md = String::from(
-        "\n## Where the Gough estimator's latency goes\n\nPer case, over the wheels' surfaces that reach utilisation 0.5 (\"wheel-surfaces\"): how many settle within ±0.1 of the truth within 150 ms, and what the estimator reported over the samples of that window (from utilisation 0.5 until it settles, at most 150 ms): held, and why (`MuEstimator::last_hold`), or identifiable but not yet for good within ±0.1.\n\n| manoeuvre | road | wheel-surfaces | within 150 ms |",
-    );
-    let mut csv = String::from("manoeuvre,road,wheel_surfaces,within_150ms");
-    for h in Hold::ALL {
-        let _ = write!(md, " {} |", h.name());
-        let _ = write!(csv, ",{}", h.name());
-    }
-    md.push_str(" identifiable |\n|---|---|---|---|");
-    csv.push_str(",identifiable\n");
-    for _ in 0..=Hold::ALL.len() {
-        md.push_str("---|");
-    }
-    md.push('\n');
-    let mut total = HoldTally::default();
-    let mut row = |man: &str, road: &str, t: &HoldTally| {
-        let _ = write!(md, "| {man} | {road} | {} | {} |", t.windows, t.within);
-        let _ = write!(
-            csv,
-            "{},{},{},{}",
-            csv_field(man),
-            csv_field(road),
-            t.windows,
-            t.within
-        );
-        for x in t.shares() {
-            if t.total() == 0 {
-                md.push_str(" – |");
-                csv.push(',');
-            } else {
-                let _ = write!(md, " {:.0} % |", 100.0 * x);
-                let _ = write!(csv, ",{x:.4}");
-            }
-        }
-        md.push('\n');
-        csv.push('\n');
-    };
-    for (c, t) in tallies {
-        row(c.manoeuvre, &c.road, t);
-        total.add(t);
-    }
-    row("all", "", &total);
-    (md, csv)
 }
 
 #[cfg(test)]
@@ -244,34 +322,42 @@ mod tests {
             manoeuvre: "slalom",
             road: "mu=0.5".into(),
         };
+        let r = |method, metrics: &Metrics, common| MethodResult {
+            method,
+            metrics: metrics.clone(),
+            common,
+        };
         // Like for like: on the 20 samples both call identifiable, the bank's p95 is lower than
-        // the table estimator's, and slip-slope is off by > 0.2 less often.
-        let like = vec![
-            Common {
-                n: 20,
-                p95: (Some(0.005), Some(0.01)),
-                gross: (0, 0),
-                latency: (Some(0.04), Some(0.5), 1),
-            },
-            Common::default(),
-            Common {
-                n: 50,
-                p95: (Some(0.01), Some(0.05)),
-                gross: (3, 1),
-                latency: (Some(0.05), Some(0.0), 3),
-            },
-            Common::default(),
-        ];
+        // Hsu–Gerdes', and slip-slope is off by > 0.2 less often.
+        let like_hsu = Common {
+            n: 20,
+            p95: (Some(0.005), Some(0.01)),
+            gross: (0, 0),
+            latency: (Some(0.04), Some(0.5), 1),
+        };
+        let like_slip = Common {
+            n: 50,
+            p95: (Some(0.01), Some(0.05)),
+            gross: (3, 1),
+            latency: (Some(0.05), Some(0.0), 3),
+        };
+        let no = Common::default();
         let md = against_the_others(&[
             (
                 &case,
-                vec![better_p95, silent.clone(), more_ws, bank.clone()],
-                like,
+                vec![
+                    r(Method::HsuGerdes, &better_p95, like_hsu),
+                    r(Method::SlipSlope, &more_ws, like_slip.clone()),
+                    r(Method::Bank, &bank, no.clone()),
+                ],
             ),
             (
                 &level,
-                vec![silent.clone(), silent, Metrics::default(), bank],
-                vec![Common::default(); 4],
+                vec![
+                    r(Method::HsuGerdes, &silent, no.clone()),
+                    r(Method::SlipSlope, &Metrics::default(), no.clone()),
+                    r(Method::Bank, &bank, no.clone()),
+                ],
             ),
         ]);
         let row = md
@@ -279,32 +365,54 @@ mod tests {
             .find(|l| l.starts_with("| slalom | mu=0.1 |"))
             .unwrap();
         assert!(
-            row.contains("gough: p95 0.010 < 0.020 (n 20 vs 1000)"),
+            row.contains("hsu-gerdes: p95 0.010 < 0.020 (n 20 vs 1000)"),
             "{row}"
         );
-        assert!(row.contains("gough: gross 0.00 % < 0.40 %"), "{row}");
+        assert!(row.contains("hsu-gerdes: gross 0.00 % < 0.40 %"), "{row}");
         assert!(
-            !row.contains("gough: ws") && !row.contains("gough: latency"),
+            !row.contains("hsu-gerdes: ws") && !row.contains("hsu-gerdes: latency"),
             "{row}"
         );
         assert!(row.contains("slip-slope: ws 4 > 3"), "{row}");
         assert!(row.contains("slip-slope: latency 0.000 < 0.050 s"), "{row}");
-        assert!(!row.contains("hsu-gerdes"), "{row}");
-        assert!(!row.contains("gough: p95 like for like"), "{row}");
+        assert!(!row.contains("hsu-gerdes: p95 like for like"), "{row}");
         assert!(
             row.contains("slip-slope: off by > 0.2 like for like 1 < 3 (n 50)"),
             "{row}"
         );
         assert!(!md.contains("| slalom | mu=0.5 |"), "{md}");
-        assert!(md.contains("bank against gough: ws level or ahead on 2 of 2 cases; p95 on 0 of 1 (both identifiable; like for like on 1 of 1); gross on 0 of 1 (gough identifiable; like for like on 1 of 1); latency on 1 of 1 (gough with one; like for like on 1 of 1)"), "{md}");
+        assert!(md.contains("bank against hsu-gerdes: ws level or ahead on 2 of 2 cases; p95 on 0 of 1 (both identifiable; like for like on 1 of 1); gross on 0 of 1 (hsu-gerdes identifiable; like for like on 1 of 1); latency on 1 of 1 (hsu-gerdes with one; like for like on 1 of 1)"), "{md}");
+        assert!(
+            md.contains("bank against slip-slope: ws level or ahead on 1 of 2 cases"),
+            "{md}"
+        );
+        // An estimator never identifiable is listed nowhere and compared on ws alone.
+        let md = against_the_others(&[
+            (
+                &case,
+                vec![
+                    r(Method::HsuGerdes, &silent, no.clone()),
+                    r(Method::SlipSlope, &more_ws, like_slip),
+                    r(Method::Bank, &bank, no.clone()),
+                ],
+            ),
+            (
+                &level,
+                vec![
+                    r(Method::HsuGerdes, &silent, no.clone()),
+                    r(Method::Bank, &bank, no),
+                ],
+            ),
+        ]);
+        let row = md
+            .lines()
+            .find(|l| l.starts_with("| slalom | mu=0.1 |"))
+            .unwrap();
+        assert!(!row.contains("hsu-gerdes"), "{row}");
         assert!(
             md.contains(
                 "bank against hsu-gerdes: ws level or ahead on 2 of 2 cases; p95 on 0 of 0"
             ),
-            "{md}"
-        );
-        assert!(
-            md.contains("bank against slip-slope: ws level or ahead on 1 of 2 cases"),
             "{md}"
         );
     }
