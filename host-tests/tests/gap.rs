@@ -407,10 +407,22 @@ fn the_mu_error_of_a_hot_tyre_is_put_down_to_the_thermal_effect() {
     let d = diagnose(p, &g.log);
     assert_eq!(d.verdict, Some(Effect::Thermal), "{:?}", d.report.verdict);
     let mu = d.report.mu.as_ref().unwrap();
+    // The estimator reads from the start, while the tyre is still cool and it is right (the
+    // bank estimates 97 % of the rows; the table estimator it replaced, 11 %, when hot): the
+    // error is where the tyre is hot, in the second half of the 8 s run, and reads low there.
     assert!(
-        mu.bias < -0.02,
+        mu.bias < 0.0,
         "hot tyre reads as a lower μ: bias {}",
         mu.bias
+    );
+    let hot = mu
+        .where_
+        .iter()
+        .find(|r| r.variable == "time")
+        .unwrap_or_else(|| panic!("no time region: {:?}", mu.where_));
+    assert!(
+        hot.lo > 4.0 && hot.share_of_error > 0.5 && hot.bias < -0.02,
+        "hot tyre reads as a lower μ where it is hot: {hot:?}"
     );
     assert_eq!(mu.verdict.effect, "thermal", "{:?}", mu.verdict);
     assert!(mu.verdict.shrink.unwrap() > 0.2);

@@ -1,20 +1,19 @@
 //! The diagnosis of the friction estimator's output, when the log has a reference `mu` column.
 //!
-//! The table estimator ([`MuEstimator`], default settings, its Gough table built from
-//! SIM.tir at the log's median camber) runs on the log's measured Fx, Fy, Mz, Fz, Vx. Its error
-//! against the reference μ is taken on the rows where it has an estimate (state not
-//! `fallback`). Then:
+//! The product's estimator ([`Method::Bank`]: the core's bank, default settings, the log's wheel
+//! taken as SIM.tir describes the tyre, as `gough mu estimate` takes a one-wheel log) runs on the
+//! log's measured Fx, Fy, Mz, Fz, Vx, κ and γ (never α). Its error against the reference μ is
+//! taken on the rows where it has an estimate (state not `fallback`). Then:
 //! - `where`: the operating regions holding the squared μ error, binned as the force gap is
 //!   ([`super::regions`]), a region reported when it holds ≥ 20 % of the error and ≥ 1.25× its
 //!   share of the rows;
-//! - `effects`: does the effect explain the error? The estimator's model is SIM.tir in steady
-//!   state at the log's median camber, at INFLPRES, without turn slip, on clean sensors. For
-//!   each candidate, with the parameters it was fitted to on the *forces* (never on μ), its
-//!   contribution to the channels is Δ = (sim with the effect) − (sim without it), where
-//!   "without" is the estimator's assumption for that aspect: γ at the median (`camber`),
-//!   p = INFLPRES (`inflation_pressure`), φt = 0 (`turn_slip`), steady state
-//!   (`relaxation_length`), and SIM.tir as it is for the others (bias, lag, friction changes,
-//!   re-fitted terms). The estimator is run again on measured − Δ; the effect explains the error
+//! - `effects`: does the effect explain the error? The estimator's model is SIM.tir at INFLPRES,
+//!   without turn slip, on clean sensors. For each candidate, with the parameters it was fitted
+//!   to on the *forces* (never on μ), its contribution to the channels is Δ = (sim with the
+//!   effect) − (sim without it), where "without" is: γ at the median (`camber`), p = INFLPRES
+//!   (`inflation_pressure`), φt = 0 (`turn_slip`), steady state (`relaxation_length`), and
+//!   SIM.tir as it is for the others (bias, lag, friction changes, re-fitted terms). The
+//!   estimator is run again on measured − Δ (κ, γ, Vx as logged); the effect explains the error
 //!   as far as that shrinks it.
 //! - `verdict`: the effect with the largest μ shrink 1 − rmse_after/rmse_before when that is at
 //!   least [`MU_MIN_SHRINK`] and the estimator's error is at least [`MU_MIN_RMSE`]; else `none`.
@@ -28,9 +27,10 @@ use super::effects::{Ctx, Effect};
 use super::log::Log;
 use super::sim::{Mods, Out, Sim};
 use super::stats;
-use crate::mu::table_estimator::{Config, MuEstimator, Sample, State};
-use gough::math::Libm;
+use crate::mu::{Method, Sample, Setup};
 use gough::mf::Params;
+use gough::mu::bank::State;
+use gough::proto::Wheel;
 use serde::Serialize;
 
 /// The μ verdict needs a shrink of at least this.
@@ -106,35 +106,32 @@ pub struct MuVerdict {
     pub indistinguishable_from: Vec<String>,
 }
 
-/// Runs the estimator over the log; `meas` replaces the measured channels, `scale` divides each
-/// estimate. Returns (μ, has an estimate) per row.
+/// Runs the product's estimator ([`Method::Bank`], through [`crate::mu::Estimator`]) over the
+/// log, its wheel as SIM.tir describes the tyre; `meas` (Fx, Fy, Mz per row) replaces the
+/// measured channels. Returns (μ, has an estimate) per row.
 pub fn run_estimator(
     params: &Params<f64>,
     log: &Log,
     meas: &[Out],
-    scale: Option<&[f64]>,
 ) -> Result<Vec<(f64, bool)>, String> {
-    let gamma = stats::median(&log.gamma);
-    let table = crate::mu::table::<f64, Libm>(params, None)
+    let mut est = Method::Bank
+        .estimator(params, &Setup::one_wheel(None))
         .map_err(|e| format!("friction estimator: {e}"))?;
-    let cfg = Config {
-        gamma,
-        ..Config::default()
-    };
-    let mut est = MuEstimator::for_tyre(&table, params, cfg);
     Ok((0..log.len())
         .map(|i| {
-            let e = est.update::<Libm>(&Sample {
+            let s = Sample {
                 t: log.t[i],
                 fz: log.fz[i],
                 fy: meas[i][1],
                 mz: meas[i][2],
                 fx: Some(meas[i][0]),
                 vx: Some(log.vx[i]),
+                kappa: Some(log.kappa[i]),
+                alpha: Some(log.alpha[i]),
                 gamma: Some(log.gamma[i]),
-            });
-            let s = scale.and_then(|s| s.get(i)).copied().unwrap_or(1.0);
-            (e.mu / s, e.state != State::Fallback)
+            };
+            let e = est.update(Wheel::FrontLeft, &s);
+            (e.mu, e.state != State::Fallback)
         })
         .collect())
 }
@@ -158,7 +155,7 @@ pub fn diagnose(
         return Err("no mu column".into());
     };
     let p = &ctx.sim.params;
-    let base = run_estimator(p, log, &log.meas, None)?;
+    let base = run_estimator(p, log, &log.meas)?;
     let mask: Vec<bool> = base.iter().map(|b| b.1).collect();
     let n_est = mask.iter().filter(|&&m| m).count();
     let (rmse, bias) = error_stats(&base, reference, &mask);
@@ -187,7 +184,7 @@ pub fn diagnose(
                 .zip(&delta)
                 .map(|(x, d)| [x[0] - d[0], x[1] - d[1], x[2] - d[2]])
                 .collect();
-            run_estimator(p, log, &m, None).map(|r| (r, note))
+            run_estimator(p, log, &m).map(|r| (r, note))
         });
         match applied {
             Ok((r, note)) => {
@@ -225,7 +222,7 @@ pub fn diagnose(
 
 /// The μ verdict: the effect with the largest μ shrink, and those that come close to it (within
 /// [`MU_CLOSE`] of its shrink, relative, or 0.02). The estimator's error is strongly
-/// autocorrelated (a Kalman filter) and concentrated where the effect acts, so neither a row-level
+/// autocorrelated (a likelihood with memory) and concentrated where the effect acts, so neither a row-level
 /// nor a 5-block test has a usable standard error here; the band is a practical-equivalence
 /// margin. When the force diagnosis's verdict is in that group (and itself shrinks the error by
 /// [`MU_MIN_SHRINK`]) it is preferred: the forces are the stronger evidence of which effect is
@@ -311,7 +308,7 @@ fn contribution(
             let w = s2.run(&l, &sim.params, &Mods::default()).map_err(fail)?;
             (
                 w.out,
-                "turn-slip contribution removed (the estimator's table has none)",
+                "turn-slip contribution removed (the estimator's model has none)",
             )
         }
         Effect::RelaxationLength => {
