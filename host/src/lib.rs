@@ -5,8 +5,8 @@
 //! - [`mfrun`] — CSV rows → [`gough::mf::Input`] → [`gough::mf::eval`] (`gough mf eval`).
 //! - [`sim`] — the vehicle simulation (`gough sim`).
 //! - [`gap`] — the sim-to-real gap diagnosis (`gough gap`).
-//! - [`mu`] — the friction estimator's bench, bound, map and peers (`gough mu`), among them the
-//!   previous table estimator ([`mu::table_estimator`], moved out of the core).
+//! - [`mu`] — the friction estimators behind one interface (the core's bank, the published
+//!   peers), their bench, bound, map and the tyre file's calibration (`gough mu`).
 //! - [`replay`], [`device`] — the firmware under QEMU over SLCAN/TCP (`gough replay`,
 //!   `gough firmware`); `xtask` runs its QEMU images through [`device::qemu`].
 //! - [`plot`] — fonts, ranges and labels of every PNG.

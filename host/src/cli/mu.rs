@@ -20,9 +20,9 @@ pub enum MuCmd {
     /// The main job: a simulated manoeuvre on a road whose friction changes, the estimator at
     /// every wheel, a table on the terminal, plots and estimates written.
     Demo(crate::mu::bench::DemoArgs),
-    /// From which utilisation the estimator reads μ on a tyre: steady, noise-free points of its
-    /// own Magic Formula on surfaces μ 1.0 … 0.1 at 0.5, 1 and 1.5·Fz0, and the trail gap
-    /// between neighbouring surfaces that decides it.
+    /// From which utilisation the bank reads μ on a tyre: steady, noise-free points of its own
+    /// Magic Formula on surfaces μ 1.0 … 0.1 at 0.5, 1 and 1.5·Fz0, each held for 150 ms, and
+    /// the trail gap between neighbouring surfaces.
     Map(MapArgs),
     /// How soon any estimator could know μ on the benchmark's data: the Cramér–Rao bound of
     /// its rows (exact model, the bench's noise) 150 ms after the utilisation reaches 0.5, beside
@@ -76,8 +76,8 @@ pub struct MapArgs {
     /// Also write the map as CSV here.
     #[arg(long)]
     pub out: Option<PathBuf>,
-    /// The samples carry no Fx, and the estimator takes the free-rolling Fx from its table (by
-    /// default they carry the model's free-rolling Fx, as a wheel that measures Fx would).
+    /// The samples carry no Fx (a wheel without a longitudinal force sensor; by default they
+    /// carry the model's free-rolling Fx, as a wheel that measures Fx would).
     #[arg(long)]
     pub no_fx: bool,
     /// Inclination γ of the wheel \[rad\] (ISO-W; the samples carry it). The sweep is α > 0,

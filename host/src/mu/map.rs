@@ -1,24 +1,27 @@
-//! `gough mu map`: from which utilisation the table estimator reads μ on a given tyre.
+//! `gough mu map`: from which utilisation the product's estimator (the bank) reads μ on a given
+//! tyre.
 //!
 //! For each surface μ and load, the tyre's own Magic Formula (λμx = λμy = μ/μy0, pure side
 //! slip, at the file's reference speed LONGVL and the inclination γ asked, 0 by default) gives
 //! steady, noise-free Fy, Mz, Fz along a slip-angle sweep (α > 0, where Fy < 0) up to the peak;
-//! the samples carry γ. At each point a fresh [`MuEstimator`] with the default
-//! [`Config`] runs over 150 ms of that constant sample at 1 kHz, rolling at 20 m/s (settling,
-//! low-pass, two-sample readings, `init_count`: all of it, as on a wheel); the point counts as
-//! identifiable when the estimator ends `Identifiable`. The map reports the lowest utilisation
-//! |F|/(μ·Fz) at which that happens, and the estimate there. The estimator's gates still budget
-//! for the configured sensor noise and model uncertainty, so this is the best case a wheel can
-//! do: real manoeuvres add noise and transients.
+//! the samples carry γ, the free-rolling κ (0, as a wheel-speed sensor reads it) and, unless
+//! `--no-fx`, the model's free-rolling Fx. At each point a fresh bank ([`Method::Bank`], default
+//! settings, the wheel as the file describes the tyre) runs over [`STEPS`] ms of that constant
+//! sample at 1 kHz, rolling at 20 m/s (its batches, fits and likelihoods: all of it, as on a
+//! wheel); the point counts as identifiable when the bank ends `identifiable`. The map reports
+//! the lowest utilisation |F|/(μ·Fz) at which that happens, and the estimate there. The bank's
+//! likelihoods still budget for the configured sensor noise and model error, so this is the
+//! best case a wheel can do at a steady point: a real manoeuvre adds noise and transients, and
+//! its history (how the point got there) tells the bank more than one point does.
 //!
 //! Beside it, the physics that decides the map, independent of the estimator: at utilisation
 //! 0.5, the pneumatic trail τ = −Mz/Fy on the surface's curve and how far the curve of a
-//! surface 0.1 grippier lies from it at the same force. Where that gap is smaller than the
-//! model's own uncertainty of the trail (`Config::trail_model_rel` of the largest trail, plus
-//! the residual torque's share), no amount of averaging can tell the two surfaces apart.
-use super::table_estimator::{Config, GoughTable, MuEstimator, Sample, State};
-use gough::math::Libm;
+//! surface 0.1 grippier lies from it at the same force. The smaller that gap, the more nearly
+//! two surfaces explain the same steady point.
+use super::{Method, Sample, Setup};
 use gough::mf::{self, Params};
+use gough::mu::bank::State;
+use gough::proto::Wheel;
 
 /// Surfaces of the map (μ).
 pub const MUS: [f64; 10] = [1.0, 0.9, 0.8, 0.7, 0.6, 0.5, 0.4, 0.3, 0.2, 0.1];
@@ -44,8 +47,11 @@ pub struct Cell {
     pub gap: Option<f64>,
 }
 
-/// Samples of 1 ms the estimator runs on each point (settling 30, first estimate ≈ 25 more).
-const STEPS: usize = 150;
+/// Samples of 1 ms the bank runs on each point: the bench's latency target
+/// ([`super::bench::TARGET_LATENCY`], 150 ms; 15 of the bank's batches). Held longer, a steady
+/// point's evidence keeps adding up and the map reads lower utilisations (500 ms: μ 0.4–0.7 from
+/// about 0.3 at Fz0).
+pub const STEPS: usize = 150;
 
 fn eval(p: &Params<f64>, lam: f64, fz: f64, alpha: f64, gamma: f64) -> Option<mf::Output<f64>> {
     super::peers::eval_cambered(p, lam, fz, alpha, 0.0, gamma)
@@ -77,23 +83,22 @@ fn at_force(p: &Params<f64>, lam: f64, fz: f64, gamma: f64, force: f64) -> Optio
 }
 
 /// The map of tyre `p` (see the module's doc). `with_fx`: the samples carry the measured Fx
-/// (at pure side slip, the free-rolling Fx of the model), as the benchmark's do; without it the
-/// estimator takes the free-rolling Fx from its table (`Curve::fx_free`).
+/// (at pure side slip, the free-rolling Fx of the model), as the benchmark's do.
 pub fn map(p: &Params<f64>, with_fx: bool, gamma: f64) -> Result<Vec<Cell>, String> {
-    let table = super::table::<f64, Libm>(p, None)?;
-    let cfg = Config::default();
+    // The bank builds on this tyre (an error here says why it cannot).
+    Method::Bank.estimator(p, &Setup::one_wheel(None))?;
+    // Surfaces scaled from the file's μy0, as the simulation scales them (architecture.md).
+    let mu0 = crate::sim::vehicle::mu_y0(p)?;
     let probe = Probe {
         p,
-        table: &table,
-        cfg,
-        mu0: MuEstimator::for_tyre(&table, p, cfg).mu0(),
+        mu0,
         with_fx,
         gamma,
     };
     let mut cells = Vec::new();
     for &mu in &MUS {
         for &load in &LOADS {
-            cells.push(probe.cell(mu, load));
+            cells.push(probe.cell(mu, load)?);
         }
     }
     Ok(cells)
@@ -102,23 +107,37 @@ pub fn map(p: &Params<f64>, with_fx: bool, gamma: f64) -> Result<Vec<Cell>, Stri
 /// What every cell is measured with.
 struct Probe<'a> {
     p: &'a Params<f64>,
-    table: &'a GoughTable<f64>,
-    cfg: Config<f64>,
     mu0: f64,
     with_fx: bool,
     gamma: f64,
 }
 
 impl Probe<'_> {
-    fn cell(&self, mu: f64, load: f64) -> Cell {
-        let Probe {
-            p,
-            table,
-            cfg,
-            mu0,
-            with_fx,
-            gamma,
-        } = *self;
+    /// The bank's last estimate after [`STEPS`] samples of the steady point `o`.
+    fn run(&self, o: &mf::Output<f64>) -> Result<Option<super::Estimate>, String> {
+        let mut est = Method::Bank.estimator(self.p, &Setup::one_wheel(None))?;
+        let mut last = None;
+        for k in 0..STEPS {
+            last = Some(est.update(
+                Wheel::FrontLeft,
+                &Sample {
+                    t: k as f64 * 1e-3,
+                    fz: o.fz,
+                    fy: o.fy,
+                    mz: o.mz,
+                    fx: self.with_fx.then_some(o.fx),
+                    vx: Some(20.0),
+                    kappa: Some(0.0),
+                    alpha: None,
+                    gamma: Some(self.gamma),
+                },
+            ));
+        }
+        Ok(last)
+    }
+
+    fn cell(&self, mu: f64, load: f64) -> Result<Cell, String> {
+        let Probe { p, mu0, gamma, .. } = *self;
         let fz = load * p.fnomin;
         let lam = mu / mu0;
         let mut out = Cell {
@@ -149,20 +168,7 @@ impl Probe<'_> {
             if util < 0.2 || i % 5 != 0 {
                 continue;
             }
-            let mut est = MuEstimator::for_tyre(table, p, cfg);
-            let mut last = None;
-            for k in 0..STEPS {
-                last = Some(est.update::<Libm>(&Sample {
-                    t: k as f64 * 1e-3,
-                    fz: o.fz,
-                    fy: o.fy,
-                    mz: o.mz,
-                    fx: with_fx.then_some(o.fx),
-                    vx: Some(20.0),
-                    gamma: Some(gamma),
-                }));
-            }
-            if let Some(e) = last.filter(|e| e.state == State::Identifiable) {
+            if let Some(e) = self.run(&o)?.filter(|e| e.state == State::Identifiable) {
                 out.first_util = Some(util);
                 out.err = Some(e.mu - mu);
                 out.sigma = Some(e.sigma);
@@ -176,7 +182,7 @@ impl Probe<'_> {
             out.trail = Some(tau);
             out.gap = at_force(p, (mu + 0.1) / mu0, fz, gamma, force).map(|g| -g.mz / g.fy - tau);
         }
-        out
+        Ok(out)
     }
 }
 
@@ -188,7 +194,7 @@ pub fn render(cells: &[Cell], name: &str, fz0: f64, with_fx: bool, gamma: f64) -
     let _ = writeln!(
         s,
         "identifiability map of {name}: steady pure side slip (α > 0, γ {gamma} rad, at LONGVL), \
-         noise-free, Fx {fx}, the estimator's defaults at 1 kHz for 150 ms per point"
+         noise-free, Fx {fx}, the bank's defaults at 1 kHz for {STEPS} ms per point"
     );
     let _ = writeln!(
         s,

@@ -13,20 +13,6 @@ pub mod estimator;
 pub mod map;
 pub mod peers;
 pub mod scenario;
-pub mod table_estimator;
-
-/// The Gough table of `p` mounted on `mounted` (`GoughTable::for_wheel_into`), built in place on
-/// the heap: a debug build copies a value the size of an f64 table several times on its way
-/// out of `GoughTable::for_wheel` — enough to overflow a test thread's stack.
-pub fn table<F: gough::math::Float, M: gough::math::Backend<F>>(
-    p: &gough::mf::Params<F>,
-    mounted: Option<gough::mf::Side>,
-) -> Result<Box<table_estimator::GoughTable<F>>, String> {
-    let mut t = Box::new(table_estimator::GoughTable::zeroed());
-    t.for_wheel_into::<M>(p, mounted)
-        .map_err(|e| e.to_string())?;
-    Ok(t)
-}
 
 pub use estimator::{mounting, Estimate, Estimator, Method, Precision, Sample, Setup};
 
