@@ -367,7 +367,7 @@ fn bench_writes_its_tables_and_bound_reads_the_same_bank() {
     assert_eq!(
         suite
             .iter()
-            .filter(|c| gough_host::mu::bench::straight_stop(c))
+            .filter(|c| c.group == gough_host::mu::bench::Group::StraightStop)
             .count(),
         5
     );
@@ -483,7 +483,7 @@ fn bench_writes_its_tables_and_bound_reads_the_same_bank() {
     );
     assert!(
         md.contains("the estimators' tyre is")
-            && md.contains("with PHY1=0.002, pvy1=-0.01; the simulation's is the file."),
+            && md.contains("with PHY1=0.002, PVY1=-0.01; the simulation's is the file."),
         "{md}"
     );
     let tir = tyre();

@@ -31,38 +31,39 @@
 use super::bench::{self, Sensors, WheelTrace};
 use super::{Method, Setup};
 use crate::sim::Log;
-use clap::Args;
 use gough::math::Libm;
 use gough::mf::{self, Input, Options, Params, Side};
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
-/// Arguments of `gough mu bound`.
-#[derive(Args)]
-pub struct BoundArgs {
+/// What `gough mu bound` runs, and where it writes.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Config {
     /// Tyre property file (.tir).
-    #[arg(
-        long,
-        default_value = "host-tests/data/tyres/MagicFormula61_Parameters.tir"
-    )]
     pub tir: PathBuf,
     /// Output directory (bound.md, bound.csv).
-    #[arg(long, default_value = "out/mu_bound")]
     pub out: PathBuf,
     /// Noise seed of the bank's run (the bound itself needs no noise).
-    #[arg(long, default_value_t = 1)]
     pub seed: u64,
     /// Only the first N cases of the bench's suite.
-    #[arg(long)]
     pub cases: Option<usize>,
-    /// Also run the maximum-likelihood reference (`WindowMl`) on every wheel and surface: about
-    /// 1,000 Magic Formula evaluations per row, a few minutes for the suite.
-    #[arg(long)]
-    pub ml: bool,
-    /// The reference's window \[s\], in (0, 10] (implies `--ml`): how much of the run-up it
-    /// may use. Default 1 s (`ML_WINDOW`).
-    #[arg(long)]
-    pub ml_window: Option<f64>,
+    /// Also run the maximum-likelihood reference ([`WindowMl`]) on every wheel and surface,
+    /// with this window \[s\], in (0, 10] (about 1,000 Magic Formula evaluations per row, a
+    /// few minutes for the suite); `None`: not.
+    pub ml: Option<f64>,
+}
+
+impl Default for Config {
+    /// The bundled MF 6.1 tyre, seed 1, the whole suite, without the reference.
+    fn default() -> Self {
+        Config {
+            tir: "host-tests/data/tyres/MagicFormula61_Parameters.tir".into(),
+            out: "out/mu_bound".into(),
+            seed: 1,
+            cases: None,
+            ml: None,
+        }
+    }
 }
 
 /// The simulation's tyre on a surface: the file's parameters with λμx, λμy for μ.
@@ -575,15 +576,12 @@ fn ml_within(
     true
 }
 
-/// Runs `gough mu bound`.
-pub fn run(a: BoundArgs) -> Result<(), String> {
-    let ml = match a.ml_window {
-        Some(w) if !(w.is_finite() && w > 0.0 && w <= 10.0) => {
-            return Err(format!("--ml-window {w}: not a window length in (0, 10] s"));
-        }
-        Some(w) => Some(w),
-        None => a.ml.then_some(ML_WINDOW),
-    };
+/// Runs `gough mu bound`: writes `bound.md` and `bound.csv` into `a.out` and prints the table.
+pub fn run(a: &Config) -> Result<(), String> {
+    let ml = a.ml;
+    if let Some(w) = ml.filter(|w| !(w.is_finite() && *w > 0.0 && *w <= 10.0)) {
+        return Err(format!("--ml-window {w}: not a window length in (0, 10] s"));
+    }
     let t = crate::tyre::load(&a.tir)?;
     let p = t.params;
     // The bank as `gough mu bench` runs it: the four wheels with the default preview.
@@ -858,10 +856,7 @@ mod tests {
     #[test]
     fn model_reproduces_the_simulation() {
         let p = tyre();
-        let c = bench::Case {
-            manoeuvre: "sine-dwell",
-            road: "mu=0.7".into(),
-        };
+        let c = bench::Case::new("sine-dwell", "mu=0.7").unwrap();
         let log = bench::simulate_case(&p, &c).unwrap();
         for w in 0..4 {
             let side = if w % 2 == 0 { Side::Left } else { Side::Right };

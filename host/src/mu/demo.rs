@@ -5,32 +5,48 @@
 use super::bench::plots::{plot_gough, plot_mu};
 use super::bench::tables::{fmt, WHEELS};
 use super::bench::{
-    measure, metrics, run_method, sim_wheelbase, simulate_case, Case, DemoArgs, Sensors, WheelTrace,
+    measure, metrics, run_method, sim_wheelbase, simulate_case, Case, Sensors, WheelTrace,
 };
 use super::{Estimate, Method, Setup};
-use crate::sim;
 use gough::mu::bank::State;
 use std::fmt::Write as _;
+use std::path::PathBuf;
+
+/// What `gough mu demo` runs, and where it writes.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Config {
+    /// Tyre property file (.tir).
+    pub tir: PathBuf,
+    /// Manoeuvre (one of the simulation's).
+    pub manoeuvre: String,
+    /// Road (the simulation's spec grammar).
+    pub road: String,
+    /// Output directory (estimates.csv, log_fl.csv, mu.png, gough.png).
+    pub out: PathBuf,
+    /// Noise seed.
+    pub seed: u64,
+}
+
+impl Default for Config {
+    /// The README's demo: the bundled MF 6.1 tyre, the sine with dwell from a dry road onto a
+    /// wet patch (μ 1.0 → 0.4), seed 1.
+    fn default() -> Self {
+        Config {
+            tir: "host-tests/data/tyres/MagicFormula61_Parameters.tir".into(),
+            manoeuvre: "sine-dwell".into(),
+            road: "mu=1.0+patch=0.4@45..300".into(),
+            out: "out/demo".into(),
+            seed: 1,
+        }
+    }
+}
 
 /// The product's main job on one command: a manoeuvre on a road whose friction changes, the
 /// estimator at every wheel, a short table, plots.
-pub fn demo(a: DemoArgs) -> Result<(), String> {
+pub fn run(a: &Config) -> Result<(), String> {
     let t = crate::tyre::load(&a.tir)?;
     let p = t.params;
-    let case = Case {
-        manoeuvre: sim::MANOEUVRES
-            .iter()
-            .copied()
-            .find(|m| *m == a.manoeuvre)
-            .ok_or_else(|| {
-                format!(
-                    "unknown manoeuvre '{}' (one of {})",
-                    a.manoeuvre,
-                    sim::MANOEUVRES.join(", ")
-                )
-            })?,
-        road: a.road.clone(),
-    };
+    let case = Case::new(&a.manoeuvre, &a.road)?;
     let log = simulate_case(&p, &case)?;
     let sensors = Sensors::default();
     std::fs::create_dir_all(&a.out).map_err(|e| format!("{}: {e}", a.out.display()))?;

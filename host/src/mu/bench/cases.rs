@@ -3,19 +3,97 @@
 //! simulated one: `--model-error`).
 
 use crate::sim::{self, Log, Manoeuvre, Overrides, SimConfig};
-use gough::mf::Params;
+use gough::mf::{Key, Params};
 
-/// A benchmark case: a manoeuvre on a road.
-#[derive(Debug, Clone)]
+/// A benchmark case: a manoeuvre of the simulation on a road, and the group it counts in.
+#[derive(Debug, Clone, PartialEq)]
 pub struct Case {
-    /// Manoeuvre name.
+    /// Manoeuvre name (one of [`sim::MANOEUVRES`]).
     pub manoeuvre: &'static str,
-    /// Road spec.
+    /// Road spec (the simulation's grammar, `gough sim --road`).
     pub road: String,
+    /// Which group of the suite it belongs to.
+    pub group: Group,
 }
 
-/// The suite: every manoeuvre on μ = 1.0, 0.7, 0.5, 0.3, 0.1, plus surface changes, plus the
-/// straight ABS stop (the `abs-split` manoeuvre on one surface) on each μ.
+impl Case {
+    /// Manoeuvre `name` (one of [`sim::MANOEUVRES`]) on `road` (the simulation's spec), in the
+    /// group its road makes it: a change of surface where the road has a split, a step or a
+    /// patch; else a straight ABS stop for the [`STRAIGHT_STOP`] manoeuvre, one surface for
+    /// the others. An error names an unknown manoeuvre or a bad road.
+    pub fn new(name: &str, road: &str) -> Result<Case, String> {
+        let manoeuvre = sim::MANOEUVRES
+            .iter()
+            .copied()
+            .find(|m| *m == name)
+            .ok_or_else(|| {
+                format!(
+                    "unknown manoeuvre '{name}' (one of {})",
+                    sim::MANOEUVRES.join(", ")
+                )
+            })?;
+        let r = sim::Road::parse(road)?;
+        let group = if r.split.is_some() || !r.steps.is_empty() || !r.patches.is_empty() {
+            Group::Change
+        } else if manoeuvre == STRAIGHT_STOP {
+            Group::StraightStop
+        } else {
+            Group::Surface
+        };
+        Ok(Case {
+            manoeuvre,
+            road: road.to_string(),
+            group,
+        })
+    }
+}
+
+/// The groups of the suite. The bench's closing lines count the issue's cases (issue 39's
+/// targets: [`Group::Surface`] and [`Group::Change`]) apart from the whole suite.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Group {
+    /// A manoeuvre on one surface.
+    Surface,
+    /// A manoeuvre over a change of surface (a patch, a step, a μ-split).
+    Change,
+    /// A straight ABS stop on one surface (the μ-split stop's braking: μ from Fx against κ).
+    StraightStop,
+}
+
+impl Group {
+    /// Among issue 39's cases (the suite without the straight ABS stops).
+    pub const fn issue_case(self) -> bool {
+        !matches!(self, Group::StraightStop)
+    }
+}
+
+/// The surfaces (μ) of the suite's one-surface cases.
+pub const SURFACES: [f64; 5] = [1.0, 0.7, 0.5, 0.3, 0.1];
+
+/// The manoeuvres run on each of [`SURFACES`].
+pub const ON_EACH_SURFACE: [&str; 5] = [
+    "step-steer",
+    "sine-dwell",
+    "brake-in-turn",
+    "constant-radius",
+    "slalom",
+];
+
+/// The changes of surface: a manoeuvre, its road with `{0}`, `{1}` for the surfaces, and those
+/// surfaces (μ).
+pub const CHANGES: [(&str, &str, [f64; 2]); 4] = [
+    ("abs-split", "split={0}/{1}", [0.9, 0.2]),
+    ("sine-dwell", "mu={0}+patch={1}@45..300", [1.0, 0.4]),
+    ("slalom", "step={0}@0,{1}@90", [1.0, 0.3]),
+    ("constant-radius", "mu={0}+patch={1}@-5..5", [0.9, 0.3]),
+];
+
+/// The manoeuvre of the straight ABS stops (on each of [`SURFACES`]: the μ-split stop's braking
+/// on one surface).
+pub const STRAIGHT_STOP: &str = "abs-split";
+
+/// The suite: every manoeuvre of [`ON_EACH_SURFACE`] on each of [`SURFACES`], the [`CHANGES`],
+/// and the straight ABS stop on each of [`SURFACES`] (34 cases).
 pub fn suite() -> Vec<Case> {
     suite_shifted(0.0)
 }
@@ -28,51 +106,28 @@ pub fn suite_shifted(d: f64) -> Vec<Case> {
         let v = ((mu + d) * 1e6).round() / 1e6;
         format!("{v:?}")
     };
+    let surface = |manoeuvre, mu, group| Case {
+        manoeuvre,
+        road: format!("mu={}", m(mu)),
+        group,
+    };
     let mut v = Vec::new();
-    for man in [
-        "step-steer",
-        "sine-dwell",
-        "brake-in-turn",
-        "constant-radius",
-        "slalom",
-    ] {
-        for mu in [1.0, 0.7, 0.5, 0.3, 0.1] {
-            v.push(Case {
-                manoeuvre: man,
-                road: format!("mu={}", m(mu)),
-            });
+    for man in ON_EACH_SURFACE {
+        for mu in SURFACES {
+            v.push(surface(man, mu, Group::Surface));
         }
     }
-    v.push(Case {
-        manoeuvre: "abs-split",
-        road: format!("split={}/{}", m(0.9), m(0.2)),
-    });
-    v.push(Case {
-        manoeuvre: "sine-dwell",
-        road: format!("mu={}+patch={}@45..300", m(1.0), m(0.4)),
-    });
-    v.push(Case {
-        manoeuvre: "slalom",
-        road: format!("step={}@0,{}@90", m(1.0), m(0.3)),
-    });
-    v.push(Case {
-        manoeuvre: "constant-radius",
-        road: format!("mu={}+patch={}@-5..5", m(0.9), m(0.3)),
-    });
-    // Straight ABS stops (the μ-split stop's braking on one surface): μ from Fx against κ.
-    for mu in [1.0, 0.7, 0.5, 0.3, 0.1] {
+    for (manoeuvre, road, [a, b]) in CHANGES {
         v.push(Case {
-            manoeuvre: "abs-split",
-            road: format!("mu={}", m(mu)),
+            manoeuvre,
+            road: road.replace("{0}", &m(a)).replace("{1}", &m(b)),
+            group: Group::Change,
         });
     }
+    for mu in SURFACES {
+        v.push(surface(STRAIGHT_STOP, mu, Group::StraightStop));
+    }
     v
-}
-
-/// A straight ABS stop: the `abs-split` manoeuvre on one surface (not among issue 39's cases;
-/// the suite adds them after those).
-pub fn straight_stop(c: &Case) -> bool {
-    c.manoeuvre == "abs-split" && c.road.starts_with("mu=")
 }
 
 /// Simulates a case.
@@ -83,23 +138,11 @@ pub fn simulate_case(p: &Params<f64>, c: &Case) -> Result<Log, String> {
     sim::simulate(&cfg, p, false)
 }
 
-/// The estimators' tyre model under `--model-error`: `p` with each NAME=DELTA added to the
-/// parameter NAME (a `.tir` key, any case). Refuses an unknown name, a DELTA that is not a
-/// finite number, and a result the `.tir` checks refuse.
-pub fn model_with_error(p: &Params<f64>, errors: &[String]) -> Result<Params<f64>, String> {
+/// The estimators' tyre model under `--model-error`: `p` with each `(key, delta)` added to its
+/// parameter. Refuses a result the `.tir` checks refuse.
+pub fn model_with_error(p: &Params<f64>, errors: &[(Key, f64)]) -> Result<Params<f64>, String> {
     let mut q = p.clone();
-    for kv in errors {
-        let (name, v) = kv
-            .split_once('=')
-            .ok_or_else(|| format!("--model-error {kv}: expected NAME=DELTA"))?;
-        let key = gough::mf::Key::from_name(name.trim())
-            .ok_or_else(|| format!("--model-error {kv}: no .tir parameter '{}'", name.trim()))?;
-        let d: f64 = v
-            .trim()
-            .parse()
-            .ok()
-            .filter(|d: &f64| d.is_finite())
-            .ok_or_else(|| format!("--model-error {kv}: '{}' is not a finite number", v.trim()))?;
+    for &(key, d) in errors {
         q.set(key, q.get(key) + d);
     }
     gough::tir::validate(&q).map_err(|(k, why)| {
@@ -148,18 +191,35 @@ mod tests {
         for c in suite_shifted(0.025) {
             sim::Road::parse(&c.road).unwrap();
         }
+        // The groups: 25 cases on one surface, 4 changes, 5 straight stops after them.
+        let groups: Vec<Group> = suite().into_iter().map(|c| c.group).collect();
+        let count = |g| groups.iter().filter(|&&x| x == g).count();
+        assert_eq!(
+            (
+                count(Group::Surface),
+                count(Group::Change),
+                count(Group::StraightStop)
+            ),
+            (25, 4, 5)
+        );
+        assert!(groups[29..].iter().all(|&g| g == Group::StraightStop));
+        // Each as its road makes it.
+        for c in suite_shifted(0.025).into_iter().chain(suite()) {
+            assert_eq!(Case::new(c.manoeuvre, &c.road), Ok(c.clone()));
+        }
+        assert!(Case::new("moonwalk", "mu=0.5").is_err());
+        assert!(Case::new("slalom", "mu=").is_err());
+        assert!(suite()
+            .iter()
+            .all(|c| sim::MANOEUVRES.contains(&c.manoeuvre)));
     }
 
-    /// `--model-error` adds each delta to its parameter (any case) and to nothing else.
+    /// `--model-error` adds each delta to its parameter and to nothing else; a tyre the `.tir`
+    /// checks refuse is an error.
     #[test]
     fn a_model_error_changes_its_parameters_only() {
-        let p = crate::tyre::load(std::path::Path::new(concat!(
-            env!("CARGO_MANIFEST_DIR"),
-            "/../host-tests/data/tyres/MagicFormula61_Parameters.tir"
-        )))
-        .unwrap()
-        .params;
-        let q = model_with_error(&p, &["PHY1=0.002".into(), "pvy1 = -0.01".into()]).unwrap();
+        let p = bundled();
+        let q = model_with_error(&p, &[(Key::PHY1, 0.002), (Key::PVY1, -0.01)]).unwrap();
         assert!((q.phy1 - p.phy1 - 0.002).abs() < 1e-15);
         assert!((q.pvy1 - p.pvy1 + 0.01).abs() < 1e-15);
         let mut back = q.clone();
@@ -167,9 +227,8 @@ mod tests {
         back.pvy1 = p.pvy1;
         assert_eq!(back, p);
         assert_eq!(model_with_error(&p, &[]).unwrap(), p);
-        for bad in ["PHY1", "NOPE=1", "PHY1=x", "PHY1=NaN", "FNOMIN=-1e9"] {
-            assert!(model_with_error(&p, &[bad.into()]).is_err(), "{bad}");
-        }
+        let e = model_with_error(&p, &[(Key::FNOMIN, -1e9)]).unwrap_err();
+        assert!(e.contains("FNOMIN"), "{e}");
     }
 
     /// Why the step steer on μ 1.0 stays ambiguous with perfect sensors: its front-left wheel,
@@ -182,11 +241,8 @@ mod tests {
     fn one_steady_point_lies_on_two_surfaces() {
         use gough::mf::{self, Input, Options, Side};
         let p = bundled();
-        let case = Case {
-            manoeuvre: "step-steer",
-            road: "mu=1.0".into(),
-        };
-        let log = simulate_case(&p, &case).unwrap();
+        let log = simulate_case(&p, &suite()[0]).unwrap();
+        assert_eq!(suite()[0].road, "mu=1.0");
         let rec = log.records.iter().find(|r| r.t >= 4.0).unwrap();
         let w = &rec.wheels[0]; // front left
         let tau_m = -w.mz / w.fy;

@@ -30,7 +30,7 @@ pub mod sensors;
 pub mod tables;
 
 pub use cases::{
-    model_with_error, sim_wheelbase, simulate_case, straight_stop, suite, suite_shifted, Case,
+    model_with_error, sim_wheelbase, simulate_case, suite, suite_shifted, Case, Group,
 };
 pub use metrics::{
     common, false_change_flags, metrics, segment_latency, wheel_surfaces, Common, Metrics, Totals,
@@ -42,133 +42,50 @@ pub(crate) use tables::csv_field;
 pub use tables::MethodResult;
 
 use crate::mu::{Estimate, Method, Setup};
-use clap::Args;
 use gough::mf::Params;
 use gough::proto::Wheel;
 use plots::plot_mu;
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
-/// Arguments of `gough mu bench`.
-#[derive(Args)]
-pub struct BenchArgs {
-    /// Tyre property file (.tir).
-    #[arg(
-        long,
-        default_value = "host-tests/data/tyres/MagicFormula61_Parameters.tir"
-    )]
+/// What `gough mu bench` runs, and where it writes.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Config {
+    /// Tyre property file (.tir): the simulated tyre, and the estimators' model of it.
     pub tir: PathBuf,
-    /// Output directory for the table (table.md, table.csv) and the plots.
-    #[arg(long, default_value = "out/mu_bench")]
+    /// Output directory: table.md, table.csv, wheels.csv and the plots.
     pub out: PathBuf,
     /// Noise seed.
-    #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    /// Only the first N cases (for a quick look).
-    #[arg(long)]
+    /// Only the first N cases of the suite.
     pub cases: Option<usize>,
-    /// Aligning-torque sensor noise, rms \[N·m\], added to every row the estimators see. The
-    /// sensors, not the estimators: what the bank assumes is its own configuration's.
-    #[arg(long, value_name = "NM", allow_negative_numbers = true, default_value_t = Sensors::default().sigma_mz)]
-    pub noise_mz: f64,
-    /// Force sensor noise (Fy, Fx, Fz), rms, as a fraction of Fz \[-\] (the sensors, not the
-    /// estimators' assumption).
-    #[arg(long, value_name = "FRACTION", allow_negative_numbers = true, default_value_t = Sensors::default().sigma_rel)]
-    pub noise_f: f64,
-    /// Pure delay of every measured channel \[s\] (rounded to the simulation's step, 1 ms).
-    #[arg(long, value_name = "S", allow_negative_numbers = true, default_value_t = Sensors::default().delay)]
-    pub delay: f64,
-    /// Weight of the bank's front-to-rear preview (`gough::mu::preview`: what a front wheel
-    /// read, handed to the rear wheel on its side a wheelbase later), inside (0, 1); 0: every
-    /// wheel alone.
-    #[arg(long, value_name = "W", default_value_t = 0.9)]
-    pub preview: f64,
-    /// Shift every surface's μ in the suite by D (0.025: midway between two of the bank's
-    /// hypotheses, which the suite's own surfaces coincide with); |D| ≤ 0.05.
-    #[arg(
-        long,
-        value_name = "D",
-        allow_negative_numbers = true,
-        default_value_t = 0.0
-    )]
+    /// The sensor model.
+    pub sensors: Sensors,
+    /// The bank's front-to-rear preview (`None`: every wheel alone).
+    pub preview: Option<gough::mu::preview::Config<f64>>,
+    /// Every surface of the suite shifted by this \[-\] ([`suite_shifted`]), |D| ≤ 0.05.
     pub mu_shift: f64,
-    /// A tyre model that is not the tyre: NAME=DELTA adds DELTA to the `.tir` parameter NAME
-    /// of the estimators' copy of the file only (e.g. `PHY1=0.002`: its horizontal shift 2 mrad
-    /// off), the simulation keeps the file; repeatable, or comma-separated. How the estimators
-    /// fare when the file they are given is wrong.
-    #[arg(
-        long = "model-error",
-        value_name = "NAME=DELTA",
-        value_delimiter = ',',
-        allow_hyphen_values = true
-    )]
-    pub model_error: Vec<String>,
+    /// The estimators' tyre is the file with these parameters moved by these amounts
+    /// ([`model_with_error`]); the simulation keeps the file.
+    pub model_error: Vec<(gough::mf::Key, f64)>,
 }
 
-impl BenchArgs {
-    /// The preview these arguments ask for over the simulated vehicle's wheelbase (`None`:
-    /// `--preview 0`).
-    pub fn preview(&self) -> Result<Option<gough::mu::preview::Config<f64>>, String> {
-        if self.preview == 0.0 {
-            return Ok(None);
+impl Default for Config {
+    /// The bench as documented: the bundled MF 6.1 tyre, seed 1, the whole suite, the default
+    /// sensors, the preview at weight 0.9 over the simulated vehicle's wheelbase, no shift, no
+    /// model error.
+    fn default() -> Self {
+        Config {
+            tir: "host-tests/data/tyres/MagicFormula61_Parameters.tir".into(),
+            out: "out/mu_bench".into(),
+            seed: 1,
+            cases: None,
+            sensors: Sensors::default(),
+            preview: Some(gough::mu::preview::Config::with_wheelbase(sim_wheelbase())),
+            mu_shift: 0.0,
+            model_error: Vec::new(),
         }
-        if !(self.preview > 0.0 && self.preview < 1.0) {
-            return Err(format!(
-                "--preview {}: a weight inside (0, 1), or 0 for none",
-                self.preview
-            ));
-        }
-        Ok(Some(gough::mu::preview::Config {
-            wheelbase: sim_wheelbase(),
-            weight: self.preview,
-        }))
     }
-
-    /// The sensor model these arguments ask for: each value finite and ≥ 0, the delay at most
-    /// 1 s.
-    pub fn sensors(&self) -> Result<Sensors, String> {
-        for (name, v, max) in [
-            ("--noise-mz", self.noise_mz, f64::MAX),
-            ("--noise-f", self.noise_f, f64::MAX),
-            ("--delay", self.delay, 1.0),
-        ] {
-            if !(v.is_finite() && (0.0..=max).contains(&v)) {
-                return Err(format!(
-                    "{name} {v}: expected a finite value from 0 to {}",
-                    if max < f64::MAX { "1 s" } else { "any size" }
-                ));
-            }
-        }
-        Ok(Sensors {
-            sigma_mz: self.noise_mz,
-            sigma_rel: self.noise_f,
-            delay: self.delay,
-            ..Sensors::default()
-        })
-    }
-}
-
-/// Arguments of `gough mu demo`.
-#[derive(Args)]
-pub struct DemoArgs {
-    /// Tyre property file (.tir).
-    #[arg(
-        long,
-        default_value = "host-tests/data/tyres/MagicFormula61_Parameters.tir"
-    )]
-    pub tir: PathBuf,
-    /// Manoeuvre (one of the simulation's).
-    #[arg(long, default_value = "sine-dwell")]
-    pub manoeuvre: String,
-    /// Road (the simulation's spec grammar).
-    #[arg(long, default_value = "mu=1.0+patch=0.4@45..300")]
-    pub road: String,
-    /// Output directory (estimates.csv, mu.png, gough.png).
-    #[arg(long, default_value = "out/demo")]
-    pub out: PathBuf,
-    /// Noise seed.
-    #[arg(long, default_value_t = 1)]
-    pub seed: u64,
 }
 
 /// Runs `method` (set up as `setup`) over a case's wheel traces (fl, fr, rl, rr), sample by
@@ -200,33 +117,39 @@ pub fn run_method(
     Ok(out)
 }
 
-/// Runs the benchmark.
-pub fn run(a: BenchArgs) -> Result<(), String> {
-    let sensors = a.sensors()?;
-    let setup = Setup::car(a.preview()?);
-    let t = crate::tyre::load(&a.tir)?;
+/// Runs the benchmark: writes `table.md`, `table.csv`, `wheels.csv` and the plots of the cases
+/// whose surface changes into `cfg.out`, and prints `table.md`.
+pub fn run(cfg: &Config) -> Result<(), String> {
+    let sensors = cfg.sensors;
+    let setup = Setup::car(cfg.preview);
+    let t = crate::tyre::load(&cfg.tir)?;
     // `sim`: the tyre the simulation runs; `p`: the estimators' model of it (the same file
     // unless `--model-error`).
     let sim = t.params;
-    let p = model_with_error(&sim, &a.model_error)?;
-    if !(a.mu_shift.is_finite() && a.mu_shift.abs() <= 0.05) {
+    let p = model_with_error(&sim, &cfg.model_error)?;
+    if !(cfg.mu_shift.is_finite() && cfg.mu_shift.abs() <= 0.05) {
         return Err(format!(
             "--mu-shift {}: expected a value from -0.05 to 0.05",
-            a.mu_shift
+            cfg.mu_shift
         ));
     }
-    let mut cases = suite_shifted(a.mu_shift);
-    if let Some(n) = a.cases {
+    let mut cases = suite_shifted(cfg.mu_shift);
+    if let Some(n) = cfg.cases {
         cases.truncate(n);
     }
-    std::fs::create_dir_all(&a.out).map_err(|e| format!("{}: {e}", a.out.display()))?;
+    std::fs::create_dir_all(&cfg.out).map_err(|e| format!("{}: {e}", cfg.out.display()))?;
     let mut md = String::new();
-    if !a.model_error.is_empty() {
+    if !cfg.model_error.is_empty() {
+        let errors: Vec<String> = cfg
+            .model_error
+            .iter()
+            .map(|(k, d)| format!("{}={d}", k.name()))
+            .collect();
         let _ = writeln!(
             md,
             "Model error (`--model-error`): the estimators' tyre is {} with {}; the simulation's is the file.\n",
-            a.tir.display(),
-            a.model_error.join(", ")
+            cfg.tir.display(),
+            errors.join(", ")
         );
     }
     md.push_str(tables::MD_HEADER);
@@ -240,12 +163,14 @@ pub fn run(a: BenchArgs) -> Result<(), String> {
         .iter()
         .map(|&m| (m, Totals::default()))
         .collect();
-    let issue_cases = cases.iter().filter(|c| !straight_stop(c)).count();
+    let issue_cases = cases.iter().filter(|c| c.group.issue_case()).count();
     let mut per_case: Vec<(&Case, Vec<MethodResult>)> = Vec::new();
     for c in &cases {
         bar.set_message(format!("{} on {}", c.manoeuvre, c.road));
         let log = simulate_case(&sim, c)?;
-        let traces: Vec<WheelTrace> = (0..4).map(|w| measure(&log, w, &sensors, a.seed)).collect();
+        let traces: Vec<WheelTrace> = (0..4)
+            .map(|w| measure(&log, w, &sensors, cfg.seed))
+            .collect();
         let mut runs: Vec<(Method, Vec<Vec<Estimate>>, Metrics)> = Vec::new();
         for (m, total) in &mut totals {
             let ests = match run_method(*m, &p, &setup, &traces) {
@@ -270,7 +195,7 @@ pub fn run(a: BenchArgs) -> Result<(), String> {
             }
             md.push_str(&tables::md_row(c, *m, &mt));
             csv.push_str(&tables::csv_row(c, *m, &mt));
-            total.add(&mt, !straight_stop(c));
+            total.add(&mt, c.group.issue_case());
             runs.push((*m, ests, mt));
         }
         // Each other estimator against the bank on the samples both call identifiable (the
@@ -303,7 +228,7 @@ pub fn run(a: BenchArgs) -> Result<(), String> {
                 plot_mu(
                     &traces[0],
                     &[("bank", fl)],
-                    &a.out.join(format!("mu_{name}.png")),
+                    &cfg.out.join(format!("mu_{name}.png")),
                     &format!("{} on {} (front left)", c.manoeuvre, c.road),
                 )?;
             }
@@ -319,11 +244,11 @@ pub fn run(a: BenchArgs) -> Result<(), String> {
     for (m, why) in &not_run {
         let _ = writeln!(md, "\n{} did not run on this tyre: {why}.", m.name());
     }
-    if a.mu_shift != 0.0 {
+    if cfg.mu_shift != 0.0 {
         let _ = writeln!(
             md,
             "\nEvery surface of the suite shifted by {:+} (the road specs above are the shifted ones).",
-            a.mu_shift
+            cfg.mu_shift
         );
     }
     if sensors != Sensors::default() {
@@ -335,13 +260,13 @@ pub fn run(a: BenchArgs) -> Result<(), String> {
             1000.0 * sensors.delay
         );
     }
-    std::fs::write(a.out.join("table.md"), &md).map_err(|e| e.to_string())?;
-    std::fs::write(a.out.join("table.csv"), &csv).map_err(|e| e.to_string())?;
-    std::fs::write(a.out.join("wheels.csv"), &wheels_csv).map_err(|e| e.to_string())?;
+    std::fs::write(cfg.out.join("table.md"), &md).map_err(|e| e.to_string())?;
+    std::fs::write(cfg.out.join("table.csv"), &csv).map_err(|e| e.to_string())?;
+    std::fs::write(cfg.out.join("wheels.csv"), &wheels_csv).map_err(|e| e.to_string())?;
     print!("{md}");
     eprintln!(
         "-> {}/table.md, table.csv, wheels.csv, mu_*.png",
-        a.out.display()
+        cfg.out.display()
     );
     Ok(())
 }

@@ -115,46 +115,28 @@ pub fn measure(log: &Log, w: usize, s: &Sensors, seed: u64) -> WheelTrace {
 
 #[cfg(test)]
 mod tests {
-    use super::super::{simulate_case, BenchArgs, Case};
+    use super::super::{simulate_case, Case};
     use super::*;
     use crate::tyre::bundled;
 
-    /// The sensor model is what `--noise-mz`, `--noise-f` and `--delay` ask for: without noise
-    /// and delay every row is the simulation's own; the delay shifts the rows by whole steps
-    /// and the noise has the rms asked for; a negative or non-finite value, or a delay over
-    /// 1 s, is refused.
+    /// The sensor model is what it says: without noise and delay every row is the simulation's
+    /// own; the delay shifts the rows by whole steps and the noise has the rms asked for.
     #[test]
-    fn sensor_arguments_reach_the_rows() {
-        use clap::Parser;
-        #[derive(Parser)]
-        struct Cli {
-            #[command(flatten)]
-            a: BenchArgs,
-        }
-        let parse = |extra: &[&str]| {
-            Cli::try_parse_from(["bench"].iter().chain(extra))
-                .unwrap()
-                .a
-                .sensors()
+    fn the_sensor_model_reaches_the_rows() {
+        let with = |sigma_mz, sigma_rel, delay| Sensors {
+            sigma_mz,
+            sigma_rel,
+            delay,
+            ..Sensors::default()
         };
-        assert_eq!(parse(&[]).unwrap(), Sensors::default());
-        for bad in [
-            &["--noise-mz", "-1"][..],
-            &["--noise-f", "NaN"],
-            &["--delay", "2"],
-        ] {
-            let e = parse(bad).unwrap_err();
-            assert!(e.starts_with(bad[0]), "{e}");
-        }
         let p = bundled();
-        let case = Case {
-            manoeuvre: "step-steer",
-            road: "mu=0.5".into(),
-        };
+        let case = Case::new("step-steer", "mu=0.5").unwrap();
         let log = simulate_case(&p, &case).unwrap();
-        let exact = parse(&["--noise-mz", "0", "--noise-f", "0", "--delay", "0"]).unwrap();
-        let late = parse(&["--noise-mz", "0", "--noise-f", "0", "--delay", "0.02"]).unwrap();
-        let noisy = parse(&["--noise-mz", "5", "--noise-f", "0.02", "--delay", "0"]).unwrap();
+        let (exact, late, noisy) = (
+            with(0.0, 0.0, 0.0),
+            with(0.0, 0.0, 0.02),
+            with(5.0, 0.02, 0.0),
+        );
         let w = 1;
         let (tr, tl, tn) = (
             measure(&log, w, &exact, 1),

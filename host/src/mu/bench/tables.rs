@@ -314,14 +314,8 @@ mod tests {
             ws_total: 4,
             ..Metrics::default()
         };
-        let case = Case {
-            manoeuvre: "slalom",
-            road: "mu=0.1".into(),
-        };
-        let level = Case {
-            manoeuvre: "slalom",
-            road: "mu=0.5".into(),
-        };
+        let case = Case::new("slalom", "mu=0.1").unwrap();
+        let level = Case::new("slalom", "mu=0.5").unwrap();
         let r = |method, metrics: &Metrics, common| MethodResult {
             method,
             metrics: metrics.clone(),

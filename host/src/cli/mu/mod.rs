@@ -1,4 +1,6 @@
 //! `gough mu ...` subcommands.
+pub mod bench;
+
 use crate::mu::{read_log, Method, Precision, Setup};
 use crate::tyre;
 use clap::{Args, Subcommand};
@@ -16,10 +18,10 @@ pub enum MuCmd {
     /// t,mu,sigma,state (identifiable, not_identifiable, fallback), with `wheel` for a car's log.
     Estimate(EstimateArgs),
     /// Benchmark the estimator (the bank) and its peers on the simulation's manoeuvre suite.
-    Bench(crate::mu::bench::BenchArgs),
+    Bench(bench::BenchArgs),
     /// The main job: a simulated manoeuvre on a road whose friction changes, the estimator at
     /// every wheel, a table on the terminal, plots and estimates written.
-    Demo(crate::mu::bench::DemoArgs),
+    Demo(bench::DemoArgs),
     /// From which utilisation the bank reads μ on a tyre: steady, noise-free points of its own
     /// Magic Formula on surfaces μ 1.0 … 0.1 at 0.5, 1 and 1.5·Fz0, each held for 150 ms, and
     /// the trail gap between neighbouring surfaces.
@@ -27,7 +29,7 @@ pub enum MuCmd {
     /// How soon any estimator could know μ on the benchmark's data: the Cramér–Rao bound of
     /// its rows (exact model, the bench's noise) 150 ms after the utilisation reaches 0.5, beside
     /// the bank's latency (as `gough mu bench` runs it), wheel by wheel.
-    Bound(crate::mu::bound::BoundArgs),
+    Bound(bench::BoundArgs),
     /// Calibrate the tyre file's registration of Mz against Fy on a log of a surface whose μ is
     /// known: the offset of PHY1 (the force's horizontal shift) or QHZ1 (the trail's) that best
     /// explains the measured Fy and Mz near the limit, and the file with it.
@@ -143,9 +145,9 @@ impl SideArg {
 pub fn run(cmd: MuCmd) -> Result<(), String> {
     match cmd {
         MuCmd::Estimate(a) => estimate(&a),
-        MuCmd::Bench(b) => crate::mu::bench::run(b),
-        MuCmd::Demo(d) => crate::mu::demo::demo(d),
-        MuCmd::Bound(b) => crate::mu::bound::run(b),
+        MuCmd::Bench(b) => crate::mu::bench::run(&b.config()?),
+        MuCmd::Demo(d) => crate::mu::demo::run(&d.config()),
+        MuCmd::Bound(b) => crate::mu::bound::run(&b.config()),
         MuCmd::Calibrate(a) => calibrate(&a),
         MuCmd::Map(a) => {
             if !a.gamma.is_finite() {
