@@ -197,10 +197,12 @@ def simulate(tyre: Tyre, manoeuvre: str, road: str | None = None, speed: float |
     CLI's log.csv. Raises ValueError for a bad argument, naming its flag."""
     import pandas as pd
 
-    def txt(x):
-        return None if x is None else repr(float(x))
+    def num(x):
+        return None if x is None else float(x)
 
+    if log_every is not None and int(log_every) < 1:
+        raise ValueError(f"--log-every {log_every}: expected an integer ≥ 1")
     cols, data = _gough._simulate(
-        tyre._inner, manoeuvre, road, txt(speed), txt(duration), txt(dt), txt(steer),
-        txt(radius), txt(decel), not abs, None if log_every is None else str(int(log_every)))
+        tyre._inner, manoeuvre, road, num(speed), num(duration), num(dt), num(steer),
+        num(radius), num(decel), bool(abs), None if log_every is None else int(log_every))
     return pd.DataFrame(data, columns=cols)

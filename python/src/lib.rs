@@ -371,42 +371,39 @@ fn _diagnose_gap(
     serde_json::to_string(&d.report).map_err(|e| PyValueError::new_err(e.to_string()))
 }
 
-/// `gough sim` without files: the manoeuvre's log as (column names, rows × columns array).
-/// Numbers come as text, parsed by the CLI's own argument code (`gough_host::cli::sim::config`).
+/// `gough sim` without files: the manoeuvre's log as (column names, rows × columns array). The
+/// numbers go into the library's run specification (`gough_host::sim::Spec`), which `gough sim`
+/// fills from its flags; its errors name those flags.
 #[pyfunction]
 #[allow(clippy::too_many_arguments)]
-#[pyo3(signature = (tyre, manoeuvre, road=None, speed=None, duration=None, dt=None, steer=None, radius=None, decel=None, no_abs=false, log_every=None))]
+#[pyo3(signature = (tyre, manoeuvre, road=None, speed=None, duration=None, dt=None, steer=None, radius=None, decel=None, abs=true, log_every=None))]
 fn _simulate<'py>(
     py: Python<'py>,
     tyre: &Tyre,
     manoeuvre: String,
     road: Option<String>,
-    speed: Option<String>,
-    duration: Option<String>,
-    dt: Option<String>,
-    steer: Option<String>,
-    radius: Option<String>,
-    decel: Option<String>,
-    no_abs: bool,
-    log_every: Option<String>,
+    speed: Option<f64>,
+    duration: Option<f64>,
+    dt: Option<f64>,
+    steer: Option<f64>,
+    radius: Option<f64>,
+    decel: Option<f64>,
+    abs: bool,
+    log_every: Option<usize>,
 ) -> PyResult<(Vec<String>, Bound<'py, numpy::PyArray2<f64>>)> {
-    let args = gough_host::cli::sim::SimArgs {
-        manoeuvre: Some(manoeuvre),
-        tir: None,
+    let spec = gough_host::sim::Spec {
+        manoeuvre,
         road,
         speed,
         duration,
         dt,
-        steer,
+        steer_deg: steer,
         radius,
         decel,
-        no_abs,
+        abs,
         log_every,
-        no_plots: true,
-        plot_size: None,
-        out: None,
     };
-    let cfg = gough_host::cli::sim::config(&args).map_err(PyValueError::new_err)?;
+    let cfg = spec.config().map_err(PyValueError::new_err)?;
     let params = &tyre.params;
     let log = py
         .detach(|| gough_host::sim::simulate(&cfg, params, false))

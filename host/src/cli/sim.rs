@@ -1,8 +1,9 @@
 //! `gough sim`: runs a manoeuvre and writes `DIR/log.csv`, `DIR/signals.png`, `DIR/gough.png`.
 //!
-//! Numbers are taken as text and parsed here, so every bad argument gives one line naming it.
+//! Numbers are taken as text and parsed here into the library's `sim::Spec`, so every bad
+//! argument gives one line naming it.
 
-use crate::sim::{plot, simulate, AbsParams, Manoeuvre, Overrides, Road, SimConfig, MANOEUVRES};
+use crate::sim::{plot, simulate, Spec, MANOEUVRES};
 use std::path::PathBuf;
 
 /// Arguments of `gough sim`.
@@ -65,52 +66,43 @@ fn number(flag: &str, s: &Option<String>) -> Result<Option<f64>, String> {
     }
 }
 
-/// The simulation's configuration from the arguments (manoeuvre, road, speed, duration, step,
-/// steer, radius, deceleration, ABS, logging); `gough sim` and the Python package's
-/// `gough.simulate` both build it here. `--tir` and `--out` are not read.
-pub fn config(a: &SimArgs) -> Result<SimConfig, String> {
-    let name = a.manoeuvre.as_deref().ok_or_else(|| {
+/// The run these arguments ask for (`--tir`, `--out` and the plots' arguments are not read):
+/// their text parsed into the library's [`Spec`], which Python's `gough.simulate` builds from
+/// numbers.
+pub fn spec(a: &SimArgs) -> Result<Spec, String> {
+    let manoeuvre = a.manoeuvre.as_deref().ok_or_else(|| {
         format!(
             "--manoeuvre NAME is required (one of: {})",
             MANOEUVRES.join(", ")
         )
     })?;
-    let o = Overrides {
+    let log_every = match &a.log_every {
+        None => None,
+        Some(n) => Some(
+            n.trim()
+                .parse::<usize>()
+                .ok()
+                .filter(|&n| n >= 1)
+                .ok_or_else(|| format!("--log-every '{n}' is not an integer ≥ 1"))?,
+        ),
+    };
+    Ok(Spec {
+        manoeuvre: manoeuvre.to_string(),
+        road: a.road.clone(),
         speed: number("--speed", &a.speed)?,
-        steer_sw: number("--steer", &a.steer)?.map(f64::to_radians),
+        duration: number("--duration", &a.duration)?,
+        dt: number("--dt", &a.dt)?,
+        steer_deg: number("--steer", &a.steer)?,
         radius: number("--radius", &a.radius)?,
         decel: number("--decel", &a.decel)?,
-    };
-    let man = Manoeuvre::by_name(name, &o)?;
-    let mut cfg = SimConfig::new(man);
-    if let Some(spec) = &a.road {
-        cfg.road = Road::parse(spec).map_err(|e| format!("--road: {e}"))?;
-    }
-    if let Some(d) = number("--duration", &a.duration)? {
-        cfg.duration = d;
-    }
-    if let Some(dt) = number("--dt", &a.dt)? {
-        cfg.dt = dt;
-    }
-    if let Some(n) = &a.log_every {
-        cfg.log_every = n
-            .trim()
-            .parse::<usize>()
-            .ok()
-            .filter(|&n| n >= 1)
-            .ok_or_else(|| format!("--log-every '{n}' is not an integer ≥ 1"))?;
-    }
-    if a.no_abs {
-        cfg.abs = None;
-    } else {
-        cfg.abs = Some(AbsParams::default());
-    }
-    Ok(cfg)
+        abs: !a.no_abs,
+        log_every,
+    })
 }
 
 /// Runs `gough sim`.
 pub fn run(a: SimArgs) -> Result<(), String> {
-    let cfg = config(&a)?;
+    let cfg = spec(&a)?.config()?;
     let man = cfg.manoeuvre;
     let tir = a.tir.as_ref().ok_or("--tir FILE is required")?;
     let out = a.out.as_ref().ok_or("--out DIR is required")?;

@@ -18,11 +18,13 @@ pub mod abs;
 pub mod manoeuvre;
 pub mod plot;
 pub mod road;
+pub mod spec;
 pub mod vehicle;
 
 pub use abs::{Abs, AbsParams};
 pub use manoeuvre::{Driver, Manoeuvre, Overrides, MANOEUVRES};
 pub use road::Road;
+pub use spec::Spec;
 pub use vehicle::{
     Commands, Initial, Record, Vehicle, VehicleParams, VehicleRecord, WheelRecord, G, MAX_DT,
     WHEELS,
