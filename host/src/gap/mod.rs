@@ -21,7 +21,7 @@
 //!    best single candidates by the pair's held-out shrink (a second effect can make the wrong
 //!    one look best alone).
 //! 6. With a `mu` column, the same questions for the friction estimator's output ([`mu`]).
-//! 7. [`plot`]: residual maps before and after the winning effect.
+//! 7. `plot` (feature `plot`): residual maps before and after the winning effect.
 //!
 //! [`mod@bench`] is the withheld-effect benchmark (`gough gap bench`): logs from a truth model with
 //! one effect or a pair switched on, diagnosed from SIM.tir and the log alone.
@@ -35,6 +35,7 @@ pub mod effects;
 pub mod fit;
 pub mod log;
 pub mod mu;
+#[cfg(feature = "plot")]
 pub mod plot;
 pub mod regions;
 pub mod report;
@@ -81,7 +82,7 @@ pub const FIRST_ALTERNATIVES: usize = 2;
 pub struct Options {
     /// Show a progress bar on the terminal.
     pub progress: bool,
-    /// Draw residual maps into this directory.
+    /// Draw residual maps into this directory (with the `plot` feature; without it, an error).
     pub plots: Option<std::path::PathBuf>,
     /// At most this many training rows per fit (`None`: [`cv::FIT_ROWS`]); small values make
     /// quick tests.
@@ -159,6 +160,13 @@ pub fn diagnose(
     log_name: &str,
     opts: &Options,
 ) -> Result<Diagnosis, String> {
+    #[cfg(not(feature = "plot"))]
+    if let Some(dir) = &opts.plots {
+        return Err(format!(
+            "{}: residual maps need gough-host's `plot` feature",
+            dir.display()
+        ));
+    }
     let sim = sim::Sim::new(params, log);
     let ctx = Ctx::new(log, &sim)
         .map_err(|(i, e)| format!("{log_name}: line {}: sim: {e}", log.line(i)))?;
@@ -461,6 +469,7 @@ pub fn diagnose(
         None => None,
     };
 
+    #[cfg(feature = "plot")]
     if let Some(dir) = &opts.plots {
         let win = winner.and_then(|w| w.spec.as_ref().map(|sp| (sp, w)));
         plot::residual_maps(dir, &ctx, win)?;

@@ -8,6 +8,7 @@ pub mod banks;
 pub mod bench;
 pub mod bound;
 pub mod calibrate;
+#[cfg(feature = "plot")]
 pub mod demo;
 pub mod estimator;
 pub mod map;

@@ -5,7 +5,7 @@
 //! re-implemented here), on a road with friction by position and an optional uneven profile
 //! ([`road`]), flown through standard manoeuvres by a driver model ([`manoeuvre`]), with a
 //! slip-controlling ABS ([`abs`]). [`simulate`] runs it at a fixed step and returns a [`Log`];
-//! [`plot`] draws it.
+//! `plot` (feature `plot`) draws it.
 //!
 //! μ follows `shared/design/architecture.md`: a road of friction μ scales the tyre by
 //! λμx = λμy = μ/μy0, so a log's `mu_true` column means what the estimator reports.
@@ -16,6 +16,7 @@
 
 pub mod abs;
 pub mod manoeuvre;
+#[cfg(feature = "plot")]
 pub mod plot;
 pub mod road;
 pub mod spec;

@@ -21,10 +21,11 @@
 //!   since the identification they change from, or a wrong new value).
 //!
 //! The tables ([`tables`]) and, for the cases whose surface changes, a plot of the front-left
-//! wheel's estimates ([`plots`]).
+//! wheel's estimates (`plots`, feature `plot`).
 
 pub mod cases;
 pub mod metrics;
+#[cfg(feature = "plot")]
 pub mod plots;
 pub mod sensors;
 pub mod tables;
@@ -44,7 +45,6 @@ pub use tables::MethodResult;
 use crate::mu::{Estimate, Method, Setup};
 use gough::mf::Params;
 use gough::proto::Wheel;
-use plots::plot_mu;
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
@@ -217,15 +217,16 @@ pub fn run(cfg: &Config) -> Result<(), String> {
                 },
             })
             .collect();
+        // The front-left wheel's estimates of the bank, on a case whose surface changes.
+        #[cfg(feature = "plot")]
         if c.road.contains("patch") || c.road.contains("step") {
             let name = format!(
                 "{}_{}",
                 c.manoeuvre,
                 c.road.replace(['=', '+', '@', '.', ',', '/'], "_")
             );
-            // The front-left wheel's estimates of the bank.
             if let Some(fl) = bank.first() {
-                plot_mu(
+                plots::plot_mu(
                     &traces[0],
                     &[("bank", fl)],
                     &cfg.out.join(format!("mu_{name}.png")),
@@ -265,8 +266,13 @@ pub fn run(cfg: &Config) -> Result<(), String> {
     std::fs::write(cfg.out.join("wheels.csv"), &wheels_csv).map_err(|e| e.to_string())?;
     print!("{md}");
     eprintln!(
-        "-> {}/table.md, table.csv, wheels.csv, mu_*.png",
-        cfg.out.display()
+        "-> {}/table.md, table.csv, wheels.csv{}",
+        cfg.out.display(),
+        if cfg!(feature = "plot") {
+            ", mu_*.png"
+        } else {
+            ""
+        }
     );
     Ok(())
 }
