@@ -34,19 +34,15 @@ use crate::sim::Log;
 use gough::math::Libm;
 use gough::mf::{self, Input, Options, Params, Side};
 use std::fmt::Write as _;
-use std::path::PathBuf;
 
 /// What `gough mu bound` runs, and where it writes.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Config {
-    /// Tyre property file (.tir).
-    pub tir: PathBuf,
-    /// Output directory (bound.md, bound.csv).
-    pub out: PathBuf,
-    /// Noise seed of the bank's run (the bound itself needs no noise).
-    pub seed: u64,
-    /// Only the first N cases of the bench's suite.
-    pub cases: Option<usize>,
+    /// The bench whose rows are bounded, as [`bench::run`] would run it: its tyre, cases
+    /// (shifted as it says), sensors and seed, and the bank's setup and tyre model for the
+    /// latency beside the bound; `out` receives bound.md and bound.csv. The bound's model is
+    /// the simulated tyre (the file), whatever the bank is given.
+    pub bench: bench::Config,
     /// Also run the maximum-likelihood reference ([`WindowMl`]) on every wheel and surface,
     /// with this window \[s\], in (0, 10] (about 1,000 Magic Formula evaluations per row, a
     /// few minutes for the suite); `None`: not.
@@ -54,13 +50,13 @@ pub struct Config {
 }
 
 impl Default for Config {
-    /// The bundled MF 6.1 tyre, seed 1, the whole suite, without the reference.
+    /// The default bench's rows, written to `out/mu_bound`, without the reference.
     fn default() -> Self {
         Config {
-            tir: "host-tests/data/tyres/MagicFormula61_Parameters.tir".into(),
-            out: "out/mu_bound".into(),
-            seed: 1,
-            cases: None,
+            bench: bench::Config {
+                out: "out/mu_bound".into(),
+                ..bench::Config::default()
+            },
             ml: None,
         }
     }
@@ -576,25 +572,26 @@ fn ml_within(
     true
 }
 
-/// Runs `gough mu bound`: writes `bound.md` and `bound.csv` into `a.out` and prints the table.
+/// Runs `gough mu bound`: writes `bound.md` and `bound.csv` into `a.bench.out` and prints the
+/// table.
 pub fn run(a: &Config) -> Result<(), String> {
     let ml = a.ml;
     if let Some(w) = ml.filter(|w| !(w.is_finite() && *w > 0.0 && *w <= 10.0)) {
         return Err(format!("--ml-window {w}: not a window length in (0, 10] s"));
     }
-    let t = crate::tyre::load(&a.tir)?;
-    let p = t.params;
-    // The bank as `gough mu bench` runs it: the four wheels with the default preview.
-    let setup = Setup::car(Some(gough::mu::preview::Config::with_wheelbase(
-        bench::sim_wheelbase(),
-    )));
-    let sens = Sensors::default();
+    let b = &a.bench;
+    // `p`: the simulated tyre, the bound's model; `est`: the bank's (`model_error`).
+    let p = crate::tyre::load(&b.tir)?.params;
+    let est = bench::model_with_error(&p, &b.model_error)?;
+    // The bank as `gough mu bench` runs it.
+    let setup = Setup::car(b.preview);
+    let sens = b.sensors;
     let models = [Model::new(&p, Side::Left)?, Model::new(&p, Side::Right)?];
-    let mut cases = bench::suite();
-    if let Some(n) = a.cases {
+    let mut cases = bench::suite_shifted(b.mu_shift);
+    if let Some(n) = b.cases {
         cases.truncate(n);
     }
-    std::fs::create_dir_all(&a.out).map_err(|e| format!("{}: {e}", a.out.display()))?;
+    std::fs::create_dir_all(&b.out).map_err(|e| format!("{}: {e}", b.out.display()))?;
     let mut md = String::new();
     let _ = writeln!(
         md,
@@ -613,9 +610,9 @@ pub fn run(a: &Config) -> Result<(), String> {
         let mut bank_lat: Vec<f64> = Vec::new();
         let mut any = false;
         let traces: Vec<WheelTrace> = (0..4)
-            .map(|w| bench::measure(&log, w, &sens, a.seed))
+            .map(|w| bench::measure(&log, w, &sens, b.seed))
             .collect();
-        let ests = bench::run_method(Method::Bank, &p, &setup, &traces)?;
+        let ests = bench::run_method(Method::Bank, &est, &setup, &traces)?;
         for (w, ((name, tr), est)) in names.iter().zip(&traces).zip(&ests).enumerate() {
             let lat = |s: usize, e: usize| bench::segment_latency(tr, est, s, e);
             let model = &models[usize::from(!w.is_multiple_of(2))];
@@ -690,10 +687,10 @@ pub fn run(a: &Config) -> Result<(), String> {
             String::new()
         }
     );
-    std::fs::write(a.out.join("bound.md"), &md).map_err(|e| e.to_string())?;
-    std::fs::write(a.out.join("bound.csv"), &csv).map_err(|e| e.to_string())?;
+    std::fs::write(b.out.join("bound.md"), &md).map_err(|e| e.to_string())?;
+    std::fs::write(b.out.join("bound.csv"), &csv).map_err(|e| e.to_string())?;
     print!("{md}");
-    eprintln!("-> {}/bound.md, bound.csv", a.out.display());
+    eprintln!("-> {}/bound.md, bound.csv", b.out.display());
     Ok(())
 }
 

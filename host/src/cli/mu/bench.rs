@@ -163,13 +163,13 @@ impl DemoArgs {
 #[derive(Args)]
 pub struct BoundArgs {
     /// Tyre property file (.tir).
-    #[arg(long, default_value_os_t = bound::Config::default().tir)]
+    #[arg(long, default_value_os_t = bound::Config::default().bench.tir)]
     pub tir: PathBuf,
     /// Output directory (bound.md, bound.csv).
-    #[arg(long, default_value_os_t = bound::Config::default().out)]
+    #[arg(long, default_value_os_t = bound::Config::default().bench.out)]
     pub out: PathBuf,
     /// Noise seed of the bank's run (the bound itself needs no noise).
-    #[arg(long, default_value_t = bound::Config::default().seed)]
+    #[arg(long, default_value_t = bound::Config::default().bench.seed)]
     pub seed: u64,
     /// Only the first N cases of the bench's suite.
     #[arg(long)]
@@ -185,13 +185,17 @@ pub struct BoundArgs {
 }
 
 impl BoundArgs {
-    /// The bound's configuration (the window is checked when it runs, before the tyre is read).
+    /// The bound's configuration: the default bench's rows with this tyre, seed and cases (the
+    /// window is checked when it runs, before the tyre is read).
     pub fn config(&self) -> bound::Config {
         bound::Config {
-            tir: self.tir.clone(),
-            out: self.out.clone(),
-            seed: self.seed,
-            cases: self.cases,
+            bench: bench::Config {
+                tir: self.tir.clone(),
+                out: self.out.clone(),
+                seed: self.seed,
+                cases: self.cases,
+                ..bench::Config::default()
+            },
             ml: self.ml_window.or(self.ml.then_some(bound::ML_WINDOW)),
         }
     }
