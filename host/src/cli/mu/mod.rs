@@ -11,7 +11,7 @@ use std::path::PathBuf;
 /// `gough mu` subcommands.
 #[derive(Subcommand)]
 pub enum MuCmd {
-    /// Run one wheel's friction estimator over a log.
+    /// Run a friction estimator over a log: one wheel's, or (the bank) a car's.
     ///
     /// LOG columns: t,fz,fy,mz required; fx,vx,kappa,alpha,gamma optional (SI, ISO-W); with
     /// `wheel` (0–3 = FL, FR, RL, RR) a car's log. The bank never reads alpha. EST columns:
