@@ -9,7 +9,7 @@
 //! `mu`: f32 with `math::Fast` with feature `fast`, Q31.32 with `FixMath` with feature `fix`).
 use gough::math::{Backend, Float, Libm};
 use gough::mf::{self, Options};
-use gough::mu::bank::{Bank, State};
+use gough::mu::{Bank, State};
 use std::{env, fmt::Write as _, fs, path::PathBuf};
 
 use gough_workloads::filter_point;

@@ -43,8 +43,8 @@
 //! estimate alike; a lone [`Wheel::new`] takes it as its file describes it.
 use crate::math::Backend;
 use crate::mf::{self, Input, Options, Output, Params, Side};
-use crate::mu::bank::{self, Bank, BuildError};
 use crate::mu::preview::{self, Preview};
+use crate::mu::{self as bank, Bank, BuildError};
 use crate::proto::Wheel as WheelId;
 use crate::proto::{AckCode, Estimate, EstimateState, Forces, Measurement, Settings};
 use crate::relax::{self, DampingSpeed, Kinematics, Sigma, Transient};

@@ -632,7 +632,7 @@ typedef struct gough_estimator_t {
 } gough_estimator_t;
 
 /**
- * One sample for the estimator alone (`gough::mu::bank::Sample`). ISO-W at the contact point,
+ * One sample for the estimator alone (`gough::mu::Sample`). ISO-W at the contact point,
  * SI units; the optional fields count only with their `GOUGH_HAS_*` bit in `present`
  * (`GOUGH_HAS_FX`, `GOUGH_HAS_KAPPA`, `GOUGH_HAS_VX`, `GOUGH_HAS_GAMMA`). Never α.
  */

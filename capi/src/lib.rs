@@ -29,8 +29,8 @@ use core::mem::{align_of, size_of};
 use core::ptr;
 use core_gough::math::{Fast, Libm};
 use core_gough::mf::{self, EvalError, Input, Options, Params, Side};
-use core_gough::mu::bank::{self, Bank};
 use core_gough::mu::preview::{self, Preview};
+use core_gough::mu::{self, Bank};
 use core_gough::proto::{self, Feed, Msg, Mtu, Reassembler, Segmenter, Settings, MSG_BUF};
 use core_gough::wheel::Wheel;
 
@@ -842,7 +842,7 @@ pub unsafe extern "C" fn gough_wheel_step(
 // Estimator alone
 // ---------------------------------------------------------------------------------------------
 
-/// One sample for the estimator alone (`gough::mu::bank::Sample`). ISO-W at the contact point,
+/// One sample for the estimator alone (`gough::mu::Sample`). ISO-W at the contact point,
 /// SI units; the optional fields count only with their `GOUGH_HAS_*` bit in `present`
 /// (`GOUGH_HAS_FX`, `GOUGH_HAS_KAPPA`, `GOUGH_HAS_VX`, `GOUGH_HAS_GAMMA`). Never α.
 #[repr(C)]
@@ -869,9 +869,9 @@ pub struct gough_sample_t {
 }
 
 /// The estimator's sample of C's, or `GOUGH_E_NONFINITE`.
-fn sample(s: &gough_sample_t) -> Result<bank::Sample<f32>, i32> {
+fn sample(s: &gough_sample_t) -> Result<mu::Sample<f32>, i32> {
     let p = s.present;
-    let sample = bank::Sample {
+    let sample = mu::Sample {
         t_us: s.t_us,
         fz: s.fz,
         fy: s.fy,
@@ -920,7 +920,7 @@ pub unsafe extern "C" fn gough_estimator_init_on(
         }
         // SAFETY: non-null; unmark, so that a failure leaves it unusable.
         unsafe { e.cast::<u32>().write(0) };
-        let bank = Bank::new::<Fast>(&params.p32, mounted, bank::Config::default())
+        let bank = Bank::new::<Fast>(&params.p32, mounted, mu::Config::default())
             .map_err(|_| GOUGH_E_MODEL)?;
         // SAFETY: non-null, GOUGH_ESTIMATOR_SIZE bytes aligned to 8.
         unsafe { put(e, MAGIC_EST, EstIn { bank, params }) };
@@ -946,9 +946,9 @@ pub unsafe extern "C" fn gough_estimator_update(
         let sample = sample(&unsafe { s.read() })?;
         let r = est.bank.update::<Fast>(&est.params.p32, &sample);
         let state = match r.state {
-            bank::State::Identifiable => GOUGH_STATE_IDENTIFIABLE,
-            bank::State::NotIdentifiable => GOUGH_STATE_NOT_IDENTIFIABLE,
-            bank::State::Fallback => GOUGH_STATE_FALLBACK,
+            mu::State::Identifiable => GOUGH_STATE_IDENTIFIABLE,
+            mu::State::NotIdentifiable => GOUGH_STATE_NOT_IDENTIFIABLE,
+            mu::State::Fallback => GOUGH_STATE_FALLBACK,
         };
         // SAFETY: non-null, the caller's output.
         unsafe {
@@ -1662,7 +1662,7 @@ mod tests {
         let mut ice = p32.clone();
         ice.lmux *= 0.3;
         ice.lmuy *= 0.3;
-        let cfg = bank::Config::default();
+        let cfg = mu::Config::default();
         let mut banks = [
             Bank::new::<Fast>(&p32, None, cfg).unwrap(),
             Bank::new::<Fast>(&p32, None, cfg).unwrap(),

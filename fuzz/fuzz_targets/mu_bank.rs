@@ -10,7 +10,7 @@
 
 use gough::math::{Fast, Libm};
 use gough::mf::{Params, Side};
-use gough::mu::bank::{Bank, Config, Sample, CELLS};
+use gough::mu::{Bank, Config, Reading, Sample, CELLS};
 use gough::mu::preview::{self, Preview};
 use libfuzzer_sys::fuzz_target;
 use std::sync::OnceLock;
@@ -66,7 +66,9 @@ fuzz_target!(|data: &[u8]| {
         pv.rear::<Fast>(&mut e32, &s);
         if flags & 16 != 0 {
             let profile: [f32; CELLS] = core::array::from_fn(|k| v[k % v.len()]);
-            e32.preview::<Fast>(&profile, v[6]);
+            if let Some(r) = Reading::new(profile, v[6]) {
+                e32.preview::<Fast>(r);
+            }
         }
         let e = e32.update::<Fast>(p32, &s);
         assert!(e.mu.is_finite() && e.sigma.is_finite() && e.sigma >= 0.0, "{e:?}");

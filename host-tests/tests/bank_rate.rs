@@ -8,7 +8,7 @@
 use gough::fixed::{Fix, FixMath};
 use gough::math::{Backend, Fast, Float};
 use gough::mf::Params;
-use gough::mu::bank::{self, Bank, State};
+use gough::mu::{self, Bank, State};
 use gough_workloads::slalom::Slalom;
 use gough_workloads::streams::{bank_sample, config, stream, DECIMATE, SAMPLES};
 use std::path::Path;
@@ -23,7 +23,7 @@ fn tyre() -> Params<f64> {
 /// (μ, identifiable) after every sample of `samples`, with bank settings `cfg`.
 fn run<F: Float, M: Backend<F>>(
     p: &Params<f64>,
-    cfg: bank::Config<F>,
+    cfg: mu::Config<F>,
     samples: impl Iterator<Item = gough::proto::Measurement>,
 ) -> Vec<(f64, bool)> {
     let pf = p.cast::<F>();
@@ -103,14 +103,14 @@ const CASES: [(f32, f32, &str); 4] = [
 fn batch_1_at_100_hz_is_the_1_khz_estimator() {
     let p = tyre();
     let p32 = p.cast::<f32>();
-    let mu0 = bank::mu_y0::<f64, gough::math::Libm>(&p).unwrap();
+    let mu0 = mu::mu_y0::<f64, gough::math::Libm>(&p).unwrap();
     println!("bank f32 math::Fast, {SAMPLES} instants 10 ms apart: batch 1 at 100 Hz (a) against batch 10 at 1 kHz (b)");
     println!("| stream | both identifiable | abs(Δμ) median / p95 / max | share > 0.05 | identifiable a / b | abs(μ − λμ·μy0) p95 a / b | max a / b |");
     for (mu, camber, name) in CASES {
         let a = run::<f32, Fast>(&p, config(), stream(&p32, mu, camber));
         let fine = run::<f32, Fast>(
             &p,
-            bank::Config::default(),
+            mu::Config::default(),
             Slalom::new(&p32, mu, camber).take(SAMPLES * DECIMATE),
         );
         let b: Vec<_> = fine.iter().step_by(DECIMATE).copied().collect();
@@ -163,7 +163,7 @@ fn batch_1_at_100_hz_is_the_1_khz_estimator() {
 fn fixed_point_bank_at_100_hz() {
     let p = tyre();
     let p32 = p.cast::<f32>();
-    let mu0 = bank::mu_y0::<f64, gough::math::Libm>(&p).unwrap();
+    let mu0 = mu::mu_y0::<f64, gough::math::Libm>(&p).unwrap();
     println!("bank at 100 Hz (batch 1), {SAMPLES} samples: Q31.32 Fix + FixMath (a) against f32 math::Fast (b)");
     println!("| stream | both identifiable | abs(Δμ) median / p95 / max | share > 0.05 | identifiable a / b | abs(μ − λμ·μy0) p95 a / b | max a / b |");
     for (mu, camber, name) in CASES {

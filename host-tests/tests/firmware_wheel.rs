@@ -2,7 +2,7 @@
 //! against the core directly — the replay test only shows that device and host agree.
 use gough::math::Fast;
 use gough::mf::{self, Input, Options, Params, Side};
-use gough::mu::bank::{self, Bank, BuildError};
+use gough::mu::{self, Bank, BuildError};
 use gough::proto::{AckCode, EstimateState, Measurement, Settings, Wheel as WheelId};
 use gough::wheel::{effective_radius, estimator_config, Wheel};
 
@@ -202,8 +202,8 @@ fn slalom(p: &Params<f32>, t0: u32, n: u32) -> Vec<Measurement> {
 
 /// The bank's sample of a measurement, written out here (not through `wheel::sample`): the
 /// measured Fz, Fy, Mz, Fx, κ, Vx, γ at the measurement's own timestamp.
-fn bank_sample(m: &Measurement) -> bank::Sample<f32> {
-    bank::Sample {
+fn bank_sample(m: &Measurement) -> mu::Sample<f32> {
+    mu::Sample {
         t_us: m.t_us,
         fz: m.fz,
         fy: m.fy,
@@ -244,9 +244,9 @@ fn the_estimate_is_the_bank_on_the_measured_forces() {
             m.t_us
         );
         let want = match d.state {
-            bank::State::Identifiable => EstimateState::Identifiable,
-            bank::State::NotIdentifiable => EstimateState::NotIdentifiable,
-            bank::State::Fallback => EstimateState::Fallback,
+            mu::State::Identifiable => EstimateState::Identifiable,
+            mu::State::NotIdentifiable => EstimateState::NotIdentifiable,
+            mu::State::Fallback => EstimateState::Fallback,
         };
         assert_eq!(e.state, want);
         assert_eq!((e.wheel, e.t_us), (m.wheel, m.t_us));

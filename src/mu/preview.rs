@@ -1,5 +1,5 @@
 //! Front-to-rear preview: what a front wheel read of the road, handed to the rear wheel on its
-//! side when the rear gets there.
+//! side when the rear gets there, and mixed into the rear's likelihoods.
 //!
 //! A rear wheel runs, a wheelbase later, over the road its front wheel has just read. When the
 //! front wheel's estimator makes a **new identification** — its first, its first after the
@@ -11,11 +11,13 @@
 //! the new surface, which the mixture would otherwise partly discard. Every
 //! rear sample rolls the queued readings on by the distance the rear wheel covered since its
 //! last sample (Vx·Δt, with the sign of Vx: reversing moves the place away again); a reading
-//! that has arrived is handed to the rear estimator ([`Bank::preview`]) with the weight
-//! `Config::weight`, the probability that the rear wheel runs on what the front read. The rear's
-//! likelihoods become the mixture (1 − w)·e^−ℓ + w·e^−ℓ′: the old surface is no longer taken
-//! for granted, and the rear's own batches confirm or overrule the reading within a few batches
-//! (a rear wheel that tracks off the front's path, a patch that ends between the axles).
+//! that has arrived is handed to the rear estimator ([`Bank::preview`]) as a [`Reading`] with
+//! the weight `Config::weight`, the probability w that the rear wheel runs on what the front
+//! read. The rear's likelihoods become the mixture (1 − w)·e^−ℓ + w·e^−ℓ′ ([`Reading`]'s
+//! mixture, in a slot of the rear bank's per-sample work): the old surface is no
+//! longer taken for granted, and the rear's own batches confirm or overrule the reading within a
+//! few batches (a rear wheel that tracks off the front's path, a patch that ends between the
+//! axles). A held value the reading excludes is dropped.
 //!
 //! One [`Preview`] per side (front left → rear left, front right → rear right), never across:
 //! on a μ-split the sides differ. Without a measured Vx the distance is unknown and nothing is
@@ -34,9 +36,62 @@
 //! turn it runs inside the front's track (off-tracking ≈ L²/2R, 0.1 m at R = 40 m), on a
 //! lane change slightly off it. The rear's own evidence decides then.
 
+use super::bank::Bank;
+use super::batch::{Sample, MAX_GAP_US};
+use super::config::CELLS;
+use super::estimate::{Estimate, State};
+use super::likelihood::Likelihood;
 use crate::math::{Backend, Float};
 use crate::mf::Params;
-use crate::mu::bank::{Bank, Estimate, Sample, State, CELLS, MAX_GAP_US};
+
+/// A reading of the surface a wheel is running onto: the likelihood profile ℓ′ another wheel's
+/// bank had where it ran over the same place ([`Bank::profile`]), with the probability p that
+/// it applies here.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Reading<F> {
+    profile: [F; CELLS],
+    weight: F,
+}
+
+impl<F: Float> Reading<F> {
+    /// A reading of `profile` with weight `weight` (0 < p < 1); `None` when the profile is not
+    /// finite and non-negative or the weight is outside (0, 1).
+    pub fn new(profile: [F; CELLS], weight: F) -> Option<Self> {
+        let ok = profile.iter().all(|x| x.is_finite() && *x >= F::ZERO);
+        (ok && weight > F::ZERO && weight < F::ONE).then_some(Reading { profile, weight })
+    }
+
+    /// The profile ℓ′ per cell.
+    pub fn profile(&self) -> &[F; CELLS] {
+        &self.profile
+    }
+
+    /// The probability p that it applies here.
+    pub fn weight(&self) -> F {
+        self.weight
+    }
+
+    /// Mixes the reading into the likelihoods `l`: each cell's ℓ becomes
+    /// −ln((1 − p)·e^−(ℓ − min ℓ) + p·e^−ℓ′) — a switch of surface this wheel is told of
+    /// rather than one it must find alone. The mixture counts as evidence.
+    pub(crate) fn mix_into<M: Backend<F>>(&self, l: &mut Likelihood<F>) {
+        let lo = l.min();
+        let p = self.weight;
+        let (la, lb) = (M::ln(F::ONE - p), M::ln(p));
+        for (c, l2) in l.nll.iter_mut().zip(self.profile.iter()) {
+            let a = la - (*c - lo);
+            let b = lb - *l2;
+            let m = a.max(b);
+            *c = -(m + M::ln(F::ONE + M::exp(-(a - b).abs())));
+        }
+        l.evidence = true;
+    }
+
+    /// Whether the reading excludes cell `k`: its ℓ′ there is above `limit`.
+    pub(crate) fn excludes(&self, k: usize, limit: F) -> bool {
+        self.profile.get(k).is_some_and(|l| *l > limit)
+    }
+}
 
 /// Readings on their way from a front wheel to the rear wheel behind it.
 pub const QUEUE: usize = 4;
@@ -77,7 +132,7 @@ impl core::fmt::Display for PreviewError {
 
 /// A reading on its way: the distance still to roll \[m\] and the front's profile.
 #[derive(Debug, Clone, Copy)]
-struct Reading<F> {
+struct Queued<F> {
     left: F,
     profile: [F; CELLS],
 }
@@ -87,7 +142,7 @@ struct Reading<F> {
 #[derive(Debug, Clone)]
 pub struct Preview<F> {
     cfg: Config<F>,
-    queue: heapless::Deque<Reading<F>, QUEUE>,
+    queue: heapless::Deque<Queued<F>, QUEUE>,
     /// Whether the front wheel's estimate has been identifiable since it last fell back.
     identified: bool,
     /// The rear wheel's last timestamp \[µs\].
@@ -160,7 +215,7 @@ impl<F: Float> Preview<F> {
                     };
                     // (Never ahead of a reading already on its way: the queue stays in order.)
                     let after = self.queue.back().map_or(F::ZERO, |r| r.left);
-                    let r = Reading {
+                    let r = Queued {
                         left: (self.cfg.wheelbase - behind).max(after),
                         profile: front.profile(),
                     };
@@ -197,7 +252,10 @@ impl<F: Float> Preview<F> {
         // work, `Bank::preview`): others that have arrived wait here, in order.
         if let Some(r) = self.queue.front() {
             if r.left <= F::ZERO && !rear.previewing() {
-                rear.preview::<M>(&r.profile, self.cfg.weight);
+                // (A profile that is not finite and non-negative is no reading: dropped.)
+                if let Some(reading) = Reading::new(r.profile, self.cfg.weight) {
+                    rear.preview::<M>(reading);
+                }
                 self.handed = self.handed.wrapping_add(1);
                 self.queue.pop_front();
             }
@@ -242,7 +300,7 @@ mod tests {
     use super::*;
     use crate::math::Libm;
     use crate::mu::bank::tests::{noisy, slips_stream, tyre};
-    use crate::mu::bank::Config as BankConfig;
+    use crate::mu::Config as BankConfig;
     extern crate std;
     use std::vec::Vec;
 
@@ -511,8 +569,9 @@ mod tests {
                 f.update::<Libm>(&p, &s);
                 pv.front(&f);
                 pv.rear::<Libm>(&mut r, &s);
-                if i % 50 == 0 {
-                    r.preview::<Libm>(&profile, weight);
+                // (Raw floats: most are no reading, and are ignored.)
+                if let Some(reading) = Reading::new(profile, weight).filter(|_| i % 50 == 0) {
+                    r.preview::<Libm>(reading);
                 }
                 let e = r.update::<Libm>(&p, &s);
                 proptest::prop_assert!(e.mu.is_finite() && e.sigma.is_finite() && e.sigma >= 0.0 && e.mu_min.is_finite(), "{e:?}");

@@ -8,7 +8,7 @@
 
 use gough::math::Float;
 use gough::mf::Params;
-use gough::mu::bank::{Config, Estimate, Sample};
+use gough::mu::{Config, Estimate, Sample};
 use gough::proto::Measurement;
 
 use crate::slalom::Slalom;

@@ -234,7 +234,7 @@ fn bank<F: Float + Feed, M: Backend<F>>(
     per_count: f64,
     overhead: u64,
 ) -> bool {
-    use gough::mu::bank::{Bank, State};
+    use gough::mu::{Bank, State};
     let p = params::<F>();
     let p32 = params::<f32>();
     let mut ok = true;

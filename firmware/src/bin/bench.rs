@@ -22,7 +22,7 @@ use cortex_m_rt::{entry, exception};
 use cortex_m_semihosting::hprintln;
 use gough::math::{Backend, Libm};
 use gough::mf::{self, Input, Options, Params};
-use gough::mu::bank::{self, Bank, State};
+use gough::mu::{self, Bank, Reading, State};
 use gough::proto::{EstimateState, Measurement, Settings};
 use gough::wheel::Wheel;
 use gough_firmware::app::{self, App};
@@ -373,7 +373,7 @@ fn bank_figures<M: Backend<f32>>(
     p: &Params<f32>,
     stream: &[Measurement],
 ) {
-    if Bank::new::<M>(p, None, bank::Config::default()).is_err() {
+    if Bank::new::<M>(p, None, mu::Config::default()).is_err() {
         hprintln!("bank: no friction in the tyre file");
         return;
     }
@@ -381,7 +381,7 @@ fn bank_figures<M: Backend<f32>>(
         id,
         clock,
         stream,
-        || Bank::new::<M>(p, None, bank::Config::default()).ok(),
+        || Bank::new::<M>(p, None, mu::Config::default()).ok(),
         |est, m| {
             let Some(est) = est.as_mut() else {
                 return State::Fallback;
@@ -399,22 +399,23 @@ fn bank_figures<M: Backend<f32>>(
     );
     // A rear wheel's bank told by the preview (`Bank::preview`) every 7th sample — far more
     // often than a front wheel identifies anew, and at every phase of a batch's fit: the
-    // mixture takes a slot of a sample's work (`bank::SLOTS`), so the worst sample stays the
+    // mixture takes a slot of a sample's work (`mu::SLOTS`), so the worst sample stays the
     // bank's own. The reading is the rear's own profile one sample before (what a front
     // wheel on the same road reports), taken and handed inside the timed step.
     let e = per_sample(
         id + 1,
         clock,
         stream,
-        || Bank::new::<M>(p, None, bank::Config::default()).ok().map(|b| (b, 0u32)),
+        || Bank::new::<M>(p, None, mu::Config::default()).ok().map(|b| (b, 0u32)),
         |st, m| {
             let Some((est, i)) = st.as_mut() else {
                 return State::Fallback;
             };
             *i = i.wrapping_add(1);
             if *i % 7 == 0 {
-                let profile = est.profile();
-                est.preview::<M>(&profile, 0.9);
+                if let Some(r) = Reading::new(est.profile(), 0.9) {
+                    est.preview::<M>(r);
+                }
             }
             est.update::<M>(p, &gough::wheel::sample::<M>(p, m)).state
         },
@@ -587,13 +588,13 @@ fn preview_figures<M: Backend<f32>>(
     stream: &[Measurement],
 ) {
     use gough::mu::preview::{self, Preview};
-    let Ok(mut b) = Bank::new::<M>(p, None, bank::Config::default()) else {
+    let Ok(mut b) = Bank::new::<M>(p, None, mu::Config::default()) else {
         return;
     };
     let Ok(mut pv) = Preview::new(preview::Config::with_wheelbase(2.9f32)) else {
         return;
     };
-    let mut profile = [0f32; bank::CELLS];
+    let mut profile = [0f32; mu::CELLS];
     for (k, x) in profile.iter_mut().enumerate() {
         *x = 0.5 * (k as f32 - 4.0) * (k as f32 - 4.0);
     }
@@ -614,7 +615,7 @@ fn preview_figures<M: Backend<f32>>(
     };
     // Handed over, then mixed in by the next update's work (a sample with no contact, so
     // that the update does nothing else).
-    let none = bank::Sample {
+    let none = mu::Sample {
         t_us: 0,
         fz: 0.0,
         fy: 0.0,
@@ -626,7 +627,9 @@ fn preview_figures<M: Backend<f32>>(
     };
     let (mean, worst) = timed(&mut |i| {
         let w = if i % 2 == 0 { 0.9 } else { 0.5 };
-        b.preview::<M>(core::hint::black_box(&profile), w);
+        if let Some(r) = Reading::new(core::hint::black_box(profile), w) {
+            b.preview::<M>(r);
+        }
         b.update::<M>(p, core::hint::black_box(&none));
     });
     hprintln!(
@@ -637,7 +640,7 @@ fn preview_figures<M: Backend<f32>>(
         size_of::<Preview<f32>>()
     );
     // Readings on their way: a front wheel's identifications over the last stream.
-    if let Ok(mut f) = Bank::new::<M>(p, None, bank::Config::default()) {
+    if let Ok(mut f) = Bank::new::<M>(p, None, mu::Config::default()) {
         for m in stream {
             f.update::<M>(p, &gough::wheel::sample::<M>(p, m));
             pv.front(&f);
@@ -645,7 +648,7 @@ fn preview_figures<M: Backend<f32>>(
     }
     let pending = pv.pending();
     let (mean, worst) = timed(&mut |i| {
-        let s = bank::Sample {
+        let s = mu::Sample {
             t_us: 1000 * i as u32,
             fz: 4000.0,
             fy: 0.0,

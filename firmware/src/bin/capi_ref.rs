@@ -17,7 +17,7 @@ use cortex_m::peripheral::{syst::SystClkSource, SYST};
 use cortex_m_rt::{entry, exception};
 use cortex_m_semihosting::hprintln;
 use gough::mf::{self, Input, Options};
-use gough::mu::bank::{self, Bank};
+use gough::mu::{self, Bank};
 use gough::proto::{self, AckCode, Forces, Measurement, Msg, Mtu, Segmenter, Settings};
 use gough::wheel::Wheel;
 use gough_firmware::app::Math;
@@ -224,14 +224,14 @@ fn main() -> ! {
     }
 
     // The estimator alone over wheel 0's samples.
-    let Ok(mut bank) = Bank::new::<Math>(p, None, bank::Config::default()) else {
+    let Ok(mut bank) = Bank::new::<Math>(p, None, mu::Config::default()) else {
         mps2::exit(false)
     };
     for (i, m) in stream.iter().enumerate() {
         if m.wheel.index() != 0 {
             continue;
         }
-        let s = bank::Sample {
+        let s = mu::Sample {
             t_us: m.t_us,
             fz: m.fz,
             fy: m.fy,
@@ -243,9 +243,9 @@ fn main() -> ! {
         };
         let e = bank.update::<Math>(p, &s);
         let state = match e.state {
-            bank::State::Identifiable => 0,
-            bank::State::NotIdentifiable => 1,
-            bank::State::Fallback => 2,
+            mu::State::Identifiable => 0,
+            mu::State::NotIdentifiable => 1,
+            mu::State::Fallback => 2,
         };
         hprintln!(
             "estimator row {}: rc 0 mu {:08x} sigma {:08x} mu_min {:08x} state {} flags {}",

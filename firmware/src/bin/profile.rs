@@ -30,7 +30,7 @@ use gough::math::Fast;
 use gough::mf::prepared::{Operating, Prepared};
 use gough::mf::Params;
 use gough::mf::{self, Input, Options};
-use gough::mu::bank::{self, Bank};
+use gough::mu::{self, Bank};
 use gough::proto::{Measurement, Settings};
 use gough_firmware::mps2;
 use gough_workloads::marks::{bench_start, bench_stop};
@@ -126,7 +126,7 @@ fn estimator_stream(id: u32, mut est: Bank<f32>, p: &Params<f32>, stream: &[Meas
     for m in stream {
         let s = gough::wheel::sample::<Fast>(p, m);
         let e = est.update::<Fast>(p, core::hint::black_box(&s));
-        seen += u32::from(e.state == bank::State::Identifiable);
+        seen += u32::from(e.state == mu::State::Identifiable);
     }
     bench_stop(id);
     seen
