@@ -46,7 +46,7 @@ use crate::mf::{self, Input, Options, Output, Params, Side};
 use crate::mu::preview::{self, Preview};
 use crate::mu::{self as bank, Bank, BuildError};
 use crate::proto::Wheel as WheelId;
-use crate::proto::{AckCode, Estimate, EstimateState, Forces, Measurement, Settings};
+use crate::proto::{AckCode, Estimate, Forces, Measurement, Settings};
 use crate::relax::{self, DampingSpeed, Kinematics, Sigma, Transient};
 
 /// Longest step the filter takes \[µs\] (`relax::MAX_DT`); a longer gap restarts it.
@@ -370,17 +370,12 @@ impl Wheel {
 
 /// The bank's estimate after measurement `m` as the protocol's.
 fn estimate_of(m: &Measurement, e: &bank::Estimate<f32>) -> Estimate {
-    let state = match e.state {
-        bank::State::Identifiable => EstimateState::Identifiable,
-        bank::State::NotIdentifiable => EstimateState::NotIdentifiable,
-        bank::State::Fallback => EstimateState::Fallback,
-    };
     Estimate {
         wheel: m.wheel,
         t_us: m.t_us,
         mu: e.mu,
         sigma: e.sigma,
-        state,
+        state: e.state,
         mu_min: e.mu_min,
         change: e.change,
     }

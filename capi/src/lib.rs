@@ -700,11 +700,11 @@ fn measurement(m: &gough_measurement_t) -> Result<proto::Measurement, i32> {
     Ok(r)
 }
 
-fn state_code(s: proto::EstimateState) -> i32 {
+fn state_code(s: mu::State) -> i32 {
     match s {
-        proto::EstimateState::Identifiable => GOUGH_STATE_IDENTIFIABLE,
-        proto::EstimateState::NotIdentifiable => GOUGH_STATE_NOT_IDENTIFIABLE,
-        proto::EstimateState::Fallback => GOUGH_STATE_FALLBACK,
+        mu::State::Identifiable => GOUGH_STATE_IDENTIFIABLE,
+        mu::State::NotIdentifiable => GOUGH_STATE_NOT_IDENTIFIABLE,
+        mu::State::Fallback => GOUGH_STATE_FALLBACK,
     }
 }
 
@@ -945,11 +945,7 @@ pub unsafe extern "C" fn gough_estimator_update(
         // SAFETY: non-null, the caller's sample.
         let sample = sample(&unsafe { s.read() })?;
         let r = est.bank.update::<Fast>(&est.params.p32, &sample);
-        let state = match r.state {
-            mu::State::Identifiable => GOUGH_STATE_IDENTIFIABLE,
-            mu::State::NotIdentifiable => GOUGH_STATE_NOT_IDENTIFIABLE,
-            mu::State::Fallback => GOUGH_STATE_FALLBACK,
-        };
+        let state = state_code(r.state);
         // SAFETY: non-null, the caller's output.
         unsafe {
             out.write(gough_estimate_t {
@@ -1438,9 +1434,9 @@ fn from_c(m: &gough_msg_t) -> Result<Msg, i32> {
                 mu: e.mu,
                 sigma: e.sigma,
                 state: match e.state {
-                    GOUGH_STATE_IDENTIFIABLE => proto::EstimateState::Identifiable,
-                    GOUGH_STATE_NOT_IDENTIFIABLE => proto::EstimateState::NotIdentifiable,
-                    GOUGH_STATE_FALLBACK => proto::EstimateState::Fallback,
+                    GOUGH_STATE_IDENTIFIABLE => mu::State::Identifiable,
+                    GOUGH_STATE_NOT_IDENTIFIABLE => mu::State::NotIdentifiable,
+                    GOUGH_STATE_FALLBACK => mu::State::Fallback,
                     _ => return Err(GOUGH_E_ARG),
                 },
                 mu_min: e.mu_min,

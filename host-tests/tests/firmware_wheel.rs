@@ -3,7 +3,7 @@
 use gough::math::Fast;
 use gough::mf::{self, Input, Options, Params, Side};
 use gough::mu::{self, Bank, BuildError};
-use gough::proto::{AckCode, EstimateState, Measurement, Settings, Wheel as WheelId};
+use gough::proto::{AckCode, Measurement, Settings, Wheel as WheelId};
 use gough::wheel::{effective_radius, estimator_config, Wheel};
 
 fn tyre() -> Params<f32> {
@@ -243,15 +243,10 @@ fn the_estimate_is_the_bank_on_the_measured_forces() {
             "t_us {}",
             m.t_us
         );
-        let want = match d.state {
-            mu::State::Identifiable => EstimateState::Identifiable,
-            mu::State::NotIdentifiable => EstimateState::NotIdentifiable,
-            mu::State::Fallback => EstimateState::Fallback,
-        };
-        assert_eq!(e.state, want);
+        assert_eq!(e.state, d.state);
         assert_eq!((e.wheel, e.t_us), (m.wheel, m.t_us));
-        identifiable += usize::from(e.state == EstimateState::Identifiable);
-        if e.state == EstimateState::Fallback {
+        identifiable += usize::from(e.state == mu::State::Identifiable);
+        if e.state == mu::State::Fallback {
             fallback += 1;
             assert_eq!(e.mu, settings.fallback_mu, "the prior is fallback_mu");
         }
@@ -289,7 +284,7 @@ fn the_estimator_never_reads_alpha_nor_the_model() {
     let none = run(&|m| Measurement { alpha: None, ..*m });
     assert_eq!(same, tripled);
     assert_eq!(same, none);
-    assert!(same.iter().any(|e| e.3 == EstimateState::Identifiable));
+    assert!(same.iter().any(|e| e.3 == mu::State::Identifiable));
 }
 
 #[test]
@@ -341,7 +336,7 @@ fn the_estimator_runs_on_through_a_timestamp_wrap() {
     // The same stream with its u32 clock wrapping in the middle: the same estimates.
     let a = run(0);
     assert_eq!(a, run(u32::MAX - 999_999));
-    assert!(a.iter().any(|e| e.3 == EstimateState::Identifiable));
+    assert!(a.iter().any(|e| e.3 == mu::State::Identifiable));
 }
 
 #[test]
@@ -496,7 +491,7 @@ fn the_car_hands_what_a_front_wheel_read_to_the_rear_wheel_behind_it() {
         rear_differs += usize::from(a.mu != b.mu || a.state != b.state);
         let mu = if m.t_us >= 1_500_000 + lag { 0.3 } else { 1.0 };
         assert!(
-            a.state != EstimateState::Identifiable || (a.mu - mu).abs() <= 0.1,
+            a.state != mu::State::Identifiable || (a.mu - mu).abs() <= 0.1,
             "wheel {w}, t_us {}: {a:?}",
             m.t_us
         );

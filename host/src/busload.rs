@@ -17,8 +17,8 @@
 //! other traffic of a vehicle bus and for retransmissions after errors).
 
 use gough::proto::{
-    CompactBatch, CompactMeasurement, CompactResults, CompactWheelResult, Estimate, EstimateState,
-    Forces, Measurement, Msg, Mtu, Segmenter, Wheel,
+    CompactBatch, CompactMeasurement, CompactResults, CompactWheelResult, Estimate, Forces,
+    Measurement, Msg, Mtu, Segmenter, Wheel,
 };
 use std::fmt::Write as _;
 
@@ -137,7 +137,7 @@ pub fn results() -> [Msg; 2] {
             t_us: 1_000_000,
             mu: 0.9,
             sigma: 0.05,
-            state: EstimateState::Identifiable,
+            state: gough::mu::State::Identifiable,
             mu_min: 0.75,
             change: false,
         }),

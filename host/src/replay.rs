@@ -16,7 +16,7 @@ use crate::device::Device;
 use gough::math::{Backend, Fast, Libm};
 use gough::mf::Params;
 use gough::proto::{
-    AckCode, Command, Estimate, EstimateState, Forces, Measurement, Msg, MsgType, Settings, Wheel,
+    AckCode, Command, Estimate, Forces, Measurement, Msg, MsgType, Settings, Wheel,
 };
 use gough::wheel;
 use std::collections::VecDeque;
@@ -299,15 +299,6 @@ pub fn compare(host: &[Reply], got: &[Reply]) -> Result<Worst, String> {
     Ok(w)
 }
 
-/// Name of an estimator state as in the RESULTS file (and `gough mu estimate`).
-pub fn state_name(s: EstimateState) -> &'static str {
-    match s {
-        EstimateState::Identifiable => "identifiable",
-        EstimateState::NotIdentifiable => "not_identifiable",
-        EstimateState::Fallback => "fallback",
-    }
-}
-
 /// Writes the RESULTS file (atomically: temporary file, then rename).
 pub fn write_results(path: &Path, log: &[Measurement], got: &[Reply]) -> std::io::Result<()> {
     let mut s = String::new();
@@ -333,7 +324,7 @@ pub fn write_results(path: &Path, log: &[Measurement], got: &[Reply]) -> std::io
                 "{:e},{:e},{},{:e},{}",
                 e.mu,
                 e.sigma,
-                state_name(e.state),
+                e.state.name(),
                 e.mu_min,
                 u8::from(e.change)
             ),

@@ -9,6 +9,7 @@
 use super::crc::crc32;
 use super::{Error, PROTO_VERSION};
 use crate::mf::{Input, Params, Side};
+use crate::mu::State;
 use core::fmt;
 use postcard::experimental::max_size::MaxSize;
 use serde::de::DeserializeOwned;
@@ -585,11 +586,11 @@ impl CompactWheelResult {
         (self.mu_min != Self::NA_U8).then(|| f32::from(self.mu_min) * Self::MU_MIN)
     }
     /// The estimate's state (`None`: no estimate).
-    pub fn state(&self) -> Option<EstimateState> {
+    pub fn state(&self) -> Option<State> {
         match self.status & Self::STATE_MASK {
-            0 => Some(EstimateState::Identifiable),
-            1 => Some(EstimateState::NotIdentifiable),
-            2 => Some(EstimateState::Fallback),
+            0 => Some(State::Identifiable),
+            1 => Some(State::NotIdentifiable),
+            2 => Some(State::Fallback),
             _ => None,
         }
     }
@@ -739,7 +740,7 @@ pub struct ParamCommit {
 pub struct Settings {
     /// Clip inputs to the `.tir` ranges (`mf::Options::limits`).
     pub limits: bool,
-    /// Friction μ \[-\] reported in [`EstimateState::Fallback`] (on the `.tir` surface's scale);
+    /// Friction μ \[-\] reported in [`State::Fallback`] (on the `.tir` surface's scale);
     /// the bank's prior. A value that is not a positive number keeps the bank's default prior.
     pub fallback_mu: f32,
     /// The car's wheelbase \[m\] for the front-to-rear preview (`mu::preview`: each rear wheel's
@@ -808,23 +809,6 @@ pub struct Forces {
     pub flags: u16,
 }
 
-/// State of a friction estimate: whether μ is usable now (the estimator's `mu::bank::State`).
-#[derive(Serialize, Deserialize, MaxSize, Debug, Clone, Copy, PartialEq, Eq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum EstimateState {
-    /// μ is within ±0.1 at 95 % by the estimator's own account: usable now. A value may be
-    /// held through a zero crossing of the force; without excitation it ages with time and
-    /// distance rolled and falls back to `NotIdentifiable`.
-    Identifiable,
-    /// Some surfaces are excluded but not enough for the above: [`Estimate::mu_min`] bounds μ
-    /// from below; μ is the last identifiable value while the evidence has not turned against
-    /// it, else the most likely surface — not to be relied on.
-    NotIdentifiable,
-    /// No surface can be excluded (no excitation yet, or the evidence aged out): μ is the prior
-    /// [`Settings::fallback_mu`].
-    Fallback,
-}
-
 /// Road friction estimate of one wheel, sent after each measurement once the estimator runs.
 ///
 /// Fields after `state` were added in protocol v2 (`mu_min`, `change`).
@@ -840,8 +824,9 @@ pub struct Estimate {
     pub mu: f32,
     /// Standard deviation of μ \[-\] by the estimator's own account (the confidence).
     pub sigma: f32,
-    /// How to read μ.
-    pub state: EstimateState,
+    /// How to read μ (the estimator's [`State`], one byte: 0, 1, 2); in `Fallback` μ is the
+    /// prior [`Settings::fallback_mu`].
+    pub state: State,
     /// The lowest μ \[-\] the evidence has not excluded: a lower bound on the road's friction a
     /// controller may rely on in any state (the lowest hypothesis, 0.1, when nothing is
     /// excluded).

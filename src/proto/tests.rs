@@ -2,6 +2,7 @@
 //! size bounds, and the reassembler against lost, duplicated, reordered, truncated and
 //! garbage frames.
 use super::*;
+use crate::mu::State;
 use proptest::prelude::*;
 use std::vec::Vec;
 use std::{format, vec};
@@ -93,7 +94,7 @@ pub(crate) fn largest() -> Vec<Msg> {
             t_us: u32::MAX,
             mu: 1.0,
             sigma: 0.1,
-            state: EstimateState::Fallback,
+            state: State::Fallback,
             mu_min: 0.1,
             change: true,
         }),
@@ -426,7 +427,7 @@ fn compact_results() {
         t_us: 9,
         mu: 0.91234,
         sigma: 0.04321,
-        state: EstimateState::NotIdentifiable,
+        state: State::NotIdentifiable,
         mu_min: 0.3,
         change: true,
     };
@@ -436,7 +437,7 @@ fn compact_results() {
         (w.fx, w.fy, w.mz, w.mu, w.sigma, w.mu_min),
         (812, -1501, 413, 9123, 432, 30)
     );
-    assert_eq!(w.state(), Some(EstimateState::NotIdentifiable));
+    assert_eq!(w.state(), Some(State::NotIdentifiable));
     assert!(w.change() && w.present());
     assert_eq!(w.status & CompactWheelResult::MF_FLAGS, 0);
     assert!((w.mu().unwrap() - e.mu).abs() <= 0.5e-4 + 1e-7);
@@ -473,7 +474,7 @@ fn compact_results() {
         let na = CompactWheelResult::or_na(Some(&bf), Some(&be));
         let got = [na.fx(), na.fy(), na.mz(), na.mu(), na.sigma(), na.mu_min()];
         assert_eq!(got.iter().filter(|v| v.is_none()).count(), 1, "{na:?}");
-        assert_eq!(na.state(), Some(EstimateState::NotIdentifiable));
+        assert_eq!(na.state(), Some(State::NotIdentifiable));
     }
     // 52 body bytes, 58 encoded: one 64-byte FD frame, 10 classic frames.
     let msg = Msg::CompactResults(CompactResults {
@@ -526,7 +527,7 @@ fn known_frames() {
         t_us: 7,
         mu: 0.5,
         sigma: 0.25,
-        state: EstimateState::Identifiable,
+        state: State::Identifiable,
         mu_min: 0.375,
         change: true,
     });
@@ -751,11 +752,7 @@ fn any_msg() -> impl Strategy<Value = Msg> {
                     t_us,
                     mu,
                     sigma,
-                    state: [
-                        EstimateState::Identifiable,
-                        EstimateState::NotIdentifiable,
-                        EstimateState::Fallback
-                    ][st],
+                    state: [State::Identifiable, State::NotIdentifiable, State::Fallback][st],
                     mu_min,
                     change
                 })

@@ -23,7 +23,7 @@ use cortex_m_semihosting::hprintln;
 use gough::math::{Backend, Libm};
 use gough::mf::{self, Input, Options, Params};
 use gough::mu::{self, Bank, Reading, State};
-use gough::proto::{EstimateState, Measurement, Settings};
+use gough::proto::{Measurement, Settings};
 use gough::wheel::Wheel;
 use gough_firmware::app::{self, App};
 use gough_firmware::{mps2, stack};
@@ -311,14 +311,6 @@ fn per_sample<S>(
     }
 }
 
-fn to_state(s: EstimateState) -> State {
-    match s {
-        EstimateState::Identifiable => State::Identifiable,
-        EstimateState::NotIdentifiable => State::NotIdentifiable,
-        EstimateState::Fallback => State::Fallback,
-    }
-}
-
 /// The firmware's whole per-wheel pipeline (`wheel::Wheel`: transient filter + MF + the bank,
 /// started as the App starts it) with backend `M`: a readable line and a
 /// `bench: wheel_<name>_<stream> mean=<n> worst=<n> ram=<bytes>` line.
@@ -345,7 +337,7 @@ fn pipeline_figures<M: Backend<f32>>(
             let f = w.forces::<M>(p, settings.limits, m);
             core::hint::black_box(&f);
             w.estimate::<M>(p, m)
-                .map_or(State::Fallback, |e| to_state(e.state))
+                .map_or(State::Fallback, |e| e.state)
         },
     );
     hprintln!(

@@ -97,11 +97,11 @@ fn step(wheels: &mut [Wheel; 4], p: &gough::mf::Params<f32>, m: &Measurement) ->
     (f, w.estimate::<Math>(p, m))
 }
 
-fn state_code(s: proto::EstimateState) -> i32 {
+fn state_code(s: mu::State) -> i32 {
     match s {
-        proto::EstimateState::Identifiable => 0,
-        proto::EstimateState::NotIdentifiable => 1,
-        proto::EstimateState::Fallback => 2,
+        mu::State::Identifiable => 0,
+        mu::State::NotIdentifiable => 1,
+        mu::State::Fallback => 2,
     }
 }
 
@@ -242,11 +242,7 @@ fn main() -> ! {
             gamma: m.gamma,
         };
         let e = bank.update::<Math>(p, &s);
-        let state = match e.state {
-            mu::State::Identifiable => 0,
-            mu::State::NotIdentifiable => 1,
-            mu::State::Fallback => 2,
-        };
+        let state = state_code(e.state);
         hprintln!(
             "estimator row {}: rc 0 mu {:08x} sigma {:08x} mu_min {:08x} state {} flags {}",
             i,

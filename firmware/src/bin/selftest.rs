@@ -15,6 +15,7 @@ use cortex_m_rt::entry;
 use cortex_m_semihosting::hprintln;
 use embedded_can::Frame as _;
 use gough::proto::slcan::{self, CanFrame, Decoder, Line};
+use gough::mu::State;
 use gough::proto::*;
 use gough_firmware::app::App;
 use gough_firmware::mps2;
@@ -191,7 +192,7 @@ fn main() -> ! {
             t_us: 9,
             mu: 0.8,
             sigma: 0.05,
-            state: EstimateState::Identifiable,
+            state: State::Identifiable,
             mu_min: 0.5,
             change: true,
         }),
@@ -417,7 +418,7 @@ fn main() -> ! {
             );
             check(
                 n_forces == SAMPLES
-                    && e.state == EstimateState::Identifiable
+                    && e.state == State::Identifiable
                     && (e.mu - mu0).abs() <= 0.1,
                 "estimator on the device reads the tyre's own surface within 0.1",
                 &mut fails,

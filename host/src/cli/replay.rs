@@ -4,7 +4,8 @@ use crate::device::{Device, SlcanTcp};
 use crate::replay::{self, Answer, Backend32};
 use crate::tyre;
 use clap::Args;
-use gough::proto::{AckCode, EstimateState, Msg, MsgType, Settings};
+use gough::mu::State;
+use gough::proto::{AckCode, Msg, MsgType, Settings};
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
@@ -104,7 +105,7 @@ pub fn run(a: ReplayArgs) -> Result<(), String> {
     let n_est = got.iter().filter(|g| g.estimate.is_some()).count();
     let n_ident = got
         .iter()
-        .filter(|g| matches!(g.estimate, Some(e) if e.state == EstimateState::Identifiable))
+        .filter(|g| matches!(g.estimate, Some(e) if e.state == State::Identifiable))
         .count();
     eprintln!(
         "{} rows -> {} forces, {} without; {} estimates, {} identifiable ({:.2} s)",
