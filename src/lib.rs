@@ -15,13 +15,15 @@
 //! - [`math`] — the float trait and the math backend ([`math::Libm`] by default).
 //! - [`mf`] — the Magic Formula: Delft Tyre 96, MF 5.2, MF 6.1/6.2; pure and combined slip.
 //! - [`tir`] — `.tir` text → [`mf::Params`], without allocation.
-//! - [`proto`] — the CAN protocol: messages (postcard), segmentation, CRC, SLCAN, DBC.
+//! - [`proto`] — the CAN protocol: messages (postcard), segmentation, CRC, SLCAN, DBC; the wire
+//!   only (the messages convert to and from the domain's types).
 //! - [`relax`] — transient slip through relaxation lengths, paper eqs. (19)–(21).
 //! - [`mu`] — the road-friction estimator ([`mu::bank`]: μ from Fy, Mz, Fz and, when given, Fx,
 //!   κ, Vx, γ — never α). The previous table estimator is a peer in the host's bench
 //!   (`gough_host::mu::table_estimator`).
-//! - [`wheel`] — one wheel's per-sample pipeline (transient filter → Magic Formula → estimator),
-//!   as the firmware runs it.
+//! - [`wheel`] — a car's wheels: their positions ([`wheel::Wheel`]), each one's per-sample
+//!   pipeline ([`wheel::Corner`]: transient filter → Magic Formula → estimator) and the four of
+//!   a [`wheel::Car`], as the firmware runs them.
 //!
 //! ## Guarantees
 //! The core never panics (no `unwrap`, no unchecked indexing; see the crate-level lints) and

@@ -1,10 +1,15 @@
-//! One wheel's per-sample pipeline: measurement → transient slips → Magic Formula → `Forces`,
-//! and measurement → friction estimator → `Estimate`.
+//! A car's wheels: their positions ([`Wheel`]: front left, front right, rear left, rear right,
+//! each with its side), and each one's per-sample pipeline ([`Corner`]): measurement →
+//! transient slips → Magic Formula → forces, and measurement → friction estimator → estimate;
+//! the four of a [`Car`], with the front-to-rear preview between their estimators.
 //!
-//! `no_std`, no allocation, no panics: the firmware runs it in its 1 kHz tick, and the host's
-//! replay check (`gough replay --check`) runs the same code on the host, in f32 with the same
-//! math backend, so "device = host f32 run" compares one piece of code built for two targets,
-//! bit for bit.
+//! `no_std`, no allocation, no panics, generic over the number type: the firmware runs it in
+//! `f32` in its 1 kHz tick, and the host's replay check (`gough replay --check`) runs the same
+//! code on the host, in f32 with the same math backend, so "device = host f32 run" compares one
+//! piece of code built for two targets, bit for bit; the host can run it in f64 as well. The
+//! pipeline takes and gives domain types ([`Measurement`], [`mf::Output`],
+//! [`crate::mu::Estimate`]); the protocol's messages convert to and from them
+//! ([`crate::proto`]).
 //!
 //! ## Forces
 //! - A measurement **with kinematics** (Vx, plus α, κ or ω) goes through the relaxation-length
@@ -23,117 +28,202 @@
 //!   steady-state Magic Formula — a stream that starts mid-manoeuvre does not start from an
 //!   undeflected tyre.
 //! - **Without kinematics** (no Vx, or neither α, κ nor ω): the steady-state Magic Formula at the
-//!   measured α, κ ([`Measurement::mf_input`](crate::proto::Measurement::mf_input),
-//!   Vx = LONGVL), see [`steady`].
+//!   measured α, κ ([`Measurement::mf_input`], Vx = LONGVL), see [`steady`].
 //!
 //! ## Estimate
-//! The friction estimator is the exact-model bank ([`crate::mu::bank::Bank`], `f32`), started
-//! with [`Wheel::start_estimator`] when parameters are loaded (the device does it on every
-//! parameter load and every `Settings`). [`Wheel::estimate`] feeds it what was **measured**: Fz,
-//! Fy, Mz, and Fx, κ, Vx, γ when the sample carries them ([`sample`]) — never α and never the
-//! model's forces — with the sample's wrapping `u32` µs timestamp as it is (the bank uses only
-//! wrapping differences, so the estimates do not depend on when the clock started). κ is the
-//! measured κ, or, without it, the one the wheel speed gives as the filter computes it,
+//! The friction estimator is the exact-model bank ([`crate::mu::Bank`]), started with
+//! [`Corner::start_estimator`] when parameters are loaded (the device does it on every
+//! parameter load and every `Settings`). [`Corner::estimate`] feeds it what was **measured**:
+//! Fz, Fy, Mz, and Fx, κ, Vx, γ when the sample carries them ([`sample`]) — never α and never
+//! the model's forces — with the sample's wrapping `u32` µs timestamp as it is (the bank uses
+//! only wrapping differences, so the estimates do not depend on when the clock started). κ is
+//! the measured κ, or, without it, the one the wheel speed gives as the filter computes it,
 //! (ω·Re − Vx)/|Vx| clamped to ±1 ([`effective_radius`]).
 //!
-//! Of the protocol's [`Settings`]: `fallback_mu` is the bank's prior `mu_prior` (the μ of a
-//! `Fallback` estimate; when it is a positive number, [`estimator_config`]); `limits` applies
-//! to the forces only; `wheelbase` starts the front-to-rear preview between a [`Car`]'s axles.
-//! A [`Car`] mounts each wheel's tyre on its side ([`Wheel::on`]), for the forces and the
-//! estimate alike; a lone [`Wheel::new`] takes it as its file describes it.
-use crate::math::Backend;
-use crate::mf::{self, Input, Options, Output, Params, Side};
-use crate::mu::preview::{self, Preview};
-use crate::mu::{self as bank, Bank, BuildError};
-use crate::proto::Wheel as WheelId;
-use crate::proto::{AckCode, Estimate, Forces, Measurement, Settings};
-use crate::relax::{self, DampingSpeed, Kinematics, Sigma, Transient};
+//! A [`Car`] mounts each wheel's tyre on its side ([`Corner::on`], [`Wheel::side`]), for the
+//! forces and the estimate alike, and runs the front-to-rear preview between its axles when it
+//! is given one; a lone [`Corner::new`] takes the tyre as its file describes it.
+use crate::math::{Backend, Float};
+use crate::mf::{self, EvalError, Input, Options, Output, Params, Side};
+use crate::mu::preview::{self, Preview, PreviewError};
+use crate::mu::{self, Bank, BuildError};
+use crate::relax::{self, DampingSpeed, Kinematics, Sigma, StepError, Transient};
+use postcard::experimental::max_size::MaxSize;
+use serde::{Deserialize, Serialize};
 
 /// Longest step the filter takes \[µs\] (`relax::MAX_DT`); a longer gap restarts it.
 pub const MAX_STEP_US: i32 = 1_000_000;
 
+/// A wheel's position on the car. The protocol carries it as one byte, 0..=3.
+#[derive(Serialize, Deserialize, MaxSize, Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Wheel {
+    /// Front left (0).
+    #[default]
+    FrontLeft,
+    /// Front right (1).
+    FrontRight,
+    /// Rear left (2).
+    RearLeft,
+    /// Rear right (3).
+    RearRight,
+}
+
+impl Wheel {
+    /// All wheels, by index.
+    pub const ALL: [Wheel; 4] = [
+        Wheel::FrontLeft,
+        Wheel::FrontRight,
+        Wheel::RearLeft,
+        Wheel::RearRight,
+    ];
+    /// 0..=3.
+    pub const fn index(self) -> usize {
+        self as usize
+    }
+    /// The wheel of an index 0..=3.
+    pub fn from_index(i: usize) -> Option<Wheel> {
+        Wheel::ALL.get(i).copied()
+    }
+    /// The side of the car the wheel is on: front and rear left on the left, the others on
+    /// the right (the side a tyre is mounted on, `mf::Options::mounted`).
+    pub const fn side(self) -> Side {
+        match self {
+            Wheel::FrontLeft | Wheel::RearLeft => Side::Left,
+            Wheel::FrontRight | Wheel::RearRight => Side::Right,
+        }
+    }
+}
+
+/// One sample of one wheel's measured forces (from a force-sensing hub or bearing, or from a
+/// vehicle observer), with what the vehicle knows of its motion. ISO-W at the contact point,
+/// SI units.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct Measurement<F> {
+    /// Sample time \[µs\], the sender's clock, wrapping.
+    pub t_us: u32,
+    /// Vertical load Fz \[N\], ≥ 0 in contact.
+    pub fz: F,
+    /// Lateral force Fy \[N\].
+    pub fy: F,
+    /// Aligning moment Mz \[N·m\].
+    pub mz: F,
+    /// Longitudinal force Fx \[N\], if measured.
+    pub fx: Option<F>,
+    /// Longitudinal speed of the wheel centre Vx \[m/s\], if known.
+    pub vx: Option<F>,
+    /// Wheel spin speed ω \[rad/s\], if known.
+    pub omega: Option<F>,
+    /// Slip angle α \[rad\], if the vehicle estimates it (the forces use it; the estimator never).
+    pub alpha: Option<F>,
+    /// Longitudinal slip κ \[-\], if the vehicle estimates it.
+    pub kappa: Option<F>,
+    /// Inclination (camber) angle γ \[rad\], if known (default 0).
+    pub gamma: Option<F>,
+}
+
+impl<F: Float> Measurement<F> {
+    /// The Magic Formula operating point of this sample, or `None` when neither α nor κ is
+    /// given (nothing to predict). Absent α, κ, γ are 0; absent Vx is the tyre's `LONGVL`;
+    /// the pressure is the parameter set's `INFLPRES`.
+    pub fn mf_input(&self, p: &Params<F>) -> Option<Input<F>> {
+        if self.alpha.is_none() && self.kappa.is_none() {
+            return None;
+        }
+        Some(Input {
+            fz: self.fz,
+            kappa: self.kappa.unwrap_or(F::ZERO),
+            alpha: self.alpha.unwrap_or(F::ZERO),
+            gamma: self.gamma.unwrap_or(F::ZERO),
+            phit: F::ZERO,
+            vx: self.vx.unwrap_or(p.longvl),
+            p: None,
+        })
+    }
+}
+
+/// Why a measurement got no forces.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Error {
+    /// Neither α, κ nor (with Vx) ω: no slip to predict the forces of.
+    NoSlip,
+    /// The transient filter refused the step (non-finite kinematics).
+    Step(StepError),
+    /// The Magic Formula refused the operating point.
+    Eval(EvalError),
+}
+
+impl core::fmt::Display for Error {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            Error::NoSlip => f.write_str("the measurement carries no slip"),
+            Error::Step(e) => write!(f, "transient filter: {e}"),
+            Error::Eval(e) => write!(f, "Magic Formula: {e}"),
+        }
+    }
+}
+
+impl core::error::Error for Error {}
+
 /// The filter's state between samples.
 #[derive(Debug, Clone, Copy)]
-struct Deflection {
-    tr: Transient<f32>,
-    cfg: relax::Config<f32>,
+struct Deflection<F> {
+    tr: Transient<F>,
+    cfg: relax::Config<F>,
     /// σκ, σα of the last evaluation \[m\].
-    sigma: Sigma<f32>,
+    sigma: Sigma<F>,
     /// Timestamp of the last sample \[µs\].
     t_us: u32,
 }
 
 /// A measurement's kinematics.
 #[derive(Debug, Clone, Copy)]
-struct Kin {
-    kin: Kinematics<f32>,
+struct Kin<F> {
+    kin: Kinematics<F>,
     /// Steady-state slips: the measured α (0 if absent) and κ (measured, or from ω).
-    alpha: f32,
-    kappa: f32,
-    tan_alpha: f32,
-}
-
-/// One wheel: transient filter and friction estimator (about 1.5 KB, nearly all of it the
-/// bank). Keeps no reference to the parameters: each call takes them (pass the same ones the
-/// estimator was started with).
-#[derive(Debug, Clone)]
-pub struct Wheel {
-    defl: Option<Deflection>,
-    est: Option<Bank<f32>>,
-    mounted: Option<Side>,
-}
-
-impl Default for Wheel {
-    fn default() -> Self {
-        Self::new()
-    }
-}
-
-/// The estimator's settings from the protocol's: the bank's defaults with the prior
-/// `mu_prior` = `fallback_mu` (when it is a positive number).
-pub fn estimator_config(s: &Settings) -> bank::Config<f32> {
-    let mut c = bank::Config::default();
-    if s.fallback_mu.is_finite() && s.fallback_mu > 0.0 {
-        c.mu_prior = s.fallback_mu;
-    }
-    c
+    alpha: F,
+    kappa: F,
+    tan_alpha: F,
 }
 
 /// Effective rolling radius Re \[m\] at load `fz` \[N\] for slip from the wheel speed ω: MF 6.x,
 /// `Re = R0·Q_RE0 − ρFz0·(DREFF·atan(BREFF·ρd) + FREFF·ρd)` with the vertical deflection taken
 /// linear (ρFz0 = FNOMIN/Cz, ρd = Fz/FNOMIN) and the speed growth of the free radius (Q_V1) left
 /// out; R0 when the file has no vertical stiffness.
-pub fn effective_radius<M: Backend<f32>>(p: &Params<f32>, fz: f32) -> f32 {
+pub fn effective_radius<F: Float, M: Backend<F>>(p: &Params<F>, fz: F) -> F {
     let r0 = p.unloaded_radius;
-    if !(p.vertical_stiffness > 0.0 && p.fnomin > 0.0) {
+    if !(p.vertical_stiffness > F::ZERO && p.fnomin > F::ZERO) {
         return r0;
     }
-    let q = if p.q_re0 > 0.0 { p.q_re0 } else { 1.0 };
+    let q = if p.q_re0 > F::ZERO { p.q_re0 } else { F::ONE };
     let rho0 = p.fnomin / p.vertical_stiffness;
-    let d = fz.max(0.0) / p.fnomin;
+    let d = fz.max(F::ZERO) / p.fnomin;
     r0 * q - rho0 * (p.dreff * M::atan(p.breff * d) + p.freff * d)
 }
 
-fn kinematics<M: Backend<f32>>(p: &Params<f32>, m: &Measurement) -> Option<Kin> {
+fn kinematics<F: Float, M: Backend<F>>(p: &Params<F>, m: &Measurement<F>) -> Option<Kin<F>> {
     let vx = m.vx?;
     if m.alpha.is_none() && m.kappa.is_none() && m.omega.is_none() {
         return None;
     }
     let speed = vx.abs();
-    let alpha = m.alpha.unwrap_or(0.0);
+    let alpha = m.alpha.unwrap_or(F::ZERO);
     let tan_alpha = M::tan(alpha);
     let (vsx, kappa) = match (m.kappa, m.omega) {
         (Some(k), _) => (-k * speed, k),
         (None, Some(w)) => {
-            let vsx = vx - w * effective_radius::<M>(p, m.fz);
-            let k = if speed > 0.0 {
-                (-vsx / speed).clamp(-1.0, 1.0)
+            let vsx = vx - w * effective_radius::<F, M>(p, m.fz);
+            let k = if speed > F::ZERO {
+                (-vsx / speed).clamp_flag(-F::ONE, F::ONE).0
             } else {
-                0.0
+                F::ZERO
             };
             (vsx, k)
         }
-        (None, None) => (0.0, 0.0),
+        (None, None) => (F::ZERO, F::ZERO),
     };
     Some(Kin {
         kin: Kinematics {
@@ -150,13 +240,13 @@ fn kinematics<M: Backend<f32>>(p: &Params<f32>, m: &Measurement) -> Option<Kin> 
 /// What the estimator reads of a measurement (see the module doc): Fz, Fy, Mz, and Fx, κ, Vx, γ
 /// when measured, at the sample's own timestamp; κ from the wheel speed when only ω is given.
 /// Never α.
-pub fn sample<M: Backend<f32>>(p: &Params<f32>, m: &Measurement) -> bank::Sample<f32> {
+pub fn sample<F: Float, M: Backend<F>>(p: &Params<F>, m: &Measurement<F>) -> mu::Sample<F> {
     let kappa = match (m.kappa, m.omega, m.vx) {
         (Some(k), _, _) => Some(k),
-        (None, Some(_), Some(_)) => kinematics::<M>(p, m).map(|k| k.kappa),
+        (None, Some(_), Some(_)) => kinematics::<F, M>(p, m).map(|k| k.kappa),
         _ => None,
     };
-    bank::Sample {
+    mu::Sample {
         t_us: m.t_us,
         fz: m.fz,
         fy: m.fy,
@@ -168,55 +258,63 @@ pub fn sample<M: Backend<f32>>(p: &Params<f32>, m: &Measurement) -> bank::Sample
     }
 }
 
-fn eval<M: Backend<f32>>(
-    p: &Params<f32>,
-    input: &Input<f32>,
+fn eval<F: Float, M: Backend<F>>(
+    p: &Params<F>,
+    input: &Input<F>,
     opts: &Options,
-) -> Result<Output<f32>, AckCode> {
-    mf::eval::<f32, M>(p, input, opts).map_err(|_| AckCode::EvalError)
+) -> Result<Output<F>, Error> {
+    mf::eval::<F, M>(p, input, opts).map_err(Error::Eval)
 }
 
-fn forces_of(m: &Measurement, o: &Output<f32>) -> Forces {
-    Forces {
-        wheel: m.wheel,
-        t_us: m.t_us,
-        fx: o.fx,
-        fy: o.fy,
-        mz: o.mz,
-        flags: o.flags.0,
-    }
-}
-
-/// The steady-state answer (no filter): the Magic Formula at the measured slips.
-/// `mounted`: the side the tyre is on (`None`: as the file describes it), see [`Wheel::mounted`].
-pub fn steady<M: Backend<f32>>(
-    p: &Params<f32>,
+/// The steady-state answer (no filter): the Magic Formula at the measured slips
+/// ([`Measurement::mf_input`]), Fx, Fy, Mz (and μ, K, σ) without Mx, My.
+/// `mounted`: the side the tyre is on (`None`: as the file describes it), see
+/// [`Corner::mounted`].
+pub fn steady<F: Float, M: Backend<F>>(
+    p: &Params<F>,
     limits: bool,
     mounted: Option<Side>,
-    m: &Measurement,
-) -> Result<Forces, AckCode> {
-    let input = m.mf_input(p).ok_or(AckCode::NoSlip)?;
+    m: &Measurement<F>,
+) -> Result<Output<F>, Error> {
+    let input = m.mf_input(p).ok_or(Error::NoSlip)?;
     let opts = Options {
         limits,
         mounted,
-        moments: false, // the Forces message carries Fx, Fy, Mz
+        moments: false, // the forces are Fx, Fy, Mz
         ..Options::default()
     };
-    eval::<M>(p, &input, &opts).map(|o| forces_of(m, &o))
+    eval::<F, M>(p, &input, &opts)
 }
 
-impl Wheel {
-    /// No filter state, no estimator; the tyre as its file describes it (see [`Wheel::mounted`]).
+/// One corner of the car: a wheel's transient filter and friction estimator (about 1.5 KB in
+/// `f32`, nearly all of it the bank). Keeps no reference to the parameters: each call takes
+/// them (pass the same ones the estimator was started with).
+#[derive(Debug, Clone)]
+pub struct Corner<F> {
+    defl: Option<Deflection<F>>,
+    est: Option<Bank<F>>,
+    mounted: Option<Side>,
+}
+
+impl<F: Float> Default for Corner<F> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl<F: Float> Corner<F> {
+    /// No filter state, no estimator; the tyre as its file describes it (see
+    /// [`Corner::mounted`]).
     pub const fn new() -> Self {
-        Wheel::on(None)
+        Corner::on(None)
     }
 
-    /// [`Wheel::new`] for a wheel on side `mounted`: where it differs from the file's
+    /// [`Corner::new`] for a wheel on side `mounted`: where it differs from the file's
     /// `TYRESIDE` the Magic Formula and the estimator mirror the tyre (α, γ in, Fy, Mz out:
     /// `Options::mounted`, `Bank::new`), so that the wheel takes and gives its signals in its own
     /// ISO-W axes. `None`: as the file describes it (the other side's signals arrive mirrored).
     pub const fn on(mounted: Option<Side>) -> Self {
-        Wheel {
+        Corner {
             defl: None,
             est: None,
             mounted,
@@ -233,15 +331,15 @@ impl Wheel {
         self.defl = None;
     }
 
-    /// (Re)starts the estimator for tyre `p` with the prior of `s` ([`estimator_config`]); it
-    /// forgets what it learnt. On an error (a tyre without friction) no estimator runs.
-    pub fn start_estimator<M: Backend<f32>>(
+    /// (Re)starts the estimator for tyre `p` with settings `cfg`; it forgets what it learnt. On
+    /// an error (a tyre without friction, settings without a grid) no estimator runs.
+    pub fn start_estimator<M: Backend<F>>(
         &mut self,
-        p: &Params<f32>,
-        s: &Settings,
+        p: &Params<F>,
+        cfg: mu::Config<F>,
     ) -> Result<(), BuildError> {
         self.est = None;
-        self.est = Some(Bank::new::<M>(p, self.mounted, estimator_config(s))?);
+        self.est = Some(Bank::new::<M>(p, self.mounted, cfg)?);
         Ok(())
     }
 
@@ -251,40 +349,41 @@ impl Wheel {
     }
 
     /// The estimator, if one runs.
-    pub fn estimator(&self) -> Option<&Bank<f32>> {
+    pub fn estimator(&self) -> Option<&Bank<F>> {
         self.est.as_ref()
     }
 
     /// The estimator, if one runs, to hand it a reading of the road ahead
     /// ([`crate::mu::preview::Preview::rear`]).
-    pub fn estimator_mut(&mut self) -> Option<&mut Bank<f32>> {
+    pub fn estimator_mut(&mut self) -> Option<&mut Bank<F>> {
         self.est.as_mut()
     }
 
     /// The filter's deflections (v lateral, u longitudinal) \[m\], if it runs.
-    pub fn deflection(&self) -> Option<(f32, f32)> {
+    pub fn deflection(&self) -> Option<(F, F)> {
         self.defl.map(|d| (d.tr.v, d.tr.u))
     }
 
-    /// The predicted forces of one sample (see the module doc), or why there are none. The
-    /// filter's state moves on only when the evaluation succeeds.
-    pub fn forces<M: Backend<f32>>(
+    /// The predicted forces of one sample (see the module doc): Fx, Fy, Mz (with μ, K, σ and the
+    /// flags; Mx, My not evaluated), or why there are none. The filter's state moves on only
+    /// when the evaluation succeeds.
+    pub fn forces<M: Backend<F>>(
         &mut self,
-        p: &Params<f32>,
+        p: &Params<F>,
         limits: bool,
-        m: &Measurement,
-    ) -> Result<Forces, AckCode> {
-        let Some(k) = kinematics::<M>(p, m) else {
+        m: &Measurement<F>,
+    ) -> Result<Output<F>, Error> {
+        let Some(k) = kinematics::<F, M>(p, m) else {
             self.defl = None;
-            return steady::<M>(p, limits, self.mounted, m);
+            return steady::<F, M>(p, limits, self.mounted, m);
         };
-        let gamma = m.gamma.unwrap_or(0.0);
-        let input = |kappa: f32, alpha: f32| Input {
+        let gamma = m.gamma.unwrap_or(F::ZERO);
+        let input = |kappa: F, alpha: F| Input {
             fz: m.fz,
             kappa,
             alpha,
             gamma,
-            phit: 0.0,
+            phit: F::ZERO,
             vx: k.kin.vx,
             p: None,
         };
@@ -293,16 +392,16 @@ impl Wheel {
             if dt > 0 && dt <= MAX_STEP_US {
                 let mut tr = d.tr;
                 let s = tr
-                    .step::<M>(&d.cfg, dt as f32 / 1.0e6, &k.kin, &d.sigma)
-                    .map_err(|_| AckCode::EvalError)?;
+                    .step::<M>(&d.cfg, F::from_micros(dt as u32), &k.kin, &d.sigma)
+                    .map_err(Error::Step)?;
                 let opts = Options {
                     limits,
                     transient: true,
                     mounted: self.mounted,
-                    moments: false, // the Forces message carries Fx, Fy, Mz
+                    moments: false, // the forces are Fx, Fy, Mz
                     ..Options::default()
                 };
-                let o = eval::<M>(p, &input(s.kappa, s.alpha), &opts)?;
+                let o = eval::<F, M>(p, &input(s.kappa, s.alpha), &opts)?;
                 self.defl = Some(Deflection {
                     tr,
                     cfg: d.cfg,
@@ -312,7 +411,7 @@ impl Wheel {
                     },
                     t_us: m.t_us,
                 });
-                return Ok(forces_of(m, &o));
+                return Ok(o);
             }
         }
         // Start: steady state of the measured slips.
@@ -320,19 +419,19 @@ impl Wheel {
         let opts = Options {
             limits,
             mounted: self.mounted,
-            moments: false, // the Forces message carries Fx, Fy, Mz
+            moments: false, // the forces are Fx, Fy, Mz
             ..Options::default()
         };
-        let o = eval::<M>(p, &input(k.kappa, k.alpha), &opts)?;
+        let o = eval::<F, M>(p, &input(k.kappa, k.alpha), &opts)?;
         let cfg = relax::Config {
             damping: DampingSpeed::Forward,
             ..relax::Config::from_params(p)
         };
         // The floor `Transient::step` puts on σ.
-        let floor = |s: f32| {
+        let floor = |s: F| {
             let s = s.abs();
             if s < cfg.sigma_min {
-                cfg.sigma_min.max(1e-6)
+                cfg.sigma_min.max(F::from_f64(1e-6))
             } else {
                 s
             }
@@ -352,32 +451,19 @@ impl Wheel {
             },
             t_us: m.t_us,
         });
-        Ok(forces_of(m, &o))
+        Ok(o)
     }
 
     /// Runs the estimator on one sample of tyre `p` (the parameters it was started with): the
     /// estimate, whose `change` is set on the one estimate at which the estimator declared a
     /// change of surface. `None` when no estimator runs.
-    pub fn estimate<M: Backend<f32>>(
+    pub fn estimate<M: Backend<F>>(
         &mut self,
-        p: &Params<f32>,
-        m: &Measurement,
-    ) -> Option<Estimate> {
+        p: &Params<F>,
+        m: &Measurement<F>,
+    ) -> Option<mu::Estimate<F>> {
         let est = self.est.as_mut()?;
-        Some(estimate_of(m, &est.update::<M>(p, &sample::<M>(p, m))))
-    }
-}
-
-/// The bank's estimate after measurement `m` as the protocol's.
-fn estimate_of(m: &Measurement, e: &bank::Estimate<f32>) -> Estimate {
-    Estimate {
-        wheel: m.wheel,
-        t_us: m.t_us,
-        mu: e.mu,
-        sigma: e.sigma,
-        state: e.state,
-        mu_min: e.mu_min,
-        change: e.change,
+        Some(est.update::<M>(p, &sample::<F, M>(p, m)))
     }
 }
 
@@ -385,19 +471,18 @@ fn estimate_of(m: &Measurement, e: &bank::Estimate<f32>) -> Estimate {
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum StartError {
-    /// The settings' wheelbase is out of range ([`Settings::wheelbase`]); nothing changed.
-    Settings,
-    /// The tyre has no friction to estimate ([`BuildError`]); no estimator runs (the preview,
-    /// if any, idles).
+    /// The preview's settings are out of range (its wheelbase not a positive number); nothing
+    /// changed.
+    Preview(PreviewError),
+    /// The tyre has no friction to estimate, or the estimator's settings no grid
+    /// ([`BuildError`]); no estimator runs (the preview, if any, idles).
     Tyre(BuildError),
 }
 
 impl core::fmt::Display for StartError {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         match self {
-            StartError::Settings => {
-                f.write_str("the settings' wheelbase is not 0 or a positive number")
-            }
+            StartError::Preview(e) => write!(f, "{e}"),
             StartError::Tyre(e) => write!(f, "{e}"),
         }
     }
@@ -405,115 +490,127 @@ impl core::fmt::Display for StartError {
 
 impl core::error::Error for StartError {}
 
-/// A car's four wheels (index = [`crate::proto::Wheel::index`]: FL, FR, RL, RR) and, when the
-/// settings give a wheelbase ([`Settings::wheelbase`]), the front-to-rear preview between their
-/// estimators ([`crate::mu::preview`]: what the front-left wheel read is handed to the
-/// rear-left one when it gets there, front-right to rear-right). The firmware's pipeline and the
-/// host's replay check run this.
+/// A car's four corners ([`Wheel`]: FL, FR, RL, RR) and, when started with one, the front-to-rear
+/// preview between their estimators ([`crate::mu::preview`]: what the front-left wheel read is
+/// handed to the rear-left one when it gets there, front-right to rear-right). The firmware's
+/// pipeline and the host's replay check run this.
 ///
-/// The wheelbase comes with the protocol's `Settings` (v3); with `0` (the default) every wheel
-/// estimates alone.
-///
-/// Each wheel is mounted on its side ([`Wheel::on`], [`WheelId::side`]: FL, RL left, FR, RR right): the tyre
-/// file describes one side's tyre (`TYRESIDE`), the other side's is its mirror image, and every
-/// wheel's signals are taken and given in its own ISO-W axes.
+/// Each corner is mounted on its side ([`Corner::on`], [`Wheel::side`]: FL, RL left, FR, RR
+/// right): the tyre file describes one side's tyre (`TYRESIDE`), the other side's is its mirror
+/// image, and every wheel's signals are taken and given in its own ISO-W axes.
 #[derive(Debug, Clone)]
-pub struct Car {
-    wheels: [Wheel; 4],
-    preview: Option<[Preview<f32>; 2]>,
+pub struct Car<F> {
+    corners: [Corner<F>; 4],
+    preview: Option<[Preview<F>; 2]>,
 }
 
-impl Default for Car {
+impl<F: Float> Default for Car<F> {
     fn default() -> Self {
         Self::new()
     }
 }
 
-/// Wheels 0–3 (FL, FR, RL, RR) on their sides ([`WheelId::side`]).
-const WHEELS_ON: [Wheel; 4] = [
-    Wheel::on(Some(WheelId::FrontLeft.side())),
-    Wheel::on(Some(WheelId::FrontRight.side())),
-    Wheel::on(Some(WheelId::RearLeft.side())),
-    Wheel::on(Some(WheelId::RearRight.side())),
-];
-
-impl Car {
-    /// No filter state, no estimators, no preview.
+impl<F: Float> Car<F> {
+    /// No filter state, no estimators, no preview; each corner on its side.
     pub const fn new() -> Self {
         Car {
-            wheels: WHEELS_ON,
+            corners: [
+                Corner::on(Some(Wheel::FrontLeft.side())),
+                Corner::on(Some(Wheel::FrontRight.side())),
+                Corner::on(Some(Wheel::RearLeft.side())),
+                Corner::on(Some(Wheel::RearRight.side())),
+            ],
             preview: None,
         }
     }
 
-    /// Wheel `i` (0..=3).
-    pub fn wheel(&self, i: usize) -> Option<&Wheel> {
-        self.wheels.get(i)
+    /// The corner of wheel `w`.
+    pub fn corner(&self, w: Wheel) -> &Corner<F> {
+        let [fl, fr, rl, rr] = &self.corners;
+        match w {
+            Wheel::FrontLeft => fl,
+            Wheel::FrontRight => fr,
+            Wheel::RearLeft => rl,
+            Wheel::RearRight => rr,
+        }
+    }
+
+    /// The corner of wheel `w`, mutable.
+    fn corner_mut(&mut self, w: Wheel) -> &mut Corner<F> {
+        let [fl, fr, rl, rr] = &mut self.corners;
+        match w {
+            Wheel::FrontLeft => fl,
+            Wheel::FrontRight => fr,
+            Wheel::RearLeft => rl,
+            Wheel::RearRight => rr,
+        }
     }
 
     /// The preview of side `i` (0 left, 1 right), if one runs.
-    pub fn preview(&self, i: usize) -> Option<&Preview<f32>> {
+    pub fn preview(&self, i: usize) -> Option<&Preview<F>> {
         self.preview.as_ref().and_then(|p| p.get(i))
     }
 
     /// Forgets every filter's deflections.
     pub fn reset_filters(&mut self) {
-        for w in self.wheels.iter_mut() {
-            w.reset_filter();
+        for c in self.corners.iter_mut() {
+            c.reset_filter();
         }
     }
 
-    /// (Re)starts the four estimators for tyre `p` with settings `s` ([`estimator_config`]),
-    /// and the preview over `s`'s wheelbase when it gives one; all forget what they learnt.
-    /// Settings whose wheelbase is out of range ([`Settings::wheelbase`]) are refused
-    /// ([`StartError::Settings`]) and nothing changes; on a tyre without friction no estimator
-    /// runs ([`StartError::Tyre`]).
-    pub fn start_estimators<M: Backend<f32>>(
+    /// (Re)starts the four estimators for tyre `p` with settings `cfg`, and the preview with
+    /// settings `preview` when given; all forget what they learnt. Preview settings out of
+    /// range are refused ([`StartError::Preview`]) and nothing changes; on a tyre without
+    /// friction no estimator runs ([`StartError::Tyre`]).
+    pub fn start_estimators<M: Backend<F>>(
         &mut self,
-        p: &Params<f32>,
-        s: &Settings,
+        p: &Params<F>,
+        cfg: mu::Config<F>,
+        preview: Option<preview::Config<F>>,
     ) -> Result<(), StartError> {
-        let preview = s
-            .wheelbase()
-            .map_err(|_| StartError::Settings)?
-            .map(|l| Preview::new(preview::Config::with_wheelbase(l)))
+        let preview = preview
+            .map(Preview::new)
             .transpose()
-            .map_err(|_| StartError::Settings)?;
+            .map_err(StartError::Preview)?;
         self.preview = preview.map(|pv| [pv.clone(), pv]);
         let mut out = Ok(());
-        for w in self.wheels.iter_mut() {
-            if let Err(e) = w.start_estimator::<M>(p, s) {
+        for c in self.corners.iter_mut() {
+            if let Err(e) = c.start_estimator::<M>(p, cfg) {
                 out = Err(StartError::Tyre(e));
             }
         }
         out
     }
 
-    /// The predicted forces of one sample ([`Wheel::forces`] of its wheel).
-    pub fn forces<M: Backend<f32>>(
+    /// The predicted forces of one sample of wheel `w` ([`Corner::forces`]).
+    pub fn forces<M: Backend<F>>(
         &mut self,
-        p: &Params<f32>,
+        p: &Params<F>,
         limits: bool,
-        m: &Measurement,
-    ) -> Result<Forces, AckCode> {
-        match self.wheels.get_mut(m.wheel.index()) {
-            Some(w) => w.forces::<M>(p, limits, m),
-            None => Err(AckCode::EvalError),
-        }
+        w: Wheel,
+        m: &Measurement<F>,
+    ) -> Result<Output<F>, Error> {
+        self.corner_mut(w).forces::<M>(p, limits, m)
     }
 
-    /// Runs the estimator of the sample's wheel ([`Wheel::estimate`]) with the previews between
-    /// the axles ([`preview::update`]): a rear wheel first takes what its front wheel read that
-    /// it has now reached, a front wheel's new identification is queued for the rear wheel
-    /// behind it.
-    pub fn estimate<M: Backend<f32>>(
+    /// Runs the estimator of wheel `w` ([`Corner::estimate`]) with the previews between the
+    /// axles ([`preview::update`]): a rear wheel first takes what its front wheel read that it
+    /// has now reached, a front wheel's new identification is queued for the rear wheel behind
+    /// it.
+    pub fn estimate<M: Backend<F>>(
         &mut self,
-        p: &Params<f32>,
-        m: &Measurement,
-    ) -> Option<Estimate> {
-        let i = m.wheel.index();
-        let bank = self.wheels.get_mut(i)?.est.as_mut()?;
-        let e = preview::update::<f32, M>(self.preview.as_mut(), i, bank, p, &sample::<M>(p, m));
-        Some(estimate_of(m, &e))
+        p: &Params<F>,
+        w: Wheel,
+        m: &Measurement<F>,
+    ) -> Option<mu::Estimate<F>> {
+        let bank = self.corners.get_mut(w.index())?.est.as_mut()?;
+        let s = sample::<F, M>(p, m);
+        Some(preview::update::<F, M>(
+            self.preview.as_mut(),
+            w.index(),
+            bank,
+            p,
+            &s,
+        ))
     }
 }

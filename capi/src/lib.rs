@@ -32,7 +32,7 @@ use core_gough::mf::{self, EvalError, Input, Options, Params, Side};
 use core_gough::mu::preview::{self, Preview};
 use core_gough::mu::{self, Bank};
 use core_gough::proto::{self, Feed, Msg, Mtu, Reassembler, Segmenter, Settings, MSG_BUF};
-use core_gough::wheel::Wheel;
+use core_gough::wheel::{self, Corner};
 
 /// On the device the core never panics; the handler must still exist. It stops the core
 /// (an ABS/ESC controller's watchdog takes over).
@@ -150,7 +150,7 @@ struct ParamsIn {
 
 struct WheelIn {
     params: *const Params<f32>,
-    wheel: Wheel,
+    wheel: Corner<f32>,
 }
 
 struct EstIn {
@@ -708,8 +708,8 @@ fn state_code(s: mu::State) -> i32 {
     }
 }
 
-/// The protocol's estimate as C's (the change flag as `GOUGH_EST_CHANGE`).
-fn estimate_c(e: &proto::Estimate) -> gough_estimate_t {
+/// An estimate as C's (the change flag as `GOUGH_EST_CHANGE`).
+fn estimate_c(e: &mu::Estimate<f32>) -> gough_estimate_t {
     gough_estimate_t {
         mu: e.mu,
         sigma: e.sigma,
@@ -759,10 +759,10 @@ pub unsafe extern "C" fn gough_wheel_init(
         let mounted = side_of(options, GOUGH_WHEEL_ESTIMATOR)?;
         // SAFETY: non-null; unmark, so that a failure leaves it unusable.
         unsafe { w.cast::<u32>().write(0) };
-        let mut wheel = Wheel::on(mounted);
+        let mut wheel = Corner::on(mounted);
         if options & GOUGH_WHEEL_ESTIMATOR != 0 {
             wheel
-                .start_estimator::<Fast>(&params.p32, &Settings::default())
+                .start_estimator::<Fast>(&params.p32, Settings::default().estimator_config())
                 .map_err(|_| GOUGH_E_MODEL)?;
         }
         let val = WheelIn {
@@ -794,7 +794,7 @@ pub unsafe extern "C" fn gough_wheel_step(
             return Err(GOUGH_E_NULL);
         }
         // SAFETY: non-null, the caller's measurement.
-        let meas = measurement(&unsafe { m.read() })?;
+        let meas = wheel::Measurement::from(&measurement(&unsafe { m.read() })?);
         // SAFETY: set by `gough_wheel_init` to caller-owned params that outlive the wheel.
         let p = unsafe { &*wi.params };
         let f = wi
@@ -820,7 +820,7 @@ pub unsafe extern "C" fn gough_wheel_step(
                         fx: f.fx,
                         fy: f.fy,
                         mz: f.mz,
-                        flags: u32::from(f.flags),
+                        flags: u32::from(f.flags.0),
                     })
                 };
                 Ok(())
@@ -828,7 +828,7 @@ pub unsafe extern "C" fn gough_wheel_step(
             Err(c) => {
                 // SAFETY: as above.
                 unsafe { forces.write(gough_forces_t::default()) };
-                Err(if c == proto::AckCode::NoSlip {
+                Err(if c == wheel::Error::NoSlip {
                     GOUGH_E_NOSLIP
                 } else {
                     GOUGH_E_MODEL
@@ -1063,10 +1063,10 @@ pub unsafe extern "C" fn gough_preview_rear_wheel(
             return Err(GOUGH_E_NULL);
         }
         // SAFETY: non-null, the caller's measurement.
-        let meas = measurement(&unsafe { m.read() })?;
+        let meas = wheel::Measurement::from(&measurement(&unsafe { m.read() })?);
         // SAFETY: set by `gough_wheel_init` to caller-owned params that outlive the wheel.
         let p = unsafe { &*wi.params };
-        let s = core_gough::wheel::sample::<Fast>(p, &meas);
+        let s = wheel::sample::<f32, Fast>(p, &meas);
         let bank = wi.wheel.estimator_mut().ok_or(GOUGH_E_ARG)?;
         pv.rear::<Fast>(bank, &s);
         Ok(())
@@ -1356,7 +1356,7 @@ fn to_c(m: &Msg) -> gough_msg_t {
             o.kind = GOUGH_MSG_ESTIMATE;
             o.wheel = e.wheel.index() as u32;
             o.t_us = e.t_us;
-            o.estimate = estimate_c(e);
+            o.estimate = estimate_c(&e.estimate());
         }
         Msg::Status(_) => o.kind = GOUGH_MSG_STATUS,
         Msg::CompactBatch(_) | Msg::CompactResults(_) => o.kind = GOUGH_MSG_OTHER,

@@ -24,7 +24,7 @@ use gough::proto::{
     Estimate, Feed, Forces, Measurement, Msg, MsgType, ParamSource, Reassembler, Settings, Status,
     MAX_TIR_LEN, MSG_BUF,
 };
-use gough::wheel::{self, Car, Wheel};
+use gough::wheel::{self, Car};
 
 /// The math backend of the device's pipeline: `gough::math::Fast` (feature `fast`, on by
 /// default: as accurate as f32 libm and cheaper on the M4F, the `bench` output gives both
@@ -77,7 +77,7 @@ struct Upload {
 /// ~6 KiB): keep it in a `static`.
 pub struct App {
     params: Option<Params<f32>>,
-    car: Car,
+    car: Car<f32>,
     source: ParamSource,
     hash: u32,
     upload: Option<Upload>,
@@ -174,7 +174,10 @@ impl App {
         let Some(p) = self.params.as_ref() else {
             return;
         };
-        if let Err(e) = self.car.start_estimators::<Math>(p, &self.settings) {
+        // (The settings in use passed `Settings::wheelbase` when they were applied.)
+        let preview = self.settings.preview().ok().flatten();
+        let cfg = self.settings.estimator_config();
+        if let Err(e) = self.car.start_estimators::<Math>(p, cfg, preview) {
             defmt::warn!("no estimator: {}", e);
         }
     }
@@ -192,8 +195,8 @@ impl App {
 
     /// Wheel `i`'s estimator (0..=3), if it runs: its state, μy0 of the tyre
     /// (`Bank::mu0`), its count of refused samples (`Bank::bad_samples`).
-    pub fn estimator(&self, i: usize) -> Option<&gough::mu::bank::Bank<f32>> {
-        self.car.wheel(i).and_then(Wheel::estimator)
+    pub fn estimator(&self, i: usize) -> Option<&gough::mu::Bank<f32>> {
+        proto::Wheel::from_index(i).and_then(|w| self.car.corner(w).estimator())
     }
 
     /// The status report.
@@ -445,8 +448,16 @@ impl App {
         let Some(p) = self.params.as_ref() else {
             return (Err(AckCode::NoParams), None);
         };
-        let forces = self.car.forces::<Math>(p, self.settings.limits, m);
-        let estimate = self.car.estimate::<Math>(p, m);
+        let x = wheel::Measurement::from(m);
+        let forces = self
+            .car
+            .forces::<Math>(p, self.settings.limits, m.wheel, &x)
+            .map(|o| Forces::new(m.wheel, m.t_us, &o))
+            .map_err(AckCode::from);
+        let estimate = self
+            .car
+            .estimate::<Math>(p, m.wheel, &x)
+            .map(|e| Estimate::new(m.wheel, m.t_us, &e));
         if let Some(e) = estimate.filter(|e| e.change) {
             defmt::info!("wheel {}: change of surface, mu {}", m.wheel, e.mu);
         }
@@ -478,6 +489,8 @@ impl App {
     /// the tyre as its file describes it, whichever wheel the sample names).
     pub fn evaluate(&self, m: &Measurement) -> Result<Forces, AckCode> {
         let p = self.params.as_ref().ok_or(AckCode::NoParams)?;
-        wheel::steady::<Math>(p, self.settings.limits, None, m)
+        wheel::steady::<f32, Math>(p, self.settings.limits, None, &m.into())
+            .map(|o| Forces::new(m.wheel, m.t_us, &o))
+            .map_err(AckCode::from)
     }
 }

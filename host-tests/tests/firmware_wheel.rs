@@ -3,8 +3,35 @@
 use gough::math::Fast;
 use gough::mf::{self, Input, Options, Params, Side};
 use gough::mu::{self, Bank, BuildError};
-use gough::proto::{AckCode, Measurement, Settings, Wheel as WheelId};
-use gough::wheel::{effective_radius, estimator_config, Wheel};
+use gough::proto::{AckCode, Estimate, Forces, Measurement, Settings, Wheel as WheelId};
+use gough::wheel::{self, Corner};
+
+/// The device's answer to a measurement, as the firmware's `App::process` gives it: the
+/// corner's forces as the protocol's `Forces`, or the `AckCode` saying why there are none.
+fn forces(
+    w: &mut Corner<f32>,
+    p: &Params<f32>,
+    limits: bool,
+    m: &Measurement,
+) -> Result<Forces, AckCode> {
+    w.forces::<Fast>(p, limits, &m.into())
+        .map(|o| Forces::new(m.wheel, m.t_us, &o))
+        .map_err(AckCode::from)
+}
+
+/// The corner's estimate after a measurement as the protocol's `Estimate`.
+fn estimate(w: &mut Corner<f32>, p: &Params<f32>, m: &Measurement) -> Option<Estimate> {
+    w.estimate::<Fast>(p, &m.into())
+        .map(|e| Estimate::new(m.wheel, m.t_us, &e))
+}
+
+fn effective_radius(p: &Params<f32>, fz: f32) -> f32 {
+    wheel::effective_radius::<f32, Fast>(p, fz)
+}
+
+fn sample(p: &Params<f32>, m: &Measurement) -> mu::Sample<f32> {
+    wheel::sample::<f32, Fast>(p, &m.into())
+}
 
 fn tyre() -> Params<f32> {
     let text = include_str!("../data/tyres/MagicFormula61_Parameters.tir");
@@ -59,11 +86,9 @@ fn meas(t_us: u32, alpha: f32, kappa: f32, vx: f32) -> Measurement {
 fn a_constant_input_gives_the_steady_state_forces_from_the_first_sample_on() {
     let p = tyre();
     let want = steady(&p, 5000.0, 0.05, -0.03, 20.0);
-    let mut w = Wheel::new();
+    let mut w = Corner::new();
     for i in 0..500u32 {
-        let f = w
-            .forces::<Fast>(&p, true, &meas(1000 * i, 0.05, -0.03, 20.0))
-            .unwrap();
+        let f = forces(&mut w, &p, true, &meas(1000 * i, 0.05, -0.03, 20.0)).unwrap();
         let tol = 1e-4 * 5000.0;
         assert!(
             (f.fx - want.fx).abs() < tol && (f.fy - want.fy).abs() < tol,
@@ -83,18 +108,15 @@ fn a_slip_angle_step_is_followed_over_the_relaxation_length() {
     let f1 = steady(&p, 5000.0, a1, 0.0, vx);
     let sigma = f1.sigma_y;
     assert!(sigma > 0.05 && sigma < 2.0, "σα {sigma}");
-    let mut w = Wheel::new();
-    w.forces::<Fast>(&p, true, &meas(0, 0.0, 0.0, vx)).unwrap();
+    let mut w = Corner::new();
+    forces(&mut w, &p, true, &meas(0, 0.0, 0.0, vx)).unwrap();
     // After travelling σα the deflection has covered 1 − 1/e of the step (first order in
     // distance); in the linear range the force follows the deflection.
     let dt_us = 100u32;
     let n = (sigma / vx * 1e6 / dt_us as f32).round() as u32;
     let mut f = None;
     for i in 1..=n {
-        f = Some(
-            w.forces::<Fast>(&p, true, &meas(dt_us * i, a1, 0.0, vx))
-                .unwrap(),
-        );
+        f = Some(forces(&mut w, &p, true, &meas(dt_us * i, a1, 0.0, vx)).unwrap());
     }
     let ratio = f.unwrap().fy / f1.fy;
     assert!(
@@ -103,10 +125,7 @@ fn a_slip_angle_step_is_followed_over_the_relaxation_length() {
     );
     // And it settles.
     for i in n + 1..20 * n {
-        f = Some(
-            w.forces::<Fast>(&p, true, &meas(dt_us * i, a1, 0.0, vx))
-                .unwrap(),
-        );
+        f = Some(forces(&mut w, &p, true, &meas(dt_us * i, a1, 0.0, vx)).unwrap());
     }
     assert!((f.unwrap().fy / f1.fy - 1.0).abs() < 1e-3);
 }
@@ -115,24 +134,22 @@ fn a_slip_angle_step_is_followed_over_the_relaxation_length() {
 fn wheel_speed_gives_the_same_slip_as_kappa() {
     let p = tyre();
     let (vx, kappa) = (20.0f32, -0.05f32);
-    let re = effective_radius::<Fast>(&p, 5000.0);
+    let re = effective_radius(&p, 5000.0);
     assert!(
         re > 0.9 * p.unloaded_radius && re < p.unloaded_radius,
         "Re {re}"
     );
     let omega = vx * (1.0 + kappa) / re;
-    let mut a = Wheel::new();
-    let mut b = Wheel::new();
+    let mut a = Corner::new();
+    let mut b = Corner::new();
     for i in 0..50u32 {
-        let fa = a
-            .forces::<Fast>(&p, true, &meas(1000 * i, 0.03, kappa, vx))
-            .unwrap();
+        let fa = forces(&mut a, &p, true, &meas(1000 * i, 0.03, kappa, vx)).unwrap();
         let m = Measurement {
             kappa: None,
             omega: Some(omega),
             ..meas(1000 * i, 0.03, kappa, vx)
         };
-        let fb = b.forces::<Fast>(&p, true, &m).unwrap();
+        let fb = forces(&mut b, &p, true, &m).unwrap();
         assert!((fa.fx - fb.fx).abs() < 1.0, "{fa:?} vs {fb:?}");
     }
 }
@@ -140,15 +157,14 @@ fn wheel_speed_gives_the_same_slip_as_kappa() {
 #[test]
 fn without_kinematics_the_steady_state_path_answers_and_restarts_the_filter() {
     let p = tyre();
-    let mut w = Wheel::new();
-    w.forces::<Fast>(&p, true, &meas(0, 0.05, 0.0, 20.0))
-        .unwrap();
+    let mut w = Corner::new();
+    forces(&mut w, &p, true, &meas(0, 0.05, 0.0, 20.0)).unwrap();
     assert!(w.deflection().is_some());
     let m = Measurement {
         vx: None,
         ..meas(1000, 0.05, 0.0, 20.0)
     };
-    let f = w.forces::<Fast>(&p, true, &m).unwrap();
+    let f = forces(&mut w, &p, true, &m).unwrap();
     let want = steady(&p, 5000.0, 0.05, 0.0, p.longvl);
     assert_eq!(f.fy, want.fy);
     assert!(w.deflection().is_none());
@@ -158,22 +174,18 @@ fn without_kinematics_the_steady_state_path_answers_and_restarts_the_filter() {
         vx: None,
         ..m
     };
-    assert_eq!(w.forces::<Fast>(&p, true, &none), Err(AckCode::NoSlip));
+    assert_eq!(forces(&mut w, &p, true, &none), Err(AckCode::NoSlip));
 }
 
 #[test]
 fn a_gap_or_a_stale_timestamp_restarts_the_filter_in_the_steady_state() {
     let p = tyre();
-    let mut w = Wheel::new();
-    w.forces::<Fast>(&p, true, &meas(0, 0.0, 0.0, 20.0))
-        .unwrap();
-    w.forces::<Fast>(&p, true, &meas(1000, 0.0, 0.0, 20.0))
-        .unwrap();
+    let mut w = Corner::new();
+    forces(&mut w, &p, true, &meas(0, 0.0, 0.0, 20.0)).unwrap();
+    forces(&mut w, &p, true, &meas(1000, 0.0, 0.0, 20.0)).unwrap();
     let want = steady(&p, 5000.0, 0.06, 0.0, 20.0);
     for t in [1000 + 1_000_001, 1000 + 1_000_001 /* not advancing */] {
-        let f = w
-            .forces::<Fast>(&p, true, &meas(t, 0.06, 0.0, 20.0))
-            .unwrap();
+        let f = forces(&mut w, &p, true, &meas(t, 0.06, 0.0, 20.0)).unwrap();
         assert_eq!(f.fy, want.fy);
     }
 }
@@ -222,9 +234,10 @@ fn the_estimate_is_the_bank_on_the_measured_forces() {
         fallback_mu: 0.45,
         ..Settings::default()
     };
-    let mut w = Wheel::new();
-    w.start_estimator::<Fast>(&p, &settings).unwrap();
-    let cfg = estimator_config(&settings);
+    let mut w = Corner::new();
+    w.start_estimator::<Fast>(&p, settings.estimator_config())
+        .unwrap();
+    let cfg = settings.estimator_config();
     assert_eq!(cfg.mu_prior, settings.fallback_mu);
     let mut direct = Bank::new::<Fast>(&p, None, cfg).unwrap();
     // A braking slalom: κ measured too, camber in the message.
@@ -235,7 +248,7 @@ fn the_estimate_is_the_bank_on_the_measured_forces() {
     }
     let (mut identifiable, mut fallback) = (0, 0);
     for m in &log {
-        let e = w.estimate::<Fast>(&p, m).unwrap();
+        let e = estimate(&mut w, &p, m).unwrap();
         let d = direct.update::<Fast>(&p, &bank_sample(m));
         assert_eq!(
             (e.mu, e.sigma, e.mu_min, e.change),
@@ -263,14 +276,15 @@ fn the_estimator_never_reads_alpha_nor_the_model() {
     let settings = Settings::default();
     let log = slalom(&p, 0, 1500);
     let run = |f: &dyn Fn(&Measurement) -> Measurement| {
-        let mut w = Wheel::new();
-        w.start_estimator::<Fast>(&p, &settings).unwrap();
+        let mut w = Corner::new();
+        w.start_estimator::<Fast>(&p, settings.estimator_config())
+            .unwrap();
         log.iter()
             .map(|m| {
                 let m = f(m);
                 // The forces path runs first, as on the device (it must not feed the estimator).
-                let _ = w.forces::<Fast>(&p, true, &m);
-                let e = w.estimate::<Fast>(&p, &m).unwrap();
+                let _ = forces(&mut w, &p, true, &m);
+                let e = estimate(&mut w, &p, &m).unwrap();
                 (e.mu, e.sigma, e.mu_min, e.state, e.change)
             })
             .collect::<Vec<_>>()
@@ -295,29 +309,20 @@ fn without_kappa_the_wheel_speed_gives_the_estimators_slip() {
         t_us: 5,
         fz: 5000.0,
         vx: Some(20.0),
-        omega: Some(20.0 * 0.97 / effective_radius::<Fast>(&p, 5000.0)),
+        omega: Some(20.0 * 0.97 / effective_radius(&p, 5000.0)),
         ..Measurement::default()
     };
     // The wheel turns 3 % slower than it rolls free: braking, κ = −0.03.
-    let k = gough::wheel::sample::<Fast>(&p, &m).kappa.unwrap();
+    let k = sample(&p, &m).kappa.unwrap();
     assert!((k + 0.03).abs() < 1e-5, "{k}");
     // A measured κ wins; without ω or Vx there is none.
     let measured = Measurement {
         kappa: Some(-0.1),
         ..m
     };
-    assert_eq!(
-        gough::wheel::sample::<Fast>(&p, &measured).kappa,
-        Some(-0.1)
-    );
-    assert_eq!(
-        gough::wheel::sample::<Fast>(&p, &Measurement { vx: None, ..m }).kappa,
-        None
-    );
-    assert_eq!(
-        gough::wheel::sample::<Fast>(&p, &Measurement { omega: None, ..m }).kappa,
-        None
-    );
+    assert_eq!(sample(&p, &measured).kappa, Some(-0.1));
+    assert_eq!(sample(&p, &Measurement { vx: None, ..m }).kappa, None);
+    assert_eq!(sample(&p, &Measurement { omega: None, ..m }).kappa, None);
 }
 
 #[test]
@@ -325,11 +330,12 @@ fn the_estimator_runs_on_through_a_timestamp_wrap() {
     let p = tyre();
     let settings = Settings::default();
     let run = |t0: u32| {
-        let mut w = Wheel::new();
-        w.start_estimator::<Fast>(&p, &settings).unwrap();
+        let mut w = Corner::new();
+        w.start_estimator::<Fast>(&p, settings.estimator_config())
+            .unwrap();
         slalom(&p, t0, 2000)
             .iter()
-            .map(|m| w.estimate::<Fast>(&p, m).unwrap())
+            .map(|m| estimate(&mut w, &p, m).unwrap())
             .map(|e| (e.mu, e.sigma, e.mu_min, e.state, e.change))
             .collect::<Vec<_>>()
     };
@@ -342,23 +348,24 @@ fn the_estimator_runs_on_through_a_timestamp_wrap() {
 #[test]
 fn no_estimator_no_estimate() {
     let p = tyre();
-    let mut w = Wheel::new();
-    assert!(w.estimate::<Fast>(&p, &slalom(&p, 0, 1)[0]).is_none());
+    let mut w = Corner::new();
+    assert!(estimate(&mut w, &p, &slalom(&p, 0, 1)[0]).is_none());
     assert!(w.estimator().is_none());
     // A tyre without friction: no estimator, and the forces still run.
     let mut flat = p.clone();
     flat.lmuy = 0.0;
     assert_eq!(
-        w.start_estimator::<Fast>(&flat, &Settings::default()),
+        w.start_estimator::<Fast>(&flat, Settings::default().estimator_config()),
         Err(BuildError::NoFriction)
     );
     assert!(w.estimator().is_none());
     let m = slalom(&flat, 0, 1)[0];
-    assert!(w.estimate::<Fast>(&flat, &m).is_none());
-    w.start_estimator::<Fast>(&p, &Settings::default()).unwrap();
+    assert!(estimate(&mut w, &flat, &m).is_none());
+    w.start_estimator::<Fast>(&p, Settings::default().estimator_config())
+        .unwrap();
     assert!(w.estimator().is_some());
     w.stop_estimator();
-    assert!(w.estimate::<Fast>(&p, &m).is_none());
+    assert!(estimate(&mut w, &p, &m).is_none());
 }
 
 /// Four wheels in a steady turn at 20 m/s whose front wheels run onto ice (λμ × 0.3) at 1.5 s
@@ -413,7 +420,7 @@ fn onto_ice(p: &Params<f32>, n: u32) -> Vec<Measurement> {
 
 #[test]
 fn the_car_hands_what_a_front_wheel_read_to_the_rear_wheel_behind_it() {
-    use gough::mu::preview::{self, Preview};
+    use gough::mu::preview::{self, Preview, PreviewError};
     use gough::wheel::{Car, StartError};
     let p = tyre();
     let log = onto_ice(&p, 3500);
@@ -421,10 +428,11 @@ fn the_car_hands_what_a_front_wheel_read_to_the_rear_wheel_behind_it() {
     let run = |wheelbase: f32| {
         let mut car = Car::new();
         let s = Settings { wheelbase, ..with };
-        car.start_estimators::<Fast>(&p, &s).unwrap();
+        car.start_estimators::<Fast>(&p, s.estimator_config(), s.preview().unwrap())
+            .unwrap();
         let est: Vec<_> = log
             .iter()
-            .map(|m| car.estimate::<Fast>(&p, m).unwrap())
+            .map(|m| car.estimate::<Fast>(&p, m.wheel, &m.into()).unwrap())
             .collect();
         (est, car)
     };
@@ -438,23 +446,25 @@ fn the_car_hands_what_a_front_wheel_read_to_the_rear_wheel_behind_it() {
             wheelbase: bad,
             ..with
         };
+        assert_eq!(s.preview(), Err(AckCode::BadSettings));
+        let pv = preview::Config::with_wheelbase(bad);
         assert_eq!(
-            c.start_estimators::<Fast>(&p, &s),
-            Err(StartError::Settings)
+            c.start_estimators::<Fast>(&p, s.estimator_config(), Some(pv)),
+            Err(StartError::Preview(PreviewError::BadConfig))
         );
         assert_eq!(
             c.preview(0).unwrap().handed(),
             car.preview(0).unwrap().handed()
         );
         assert_eq!(
-            c.wheel(2).unwrap().estimator().unwrap().current(),
-            car.wheel(2).unwrap().estimator().unwrap().current()
+            c.corner(WheelId::RearLeft).estimator().unwrap().current(),
+            car.corner(WheelId::RearLeft).estimator().unwrap().current()
         );
     }
     let handed = car.preview(0).unwrap().handed() + car.preview(1).unwrap().handed();
     assert!(handed >= 2, "{handed}");
     // The same, written out with the core's pieces: banks and two previews.
-    let cfg = estimator_config(&with);
+    let cfg = with.estimator_config();
     let mut banks: Vec<_> = (0..4)
         .map(|w| Bank::new::<Fast>(&p, Some(WheelId::ALL[w].side()), cfg).unwrap())
         .collect();
@@ -483,7 +493,7 @@ fn the_car_hands_what_a_front_wheel_read_to_the_rear_wheel_behind_it() {
     let lag = (2.9 / 20.0 * 1e6) as u32;
     let mut rear_differs = 0;
     for ((a, b), m) in told.iter().zip(&alone).zip(&log) {
-        let w = a.wheel.index();
+        let w = m.wheel.index();
         if w < 2 {
             assert_eq!((a.mu, a.sigma, a.state), (b.mu, b.sigma, b.state));
             continue;
@@ -502,7 +512,7 @@ fn the_car_hands_what_a_front_wheel_read_to_the_rear_wheel_behind_it() {
 /// The car mounts each wheel on its side: a measurement without kinematics of the front-left
 /// wheel (a left-hand wheel; the bundled file's tyre is a right-hand one) is answered with the
 /// tyre mirrored — Fy, Mz of α, γ mirrored — the front-right's as the file describes it; a
-/// `Wheel::new` takes the file's side, `Wheel::on` the one given.
+/// `Corner::new` takes the file's side, `Corner::on` the one given.
 #[test]
 fn the_car_mounts_each_wheel_on_its_side() {
     use gough::wheel::Car;
@@ -522,8 +532,8 @@ fn the_car_mounts_each_wheel_on_its_side() {
             gamma: Some(0.02),
             ..Measurement::default()
         };
-        assert_eq!(car.wheel(id.index()).unwrap().mounted(), Some(side));
-        let f = car.forces::<Fast>(&p, false, &m).unwrap();
+        assert_eq!(car.corner(id).mounted(), Some(side));
+        let f = car.forces::<Fast>(&p, false, id, &(&m).into()).unwrap();
         let want = steady_on(&p, Some(side), 5000.0, 0.05, -0.02, 0.02, p.longvl);
         assert_eq!((f.fx, f.fy, f.mz), (want.fx, want.fy, want.mz), "{id:?}");
         let own = steady_on(&p, None, 5000.0, 0.05, -0.02, 0.02, p.longvl);
@@ -531,6 +541,9 @@ fn the_car_mounts_each_wheel_on_its_side() {
             assert!((f.fy - own.fy).abs() > 1.0, "{} {}", f.fy, own.fy);
         }
     }
-    assert_eq!(Wheel::new().mounted(), None);
-    assert_eq!(Wheel::on(Some(Side::Left)).mounted(), Some(Side::Left));
+    assert_eq!(Corner::<f32>::new().mounted(), None);
+    assert_eq!(
+        Corner::<f32>::on(Some(Side::Left)).mounted(),
+        Some(Side::Left)
+    );
 }

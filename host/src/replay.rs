@@ -201,19 +201,28 @@ fn run<M: Backend<f32>>(
     let mut car = wheel::Car::new();
     // As the device: settings out of range are refused; a tyre without friction gets forces
     // and no estimates.
-    if let Err(e @ wheel::StartError::Settings) = car.start_estimators::<M>(p, settings) {
+    let preview = settings.preview().map_err(|_| {
+        format!(
+            "wheelbase {} m: the settings' wheelbase is not 0 or a positive number",
+            settings.wheelbase
+        )
+    })?;
+    let cfg = settings.estimator_config();
+    if let Err(e @ wheel::StartError::Preview(_)) = car.start_estimators::<M>(p, cfg, preview) {
         return Err(format!("wheelbase {} m: {e}", settings.wheelbase));
     }
     Ok(log
         .iter()
         .map(|m| {
-            let answer = match car.forces::<M>(p, settings.limits, m) {
-                Ok(f) => Answer::Forces(f),
-                Err(c) => Answer::Ack(c),
+            let x = wheel::Measurement::from(m);
+            let answer = match car.forces::<M>(p, settings.limits, m.wheel, &x) {
+                Ok(o) => Answer::Forces(Forces::new(m.wheel, m.t_us, &o)),
+                Err(e) => Answer::Ack(AckCode::from(e)),
             };
+            let estimate = car.estimate::<M>(p, m.wheel, &x);
             Reply {
                 answer,
-                estimate: car.estimate::<M>(p, m),
+                estimate: estimate.map(|e| Estimate::new(m.wheel, m.t_us, &e)),
             }
         })
         .collect())

@@ -8,8 +8,9 @@
 
 use super::crc::crc32;
 use super::{Error, PROTO_VERSION};
-use crate::mf::{Input, Params, Side};
-use crate::mu::State;
+use crate::mf::Output;
+use crate::mu::{self, preview, State};
+use crate::wheel;
 use core::fmt;
 use postcard::experimental::max_size::MaxSize;
 use serde::de::DeserializeOwned;
@@ -97,46 +98,8 @@ impl MsgType {
     }
 }
 
-/// Which wheel a sample or a result belongs to. Encoded as one byte, 0..=3.
-#[derive(Serialize, Deserialize, MaxSize, Debug, Clone, Copy, PartialEq, Eq, Default)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum Wheel {
-    /// Front left (0).
-    #[default]
-    FrontLeft,
-    /// Front right (1).
-    FrontRight,
-    /// Rear left (2).
-    RearLeft,
-    /// Rear right (3).
-    RearRight,
-}
-
-impl Wheel {
-    /// All wheels, by index.
-    pub const ALL: [Wheel; 4] = [
-        Wheel::FrontLeft,
-        Wheel::FrontRight,
-        Wheel::RearLeft,
-        Wheel::RearRight,
-    ];
-    /// 0..=3.
-    pub const fn index(self) -> usize {
-        self as usize
-    }
-    /// The wheel of an index 0..=3.
-    pub fn from_index(i: usize) -> Option<Wheel> {
-        Wheel::ALL.get(i).copied()
-    }
-    /// The side of the car the wheel is on: front and rear left on the left, the others on
-    /// the right (the side a tyre is mounted on, `mf::Options::mounted`).
-    pub const fn side(self) -> Side {
-        match self {
-            Wheel::FrontLeft | Wheel::RearLeft => Side::Left,
-            Wheel::FrontRight | Wheel::RearRight => Side::Right,
-        }
-    }
-}
+/// Which wheel a sample or a result belongs to: [`crate::wheel::Wheel`], one byte, 0..=3.
+pub use crate::wheel::Wheel;
 
 /// One sample of one wheel's measured forces (from a force-sensing hub or bearing, or from a
 /// vehicle observer), with what the vehicle knows of its motion.
@@ -170,24 +133,21 @@ pub struct Measurement {
     pub gamma: Option<f32>,
 }
 
-impl Measurement {
-    /// The Magic Formula operating point of this sample, or `None` when neither α nor κ is
-    /// given (nothing to predict). Absent α, κ, γ are 0; absent Vx is the tyre's `LONGVL`;
-    /// the pressure is the parameter set's `INFLPRES`. Device and host both use this, so they
-    /// evaluate the same point.
-    pub fn mf_input(&self, p: &Params<f32>) -> Option<Input<f32>> {
-        if self.alpha.is_none() && self.kappa.is_none() {
-            return None;
+impl From<&Measurement> for wheel::Measurement<f32> {
+    /// What the wheel's pipeline takes of a measurement (δ is not used).
+    fn from(m: &Measurement) -> Self {
+        wheel::Measurement {
+            t_us: m.t_us,
+            fz: m.fz,
+            fy: m.fy,
+            mz: m.mz,
+            fx: m.fx,
+            vx: m.vx,
+            omega: m.omega,
+            alpha: m.alpha,
+            kappa: m.kappa,
+            gamma: m.gamma,
         }
-        Some(Input {
-            fz: self.fz,
-            kappa: self.kappa.unwrap_or(0.0),
-            alpha: self.alpha.unwrap_or(0.0),
-            gamma: self.gamma.unwrap_or(0.0),
-            phit: 0.0,
-            vx: self.vx.unwrap_or(p.longvl),
-            p: None,
-        })
     }
 }
 
@@ -761,6 +721,23 @@ impl Default for Settings {
 }
 
 impl Settings {
+    /// The estimator's settings these give: the bank's defaults with the prior `mu_prior` =
+    /// `fallback_mu` when it is a positive number.
+    pub fn estimator_config(&self) -> mu::Config<f32> {
+        let mut c = mu::Config::default();
+        if self.fallback_mu.is_finite() && self.fallback_mu > 0.0 {
+            c.mu_prior = self.fallback_mu;
+        }
+        c
+    }
+
+    /// The front-to-rear preview these give: none for wheelbase `0`, the preview over the
+    /// wheelbase (default weight) for a positive finite one, `Err(AckCode::BadSettings)` for
+    /// anything else ([`Settings::wheelbase`]).
+    pub fn preview(&self) -> Result<Option<preview::Config<f32>>, AckCode> {
+        Ok(self.wheelbase()?.map(preview::Config::with_wheelbase))
+    }
+
     /// The wheelbase of the preview: `Ok(None)` for `0` (none), `Ok(Some(l))` for a positive
     /// finite `l`, `Err(AckCode::BadSettings)` for anything else (negative, NaN, ±∞).
     pub fn wheelbase(&self) -> Result<Option<f32>, AckCode> {
@@ -809,6 +786,21 @@ pub struct Forces {
     pub flags: u16,
 }
 
+impl Forces {
+    /// The forces of wheel `wheel` at sample time `t_us`: Fx, Fy, Mz and the flags of a Magic
+    /// Formula evaluation.
+    pub fn new(wheel: Wheel, t_us: u32, o: &Output<f32>) -> Forces {
+        Forces {
+            wheel,
+            t_us,
+            fx: o.fx,
+            fy: o.fy,
+            mz: o.mz,
+            flags: o.flags.0,
+        }
+    }
+}
+
 /// Road friction estimate of one wheel, sent after each measurement once the estimator runs.
 ///
 /// Fields after `state` were added in protocol v2 (`mu_min`, `change`).
@@ -836,6 +828,32 @@ pub struct Estimate {
     /// bank's `change_min`); clear on every other. It is not repeated: a receiver that misses
     /// that one estimate sees the new μ only.
     pub change: bool,
+}
+
+impl Estimate {
+    /// The estimate `e` of wheel `wheel` after the sample of time `t_us`.
+    pub fn new(wheel: Wheel, t_us: u32, e: &mu::Estimate<f32>) -> Estimate {
+        Estimate {
+            wheel,
+            t_us,
+            mu: e.mu,
+            sigma: e.sigma,
+            state: e.state,
+            mu_min: e.mu_min,
+            change: e.change,
+        }
+    }
+
+    /// The estimate it carries.
+    pub fn estimate(&self) -> mu::Estimate<f32> {
+        mu::Estimate {
+            mu: self.mu,
+            sigma: self.sigma,
+            state: self.state,
+            mu_min: self.mu_min,
+            change: self.change,
+        }
+    }
 }
 
 /// Where the device's parameter set came from.
@@ -907,6 +925,16 @@ pub enum AckCode {
     NotSupported,
     /// A [`Settings`] field is out of range ([`Settings::wheelbase`]); the settings in use stay.
     BadSettings,
+}
+
+impl From<wheel::Error> for AckCode {
+    /// Why a measurement got no forces, as the device answers it.
+    fn from(e: wheel::Error) -> AckCode {
+        match e {
+            wheel::Error::NoSlip => AckCode::NoSlip,
+            wheel::Error::Step(_) | wheel::Error::Eval(_) => AckCode::EvalError,
+        }
+    }
 }
 
 /// Answer to a request ([`ParamBegin`], [`ParamCommit`], [`Settings`], [`Command`]), to a

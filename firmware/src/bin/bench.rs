@@ -8,7 +8,7 @@
 //! the figures. Printed: instructions per evaluation, and the largest error against the f64
 //! path over the same inputs; then, per wheel per sample, the friction estimator alone (the bank,
 //! `mu::bank::Bank`) and the firmware's whole per-wheel pipeline (transient filter + Magic
-//! Formula + bank, `wheel::Wheel`), the pipeline with `Fast` and `Libm`, on 1 kHz slaloms with
+//! Formula + bank, `wheel::Corner`), the pipeline with `Fast` and `Libm`, on 1 kHz slaloms with
 //! sensor noise on a dry, a wet and an icy road: the mean over the stream (one bracket) and the
 //! worst sample (each sample timed alone); the RAM, and the stack the pipeline takes.
 #![no_std]
@@ -23,8 +23,8 @@ use cortex_m_semihosting::hprintln;
 use gough::math::{Backend, Libm};
 use gough::mf::{self, Input, Options, Params};
 use gough::mu::{self, Bank, Reading, State};
-use gough::proto::{Measurement, Settings};
-use gough::wheel::Wheel;
+use gough::proto::{AckCode, Estimate, Forces, Measurement, Settings};
+use gough::wheel::{self, Corner};
 use gough_firmware::app::{self, App};
 use gough_firmware::{mps2, stack};
 use gough_workloads::marks::{bench_start, bench_stop};
@@ -311,7 +311,7 @@ fn per_sample<S>(
     }
 }
 
-/// The firmware's whole per-wheel pipeline (`wheel::Wheel`: transient filter + MF + the bank,
+/// The firmware's whole per-wheel pipeline (`wheel::Corner`: transient filter + MF + the bank,
 /// started as the App starts it) with backend `M`: a readable line and a
 /// `bench: wheel_<name>_<stream> mean=<n> worst=<n> ram=<bytes>` line.
 fn pipeline_figures<M: Backend<f32>>(
@@ -328,20 +328,26 @@ fn pipeline_figures<M: Backend<f32>>(
         clock,
         stream,
         || {
-            let mut w = Wheel::new();
-            let started = w.start_estimator::<M>(p, &settings);
+            let mut w = Corner::new();
+            let started = w.start_estimator::<M>(p, settings.estimator_config());
             core::hint::black_box(&started);
             w
         },
         |w, m| {
-            let f = w.forces::<M>(p, settings.limits, m);
+            // As the App: the protocol's messages from the corner's answers.
+            let x = wheel::Measurement::from(m);
+            let f = w
+                .forces::<M>(p, settings.limits, &x)
+                .map(|o| Forces::new(m.wheel, m.t_us, &o))
+                .map_err(AckCode::from);
             core::hint::black_box(&f);
-            w.estimate::<M>(p, m)
+            w.estimate::<M>(p, &x)
+                .map(|e| Estimate::new(m.wheel, m.t_us, &e))
                 .map_or(State::Fallback, |e| e.state)
         },
     );
     hprintln!(
-        "pipeline (transient filter + MF + bank estimator, firmware wheel::Wheel), {}: {} instructions per wheel per sample (mean over {} samples; identifiable samples {} mean; worst sample {}; {} identifiable)",
+        "pipeline (transient filter + MF + bank estimator, firmware wheel::Corner), {}: {} instructions per wheel per sample (mean over {} samples; identifiable samples {} mean; worst sample {}; {} identifiable)",
         name, w.mean, NS, w.mean_identifiable, w.max, w.identifiable
     );
     hprintln!(
@@ -350,7 +356,7 @@ fn pipeline_figures<M: Backend<f32>>(
         stream_name,
         w.mean,
         w.max,
-        size_of::<Wheel>()
+        size_of::<Corner<f32>>()
     );
 }
 
@@ -378,7 +384,7 @@ fn bank_figures<M: Backend<f32>>(
             let Some(est) = est.as_mut() else {
                 return State::Fallback;
             };
-            est.update::<M>(p, &gough::wheel::sample::<M>(p, m)).state
+            est.update::<M>(p, &wheel::sample::<f32, M>(p, &m.into())).state
         },
     );
     hprintln!(
@@ -409,7 +415,7 @@ fn bank_figures<M: Backend<f32>>(
                     est.preview::<M>(r);
                 }
             }
-            est.update::<M>(p, &gough::wheel::sample::<M>(p, m)).state
+            est.update::<M>(p, &wheel::sample::<f32, M>(p, &m.into())).state
         },
     );
     hprintln!(
@@ -503,9 +509,9 @@ fn main() -> ! {
 
     // The friction estimator and the per-wheel pipeline.
     hprintln!(
-        "RAM per wheel: Bank<f32> {} bytes, wheel::Wheel (filter + estimator) {} bytes; App {} bytes (four wheels); Params<f32> {} bytes",
+        "RAM per wheel: Bank<f32> {} bytes, wheel::Corner (filter + estimator) {} bytes; App {} bytes (four wheels); Params<f32> {} bytes",
         size_of::<Bank<f32>>(),
-        size_of::<Wheel>(),
+        size_of::<Corner<f32>>(),
         size_of::<App>(),
         size_of::<Params<f32>>()
     );
@@ -634,7 +640,7 @@ fn preview_figures<M: Backend<f32>>(
     // Readings on their way: a front wheel's identifications over the last stream.
     if let Ok(mut f) = Bank::new::<M>(p, None, mu::Config::default()) {
         for m in stream {
-            f.update::<M>(p, &gough::wheel::sample::<M>(p, m));
+            f.update::<M>(p, &wheel::sample::<f32, M>(p, &m.into()));
             pv.front(&f);
         }
     }

@@ -1,5 +1,5 @@
 //! The Rust side of the C API's example (issue 41): the same work as
-//! `capi/examples/m4f/main.c`, through the Rust API the firmware uses (`gough::wheel::Wheel`,
+//! `capi/examples/m4f/main.c`, through the Rust API the firmware uses (`gough::wheel::Corner`,
 //! `gough::mu::bank::Bank`, `gough::proto`, math backend `app::Math`), printing the same result
 //! lines — `cargo xtask test-all` compares them to the bit — and the same bench line for the
 //! pipeline's instructions per wheel per sample (`bench: pipeline_replay_rust`; QEMU
@@ -18,8 +18,10 @@ use cortex_m_rt::{entry, exception};
 use cortex_m_semihosting::hprintln;
 use gough::mf::{self, Input, Options};
 use gough::mu::{self, Bank};
-use gough::proto::{self, AckCode, Forces, Measurement, Msg, Mtu, Segmenter, Settings};
-use gough::wheel::Wheel;
+use gough::proto::{
+    self, AckCode, Estimate, Forces, Measurement, Msg, Mtu, Segmenter, Settings,
+};
+use gough::wheel::{self, Corner};
 use gough_firmware::app::Math;
 use gough_firmware::mps2;
 use gough_workloads::marks::{bench_start, bench_stop};
@@ -91,10 +93,17 @@ fn read(out: &mut [Measurement; ROWS]) -> Option<()> {
 
 /// The pipeline's step, as `gough_wheel_step` does it: forces, then the estimate.
 #[inline(never)]
-fn step(wheels: &mut [Wheel; 4], p: &gough::mf::Params<f32>, m: &Measurement) -> Answer {
+fn step(wheels: &mut [Corner<f32>; 4], p: &gough::mf::Params<f32>, m: &Measurement) -> Answer {
     let w = &mut wheels[m.wheel.index() & 3];
-    let f = w.forces::<Math>(p, Settings::default().limits, m);
-    (f, w.estimate::<Math>(p, m))
+    let x = wheel::Measurement::from(m);
+    let f = w
+        .forces::<Math>(p, Settings::default().limits, &x)
+        .map(|o| Forces::new(m.wheel, m.t_us, &o))
+        .map_err(AckCode::from);
+    let e = w
+        .estimate::<Math>(p, &x)
+        .map(|e| Estimate::new(m.wheel, m.t_us, &e));
+    (f, e)
 }
 
 fn state_code(s: mu::State) -> i32 {
@@ -168,9 +177,12 @@ fn main() -> ! {
     // Four wheels on their sides with their estimators, as `gough_wheel_init(..,
     // GOUGH_WHEEL_ESTIMATOR | GOUGH_WHEEL_LEFT or _RIGHT)`.
     let fresh = || {
-        let mut w = proto::Wheel::ALL.map(|id| Wheel::on(Some(id.side())));
+        let mut w = proto::Wheel::ALL.map(|id| Corner::on(Some(id.side())));
         for x in &mut w {
-            if x.start_estimator::<Math>(p, &Settings::default()).is_err() {
+            if x
+                .start_estimator::<Math>(p, Settings::default().estimator_config())
+                .is_err()
+            {
                 mps2::exit(false);
             }
         }
@@ -314,7 +326,7 @@ fn main() -> ! {
         "bench: pipeline_replay_rust mean={} worst={} ram={}",
         (mean + 0.5) as u32,
         (worst + 0.5) as u32,
-        size_of::<Wheel>()
+        size_of::<Corner<f32>>()
     );
     mps2::exit(true)
 }

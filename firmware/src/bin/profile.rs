@@ -74,7 +74,7 @@ fn main() -> ! {
     // The estimator: the firmware's config, the bench's slalom with camber.
     // SAFETY: the only reference to STREAM, taken once.
     let stream = unsafe { &mut *addr_of_mut!(STREAM) };
-    let cfg = gough::wheel::estimator_config(&Settings::default());
+    let cfg = Settings::default().estimator_config();
     let mut seen = [0u32; 2];
     for (k, mu) in [1.0, 0.2].into_iter().enumerate() {
         workload::slalom(&p32, mu, 0.02, stream);
@@ -124,7 +124,7 @@ fn estimator_stream(id: u32, mut est: Bank<f32>, p: &Params<f32>, stream: &[Meas
     let mut seen = 0u32;
     bench_start(id);
     for m in stream {
-        let s = gough::wheel::sample::<Fast>(p, m);
+        let s = gough::wheel::sample::<f32, Fast>(p, &m.into());
         let e = est.update::<Fast>(p, core::hint::black_box(&s));
         seen += u32::from(e.state == mu::State::Identifiable);
     }
