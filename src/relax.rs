@@ -342,6 +342,18 @@ impl<F: Float> Transient<F> {
         Transient { v: zero, u: zero }
     }
 
+    /// The steady state of constant slips κ and tan α with relaxation lengths `sigma`: the
+    /// deflections v = σα·tan α, u = σκ·κ that eq. (20) settles on, with σ floored and the
+    /// deflections clamped as [`Transient::step`] floors and clamps them (so that a step with
+    /// the same inputs stays there).
+    pub fn steady(cfg: &Config<F>, sigma: &Sigma<F>, kappa: F, tan_alpha: F) -> Self {
+        let mut flags = StepFlags::default();
+        let s_a = cfg.floor(sigma.sigma_alpha, &mut flags);
+        let s_k = cfg.floor(sigma.sigma_kappa, &mut flags);
+        let (v, u) = cfg.clamp(s_a * tan_alpha, s_k * kappa, s_a, s_k, &mut flags);
+        Transient { v, u }
+    }
+
     /// Advances the states by `dt` \[s\] with the kinematics and relaxation lengths held over the
     /// step (eq. 20, exact), and returns α', κ' (eq. 21) with the low-speed damping added.
     pub fn step<M: Backend<F>>(
@@ -481,12 +493,18 @@ pub fn decayed_sigma<F: Float>(sigma0: F, force: F, stiffness: F, slip: F) -> F 
     }
 }
 
-/// A tyre with transient slip: the states of eq. (20) plus the Magic Formula at (α', κ').
+/// A tyre with transient slip: the states of eq. (20), then the Magic Formula at (α', κ') — the
+/// one composition of the filter and the model, which the per-wheel pipeline
+/// (`wheel::Corner`), the host's vehicle simulation and its gap diagnosis run.
 ///
-/// One Magic Formula evaluation per step; the relaxation lengths of a step are those the
-/// previous step's evaluation returned (σ varies with Fz, which changes little over one short
-/// step). With [`TransientTyre::hold`] the step is a first-order hold between the previous
-/// operating point and this one, with σ at both ends (for steps over which the load moves).
+/// One Magic Formula evaluation per step ([`TransientTyre::step`]); the relaxation lengths of a
+/// step are those the previous step's evaluation returned (σ varies with Fz, which changes
+/// little over one short step), on the first step σ at the step's load and zero slip. With
+/// [`TransientTyre::hold`] the step is a first-order hold between the previous operating point
+/// and this one, with σ at both ends (for steps over which the load moves). A caller with σ of
+/// its own at both ends steps with [`TransientTyre::step_between`]. It starts undeflected
+/// ([`TransientTyre::new`]) or in the steady state of given slips ([`TransientTyre::start`],
+/// [`TransientTyre::restart`]).
 #[derive(Debug, Clone)]
 pub struct TransientTyre<F> {
     /// Deflection states.
@@ -500,12 +518,15 @@ pub struct TransientTyre<F> {
     /// (one more Magic Formula evaluation per step), and α', κ' are formed with it. Off: the
     /// inputs are held over the step with the previous step's σ ([`Transient::step`]).
     pub hold: bool,
-    last: Option<Output<F>>,
+    /// σ the next step starts from: the last evaluation's (decayed with `slip_decay`); `None`
+    /// before the first step.
+    sigma: Option<Sigma<F>>,
+    /// The last step's kinematics (the start of a first-order hold).
     last_kin: Option<Kinematics<F>>,
-    last_slips: Slips<F>,
 }
 
-/// Operating point of a transient step: the kinematics plus the load and camber.
+/// Operating point of a transient step: the kinematics plus the load, camber, turn slip and
+/// pressure.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct Operating<F> {
     /// Wheel kinematics.
@@ -514,8 +535,25 @@ pub struct Operating<F> {
     pub fz: F,
     /// Inclination γ \[rad\].
     pub gamma: F,
+    /// Turn slip φt \[1/m\] (used only with `Options::turn_slip`).
+    pub phit: F,
     /// Inflation pressure \[Pa\] (`None`: INFLPRES).
     pub p: Option<F>,
+}
+
+impl<F: Float> Operating<F> {
+    /// The Magic Formula's input at this point with slips κ, α.
+    fn input(&self, kappa: F, alpha: F) -> Input<F> {
+        Input {
+            fz: self.fz,
+            kappa,
+            alpha,
+            gamma: self.gamma,
+            phit: self.phit,
+            vx: self.kin.vx,
+            p: self.p,
+        }
+    }
 }
 
 /// Why a transient-tyre step failed.
@@ -527,6 +565,25 @@ pub enum TyreError {
     Eval(EvalError),
 }
 
+impl core::fmt::Display for TyreError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            TyreError::Step(e) => write!(f, "relaxation step: {e}"),
+            TyreError::Eval(e) => write!(f, "Magic Formula: {e}"),
+        }
+    }
+}
+
+impl core::error::Error for TyreError {}
+
+/// The relaxation lengths an evaluation gives.
+fn sigma_of<F: Float>(o: &Output<F>) -> Sigma<F> {
+    Sigma {
+        sigma_kappa: o.sigma_x,
+        sigma_alpha: o.sigma_y,
+    }
+}
+
 impl<F: Float> TransientTyre<F> {
     /// Undeflected tyre with the parameter set's defaults.
     pub fn new(p: &Params<F>) -> Self {
@@ -535,61 +592,60 @@ impl<F: Float> TransientTyre<F> {
             config: Config::from_params(p),
             slip_decay: false,
             hold: false,
-            last: None,
+            sigma: None,
             last_kin: None,
-            last_slips: Slips::default(),
         }
     }
 
-    /// The last output, if any step has run.
-    pub fn last(&self) -> Option<&Output<F>> {
-        self.last.as_ref()
+    /// σ the next step starts from, if any step or start has run.
+    pub fn sigma(&self) -> Option<Sigma<F>> {
+        self.sigma
     }
 
-    /// The last transient slips.
-    pub fn slips(&self) -> Slips<F> {
-        self.last_slips
+    /// Sets the deflections to the steady state of slips κ, tan α with relaxation lengths
+    /// `sigma` ([`Transient::steady`]), and `sigma` as the next step's σ.
+    pub fn restart(&mut self, sigma: Sigma<F>, kappa: F, tan_alpha: F) {
+        self.state = Transient::steady(&self.config, &sigma, kappa, tan_alpha);
+        self.sigma = Some(sigma);
     }
 
-    /// Advances by `dt` and evaluates the Magic Formula at the transient slips.
+    /// Starts in the steady state of slips κ, α at `op`: the Magic Formula there with `opts`
+    /// (the steady-state answer), and the deflections that give it ([`TransientTyre::restart`]
+    /// with the evaluation's σ). Nothing changes on an error.
+    pub fn start<M: Backend<F>>(
+        &mut self,
+        p: &Params<F>,
+        opts: &Options,
+        op: &Operating<F>,
+        kappa: F,
+        alpha: F,
+    ) -> Result<Output<F>, TyreError> {
+        let out = mf::eval::<F, M>(p, &op.input(kappa, alpha), opts).map_err(TyreError::Eval)?;
+        self.restart(sigma_of(&out), kappa, M::tan(alpha));
+        self.last_kin = Some(op.kin);
+        Ok(out)
+    }
+
+    /// Advances by `dt` \[s\] to `op` and evaluates the Magic Formula at the transient slips:
+    /// the output and the slips it was evaluated at. Nothing changes on an error.
     pub fn step<M: Backend<F>>(
         &mut self,
         p: &Params<F>,
         opts: &Options,
         dt: F,
         op: &Operating<F>,
-    ) -> Result<Output<F>, TyreError> {
+    ) -> Result<(Output<F>, Slips<F>), TyreError> {
         // σ at this sample's load and zero slip (the relaxation lengths depend on the load only).
         let zero_slip = || -> Result<Sigma<F>, TyreError> {
-            let o = mf::eval::<F, M>(
-                p,
-                &Input {
-                    fz: op.fz,
-                    gamma: op.gamma,
-                    vx: op.kin.vx,
-                    p: op.p,
-                    ..Input::default()
-                },
-                opts,
-            )
-            .map_err(TyreError::Eval)?;
-            Ok(Sigma {
-                sigma_kappa: o.sigma_x,
-                sigma_alpha: o.sigma_y,
-            })
+            let input = Input {
+                phit: F::ZERO,
+                ..op.input(F::ZERO, F::ZERO)
+            };
+            let o = mf::eval::<F, M>(p, &input, opts).map_err(TyreError::Eval)?;
+            Ok(sigma_of(&o))
         };
-        let sigma = match self.last {
-            Some(o) => {
-                let (mut sk, mut sa) = (o.sigma_x, o.sigma_y);
-                if self.slip_decay {
-                    sk = decayed_sigma(sk, o.fx, o.k_xk, self.last_slips.kappa);
-                    sa = decayed_sigma(sa, o.fy, o.k_ya, M::tan(self.last_slips.alpha));
-                }
-                Sigma {
-                    sigma_kappa: sk,
-                    sigma_alpha: sa,
-                }
-            }
+        let sigma = match self.sigma {
+            Some(s) => s,
             // First step: σ at this load, zero slip.
             None => zero_slip()?,
         };
@@ -598,7 +654,7 @@ impl<F: Float> TransientTyre<F> {
             // The end's σ; on the first step that is `sigma` itself (evaluated once).
             let s1 = Sample {
                 kin: op.kin,
-                sigma: if self.last.is_some() {
+                sigma: if self.sigma.is_some() {
                     zero_slip()?
                 } else {
                     sigma
@@ -613,25 +669,49 @@ impl<F: Float> TransientTyre<F> {
             state.step::<M>(&self.config, dt, &op.kin, &sigma)
         }
         .map_err(TyreError::Step)?;
-        let out = mf::eval::<F, M>(
-            p,
-            &Input {
-                fz: op.fz,
-                kappa: s.kappa,
-                alpha: s.alpha,
-                gamma: op.gamma,
-                phit: F::ZERO,
-                vx: op.kin.vx,
-                p: op.p,
-            },
-            opts,
-        )
-        .map_err(TyreError::Eval)?;
+        self.eval_commit::<M>(p, opts, op, state, s)
+    }
+
+    /// [`TransientTyre::step`] with the caller's relaxation lengths: a first-order hold
+    /// ([`Transient::step_hold`]) from `s0` (the previous step's end) to `s1` (this one's, at
+    /// `op`), then the Magic Formula at the slips. Nothing changes on an error.
+    pub fn step_between<M: Backend<F>>(
+        &mut self,
+        p: &Params<F>,
+        opts: &Options,
+        dt: F,
+        s0: &Sample<F>,
+        s1: &Sample<F>,
+        op: &Operating<F>,
+    ) -> Result<(Output<F>, Slips<F>), TyreError> {
+        let mut state = self.state;
+        let s = state
+            .step_hold::<M>(&self.config, dt, s0, s1)
+            .map_err(TyreError::Step)?;
+        self.eval_commit::<M>(p, opts, op, state, s)
+    }
+
+    /// The Magic Formula at the slips `s` of the new deflections `state`; on success the tyre
+    /// moves on to them, with the evaluation's σ (decayed with `slip_decay`) for the next step.
+    fn eval_commit<M: Backend<F>>(
+        &mut self,
+        p: &Params<F>,
+        opts: &Options,
+        op: &Operating<F>,
+        state: Transient<F>,
+        s: Slips<F>,
+    ) -> Result<(Output<F>, Slips<F>), TyreError> {
+        let out =
+            mf::eval::<F, M>(p, &op.input(s.kappa, s.alpha), opts).map_err(TyreError::Eval)?;
+        let mut next = sigma_of(&out);
+        if self.slip_decay {
+            next.sigma_kappa = decayed_sigma(out.sigma_x, out.fx, out.k_xk, s.kappa);
+            next.sigma_alpha = decayed_sigma(out.sigma_y, out.fy, out.k_ya, M::tan(s.alpha));
+        }
         self.state = state;
-        self.last = Some(out);
+        self.sigma = Some(next);
         self.last_kin = Some(op.kin);
-        self.last_slips = s;
-        Ok(out)
+        Ok((out, s))
     }
 }
 

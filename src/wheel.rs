@@ -12,20 +12,20 @@
 //! ([`crate::proto`]).
 //!
 //! ## Forces
-//! - A measurement **with kinematics** (Vx, plus α, κ or ω) goes through the relaxation-length
-//!   filter ([`crate::relax::Transient`], eq. 20 solved exactly over the step between this
-//!   wheel's timestamps): slip speeds Vsy = |Vx|·tan α and Vsx = −|Vx|·κ, or Vsx = Vx − ω·Re when ω
-//!   is given without κ ([`effective_radius`]); the Magic Formula is evaluated at the transient
-//!   α', κ' (`Options::transient`). The relaxation lengths of a step are those of the previous
-//!   evaluation (σ varies with Fz, which changes little over one step), as in
-//!   [`crate::relax::TransientTyre`]. The damping speed is |Vx|
+//! - A measurement **with kinematics** (Vx, plus α, κ or ω) goes through the transient tyre
+//!   ([`crate::relax::TransientTyre`]: the relaxation-length filter, eq. 20 solved exactly over
+//!   the step between this wheel's timestamps, then the Magic Formula at the transient α', κ',
+//!   `Options::transient`): slip speeds Vsy = |Vx|·tan α and Vsx = −|Vx|·κ, or Vsx = Vx − ω·Re
+//!   when ω is given without κ ([`effective_radius`]). The relaxation lengths of a step are
+//!   those of the previous evaluation (σ varies with Fz, which changes little over one step).
+//!   The damping speed is |Vx|
 //!   ([`crate::relax::DampingSpeed::Forward`], TNO's form): a constant input settles on
 //!   exactly the steady-state Magic Formula at the measured α, κ — the slips the Magic Formula
 //!   was fitted with.
 //! - **Start** (a wheel's first sample; after a gap longer than [`MAX_STEP_US`], a timestamp that
 //!   does not advance, a parameter upload, or a sample without kinematics): the deflections start
-//!   in the steady state of the measured slips (v = σα·tan α, u = σκ·κ) and the forces are the
-//!   steady-state Magic Formula — a stream that starts mid-manoeuvre does not start from an
+//!   in the steady state of the measured slips (v = σα·tan α, u = σκ·κ,
+//!   [`crate::relax::TransientTyre::start`]) and the forces are the steady-state Magic Formula — a stream that starts mid-manoeuvre does not start from an
 //!   undeflected tyre.
 //! - **Without kinematics** (no Vx, or neither α, κ nor ω): the steady-state Magic Formula at the
 //!   measured α, κ ([`Measurement::mf_input`], Vx = LONGVL), see [`steady`].
@@ -47,7 +47,7 @@ use crate::math::{Backend, Float};
 use crate::mf::{self, EvalError, Input, Options, Output, Params, Side};
 use crate::mu::preview::{self, Preview, PreviewError};
 use crate::mu::{self, Bank, BuildError};
-use crate::relax::{self, DampingSpeed, Kinematics, Sigma, StepError, Transient};
+use crate::relax::{DampingSpeed, Kinematics, Operating, StepError, TransientTyre, TyreError};
 use postcard::experimental::max_size::MaxSize;
 use serde::{Deserialize, Serialize};
 
@@ -168,14 +168,19 @@ impl core::fmt::Display for Error {
 
 impl core::error::Error for Error {}
 
-/// The filter's state between samples.
-#[derive(Debug, Clone, Copy)]
-struct Deflection<F> {
-    tr: Transient<F>,
-    cfg: relax::Config<F>,
-    /// σκ, σα of the last evaluation \[m\].
-    sigma: Sigma<F>,
-    /// Timestamp of the last sample \[µs\].
+impl From<TyreError> for Error {
+    fn from(e: TyreError) -> Self {
+        match e {
+            TyreError::Step(e) => Error::Step(e),
+            TyreError::Eval(e) => Error::Eval(e),
+        }
+    }
+}
+
+/// The filter between samples: the transient tyre and the time of the last sample \[µs\].
+#[derive(Debug, Clone)]
+struct Filter<F> {
+    tyre: TransientTyre<F>,
     t_us: u32,
 }
 
@@ -186,7 +191,6 @@ struct Kin<F> {
     /// Steady-state slips: the measured α (0 if absent) and κ (measured, or from ω).
     alpha: F,
     kappa: F,
-    tan_alpha: F,
 }
 
 /// Effective rolling radius Re \[m\] at load `fz` \[N\] for slip from the wheel speed ω: MF 6.x,
@@ -233,7 +237,6 @@ fn kinematics<F: Float, M: Backend<F>>(p: &Params<F>, m: &Measurement<F>) -> Opt
         },
         alpha,
         kappa,
-        tan_alpha,
     })
 }
 
@@ -291,7 +294,7 @@ pub fn steady<F: Float, M: Backend<F>>(
 /// them (pass the same ones the estimator was started with).
 #[derive(Debug, Clone)]
 pub struct Corner<F> {
-    defl: Option<Deflection<F>>,
+    filter: Option<Filter<F>>,
     est: Option<Bank<F>>,
     mounted: Option<Side>,
 }
@@ -315,7 +318,7 @@ impl<F: Float> Corner<F> {
     /// ISO-W axes. `None`: as the file describes it (the other side's signals arrive mirrored).
     pub const fn on(mounted: Option<Side>) -> Self {
         Corner {
-            defl: None,
+            filter: None,
             est: None,
             mounted,
         }
@@ -328,7 +331,7 @@ impl<F: Float> Corner<F> {
 
     /// Forgets the filter's deflections (the next sample starts it in the steady state).
     pub fn reset_filter(&mut self) {
-        self.defl = None;
+        self.filter = None;
     }
 
     /// (Re)starts the estimator for tyre `p` with settings `cfg`; it forgets what it learnt. On
@@ -361,7 +364,9 @@ impl<F: Float> Corner<F> {
 
     /// The filter's deflections (v lateral, u longitudinal) \[m\], if it runs.
     pub fn deflection(&self) -> Option<(F, F)> {
-        self.defl.map(|d| (d.tr.v, d.tr.u))
+        self.filter
+            .as_ref()
+            .map(|f| (f.tyre.state.v, f.tyre.state.u))
     }
 
     /// The predicted forces of one sample (see the module doc): Fx, Fy, Mz (with μ, K, σ and the
@@ -374,26 +379,19 @@ impl<F: Float> Corner<F> {
         m: &Measurement<F>,
     ) -> Result<Output<F>, Error> {
         let Some(k) = kinematics::<F, M>(p, m) else {
-            self.defl = None;
+            self.filter = None;
             return steady::<F, M>(p, limits, self.mounted, m);
         };
-        let gamma = m.gamma.unwrap_or(F::ZERO);
-        let input = |kappa: F, alpha: F| Input {
+        let op = Operating {
+            kin: k.kin,
             fz: m.fz,
-            kappa,
-            alpha,
-            gamma,
+            gamma: m.gamma.unwrap_or(F::ZERO),
             phit: F::ZERO,
-            vx: k.kin.vx,
             p: None,
         };
-        if let Some(d) = self.defl {
-            let dt = m.t_us.wrapping_sub(d.t_us) as i32;
+        if let Some(f) = self.filter.as_mut() {
+            let dt = m.t_us.wrapping_sub(f.t_us) as i32;
             if dt > 0 && dt <= MAX_STEP_US {
-                let mut tr = d.tr;
-                let s = tr
-                    .step::<M>(&d.cfg, F::from_micros(dt as u32), &k.kin, &d.sigma)
-                    .map_err(Error::Step)?;
                 let opts = Options {
                     limits,
                     transient: true,
@@ -401,56 +399,28 @@ impl<F: Float> Corner<F> {
                     moments: false, // the forces are Fx, Fy, Mz
                     ..Options::default()
                 };
-                let o = eval::<F, M>(p, &input(s.kappa, s.alpha), &opts)?;
-                self.defl = Some(Deflection {
-                    tr,
-                    cfg: d.cfg,
-                    sigma: Sigma {
-                        sigma_kappa: o.sigma_x,
-                        sigma_alpha: o.sigma_y,
-                    },
-                    t_us: m.t_us,
-                });
+                let (o, _) = f
+                    .tyre
+                    .step::<M>(p, &opts, F::from_micros(dt as u32), &op)
+                    .map_err(Error::from)?;
+                f.t_us = m.t_us;
                 return Ok(o);
             }
         }
         // Start: steady state of the measured slips.
-        self.defl = None;
+        self.filter = None;
         let opts = Options {
             limits,
             mounted: self.mounted,
             moments: false, // the forces are Fx, Fy, Mz
             ..Options::default()
         };
-        let o = eval::<F, M>(p, &input(k.kappa, k.alpha), &opts)?;
-        let cfg = relax::Config {
-            damping: DampingSpeed::Forward,
-            ..relax::Config::from_params(p)
-        };
-        // The floor `Transient::step` puts on σ.
-        let floor = |s: F| {
-            let s = s.abs();
-            if s < cfg.sigma_min {
-                cfg.sigma_min.max(F::from_f64(1e-6))
-            } else {
-                s
-            }
-        };
-        let (s_a, s_k) = (floor(o.sigma_y), floor(o.sigma_x));
-        let (v_max, u_max) = (cfg.max_tan_alpha * s_a, cfg.max_kappa * s_k);
-        let tr = Transient {
-            v: (s_a * k.tan_alpha).max(-v_max).min(v_max),
-            u: (s_k * k.kappa).max(-u_max).min(u_max),
-        };
-        self.defl = Some(Deflection {
-            tr,
-            cfg,
-            sigma: Sigma {
-                sigma_kappa: o.sigma_x,
-                sigma_alpha: o.sigma_y,
-            },
-            t_us: m.t_us,
-        });
+        let mut tyre = TransientTyre::new(p);
+        tyre.config.damping = DampingSpeed::Forward;
+        let o = tyre
+            .start::<M>(p, &opts, &op, k.kappa, k.alpha)
+            .map_err(Error::from)?;
+        self.filter = Some(Filter { tyre, t_us: m.t_us });
         Ok(o)
     }
 

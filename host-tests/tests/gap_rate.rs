@@ -63,16 +63,17 @@ fn oscillating_log(
             },
             fz,
             gamma: 0.0,
+            phit: 0.0,
             p: None,
         };
         if init {
             // Start in the steady state of the first row, as the sim does.
-            let o = tt.step::<Libm>(p, &opts, dt, &op).unwrap();
+            let (o, _) = tt.step::<Libm>(p, &opts, dt, &op).unwrap();
             tt.state.v = o.sigma_y * alpha.tan();
             tt.state.u = o.sigma_x * kappa;
             init = false;
         }
-        let o = tt.step::<Libm>(p, &opts, dt, &op).unwrap();
+        let (o, _) = tt.step::<Libm>(p, &opts, dt, &op).unwrap();
         if i % every == 0 {
             lg.t.push(t);
             lg.vx.push(vx);

@@ -251,9 +251,10 @@ fn fy_averages(p: &Params<f64>, f: f64, amp: f64, vx: f64) -> (f64, f64) {
             },
             fz,
             gamma: 0.0,
+            phit: 0.0,
             p: None,
         };
-        let out = tyre.step::<Libm>(p, &opts, dt, &op).unwrap();
+        let (out, _) = tyre.step::<Libm>(p, &opts, dt, &op).unwrap();
         if t >= settle {
             let ss = mf::eval::<f64, Libm>(
                 p,
@@ -376,11 +377,12 @@ fn transient_tyre_converges_to_the_steady_state() {
         },
         fz: 5000.0,
         gamma: 0.01,
+        phit: 0.0,
         p: None,
     };
     let mut outs = Vec::new();
     for _ in 0..2000 {
-        outs.push(tyre.step::<Libm>(&p, &opts, 1e-3, &op).unwrap());
+        outs.push(tyre.step::<Libm>(&p, &opts, 1e-3, &op).unwrap().0);
     }
     let ss = mf::eval::<f64, Libm>(
         &p,
@@ -584,9 +586,10 @@ fn fy_under_load(
             },
             fz,
             gamma: 0.0,
+            phit: 0.0,
             p: None,
         };
-        let o = tyre.step::<Libm>(p, &opts, dt, &op).unwrap();
+        let (o, _) = tyre.step::<Libm>(p, &opts, dt, &op).unwrap();
         out.push((t, o.fy));
     }
     out
@@ -684,4 +687,151 @@ fn dynamic_side_force_loss_from_a_100_hz_run_is_the_continuous_one() {
     std::println!("Fig. 14 loss at 8 Hz ±30 %, 10 m/s: continuous {cont:.4}, hold 100 Hz {l100:.4}, held step 100 Hz {old100:.4}");
     assert!(cont > 0.005, "a loss to measure: {cont}");
     assert!((l100 - cont).abs() < 0.05 * cont, "{l100} vs {cont}");
+}
+
+/// The steady state of constant slips is a fixed point of the step (both damping speeds at
+/// zero longitudinal slip, the forward one under braking too), σ floored as the step floors
+/// it: a σ below `sigma_min` gives the deflections of `sigma_min`.
+#[test]
+fn the_steady_state_is_a_fixed_point_of_the_step() {
+    let vx = 15.0;
+    for (damping, tan_a, kappa) in [
+        (DampingSpeed::Forward, 0.04, -0.06),
+        (DampingSpeed::Rolling, -0.07, 0.0),
+    ] {
+        let c = cfg(damping);
+        let k = Kinematics {
+            vx,
+            vsx: -kappa * vx,
+            vsy: tan_a * vx,
+        };
+        let mut tr = Transient::steady(&c, &SIGMA, kappa, tan_a);
+        assert_eq!(
+            (tr.v, tr.u),
+            (SIGMA.sigma_alpha * tan_a, SIGMA.sigma_kappa * kappa)
+        );
+        let s = tr.step::<Libm>(&c, 1e-3, &k, &SIGMA).unwrap();
+        assert!((s.alpha.tan() - tan_a).abs() < 1e-12 && (s.kappa - kappa).abs() < 1e-12);
+    }
+    let c = cfg(DampingSpeed::Forward);
+    let tiny = Sigma {
+        sigma_kappa: 0.0,
+        sigma_alpha: 1e-4,
+    };
+    let tr = Transient::steady(&c, &tiny, 0.1, 0.2);
+    assert_eq!((tr.v, tr.u), (0.01 * 0.2, 0.01 * 0.1));
+    // Clamped as the step clamps: |tan α'| ≤ 1.
+    let tr = Transient::steady(&c, &SIGMA, 0.0, 3.0);
+    assert_eq!(tr.v, SIGMA.sigma_alpha);
+}
+
+/// `TransientTyre::start` answers with the steady-state Magic Formula at the given slips and
+/// leaves the tyre in that steady state: a step with the same inputs gives the same forces.
+#[test]
+fn a_started_tyre_stays_in_the_steady_state_of_its_slips() {
+    let p = tyre61();
+    let (vx, a, k) = (20.0, 0.05f64, -0.03f64);
+    let op = Operating {
+        kin: Kinematics {
+            vx,
+            vsx: -k * vx,
+            vsy: a.tan() * vx,
+        },
+        fz: 5000.0,
+        gamma: 0.02,
+        ..Operating::default()
+    };
+    let steady = Options {
+        moments: false,
+        ..Options::default()
+    };
+    let transient = Options {
+        transient: true,
+        ..steady
+    };
+    let mut tyre = TransientTyre::new(&p);
+    tyre.config.damping = DampingSpeed::Forward;
+    assert!(tyre.sigma().is_none());
+    let o = tyre.start::<Libm>(&p, &steady, &op, k, a).unwrap();
+    let input = Input {
+        fz: 5000.0,
+        kappa: k,
+        alpha: a,
+        gamma: 0.02,
+        vx,
+        ..Input::default()
+    };
+    assert_eq!(o, mf::eval::<f64, Libm>(&p, &input, &steady).unwrap());
+    assert_eq!(
+        tyre.sigma(),
+        Some(Sigma {
+            sigma_kappa: o.sigma_x,
+            sigma_alpha: o.sigma_y
+        })
+    );
+    for _ in 0..100 {
+        let (f, s) = tyre.step::<Libm>(&p, &transient, 1e-3, &op).unwrap();
+        assert!((s.alpha - a).abs() < 1e-12 && (s.kappa - k).abs() < 1e-12);
+        assert!((f.fy - o.fy).abs() < 1e-9 * p.fnomin && (f.fx - o.fx).abs() < 1e-9 * p.fnomin);
+    }
+    // A start the Magic Formula refuses changes nothing.
+    let before = (tyre.state, tyre.sigma());
+    let bad = Operating { fz: f64::NAN, ..op };
+    assert!(tyre.start::<Libm>(&p, &steady, &bad, k, a).is_err());
+    assert_eq!((tyre.state, tyre.sigma()), before);
+}
+
+/// `TransientTyre::step_between` is the first-order hold with the caller's σ, then the Magic
+/// Formula at its slips (turn slip and pressure of the operating point included), to the bit.
+#[test]
+fn step_between_is_the_hold_then_the_magic_formula() {
+    let p = tyre61();
+    let opts = Options {
+        transient: true,
+        ..Options::default()
+    };
+    let kin = |a: f64| Kinematics {
+        vx: 10.0,
+        vsx: 0.1,
+        vsy: a.tan() * 10.0,
+    };
+    let s0 = Sample {
+        kin: kin(0.01),
+        sigma: SIGMA,
+    };
+    let s1 = Sample {
+        kin: kin(0.03),
+        sigma: Sigma {
+            sigma_kappa: 0.2,
+            sigma_alpha: 0.5,
+        },
+    };
+    let op = Operating {
+        kin: s1.kin,
+        fz: 4500.0,
+        gamma: -0.01,
+        phit: 0.0,
+        p: Some(2.0e5),
+    };
+    let mut tyre = TransientTyre::new(&p);
+    tyre.restart(SIGMA, -0.01, 0.01f64.tan());
+    let mut by_hand = tyre.state;
+    let (o, s) = tyre
+        .step_between::<Libm>(&p, &opts, 0.01, &s0, &s1, &op)
+        .unwrap();
+    let sh = by_hand
+        .step_hold::<Libm>(&tyre.config, 0.01, &s0, &s1)
+        .unwrap();
+    assert_eq!(s, sh);
+    assert_eq!(tyre.state, by_hand);
+    let input = Input {
+        fz: 4500.0,
+        kappa: sh.kappa,
+        alpha: sh.alpha,
+        gamma: -0.01,
+        phit: 0.0,
+        vx: 10.0,
+        p: Some(2.0e5),
+    };
+    assert_eq!(o, mf::eval::<f64, Libm>(&p, &input, &opts).unwrap());
 }

@@ -3,15 +3,17 @@
 //! - Steady state: [`gough::mf::eval`] of the file's version at each row's (Fz, κ, α, γ, φt,
 //!   Vx, p), limits on (the file's ranges; each clip is the model's, as in `gough mf eval`).
 //! - Relaxation: when the file gives what the filters need (MF 6.x `LATERAL_STIFFNESS` and
-//!   `LONGITUDINAL_STIFFNESS`; MF 5.2 / Delft 96 `PTX1` and `PTY1`), the slips pass through
-//!   [`gough::relax::Transient`] (eq. 20, exact discretisation) before the Magic Formula, which
-//!   then runs with `Options::transient` (no steady-state low-speed reductions).
+//!   `LONGITUDINAL_STIFFNESS`; MF 5.2 / Delft 96 `PTX1` and `PTY1`), the core's transient tyre
+//!   runs ([`gough::relax::TransientTyre`]: the filter of eq. 20, exact discretisation, then
+//!   the Magic Formula at its slips with `Options::transient`, no steady-state low-speed
+//!   reductions).
 //! - Turn slip is on when the log has a `phit` column and the file carries turn-slip
 //!   coefficients (MF 6.x); otherwise φt is not used.
 //!
 //! ## First-order hold: the continuous model, sampled
 //! A log samples continuous signals, so between two rows the inputs are taken as linear in
-//! time, and the filter is the core's [`Transient::step_hold`]: the kinematics **and** the
+//! time, and the step is the core's [`TransientTyre::step_between`] ([`Transient::step_hold`],
+//! then the Magic Formula): the kinematics **and** the
 //! relaxation lengths (σ at each row's load, γ, p) are linear between the two rows, and with them
 //! the damping speed and the decay rate V/σ; the forcing is integrated exactly; the core takes
 //! sub-steps where V/σ moves faster than one step resolves (the load oscillating at several Hz
@@ -32,8 +34,8 @@
 //! that fit exactly in steady state (α' → α, κ' → κ), also under braking.
 //!
 //! The first row (and the first after a gap) starts in steady state (deflections equal to
-//! σ·tan α and σ·κ), so a log that begins mid-manoeuvre does not show a start-up transient that
-//! the tyre never had.
+//! σ·tan α and σ·κ, with σ floored as the filter floors it: [`Transient::steady`]), so a log
+//! that begins mid-manoeuvre does not show a start-up transient that the tyre never had.
 //!
 //! Nothing of the tyre is re-implemented here. The one formula typed here is the sensor model of
 //! [`lag`] (a first-order low-pass, exact for a first-order hold), which is not the tyre's.
@@ -41,7 +43,9 @@
 use super::log::Log;
 use gough::math::Libm;
 use gough::mf::{self, Input, Options, Params};
-use gough::relax::{Config, DampingSpeed, Kinematics, Sample, Sigma, Transient};
+use gough::relax::{
+    Config, DampingSpeed, Kinematics, Operating, Sample, Sigma, Transient, TransientTyre,
+};
 
 /// Fx, Fy \[N\], Mz \[N·m\] of one row.
 pub type Out = [f64; 3];
@@ -171,19 +175,33 @@ impl Sim {
         }
     }
 
+    /// The kinematics of row `i`.
+    fn kinematics(log: &Log, i: usize) -> Kinematics<f64> {
+        let (vsx, vsy) = log.slip_velocity(i);
+        Kinematics {
+            vx: log.vx[i],
+            vsx,
+            vsy,
+        }
+    }
+
     /// The inputs of eq. (20) at row `i` with relaxation lengths `sigma` = `[σκ, σα]`.
     fn sample(log: &Log, i: usize, sigma: [f64; 2]) -> Sample<f64> {
-        let (vsx, vsy) = log.slip_velocity(i);
         Sample {
-            kin: Kinematics {
-                vx: log.vx[i],
-                vsx,
-                vsy,
-            },
-            sigma: Sigma {
-                sigma_kappa: sigma[0],
-                sigma_alpha: sigma[1],
-            },
+            kin: Sim::kinematics(log, i),
+            sigma: sigma_of(sigma),
+        }
+    }
+
+    /// The operating point of row `i` (what [`Sim::input`] gives the Magic Formula, but for
+    /// the slips).
+    fn operating(&self, log: &Log, i: usize) -> Operating<f64> {
+        Operating {
+            kin: Sim::kinematics(log, i),
+            fz: log.fz[i],
+            gamma: log.gamma[i],
+            phit: if self.turn_slip { log.phit_at(i) } else { 0.0 },
+            p: log.p_at(i),
         }
     }
 
@@ -235,12 +253,15 @@ impl Sim {
         })
     }
 
-    /// Steady-state deflections at row `i` for relaxation lengths `sigma`.
-    fn init(log: &Log, i: usize, sigma: [f64; 2]) -> Transient<f64> {
-        Transient {
-            v: sigma[1] * log.alpha[i].tan(),
-            u: sigma[0] * log.kappa[i],
-        }
+    /// Steady-state deflections at row `i` for relaxation lengths `sigma` (the core's
+    /// [`Transient::steady`]).
+    fn init(&self, log: &Log, i: usize, sigma: [f64; 2]) -> Transient<f64> {
+        Transient::steady(
+            &self.cfg,
+            &sigma_of(sigma),
+            log.kappa[i],
+            log.alpha[i].tan(),
+        )
     }
 
     /// Runs the whole log with `params` (SIM.tir's or an effect's) and `mods`. The filters
@@ -256,7 +277,9 @@ impl Sim {
             sigma: Vec::with_capacity(n),
             slips: Vec::with_capacity(n),
         };
-        let mut st = Transient::new(0.0);
+        // The core's transient tyre: the filter, then the Magic Formula at its slips.
+        let mut tyre = TransientTyre::new(params);
+        tyre.config = self.cfg;
         let mut prev = [0.0; 2];
         for i in 0..n {
             set_lambda(&mut q, &base, mods, i);
@@ -266,17 +289,23 @@ impl Sim {
                 [0.0, 0.0]
             };
             let fresh = restart.get(i).copied().unwrap_or(true);
-            let slips = if !filters || fresh {
+            let (o, slips) = if !filters || fresh {
                 if filters {
-                    st = Sim::init(log, i, sigma);
+                    tyre.restart(sigma_of(sigma), log.kappa[i], log.alpha[i].tan());
                 }
-                [log.kappa[i], log.alpha[i]]
+                let inp = self.input(log, i, log.kappa[i], log.alpha[i]);
+                let o = mf::eval::<f64, Libm>(&q, &inp, &self.opts)
+                    .map_err(|e| (i, format!("Magic Formula: {e}")))?;
+                (o, [log.kappa[i], log.alpha[i]])
             } else {
-                self.advance(&mut st, log, i, prev, sigma)?
+                // The first-order hold from row i − 1 to row i, each with its own σ.
+                let h = log.t[i] - log.t[i - 1];
+                let (a, b) = (Sim::sample(log, i - 1, prev), Sim::sample(log, i, sigma));
+                let (o, s) = tyre
+                    .step_between::<Libm>(&q, &self.opts, h, &a, &b, &self.operating(log, i))
+                    .map_err(|e| (i, e.to_string()))?;
+                (o, [s.kappa, s.alpha])
             };
-            let inp = self.input(log, i, slips[0], slips[1]);
-            let o = mf::eval::<f64, Libm>(&q, &inp, &self.opts)
-                .map_err(|e| (i, format!("Magic Formula: {e}")))?;
             prev = sigma;
             let mut out = [o.fx, o.fy, o.mz];
             add(&mut out, mods, i);
@@ -300,7 +329,7 @@ impl Sim {
         for i in 0..n {
             let s = sigma.get(i).copied().unwrap_or(s0);
             if restart.get(i).copied().unwrap_or(true) {
-                st = Sim::init(log, i, s);
+                st = self.init(log, i, s);
                 out.push([log.kappa[i], log.alpha[i]]);
             } else {
                 let p = sigma.get(i - 1).copied().unwrap_or(s0);
@@ -337,6 +366,14 @@ impl Sim {
             res.push(out);
         }
         Ok(res)
+    }
+}
+
+/// Relaxation lengths `[σκ, σα]` as the core's.
+fn sigma_of(sigma: [f64; 2]) -> Sigma<f64> {
+    Sigma {
+        sigma_kappa: sigma[0],
+        sigma_alpha: sigma[1],
     }
 }
 

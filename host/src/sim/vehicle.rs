@@ -603,9 +603,10 @@ impl Vehicle {
                 },
                 fz: fz[i],
                 gamma,
+                phit: 0.0,
                 p: None,
             };
-            let out: Output<f64> = wheel
+            let (out, slips): (Output<f64>, _) = wheel
                 .tyre
                 .step::<Libm>(&wheel.params, &wheel.options, dt, &op)
                 .map_err(|e| {
@@ -614,7 +615,6 @@ impl Vehicle {
                         self.t, WHEELS[i]
                     )
                 })?;
-            let slips = wheel.tyre.slips();
             let omega0 = wheel.omega;
             // Wheel spin: drive and tyre torque, then brake and rolling resistance as Coulomb
             // torques that can stop the wheel but not reverse it.
