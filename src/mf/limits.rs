@@ -159,23 +159,8 @@ pub fn condition<F: Float, M: Backend<F>>(
     Ok(c)
 }
 
-/// The load stage of the conditioning: everything but κ and α (which it leaves 0; [`slips`]
-/// conditions them). `input.kappa` and `input.alpha` are not read.
-#[inline(always)]
-pub fn condition_load<F: Float, M: Backend<F>>(
-    p: &Params<F>,
-    input: &Input<F>,
-    opts: &Options,
-) -> Result<Conditioned<F>, EvalError> {
-    check_finite(&Input {
-        kappa: F::ZERO,
-        alpha: F::ZERO,
-        ..*input
-    })?;
-    condition_load_checked::<F, M>(p, input, opts)
-}
-
-/// [`condition_load`] of an input its caller has checked finite ([`check_finite`]): `mf::eval`
+/// The load stage of the conditioning — everything but κ and α (which it leaves 0; [`slips`]
+/// conditions them) — of an input its caller has checked finite ([`check_finite`]): `mf::eval`
 /// checks the whole input once.
 #[inline(always)]
 pub(crate) fn condition_load_checked<F: Float, M: Backend<F>>(

@@ -1,9 +1,11 @@
 //! Magic Formula steady-state tyre forces and moments: Delft Tyre 96, MF-Tyre 5.2, MF 6.1/6.2.
 //!
 //! One entry point, [`eval`], computes in book order (the order of MFeval's `Solver.m`, and of
-//! the paper's appendix): conditioning of the inputs ([`limits`]) → `fx0` → `fy0` → `mz0`
-//! intermediates ([`pure`]) → `fx` → `fy` ([`combined`]) → `mx` → `my` ([`moments`]) → `mz`
-//! ([`combined`]) → relaxation lengths ([`sigma`]). Turn slip ([`turnslip`]) is an option.
+//! the paper's appendix): conditioning of the inputs (`limits`) → `fx0` → `fy0` → `mz0`
+//! intermediates (`pure`) → `fx` → `fy` ([`combined`]) → `mx` → `my` (`moments`) → `mz`
+//! ([`combined`]) → relaxation lengths (`sigma`). Turn slip ([`turnslip`]) is an option. The
+//! stage modules are the crate's own (`pure`, `limits`, `moments`, `sigma`); the equation map
+//! below says where each equation is.
 //!
 //! [`eval`] runs in stages ([`prepared`]): the load stage (everything that depends on Fz, γ, p,
 //! Vx and the scalings), the friction stage (λμ) and the slip stage (κ, α); [`prepared::Prepared`]
@@ -17,14 +19,14 @@
 //! ## Equation map
 //! | quantity | paper (Delft Tyre 96, appendix) | MF 5.2 / 6.1 (Pacejka 2006, ch. 4; Besselink 2010) | fn |
 //! |---|---|---|---|
-//! | Fx0 | (22)–(31) | (4.E9)–(4.E18) | [`pure::fx0`] |
-//! | Fy0 | (32)–(42) | (4.E19)–(4.E30) | [`pure::fy0`] |
-//! | t, Mzr (pure) | (43)–(56), reconstructed | (4.E31)–(4.E49), (A58), (A60) | [`pure::mz0_load`], [`pure::mz0_mu`] |
+//! | Fx0 | (22)–(31) | (4.E9)–(4.E18) | `pure::fx0_load`, `pure::fx0_mu`, `pure::fx0_slip` |
+//! | Fy0 | (32)–(42) | (4.E19)–(4.E30) | `pure::fy0_load`, `pure::fy0_mu`, `pure::fy0_slip` |
+//! | t, Mzr (pure) | (43)–(56), reconstructed | (4.E31)–(4.E49), (A58), (A60) | `pure::mz0_load`, `pure::mz0_mu` |
 //! | Fx | (57)–(62), reconstructed | (4.E50)–(4.E57) | [`combined::fx_slip`] |
 //! | Fy | (13)–(16), (63)–(68) | (4.E58)–(4.E67) | [`combined::fy_slip`] |
 //! | Mz | (17), (18), (69)–(75) | (4.E71)–(4.E78), (A54)–(A56) | [`combined::mz_slip`] |
-//! | Mx, My | — (MF 5.2 forms) | (A47)/(49 draft), (A48) | [`moments`] |
-//! | σx, σy | — (MF 5.2 forms) | Besselink eqs. (17)–(19) | [`sigma`] |
+//! | Mx, My | — (MF 5.2 forms) | (A47)/(49 draft), (A48) | `moments::mx`, `moments::my` |
+//! | σx, σy | — (MF 5.2 forms) | Besselink eqs. (17)–(19) | `sigma::sigma` |
 //!
 //! The scan of the paper is damaged in eqs. 43–68; those equations are reconstructed from the
 //! body's eqs. (7)–(18) and from MF 5.2, which grew out of Delft Tyre 96. Each reconstruction is
@@ -35,12 +37,12 @@
 //! loaded-radius search: Fz is an input here. Transient behaviour is in the `relax` module.
 
 pub mod combined;
-pub mod limits;
-pub mod moments;
-pub mod params;
+pub(crate) mod limits;
+pub(crate) mod moments;
+mod params;
 pub mod prepared;
-pub mod pure;
-pub mod sigma;
+pub(crate) mod pure;
+pub(crate) mod sigma;
 pub mod turnslip;
 
 pub use params::{Key, Need, Params, Side, Since, Version, IGNORED_KEYS};

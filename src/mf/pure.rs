@@ -19,12 +19,11 @@ use super::{clip_e, magic_sin, Flags, Params, Version, EPS};
 use crate::math::{Backend, Float, Lift};
 
 /// Results of [`fx0`].
+#[cfg(test)]
 #[derive(Debug, Clone, Copy)]
 pub struct Fx0<F> {
     /// Pure longitudinal force Fx0 \[N\] (22), (4.E9).
     pub fx0: F,
-    /// μx \[-\] (26), (4.E13).
-    pub mu_x: F,
     /// Kxκ \[N\] (28), (4.E15).
     pub k_xk: F,
 }
@@ -164,27 +163,24 @@ pub fn fx0_slip<F: Float, H: Float, G: Lift<F> + Lift<H>, M: Backend<G>>(
 }
 
 /// Pure longitudinal slip force, eqs. (22)–(31) / (4.E9)–(4.E18), at the conditioned `c`: the
-/// three stages in a row.
+/// three stages in a row (`mf::eval` runs them staged; the tests check the pure-slip identities
+/// with this).
+#[cfg(test)]
 pub fn fx0<F: Float, M: Backend<F>>(p: &Params<F>, c: &mut Conditioned<F>) -> Fx0<F> {
     let l = fx0_load::<F, M>(p, c);
     let m = fx0_mu::<F, F>(&l, c, c.lmux_star, c.lmux_prime);
     let mut flags = c.flags;
     let fx0 = fx0_slip::<F, F, F, M>(&l, &m, c, c.kappa, &mut flags);
     c.flags = flags;
-    Fx0 {
-        fx0,
-        mu_x: m.mu_x,
-        k_xk: l.k_xk,
-    }
+    Fx0 { fx0, k_xk: l.k_xk }
 }
 
 /// Results of [`fy0`].
+#[cfg(test)]
 #[derive(Debug, Clone, Copy)]
 pub struct Fy0<F> {
     /// Pure lateral force Fy0 \[N\] (32), (4.E19).
     pub fy0: F,
-    /// μy \[-\] (37), (4.E23), signed as the file fits it.
-    pub mu_y: F,
     /// Kyα \[N/rad\] (39), (4.E25).
     pub k_ya: F,
     /// SHy \[rad\] (41), (4.E27).
@@ -395,7 +391,8 @@ pub fn fy0_slip<F: Float, H: Float, G: Lift<F> + Lift<H>, M: Backend<G>>(
 }
 
 /// Pure side-slip force, eqs. (32)–(42) / (4.E19)–(4.E30), at the conditioned `c` and camber
-/// `gamma_star`: the three stages in a row.
+/// `gamma_star`: the three stages in a row (as [`fx0`]).
+#[cfg(test)]
 pub fn fy0<F: Float, M: Backend<F>>(
     p: &Params<F>,
     c: &mut Conditioned<F>,
@@ -409,7 +406,6 @@ pub fn fy0<F: Float, M: Backend<F>>(
     c.flags = flags;
     Fy0 {
         fy0,
-        mu_y: m.mu_y,
         k_ya: l.k_ya,
         s_hy: m.s_hy,
     }
