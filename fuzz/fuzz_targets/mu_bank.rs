@@ -66,7 +66,7 @@ fuzz_target!(|data: &[u8]| {
         pv.rear::<Fast>(&mut e32, &s);
         if flags & 16 != 0 {
             let profile: [f32; CELLS] = core::array::from_fn(|k| v[k % v.len()]);
-            if let Some(r) = Reading::new(profile, v[6]) {
+            if let Some(r) = Reading::new(&profile, v[6]) {
                 e32.preview::<Fast>(r);
             }
         }

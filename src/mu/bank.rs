@@ -446,11 +446,12 @@ impl<F: Float> Bank<F> {
     /// the reading excludes (its ℓ′ above `hold_nll`) is dropped.
     fn mix_waiting<M: Backend<F>>(&mut self) {
         self.mix_waited = false;
-        if let Some(r) = self.mixing.take() {
+        if let Some(r) = &self.mixing {
             r.mix_into::<M>(&mut self.likelihood);
             let c = &self.cfg;
             self.report
                 .drop_held_if(|h| r.excludes(c.cell_of(h), c.hold_nll));
+            self.mixing = None;
         }
     }
 }

@@ -56,9 +56,12 @@ pub struct Reading<F> {
 impl<F: Float> Reading<F> {
     /// A reading of `profile` with weight `weight` (0 < p < 1); `None` when the profile is not
     /// finite and non-negative or the weight is outside (0, 1).
-    pub fn new(profile: [F; CELLS], weight: F) -> Option<Self> {
+    pub fn new(profile: &[F; CELLS], weight: F) -> Option<Self> {
         let ok = profile.iter().all(|x| x.is_finite() && *x >= F::ZERO);
-        (ok && weight > F::ZERO && weight < F::ONE).then_some(Reading { profile, weight })
+        (ok && weight > F::ZERO && weight < F::ONE).then_some(Reading {
+            profile: *profile,
+            weight,
+        })
     }
 
     /// The profile ℓ′ per cell.
@@ -250,20 +253,26 @@ impl<F: Float> Preview<F> {
         // readings a reversal has carried too far away at the back. One per sample, and only
         // when the bank has mixed the last one in (its mixture takes a slot of a sample's
         // work, `Bank::preview`): others that have arrived wait here, in order.
-        if let Some(r) = self.queue.front() {
-            if r.left <= F::ZERO && !rear.previewing() {
-                // (A profile that is not finite and non-negative is no reading: dropped.)
-                if let Some(reading) = Reading::new(r.profile, self.cfg.weight) {
-                    rear.preview::<M>(reading);
-                }
-                self.handed = self.handed.wrapping_add(1);
-                self.queue.pop_front();
-            }
+        if self.queue.front().is_some_and(|r| r.left <= F::ZERO) && !rear.previewing() {
+            self.hand::<M>(rear);
         }
         let far = F::TWO * self.cfg.wheelbase;
         while self.queue.back().is_some_and(|r| r.left > far) {
             self.queue.pop_back();
             self.dropped = self.dropped.wrapping_add(1);
+        }
+    }
+
+    /// Hands the nearest reading to `rear` (a few times per change of surface: kept out of
+    /// [`Preview::rear`]'s every-sample path). A profile that is not finite and non-negative
+    /// is no reading: dropped.
+    #[inline(never)]
+    fn hand<M: Backend<F>>(&mut self, rear: &mut Bank<F>) {
+        if let Some(r) = self.queue.pop_front() {
+            if let Some(reading) = Reading::new(&r.profile, self.cfg.weight) {
+                rear.preview::<M>(reading);
+            }
+            self.handed = self.handed.wrapping_add(1);
         }
     }
 }
@@ -570,7 +579,7 @@ mod tests {
                 pv.front(&f);
                 pv.rear::<Libm>(&mut r, &s);
                 // (Raw floats: most are no reading, and are ignored.)
-                if let Some(reading) = Reading::new(profile, weight).filter(|_| i % 50 == 0) {
+                if let Some(reading) = Reading::new(&profile, weight).filter(|_| i % 50 == 0) {
                     r.preview::<Libm>(reading);
                 }
                 let e = r.update::<Libm>(&p, &s);

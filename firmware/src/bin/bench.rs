@@ -411,7 +411,7 @@ fn bank_figures<M: Backend<f32>>(
             };
             *i = i.wrapping_add(1);
             if *i % 7 == 0 {
-                if let Some(r) = Reading::new(est.profile(), 0.9) {
+                if let Some(r) = Reading::new(&est.profile(), 0.9) {
                     est.preview::<M>(r);
                 }
             }
@@ -625,7 +625,7 @@ fn preview_figures<M: Backend<f32>>(
     };
     let (mean, worst) = timed(&mut |i| {
         let w = if i % 2 == 0 { 0.9 } else { 0.5 };
-        if let Some(r) = Reading::new(core::hint::black_box(profile), w) {
+        if let Some(r) = Reading::new(core::hint::black_box(&profile), w) {
             b.preview::<M>(r);
         }
         b.update::<M>(p, core::hint::black_box(&none));

@@ -208,7 +208,7 @@ fn a_reading_from_ahead_is_mixed_in_within_a_sample() {
     let s = stream(&p, 0.5, |t| 0.1 * (t / 0.5).min(1.0), 1500, 0);
     let mut b = Bank::new::<Libm>(&p, None, Config::default()).unwrap();
     let profile: [f64; CELLS] = core::array::from_fn(|k| 0.5 * (k as f64 - 4.0).powi(2));
-    let reading = |w: f64| Reading::new(profile, w).unwrap();
+    let reading = |w: f64| Reading::new(&profile, w).unwrap();
     let mut waits = [0usize; 2];
     for (i, x) in s.iter().enumerate() {
         if i >= 300 {
@@ -357,7 +357,7 @@ fn no_sample_takes_more_than_its_slots() {
         for (i, x) in s.iter().enumerate() {
             // (A profile taken right after a mixture may hold a value a rounding below 0: no
             // reading then.)
-            if let Some(r) = Reading::new(b.profile(), 0.9).filter(|_| i % 7 == 0) {
+            if let Some(r) = Reading::new(&b.profile(), 0.9).filter(|_| i % 7 == 0) {
                 b.preview::<Libm>(r);
             }
             b.update::<Libm>(&p, x);
