@@ -19,12 +19,7 @@ pub static TICKS: AtomicU32 = AtomicU32::new(0);
 
 /// Starts SysTick at 1 kHz with its interrupt.
 pub fn start_systick(mut syst: cortex_m::peripheral::SYST) {
-    use cortex_m::peripheral::syst::SystClkSource;
-    syst.set_clock_source(SystClkSource::Core);
-    syst.set_reload(SYSTICK_RELOAD);
-    syst.clear_current();
-    syst.enable_interrupt();
-    syst.enable_counter();
+    gough_workloads::clock::start_systick(&mut syst, SYSTICK_RELOAD);
 }
 
 /// The SysTick handler's body (each binary declares `#[exception] fn SysTick`): counts the

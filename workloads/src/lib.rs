@@ -8,6 +8,8 @@
 //!   100 Hz settings and the hash of its estimates.
 //! - [`filter_point`] — the transient-filter bench's stream.
 //! - [`marks`] (feature `marks`) — `bench_start`/`bench_stop`, the markers outside counters find.
+//! - `clock` (feature `clock`, Cortex-M targets only) — the SysTick cycle clock the benches time
+//!   with, calibrated.
 //!
 //! `no_std`, no heap; every stream is generated one sample at a time, so a device with little
 //! RAM need not hold it, and gives the same bits on every target (IEEE f32, no FMA
@@ -15,6 +17,8 @@
 #![no_std]
 #![deny(missing_docs)]
 
+#[cfg(all(feature = "clock", target_arch = "arm"))]
+pub mod clock;
 mod filter;
 #[cfg(feature = "marks")]
 pub mod marks;

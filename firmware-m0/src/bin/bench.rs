@@ -5,8 +5,8 @@
 //! against Q31.32 fixed point (`fixed::Fix` + `fixed::FixMath`, feature `fix`); the estimator
 //! with feature `mu`. Under
 //! QEMU with `-icount shift=0`: one instruction = 1 ns of virtual time, SysTick counts the core
-//! clock (16 MHz on the M0: 62.5 instructions per count; 25 MHz on the M3: 40), calibrated below
-//! on a loop of known length, as in `firmware/src/bin/bench.rs`.
+//! clock (16 MHz on the M0: 62.5 instructions per count; 25 MHz on the M3: 40), calibrated on a
+//! loop of known length by the benches' clock (`gough_workloads::clock`, the M4F bench's too).
 //!
 //! The bundled MF 6.1 tyre is parsed by `gough::tir::parse` on the host, in build.rs, and
 //! embedded as f64 values, converted at boot to `f32` and `Fix` as `Params::cast` does: parsing
@@ -19,8 +19,6 @@
 #![no_std]
 #![no_main]
 
-use core::sync::atomic::{AtomicU32, Ordering};
-use cortex_m::peripheral::{syst::SystClkSource, SYST};
 use cortex_m_rt::{entry, exception};
 use cortex_m_semihosting::{debug, hprintln};
 use gough::math::{Backend, Float};
@@ -29,6 +27,7 @@ use gough::mf::{self, Input, Options, Params};
 // The workloads and markers of the M4F bench (one definition for both), and what build.rs
 // computed from them on the host (this crate's own build output).
 use gough_workloads::filter_point;
+use gough_workloads::clock::{self, now};
 use gough_workloads::marks::{bench_start, bench_stop};
 use gough_workloads::points::{input, N};
 #[cfg(feature = "mu")]
@@ -36,8 +35,6 @@ use gough_workloads::streams::{bank_sample, config, hash, stream, Feed, HASH0, S
 include!(concat!(env!("OUT_DIR"), "/reference.rs"));
 include!(concat!(env!("OUT_DIR"), "/estimator.rs"));
 
-static WRAPS: AtomicU32 = AtomicU32::new(0);
-const RELOAD: u32 = 0x00FF_FFFF;
 /// Points per timed block.
 const B: usize = 16;
 const PAINT: u32 = 0xDEAD_BEEF;
@@ -68,21 +65,7 @@ unsafe fn HardFault(frame: &cortex_m_rt::ExceptionFrame) -> ! {
 
 #[exception]
 fn SysTick() {
-    // No read-modify-write atomics on ARMv6-M; this handler is the only writer.
-    WRAPS.store(
-        WRAPS.load(Ordering::SeqCst).wrapping_add(1),
-        Ordering::SeqCst,
-    );
-}
-
-fn now() -> u64 {
-    loop {
-        let w = WRAPS.load(Ordering::SeqCst);
-        let c = SYST::get_current();
-        if WRAPS.load(Ordering::SeqCst) == w {
-            return u64::from(w) * u64::from(RELOAD + 1) + u64::from(RELOAD - c);
-        }
-    }
+    clock::on_systick();
 }
 
 extern "C" {
@@ -345,36 +328,16 @@ fn main() -> ! {
     let Some(cp) = cortex_m::Peripherals::take() else {
         exit(false)
     };
-    let mut syst = cp.SYST;
-    syst.set_clock_source(SystClkSource::Core);
-    syst.set_reload(RELOAD);
-    syst.clear_current();
-    syst.enable_interrupt();
-    syst.enable_counter();
-    // After `clear_current` the counter reads 0 until its first reload: wait for it.
-    while SYST::get_current() == 0 {}
+    clock::start(cp.SYST);
 
     // Calibration: a loop of exactly 2 instructions per iteration (subs + bne).
     const LOOPS: u32 = 1_000_000;
     bench_start(0);
-    let t0 = now();
-    // SAFETY: a register-only countdown loop.
-    unsafe {
-        core::arch::asm!("1:", "subs r0, #1", "bne 1b", inout("r0") LOOPS => _, options(nomem, nostack));
-    }
-    let t1 = now();
+    let per_count = clock::calibrate(LOOPS);
     bench_stop(0);
-    let per_count = (2 * LOOPS) as f64 / (t1 - t0) as f64;
     hprintln!("calibration: {} instructions per SysTick count", per_count);
-    // The timer's own cost per bracket [counts].
-    let mut o = 0u64;
-    for _ in 0..64 {
-        let t0 = now();
-        core::hint::black_box(0);
-        let t1 = now();
-        o += t1 - t0;
-    }
-    let overhead = o / 64;
+    // The timer's own cost per bracket [counts] (whole counts).
+    let overhead = clock::overhead() as u64;
 
     let mut ok = true;
     #[cfg(feature = "fast")]

@@ -1,7 +1,8 @@
 //! Instruction counts of the combined-slip Magic Formula on the Cortex-M4F, under QEMU with
 //! `-icount shift=6` (one instruction = 64 ns of virtual time; SysTick counts the 25 MHz core
-//! clock, i.e. 1.6 counts per instruction, calibrated below on a loop of known length: a sample
-//! timed alone is counted to the instruction; with `shift=0` a count is 40 instructions).
+//! clock, i.e. 1.6 counts per instruction, calibrated on a loop of known length by the benches'
+//! clock, `gough_workloads::clock`: a sample timed alone is counted to the instruction; with
+//! `shift=0` a count is 40 instructions).
 //!
 //! Each workload is bracketed by `bench_start`/`bench_stop`: exported, never inlined, with
 //! distinct bodies, so an outside instruction counter (a QEMU plugin, a debugger) can check
@@ -16,8 +17,6 @@
 
 use core::mem::size_of;
 use core::ptr::addr_of_mut;
-use core::sync::atomic::{AtomicU32, Ordering};
-use cortex_m::peripheral::{syst::SystClkSource, SYST};
 use cortex_m_rt::{entry, exception};
 use cortex_m_semihosting::hprintln;
 use gough::math::{Backend, Libm};
@@ -27,27 +26,15 @@ use gough::proto::{AckCode, Estimate, Forces, Measurement, Settings};
 use gough::wheel::{self, Corner};
 use gough_firmware::app::{self, App};
 use gough_firmware::{mps2, stack};
+use gough_workloads::clock::{self, now};
 use gough_workloads::marks::{bench_start, bench_stop};
 // N, `input`: the grid the M0 bench measures too.
 use gough_workloads::points::{input, N};
 use gough_workloads::slalom as workload;
 
-static WRAPS: AtomicU32 = AtomicU32::new(0);
-const RELOAD: u32 = 0x00FF_FFFF;
-
-fn now() -> u64 {
-    loop {
-        let w = WRAPS.load(Ordering::SeqCst);
-        let c = SYST::get_current();
-        if WRAPS.load(Ordering::SeqCst) == w {
-            return u64::from(w) * u64::from(RELOAD + 1) + u64::from(RELOAD - c);
-        }
-    }
-}
-
 #[exception]
 fn SysTick() {
-    WRAPS.fetch_add(1, Ordering::SeqCst);
+    clock::on_systick();
 }
 
 /// Runs workload `id`: N f32 evaluations with backend `M`; returns (counts, max |ΔFx|,|ΔFy|, max |ΔMz|).
@@ -131,13 +118,7 @@ fn staged<M: Backend<f32>>(name: &str, first_id: u32, per_count: f64, p32: &Para
     let ins: [Input<f32>; N] = core::array::from_fn(input::<f32>);
     let op = |x: &Input<f32>| Operating::from(x);
     // The timer's own cost [counts].
-    let mut o = 0u64;
-    for _ in 0..64 {
-        let t0 = now();
-        core::hint::black_box(0);
-        o += now() - t0;
-    }
-    let overhead = o as f64 / 64.0;
+    let overhead = clock::overhead();
     let print = |what: &str, total: u64, worst: f64, ram: usize| {
         hprintln!(
             "bench: {}_{} mean={} worst={} ram={}",
@@ -435,26 +416,13 @@ fn main() -> ! {
     let Some(cp) = cortex_m::Peripherals::take() else {
         mps2::exit(false)
     };
-    let mut syst = cp.SYST;
-    syst.set_clock_source(SystClkSource::Core);
-    syst.set_reload(RELOAD);
-    syst.clear_current();
-    syst.enable_interrupt();
-    syst.enable_counter();
-    // After `clear_current` the counter reads 0 until its first reload: wait for it.
-    while SYST::get_current() == 0 {}
+    clock::start(cp.SYST);
 
     // Calibration: a loop of exactly 2 instructions per iteration (subs + bne).
     const LOOPS: u32 = 1_000_000;
     bench_start(0);
-    let t0 = now();
-    // SAFETY: a register-only countdown loop.
-    unsafe {
-        core::arch::asm!("1:", "subs {0}, #1", "bne 1b", inout(reg) LOOPS => _, options(nomem, nostack));
-    }
-    let t1 = now();
+    let per_count = clock::calibrate(LOOPS);
     bench_stop(0);
-    let per_count = (2 * LOOPS) as f64 / (t1 - t0) as f64;
     hprintln!("calibration: {} instructions per SysTick count", per_count);
 
     let Ok(t) = gough::tir::parse(gough_firmware::BUNDLED_TIR) else {
@@ -518,16 +486,9 @@ fn main() -> ! {
     // SAFETY: the only reference to STREAM, taken once.
     let stream = unsafe { &mut *addr_of_mut!(STREAM) };
     // The timer's own cost per timed sample [counts].
-    let mut o = 0u64;
-    for _ in 0..64 {
-        let t0 = now();
-        core::hint::black_box(0);
-        let t1 = now();
-        o += t1 - t0;
-    }
     let clock = Clock {
         per_count,
-        overhead: o as f64 / 64.0,
+        overhead: clock::overhead(),
     };
     // Streams: the slalom on the tyre's own surface (λμ 1) with and without camber; then on a
     // wet and an icy road.

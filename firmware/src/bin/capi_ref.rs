@@ -3,7 +3,7 @@
 //! `gough::mu::bank::Bank`, `gough::proto`, math backend `app::Math`), printing the same result
 //! lines — `cargo xtask test-all` compares them to the bit — and the same bench line for the
 //! pipeline's instructions per wheel per sample (`bench: pipeline_replay_rust`; QEMU
-//! `-icount shift=6`, SysTick, calibrated as `bench.rs`).
+//! `-icount shift=6`, the benches' SysTick clock `gough_workloads::clock`, calibrated).
 //!
 //! The stream is `examples/replay_log.csv` (what `gough replay` sends the firmware), read as
 //! `gough_host::replay::read_log` reads it: f64 fields rounded to f32, t in µs.
@@ -12,8 +12,6 @@
 
 use core::mem::{size_of, MaybeUninit};
 use core::ptr::addr_of_mut;
-use core::sync::atomic::{AtomicU32, Ordering};
-use cortex_m::peripheral::{syst::SystClkSource, SYST};
 use cortex_m_rt::{entry, exception};
 use cortex_m_semihosting::hprintln;
 use gough::mf::{self, Input, Options};
@@ -24,24 +22,12 @@ use gough::proto::{
 use gough::wheel::{self, Corner};
 use gough_firmware::app::Math;
 use gough_firmware::mps2;
+use gough_workloads::clock::{self, now};
 use gough_workloads::marks::{bench_start, bench_stop};
-
-static WRAPS: AtomicU32 = AtomicU32::new(0);
-const RELOAD: u32 = 0x00FF_FFFF;
-
-fn now() -> u64 {
-    loop {
-        let w = WRAPS.load(Ordering::SeqCst);
-        let c = SYST::get_current();
-        if WRAPS.load(Ordering::SeqCst) == w {
-            return u64::from(w) * u64::from(RELOAD + 1) + u64::from(RELOAD - c);
-        }
-    }
-}
 
 #[exception]
 fn SysTick() {
-    WRAPS.fetch_add(1, Ordering::SeqCst);
+    clock::on_systick();
 }
 
 const LOG: &str = include_str!("../../../examples/replay_log.csv");
@@ -119,21 +105,8 @@ fn main() -> ! {
     let Some(cp) = cortex_m::Peripherals::take() else {
         mps2::exit(false)
     };
-    let mut syst = cp.SYST;
-    syst.set_clock_source(SystClkSource::Core);
-    syst.set_reload(RELOAD);
-    syst.clear_current();
-    syst.enable_interrupt();
-    syst.enable_counter();
-    while SYST::get_current() == 0 {}
-    const LOOPS: u32 = 1_000_000;
-    let t0 = now();
-    // SAFETY: a register-only countdown loop.
-    unsafe {
-        core::arch::asm!("1:", "subs {0}, #1", "bne 1b", inout(reg) LOOPS => _, options(nomem, nostack));
-    }
-    let t1 = now();
-    let per_count = (2 * LOOPS) as f64 / (t1 - t0) as f64;
+    clock::start(cp.SYST);
+    let per_count = clock::calibrate(1_000_000);
     hprintln!(
         "calibration: {} instructions per 1000 SysTick counts",
         (per_count * 1000.0 + 0.5) as u32
@@ -298,13 +271,7 @@ fn main() -> ! {
     );
 
     // Instructions per wheel per sample, as the C example measures them.
-    let mut o = 0u64;
-    for _ in 0..64 {
-        let a = now();
-        core::hint::black_box(0);
-        o += now() - a;
-    }
-    let overhead = o as f64 / 64.0;
+    let overhead = clock::overhead();
     let mut wheels = fresh();
     bench_start(31);
     let t0 = now();

@@ -76,12 +76,9 @@ fn main() -> ! {
         .enable();
     can.modify_filters()
         .enable_bank(0, bxcan::Fifo::Fifo0, bxcan::filter::Mask32::accept_all());
+    // SysTick at 1 kHz of the 168 MHz core clock.
     let mut syst = cp.SYST;
-    syst.set_clock_source(cortex_m::peripheral::syst::SystClkSource::Core);
-    syst.set_reload(168_000 - 1);
-    syst.clear_current();
-    syst.enable_interrupt();
-    syst.enable_counter();
+    gough_workloads::clock::start_systick(&mut syst, 168_000 - 1);
     defmt::info!("gough firmware on STM32F405 up");
     let mut last = 0;
     loop {
