@@ -5,7 +5,8 @@
 //! One definition, used unchanged by the firmware and the host tools.
 //!
 //! ## Layers
-//! 1. [`Msg`] ([`msg`]): the messages, SI units, radians, ISO-W axes. A message is encoded as
+//! 1. [`Msg`] ([`msg`]; the bodies in [`measurement`], [`requests`], [`results`], [`status`]):
+//!    the messages, SI units, radians, ISO-W axes. A message is encoded as
 //!    `[PROTO_VERSION][type][postcard body][CRC-32 LE]` ([`Msg::encode`], [`Msg::decode`]); the
 //!    header's `type` byte is [`MsgType`], the body is the variant's struct in
 //!    [postcard](https://postcard.jamesmunns.com/wire-format), the CRC ([`crc32`]) covers header
@@ -36,16 +37,24 @@ pub mod crc;
 pub mod dbc;
 pub mod frame;
 pub mod link;
+pub mod measurement;
 pub mod msg;
 pub mod reassembler;
+pub mod requests;
+pub mod results;
 pub mod segmenter;
 pub mod slcan;
+pub mod status;
 
 pub use crc::crc32;
 pub use frame::{Frame, FrameRepr, Position};
+pub use measurement::*;
 pub use msg::*;
 pub use reassembler::{Counters, Feed, Reassembler};
+pub use requests::*;
+pub use results::*;
 pub use segmenter::{Mtu, Segmenter};
+pub use status::*;
 
 use core::fmt;
 use postcard::experimental::max_size::MaxSize;
