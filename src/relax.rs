@@ -558,6 +558,7 @@ impl<F: Float> Operating<F> {
 
 /// Why a transient-tyre step failed.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum TyreError {
     /// The transient step refused its input.
     Step(StepError),

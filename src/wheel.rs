@@ -44,10 +44,10 @@
 //! forces and the estimate alike, and runs the front-to-rear preview between its axles when it
 //! is given one; a lone [`Corner::new`] takes the tyre as its file describes it.
 use crate::math::{Backend, Float};
-use crate::mf::{self, EvalError, Input, Options, Output, Params, Side};
+use crate::mf::{self, Input, Options, Output, Params, Side};
 use crate::mu::preview::{self, Preview, PreviewError};
 use crate::mu::{self, Bank, BuildError};
-use crate::relax::{DampingSpeed, Kinematics, Operating, StepError, TransientTyre, TyreError};
+use crate::relax::{DampingSpeed, Kinematics, Operating, TransientTyre, TyreError};
 use postcard::experimental::max_size::MaxSize;
 use serde::{Deserialize, Serialize};
 
@@ -150,32 +150,21 @@ impl<F: Float> Measurement<F> {
 pub enum Error {
     /// Neither α, κ nor (with Vx) ω: no slip to predict the forces of.
     NoSlip,
-    /// The transient filter refused the step (non-finite kinematics).
-    Step(StepError),
-    /// The Magic Formula refused the operating point.
-    Eval(EvalError),
+    /// The transient tyre refused the sample: its filter the step (non-finite kinematics), or
+    /// the Magic Formula the operating point.
+    Tyre(TyreError),
 }
 
 impl core::fmt::Display for Error {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         match self {
             Error::NoSlip => f.write_str("the measurement carries no slip"),
-            Error::Step(e) => write!(f, "transient filter: {e}"),
-            Error::Eval(e) => write!(f, "Magic Formula: {e}"),
+            Error::Tyre(e) => write!(f, "{e}"),
         }
     }
 }
 
 impl core::error::Error for Error {}
-
-impl From<TyreError> for Error {
-    fn from(e: TyreError) -> Self {
-        match e {
-            TyreError::Step(e) => Error::Step(e),
-            TyreError::Eval(e) => Error::Eval(e),
-        }
-    }
-}
 
 /// The filter between samples: the transient tyre and the time of the last sample \[µs\].
 #[derive(Debug, Clone)]
@@ -266,7 +255,7 @@ fn eval<F: Float, M: Backend<F>>(
     input: &Input<F>,
     opts: &Options,
 ) -> Result<Output<F>, Error> {
-    mf::eval::<F, M>(p, input, opts).map_err(Error::Eval)
+    mf::eval::<F, M>(p, input, opts).map_err(|e| Error::Tyre(TyreError::Eval(e)))
 }
 
 /// The steady-state answer (no filter): the Magic Formula at the measured slips
@@ -402,7 +391,7 @@ impl<F: Float> Corner<F> {
                 let (o, _) = f
                     .tyre
                     .step::<M>(p, &opts, F::from_micros(dt as u32), &op)
-                    .map_err(Error::from)?;
+                    .map_err(Error::Tyre)?;
                 f.t_us = m.t_us;
                 return Ok(o);
             }
@@ -419,7 +408,7 @@ impl<F: Float> Corner<F> {
         tyre.config.damping = DampingSpeed::Forward;
         let o = tyre
             .start::<M>(p, &opts, &op, k.kappa, k.alpha)
-            .map_err(Error::from)?;
+            .map_err(Error::Tyre)?;
         self.filter = Some(Filter { tyre, t_us: m.t_us });
         Ok(o)
     }

@@ -81,7 +81,7 @@ impl From<wheel::Error> for AckCode {
     fn from(e: wheel::Error) -> AckCode {
         match e {
             wheel::Error::NoSlip => AckCode::NoSlip,
-            wheel::Error::Step(_) | wheel::Error::Eval(_) => AckCode::EvalError,
+            wheel::Error::Tyre(_) => AckCode::EvalError,
         }
     }
 }
