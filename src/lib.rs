@@ -19,8 +19,7 @@
 //!   only (the messages convert to and from the domain's types).
 //! - [`relax`] — transient slip through relaxation lengths, paper eqs. (19)–(21).
 //! - [`mu`] — the road-friction estimator ([`mu::bank`]: μ from Fy, Mz, Fz and, when given, Fx,
-//!   κ, Vx, γ — never α). The previous table estimator is a peer in the host's bench
-//!   (`gough_host::mu::table_estimator`).
+//!   κ, Vx, γ — never α).
 //! - [`wheel`] — a car's wheels: their positions ([`wheel::Wheel`]), each one's per-sample
 //!   pipeline ([`wheel::Corner`]: transient filter → Magic Formula → estimator) and the four of
 //!   a [`wheel::Car`], as the firmware runs them.

@@ -1,11 +1,10 @@
 //! gough firmware: the board-independent application ([`app`]) and the boards.
 //!
-//! The loop (see `architecture.md`): CAN frames → `proto::Reassembler` → `Msg`; measurements
+//! The loop (docs/architecture.md): CAN frames → `proto::Reassembler` → `Msg`; measurements
 //! are queued and, at each 1 kHz tick, run through their wheel's pipeline ([`gough::wheel`]: the
-//! relaxation-length filter, `mf::eval` at the transient slips, the Gough-plot friction
-//! estimator; f32, `math::Fast` by default); the predicted forces and the estimates go back as
-//! `Msg::Forces` and `Msg::Estimate` through `proto::Segmenter`. The estimator's table is built
-//! outside the tick ([`app`]).
+//! relaxation-length filter, `mf::eval` at the transient slips, the friction estimator
+//! [`gough::mu::Bank`]; f32, `math::Fast` by default); the predicted forces and the estimates go
+//! back as `Msg::Forces` and `Msg::Estimate` through `proto::Segmenter`.
 //!
 //! Boards: [`mps2`] (QEMU mps2-an386: SLCAN over the CMSDK UART0, SysTick, semihosting) and
 //! `src/bin/stm32f4.rs` (STM32F405, bxCAN1 through stm32f4xx-hal). Any driver implementing

@@ -18,9 +18,6 @@
 //! - [`bank`] — the [`Bank`] that ties them together, with its per-sample work scheduler.
 //! - [`preview`] — the front-to-rear hand-over: what a front wheel read, carried to the rear
 //!   wheel on its side a wheelbase later and mixed into its likelihoods.
-//!
-//! The previous estimator, a trail inversion on tabulated Gough curves, is a peer in the host's
-//! bench (`gough mu bench`).
 
 pub mod bank;
 pub mod batch;

@@ -29,7 +29,7 @@ use super::sim::{Mods, Out, Sim};
 use super::stats;
 use crate::mu::{Method, Sample, Setup};
 use gough::mf::Params;
-use gough::mu::bank::State;
+use gough::mu::State;
 use gough::proto::Wheel;
 use serde::Serialize;
 

@@ -7,7 +7,7 @@
 use super::estimator::{Estimate, Estimator, Sample, Setup};
 use gough::math::{Backend, Float, Libm};
 use gough::mf::Params;
-use gough::mu::bank::{self, Bank};
+use gough::mu::bank::Bank;
 use gough::mu::preview::{self, Preview};
 use gough::proto::Wheel;
 
@@ -27,7 +27,7 @@ where
     pub fn new(p: &Params<f64>, setup: &Setup) -> Result<Self, String> {
         let p = p.cast::<F>();
         let new = |w: usize| {
-            Bank::new::<Libm>(&p, setup.mounted[w], bank::Config::default())
+            Bank::new::<Libm>(&p, setup.mounted[w], gough::mu::Config::default())
                 .map_err(|e| e.to_string())
         };
         let banks = [new(0)?, new(1)?, new(2)?, new(3)?];
@@ -52,7 +52,7 @@ where
 {
     fn update(&mut self, wheel: Wheel, s: &Sample) -> Estimate {
         let c = |x: f64| F::from_f64(x);
-        let s = bank::Sample {
+        let s = gough::mu::Sample {
             // Wrapping microseconds: only differences are used, so an offset clock gives the
             // same estimates.
             t_us: (s.t * 1e6).round() as i64 as u32,

@@ -8,7 +8,7 @@ use super::bench::{
     measure, metrics, run_method, sim_wheelbase, simulate_case, Case, Sensors, WheelTrace,
 };
 use super::{Estimate, Method, Setup};
-use gough::mu::bank::State;
+use gough::mu::State;
 use std::fmt::Write as _;
 use std::path::PathBuf;
 

@@ -11,8 +11,8 @@
 //! sees them as the device does; one wheel's log is wheel `FrontLeft` alone.
 
 use gough::mf::{Params, Side};
-use gough::mu::bank::State;
 use gough::mu::preview;
+use gough::mu::State;
 use gough::proto::Wheel;
 
 /// One measured sample of a wheel, SI, ISO-W at the contact point, in the wheel's own axes

@@ -20,7 +20,7 @@
 //! two surfaces explain the same steady point.
 use super::{Method, Sample, Setup};
 use gough::mf::{self, Params};
-use gough::mu::bank::State;
+use gough::mu::State;
 use gough::proto::Wheel;
 
 /// Surfaces of the map (μ).

@@ -19,7 +19,7 @@
 use super::estimator::{Estimate, Estimator, Sample};
 use gough::math::Libm;
 use gough::mf::{self, Input, Options, Params};
-use gough::mu::bank::State;
+use gough::mu::State;
 use gough::proto::Wheel;
 
 /// The range of μ both peers report (a reading outside it saturates): Hsu–Gerdes' clamp, the

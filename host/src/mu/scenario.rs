@@ -193,8 +193,7 @@ pub struct Trace {
 /// μy0 of a parameter set (the bank's definition: μy at FNOMIN, zero slip and camber, nominal
 /// pressure, docs/architecture.md).
 pub fn mu_y0(p: &Params<f64>) -> Result<f64, String> {
-    gough::mu::bank::mu_y0::<f64, Libm>(p)
-        .ok_or_else(|| "the tyre has no friction at FNOMIN".into())
+    gough::mu::mu_y0::<f64, Libm>(p).ok_or_else(|| "the tyre has no friction at FNOMIN".into())
 }
 
 /// The parameters on surface μ: λμx, λμy scaled by μ/μy0.
@@ -346,7 +345,7 @@ pub fn simulate(
             vsx: -kappa * VX,
             vsy: VX * alpha.tan(),
         };
-        let o = tyre
+        let (o, _) = tyre
             .step::<Libm>(
                 q,
                 &opts,
@@ -355,6 +354,7 @@ pub fn simulate(
                     kin,
                     fz,
                     gamma: 0.0,
+                    phit: 0.0,
                     p: None,
                 },
             )

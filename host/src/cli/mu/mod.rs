@@ -234,7 +234,7 @@ fn estimate(a: &EstimateArgs) -> Result<(), String> {
     write().map_err(|e| format!("{}: cannot write: {e}", a.out.display()))?;
     let n_id = est
         .iter()
-        .filter(|e| e.state == gough::mu::bank::State::Identifiable)
+        .filter(|e| e.state == gough::mu::State::Identifiable)
         .count();
     let last = est.last().map(|e| (e.mu, e.sigma, e.state.name()));
     eprintln!(

@@ -5,7 +5,7 @@
 
 use super::sensors::WheelTrace;
 use crate::mu::Estimate;
-use gough::mu::bank::State;
+use gough::mu::State;
 
 /// The latency target: within ±0.1 this long after utilisation 0.5 \[s\].
 pub const TARGET_LATENCY: f64 = 0.150;

@@ -5,7 +5,7 @@ use crate::mu::Estimate;
 use crate::sim::Log;
 use gough::math::Libm;
 use gough::mf::Params;
-use gough::mu::bank::State;
+use gough::mu::State;
 use std::path::Path;
 
 /// μ against time: the truth, the utilisation, and each series of estimates (a line; its
