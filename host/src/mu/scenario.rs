@@ -122,6 +122,14 @@ pub enum Manoeuvre {
         /// Deepest κ (negative: braking) \[-\].
         kappa: f64,
     },
+    /// Braking under an ABS, straight: κ ramped over 0.5 s to κ95, the slip ratio of utilisation
+    /// 0.95 on the first surface at FNOMIN, then cycling at `freq` between 0.6 and 1.4 times
+    /// it (past the peak and back, as a slip-threshold ABS cycles). Two wheels of it on two
+    /// surfaces are the wheel level's μ-split stop.
+    AbsBraking {
+        /// Cycles per second \[Hz\].
+        freq: f64,
+    },
     /// A slalom: α = `amplitude`·α(util 0.95 on the first surface)·sin(2π·`freq`·t).
     Slalom {
         /// Amplitude in units of the first surface's slip angle at utilisation 0.95 \[-\].
@@ -155,6 +163,13 @@ pub struct Noise {
     pub mz_rel: f64,
     /// κ \[-\].
     pub kappa: f64,
+}
+
+impl Noise {
+    /// The Mz noise on tyre `p`, rms \[N·m\]: `mz_rel`·FNOMIN·R0.
+    pub fn mz_sigma(&self, p: &Params<f64>) -> f64 {
+        self.mz_rel * p.fnomin * p.unloaded_radius
+    }
 }
 
 impl Default for Noise {
@@ -224,46 +239,139 @@ fn steady(q: &Params<f64>, fz: f64, alpha: f64, kappa: f64) -> Result<(f64, f64)
 }
 
 /// The smallest slip x ≥ 0 in steps of `dx` up to `max` at which `force(x)` reaches `target`,
-/// refined by bisection (the rising side of the curve); `max` if it never does.
+/// refined on that step ([`refine`]: the rising side of the curve); when the force never
+/// reaches it (a utilisation beyond the tyre's peak at this load: a tyre whose peak |F| is
+/// below μ·Fz, or a perturbed pressure), the slip of the largest force on the steps, the peak's.
 fn solve(
     target: f64,
     dx: f64,
     max: f64,
     force: impl Fn(f64) -> Result<f64, String>,
 ) -> Result<f64, String> {
-    let (mut lo, mut hi) = (0.0, 0.0);
     let mut x = 0.0;
-    let mut found = false;
+    let mut fx = force(0.0)?;
+    if fx >= target {
+        return Ok(0.0);
+    }
+    let mut peak = (fx, 0.0);
     while x < max {
         let nx = x + dx;
-        if force(nx)? >= target {
-            lo = x;
-            hi = nx;
-            found = true;
-            break;
+        let fn_ = force(nx)?;
+        if fn_ >= target {
+            return refine(target, (x, fx), (nx, fn_), &force);
         }
-        x = nx;
-    }
-    if !found {
-        return Ok(max);
-    }
-    for _ in 0..40 {
-        let m = 0.5 * (lo + hi);
-        if force(m)? >= target {
-            hi = m;
-        } else {
-            lo = m;
+        if fn_ > peak.0 {
+            peak = (fn_, nx);
         }
+        (x, fx) = (nx, fn_);
     }
-    Ok(0.5 * (lo + hi))
+    Ok(peak.1)
 }
 
-/// α > 0 at which pure side slip gives |Fy| = `util`·μ·Fz on surface parameters `q` \[rad\].
+/// The root of `force(x) = target` in the bracket `lo` (below the target) .. `hi` (at or above
+/// it), each `(x, force(x))`, by the Illinois variant of regula falsi: to 1e-12 of the slip or
+/// 1e-9 of the target (a utilisation to 1e-9), at most 100 evaluations.
+fn refine(
+    target: f64,
+    lo: (f64, f64),
+    hi: (f64, f64),
+    force: &impl Fn(f64) -> Result<f64, String>,
+) -> Result<f64, String> {
+    let ((mut a, mut fa), (mut b, mut fb)) = ((lo.0, lo.1 - target), (hi.0, hi.1 - target));
+    let tol_f = 1e-9 * target.abs().max(f64::MIN_POSITIVE);
+    let mut side = 0i8;
+    for _ in 0..100 {
+        if b - a <= 1e-12 || fb <= tol_f {
+            break;
+        }
+        let x = (a * fb - b * fa) / (fb - fa);
+        let x = if x > a && x < b { x } else { 0.5 * (a + b) };
+        let f = force(x)? - target;
+        if f >= 0.0 {
+            (b, fb) = (x, f);
+            if side == 1 {
+                fa *= 0.5;
+            }
+            side = 1;
+        } else {
+            (a, fa) = (x, f);
+            if side == -1 {
+                fb *= 0.5;
+            }
+            side = -1;
+        }
+    }
+    Ok(b)
+}
+
+/// [`solve`] started from the previous root `prev` of the same surface (the steady manoeuvres
+/// solve at every step of the truth, and the load moves little in a step): the bracket walked
+/// from it in steps of 1 % of it, doubling, then [`refine`]d; the full [`solve`] on a new
+/// surface, or when the walk leaves `0..max`. `prev` is updated.
+fn track(
+    prev: &mut Option<(usize, f64)>,
+    surface: usize,
+    target: f64,
+    dx: f64,
+    max: f64,
+    force: impl Fn(f64) -> Result<f64, String>,
+) -> Result<f64, String> {
+    let warm = match *prev {
+        Some((s, x0)) if s == surface && x0 > 0.0 => {
+            let f0 = force(x0)?;
+            let mut d = (0.01 * x0).max(1e-7);
+            let (mut lo, mut hi) = ((x0, f0), (x0, f0));
+            let mut found = false;
+            for _ in 0..60 {
+                if f0 < target {
+                    let x = hi.0 + d;
+                    if x > max {
+                        break;
+                    }
+                    lo = hi;
+                    hi = (x, force(x)?);
+                    if hi.1 >= target {
+                        found = true;
+                        break;
+                    }
+                } else {
+                    let x = lo.0 - d;
+                    if x <= 0.0 {
+                        break;
+                    }
+                    hi = lo;
+                    lo = (x, force(x)?);
+                    if lo.1 < target {
+                        found = true;
+                        break;
+                    }
+                }
+                d *= 2.0;
+            }
+            if found {
+                Some(refine(target, lo, hi, &force)?)
+            } else {
+                None
+            }
+        }
+        _ => None,
+    };
+    let x = match warm {
+        Some(x) => x,
+        None => solve(target, dx, max, &force)?,
+    };
+    *prev = Some((surface, x));
+    Ok(x)
+}
+
+/// α > 0 at which pure side slip gives |Fy| = `util`·μ·Fz on surface parameters `q` \[rad\]
+/// (the rising side; beyond the tyre's peak at this load, the peak's slip angle).
 pub fn alpha_at(q: &Params<f64>, fz: f64, mu: f64, util: f64) -> Result<f64, String> {
     solve(util * mu * fz, 5e-4, 0.6, |a| Ok(-steady(q, fz, a, 0.0)?.1))
 }
 
-/// κ < 0 at which straight braking gives |Fx| = `util`·μ·Fz on surface parameters `q`.
+/// κ < 0 at which straight braking gives |Fx| = `util`·μ·Fz on surface parameters `q` (the
+/// rising side; beyond the tyre's peak at this load, the peak's slip ratio).
 pub fn kappa_at(q: &Params<f64>, fz: f64, mu: f64, util: f64) -> Result<f64, String> {
     solve(
         util * mu * fz,
@@ -287,7 +395,7 @@ pub fn simulate(
     }
     let mu0 = mu_y0(truth)?;
     let fz0 = truth.fnomin;
-    let r0 = truth.unloaded_radius;
+    let sigma_mz = noise.mz_sigma(truth);
     let every = ((1.0 / rate) / STEP).round().max(1.0) as usize;
     let n = (sc.duration / STEP).round() as usize;
     let surfaces = [
@@ -306,6 +414,12 @@ pub fn simulate(
         }
         _ => 0.0,
     };
+    let kappa95 = match sc.manoeuvre {
+        Manoeuvre::AbsBraking { .. } => kappa_at(&surfaces[0], fz0, sc.mu[0], 0.95)?,
+        _ => 0.0,
+    };
+    // The steady manoeuvres' slip, tracked from step to step (surface index, slip magnitude).
+    let mut prev: Option<(usize, f64)> = None;
     let mut tyre = TransientTyre::new(truth);
     let opts = Options {
         transient: true,
@@ -320,8 +434,26 @@ pub fn simulate(
         let (mu, q) = (sc.mu[k], &surfaces[k]);
         let fz = load(t);
         let (alpha, kappa) = match sc.manoeuvre {
-            Manoeuvre::SteadyCornering { util } => (alpha_at(q, fz, mu, util)?, 0.0),
-            Manoeuvre::SteadyBraking { util } => (0.0, kappa_at(q, fz, mu, util)?),
+            Manoeuvre::SteadyCornering { util } => {
+                let a = track(&mut prev, k, util * mu * fz, 5e-4, 0.6, |a| {
+                    Ok(-steady(q, fz, a, 0.0)?.1)
+                })?;
+                (a, 0.0)
+            }
+            Manoeuvre::SteadyBraking { util } => {
+                let b = track(&mut prev, k, util * mu * fz, 5e-4, 0.6, |k| {
+                    Ok(-steady(q, fz, 0.0, -k)?.0)
+                })?;
+                (0.0, -b)
+            }
+            Manoeuvre::AbsBraking { freq } => {
+                let f = if t < 0.5 {
+                    t / 0.5
+                } else {
+                    1.0 + 0.4 * (2.0 * std::f64::consts::PI * freq * (t - 0.5)).sin()
+                };
+                (0.0, kappa95 * f)
+            }
             Manoeuvre::BrakeInTurn { kappa, .. } => {
                 let f = if t < 2.0 {
                     0.0
@@ -365,7 +497,7 @@ pub fn simulate(
             tr.fz.push(fz + sf * rng.normal());
             tr.fy.push(o.fy + sf * rng.normal());
             tr.fx.push(o.fx + sf * rng.normal());
-            tr.mz.push(o.mz + noise.mz_rel * fz0 * r0 * rng.normal());
+            tr.mz.push(o.mz + sigma_mz * rng.normal());
             tr.kappa.push(kappa + noise.kappa * rng.normal());
             tr.vx.push(VX);
             tr.gamma.push(0.0);
@@ -460,6 +592,62 @@ mod tests {
         assert_eq!(q.qhz1, p.qhz1 + 0.002);
         assert_eq!(q.lky, p.lky);
         assert!(has_pressure(&p));
+    }
+
+    /// The slip tracked from step to step is the one solved afresh, on either side of the
+    /// previous one and across a change of surface; a utilisation beyond the peak gives the
+    /// peak's slip.
+    #[test]
+    fn the_tracked_slip_is_the_solved_one_and_beyond_the_peak_the_peak() {
+        let p = tyre();
+        let mu0 = mu_y0(&p).unwrap();
+        let mut prev = None;
+        for (i, (mu, fz)) in [(1.0, 6000.0), (1.0, 6100.0), (1.0, 5500.0), (0.3, 5500.0)]
+            .into_iter()
+            .enumerate()
+        {
+            let q = on_surface(&p, mu, mu0);
+            let cold = alpha_at(&q, fz, mu, 0.65).unwrap();
+            let warm = track(
+                &mut prev,
+                usize::from(i == 3),
+                0.65 * mu * fz,
+                5e-4,
+                0.6,
+                |a| Ok(-steady(&q, fz, a, 0.0)?.1),
+            )
+            .unwrap();
+            assert!((cold - warm).abs() < 1e-9, "{i}: {cold} {warm}");
+            let (_, fy) = steady(&q, fz, warm, 0.0).unwrap();
+            assert!((-fy / (mu * fz) - 0.65).abs() < 1e-8, "{i}: {fy}");
+        }
+        // Beyond the peak: the largest force's slip angle, to the scan's step.
+        let q = on_surface(&p, 1.0, mu0);
+        let a = alpha_at(&q, p.fnomin, 1.0, 2.0).unwrap();
+        let f = |a: f64| -steady(&q, p.fnomin, a, 0.0).unwrap().1;
+        assert!(a > 0.0 && a < 0.6, "{a}");
+        assert!(f(a) >= f(a - 5e-4) && f(a) >= f(a + 5e-4), "{a}");
+    }
+
+    /// The ABS cycles the slip ratio between 0.6 and 1.4 times that of utilisation 0.95 on its
+    /// surface, after a ramp of 0.5 s; the Mz noise is 7.5e-4·FNOMIN·R0 (2 N·m on this tyre).
+    #[test]
+    fn the_abs_cycles_about_the_slip_of_utilisation_095() {
+        let p = tyre();
+        let sc = Scenario {
+            manoeuvre: Manoeuvre::AbsBraking { freq: 4.0 },
+            mu: [0.2, 0.2],
+            step: None,
+            duration: 2.0,
+        };
+        let tr = simulate(&p, &sc, 1000.0, &Noise::default(), 1).unwrap();
+        let q = on_surface(&p, 0.2, mu_y0(&p).unwrap());
+        let k95 = kappa_at(&q, p.fnomin, 0.2, 0.95).unwrap();
+        let (lo, hi) = tr.kappa_true[500..]
+            .iter()
+            .fold((0.0f64, f64::MIN), |(a, b), &k| (a.min(k), b.max(k)));
+        assert!(((lo / k95) - 1.4).abs() < 1e-3 && ((hi / k95) - 0.6).abs() < 1e-3);
+        assert!((Noise::default().mz_sigma(&p) - 2.0).abs() < 0.01);
     }
 
     #[test]
