@@ -13,6 +13,9 @@ pub const TARGET_LATENCY: f64 = 0.150;
 /// An identifiable estimate off by more than this is a gross error \[-\].
 pub const GROSS: f64 = 0.2;
 
+/// Issue 55's target for a step of the surface: read within this \[s\] ([`StepRead`]).
+pub const TARGET_STEP: f64 = 0.200;
+
 /// Metrics of one estimator on one case (all wheels).
 #[derive(Debug, Clone, Default)]
 pub struct Metrics {
@@ -158,11 +161,18 @@ pub fn wheel_surfaces(traces: &[WheelTrace], ests: &[Vec<Estimate>]) -> Vec<Whee
 /// old identification held meanwhile — is a true one (its lateness is the latency's and the
 /// "detect change" column's).
 pub fn false_change_flags(tr: &WheelTrace, est: &[Estimate]) -> usize {
+    false_flags(&tr.mu_true, est)
+}
+
+/// [`false_change_flags`] on the true μ of each row. Causal: the count over a prefix of the rows
+/// is the count of the prefix (a warm run's own flags are those of the two runs in a row less
+/// those of the first).
+pub(crate) fn false_flags(mu_true: &[f64], est: &[Estimate]) -> usize {
     // True μ where the current identification began.
     let mut began: Option<f64> = None;
     let mut false_flags = 0;
     for (i, e) in est.iter().enumerate() {
-        let Some(&now) = tr.mu_true.get(i) else {
+        let Some(&now) = mu_true.get(i) else {
             break;
         };
         if e.change {
@@ -176,6 +186,83 @@ pub fn false_change_flags(tr: &WheelTrace, est: &[Estimate]) -> usize {
         }
     }
     false_flags
+}
+
+/// The false change flags of a warm run (`warm`: the estimates of a second run over the traces
+/// on the estimator that made `cold`), judged with the first run behind it: those of the two
+/// runs in a row less those of the first (the count of [`false_change_flags`] is causal). A
+/// flag at the warm run's start, where the road is the first run's start again, is true when
+/// its value is right.
+pub fn warm_false_change_flags(
+    traces: &[WheelTrace],
+    cold: &[Vec<Estimate>],
+    warm: &[Vec<Estimate>],
+) -> usize {
+    traces
+        .iter()
+        .zip(cold.iter().zip(warm))
+        .map(|(tr, (c, w))| {
+            let mu: Vec<f64> = [tr.mu_true.as_slice(), &tr.mu_true].concat();
+            let both: Vec<Estimate> = [c.as_slice(), w].concat();
+            false_flags(&mu, &both) - false_flags(&tr.mu_true, c)
+        })
+        .sum()
+}
+
+/// One step of the surface under one wheel, and when the estimator read it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StepRead {
+    /// Wheel index (0–3: FL, FR, RL, RR).
+    pub wheel: usize,
+    /// True μ before and after the step \[-\].
+    pub from: f64,
+    /// See `from`.
+    pub to: f64,
+    /// Time of the first row on the new surface \[s\].
+    pub t_step: f64,
+    /// From `t_step` to the first row at which the estimate is identifiable within ±0.1 of
+    /// the new μ and from which it stays within ±0.1 (in any state but the fallback) to the end
+    /// of the new surface \[s\] (none: never).
+    pub read: Option<f64>,
+}
+
+impl StepRead {
+    /// Read within [`TARGET_STEP`].
+    pub fn in_time(&self) -> bool {
+        self.read.is_some_and(|r| r <= TARGET_STEP + 1e-9)
+    }
+}
+
+/// Every step of the surface in the traces (each boundary between stretches of constant true
+/// μ) and how soon estimates `ests[w]` of wheel `w` read it ([`StepRead::read`]).
+pub fn step_reads(traces: &[WheelTrace], ests: &[Vec<Estimate>]) -> Vec<StepRead> {
+    let mut out = Vec::new();
+    for (w, (tr, est)) in traces.iter().zip(ests).enumerate() {
+        if est.len() != tr.rows.len() {
+            continue;
+        }
+        for (a, b) in segments(&tr.mu_true).into_iter().skip(1) {
+            // Back from the stretch's end while within ±0.1: the earliest identifiable row.
+            let mut first = None;
+            for i in (a..b).rev() {
+                let e = &est[i];
+                if e.state == State::Fallback || (e.mu - tr.mu_true[i]).abs() > 0.1 {
+                    break;
+                }
+                if e.state == State::Identifiable {
+                    first = Some(i);
+                }
+            }
+            out.push(StepRead {
+                wheel: w,
+                from: tr.mu_true[a - 1],
+                to: tr.mu_true[a],
+                t_step: tr.rows[a].t,
+                read: first.map(|i| tr.rows[i].t - tr.rows[a].t),
+            });
+        }
+    }
+    out
 }
 
 /// Metrics of estimates `est` against the trace(s).
@@ -448,6 +535,75 @@ mod tests {
         assert_eq!(run(&[(350, 0.3)]), 0);
         // A flag on the very first sample has no identification to change from.
         assert_eq!(run(&[(0, 0.9)]), 1);
+        // Warm: the same traces again after a first run that ended identified on 0.3. The
+        // flag back to 0.9 at the warm run's start is a true change; a flag at its sample 50
+        // (0.9 → 0.9, no change of road) a false one.
+        let mut cold = vec![e(0.9, false); n];
+        cold[200..].fill(e(0.3, false));
+        cold[210] = e(0.3, true);
+        let mut warm = cold.clone();
+        warm[0] = e(0.9, true);
+        warm[1..200].fill(e(0.9, false));
+        let t = std::slice::from_ref(&tr);
+        assert_eq!(false_change_flags(&tr, &cold), 0);
+        assert_eq!(
+            warm_false_change_flags(t, &[cold.clone()], &[warm.clone()]),
+            0
+        );
+        warm[50] = e(0.9, true);
+        assert_eq!(warm_false_change_flags(t, &[cold], &[warm]), 1);
+    }
+
+    /// A step is read at the first row that is identifiable within ±0.1 of the new μ and from
+    /// which the estimate stays within ±0.1 (held while not identifiable) to the stretch's end:
+    /// not at an earlier visit within ±0.1 that is left again, nor at a row within ±0.1 that is
+    /// only not identifiable; never if the estimate leaves ±0.1 at the end.
+    #[test]
+    fn a_step_is_read_when_the_estimate_is_identifiable_within_01_for_good() {
+        let n = 1000;
+        // μ 0.9 for 400 rows (1 kHz), then 0.3.
+        let tr = flat_trace(
+            (0..n).map(|i| if i < 400 { 0.9 } else { 0.3 }).collect(),
+            vec![0.7; n],
+        );
+        let e = |mu: f64, state: State| Estimate {
+            mu,
+            sigma: 0.02,
+            state,
+            change: false,
+        };
+        let est: Vec<Estimate> = (0..n)
+            .map(|i| match i {
+                0..400 => e(0.9, State::Identifiable),
+                // Passes through 0.3 (identifiable) and leaves again.
+                400..450 => e(0.9, State::NotIdentifiable),
+                450..460 => e(0.32, State::Identifiable),
+                460..500 => e(0.6, State::NotIdentifiable),
+                // Within ±0.1 but not identifiable: not yet read.
+                500..530 => e(0.35, State::NotIdentifiable),
+                // Read at 530, held (not identifiable) within ±0.1 later.
+                530..900 => e(0.28, State::Identifiable),
+                _ => e(0.31, State::NotIdentifiable),
+            })
+            .collect();
+        let s = step_reads(std::slice::from_ref(&tr), std::slice::from_ref(&est));
+        assert_eq!(s.len(), 1);
+        assert_eq!((s[0].wheel, s[0].from, s[0].to), (0, 0.9, 0.3));
+        assert!((s[0].t_step - 0.4).abs() < 1e-12);
+        assert!((s[0].read.unwrap() - 0.13).abs() < 1e-9, "{s:?}");
+        assert!(s[0].in_time());
+        // Late: read at 650 (0.25 s); never: off by more than 0.1 at the end.
+        let mut late = est.clone();
+        late[530..650].fill(e(0.6, State::Identifiable));
+        let s = step_reads(std::slice::from_ref(&tr), std::slice::from_ref(&late));
+        assert!((s[0].read.unwrap() - 0.25).abs() < 1e-9 && !s[0].in_time());
+        let mut never = est;
+        never[n - 1] = e(0.9, State::Identifiable);
+        let s = step_reads(std::slice::from_ref(&tr), std::slice::from_ref(&never));
+        assert_eq!(s[0].read, None);
+        // No step, no reads.
+        let flat = flat_trace(vec![0.5; 10], vec![0.7; 10]);
+        assert!(step_reads(&[flat], &[vec![e(0.5, State::Identifiable); 10]]).is_empty());
     }
 
     /// The per-wheel listing (`wheels.csv`, the misses table) counts what [`metrics`] counts: a
