@@ -333,8 +333,9 @@ fn the_reference_needs_the_run_up() {
 #[test]
 fn bench_writes_its_tables_and_bound_reads_the_same_bank() {
     let dir = tmp("bench-tables");
+    // The bench's vehicle suite only (its wheel cases: tests/mu_bench.rs).
     let args = |cmd: &'static str| -> Vec<String> {
-        [
+        let mut a = [
             "mu",
             cmd,
             "--tir",
@@ -345,7 +346,11 @@ fn bench_writes_its_tables_and_bound_reads_the_same_bank() {
             dir.join(cmd).to_str().unwrap(),
         ]
         .map(String::from)
-        .to_vec()
+        .to_vec();
+        if cmd == "bench" {
+            a.extend(["--only", "vehicle"].map(String::from));
+        }
+        a
     };
     let run = |cmd: &'static str| {
         let a = args(cmd);
@@ -448,7 +453,9 @@ fn bench_writes_its_tables_and_bound_reads_the_same_bank() {
     let quick = |name: &str, cases: &str, extra: &[&str]| {
         let out = dir.join(name);
         let tir = tyre();
-        let mut args = vec!["mu", "bench", "--tir", &tir, "--cases", cases];
+        let mut args = vec![
+            "mu", "bench", "--tir", &tir, "--cases", cases, "--only", "vehicle",
+        ];
         args.extend(["--out", out.to_str().unwrap()]);
         args.extend(extra);
         let o = gough(&args);
@@ -472,6 +479,21 @@ fn bench_writes_its_tables_and_bound_reads_the_same_bank() {
     one_line_error(
         &["mu", "bench", "--cases", "1", "--delay", "-0.01"],
         "--delay -0.01",
+    );
+    one_line_error(&["mu", "bench", "--seeds", "5-1"], "--seeds 5-1");
+    let out = tmp("bench-no-tyres");
+    one_line_error(
+        &[
+            "mu",
+            "bench",
+            "--only",
+            "wheel",
+            "--tyres",
+            "/nonexistent",
+            "--out",
+            out.to_str().unwrap(),
+        ],
+        "/nonexistent",
     );
     // The estimators can be given a tyre that is not the simulated one (`--model-error`):
     // the table says so, and a name the file format does not have, a delta that is not a
@@ -500,6 +522,8 @@ fn bench_writes_its_tables_and_bound_reads_the_same_bank() {
                 &tir,
                 "--cases",
                 "1",
+                "--only",
+                "vehicle",
                 "--model-error",
                 e,
             ],

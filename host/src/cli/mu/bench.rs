@@ -8,18 +8,43 @@ use std::path::PathBuf;
 /// Arguments of `gough mu bench`.
 #[derive(Args)]
 pub struct BenchArgs {
-    /// Tyre property file (.tir).
+    /// Tyre property file (.tir) of the vehicle suite.
     #[arg(long, default_value_os_t = bench::Config::default().tir)]
     pub tir: PathBuf,
-    /// Output directory for the table (table.md, table.csv, wheels.csv) and the plots.
+    /// Output directory for the table (table.md; the vehicle suite's table.csv, wheels.csv and
+    /// plots; the wheel cases' wheel_cases.csv).
     #[arg(long, default_value_os_t = bench::Config::default().out)]
     pub out: PathBuf,
-    /// Noise seed.
+    /// Noise seed (and, for the wheel cases, the seed of the envelope's draws).
     #[arg(long, default_value_t = bench::Config::default().seed)]
     pub seed: u64,
-    /// Only the first N cases (for a quick look).
+    /// Run once per seed, each into OUT/seed-N, and write OUT/seeds.md: per seed and the worst
+    /// over them. A range A-B (`1-5`), a list (`1,3,5`) or one seed.
+    #[arg(long, value_name = "SEEDS", conflicts_with = "seed")]
+    pub seeds: Option<String>,
+    /// Only the first N cases of the vehicle suite (for a quick look).
     #[arg(long)]
     pub cases: Option<usize>,
+    /// Only one group of cases: the vehicle simulation's suite on `--tir`, or the wheel cases
+    /// on every tyre of `--tyres`. Default: both, the vehicle suite first.
+    #[arg(long, value_enum)]
+    pub only: Option<bench::Only>,
+    /// The folder of tyre files for the wheel cases: every `.tir` the estimator accepts (the
+    /// others are listed as skipped, with why).
+    #[arg(long, value_name = "DIR", default_value_os_t = bench::Config::default().tyres)]
+    pub tyres: PathBuf,
+    /// The quick subset (CI): the wheel cases on three tyres (MF 6.1 car, FSAE, MF 5.2 truck) ×
+    /// four scenarios, exact and at 1× the envelope, at 200 Hz, one of them at 100 Hz and 1 kHz;
+    /// the vehicle suite's first three cases (unless `--cases`).
+    #[arg(long)]
+    pub quick: bool,
+    /// Run every wheel case twice in a row on one estimator, and report the second run (the
+    /// estimator warm from the first) beside the first (cold).
+    #[arg(long)]
+    pub warm: bool,
+    /// Threads running the wheel cases (the results do not depend on it).
+    #[arg(long, value_name = "N", default_value_t = bench::Config::default().jobs)]
+    pub jobs: usize,
     /// Aligning-torque sensor noise, rms \[N·m\], added to every row the estimators see. The
     /// sensors, not the estimators: what the bank assumes is its own configuration's.
     #[arg(long, value_name = "NM", allow_negative_numbers = true, default_value_t = bench::Sensors::default().sigma_mz)]
@@ -106,7 +131,21 @@ impl BenchArgs {
                 .iter()
                 .map(|kv| model_error(kv))
                 .collect::<Result<_, _>>()?,
+            only: self.only,
+            tyres: self.tyres.clone(),
+            quick: self.quick,
+            warm: self.warm,
+            jobs: if self.jobs == 0 {
+                return Err("--jobs 0: expected at least one thread".into());
+            } else {
+                self.jobs
+            },
         })
+    }
+
+    /// The seeds of `--seeds` (`None`: one run, `--seed`).
+    pub fn seeds(&self) -> Result<Option<Vec<u64>>, String> {
+        self.seeds.as_deref().map(bench::parse_seeds).transpose()
     }
 }
 
@@ -219,6 +258,27 @@ mod tests {
             .config()
     }
 
+    /// `--seeds` reads a range, a list or one seed (each once, in order); anything else, and
+    /// `--seeds` with `--seed`, is refused.
+    #[test]
+    fn the_seeds() {
+        use bench::parse_seeds as p;
+        assert_eq!(p("1-5"), Ok(vec![1, 2, 3, 4, 5]));
+        assert_eq!(p("3"), Ok(vec![3]));
+        assert_eq!(p("1,3, 5"), Ok(vec![1, 3, 5]));
+        assert_eq!(p("1-3,2,7"), Ok(vec![1, 2, 3, 7]));
+        for bad in ["", "5-1", "a", "1-", "-3", "1-b", "0-5000"] {
+            let e = p(bad).unwrap_err();
+            assert!(e.starts_with(&format!("--seeds {bad}:")), "{e}");
+        }
+        let seeds = |extra: &[&str]| {
+            Cli::try_parse_from(["bench"].iter().chain(extra)).map(|c| c.a.seeds().unwrap())
+        };
+        assert_eq!(seeds(&["--seeds", "1-2"]).unwrap(), Some(vec![1, 2]));
+        assert_eq!(seeds(&[]).unwrap(), None);
+        assert!(seeds(&["--seeds", "1-2", "--seed", "3"]).is_err());
+    }
+
     /// Without arguments, the bench's documented configuration; the sensors, the preview and the
     /// model errors are what the flags ask for, and a value out of range is refused naming its
     /// flag.
@@ -258,6 +318,15 @@ mod tests {
             let e = parse(bad).unwrap_err();
             assert!(e.starts_with(bad[0]), "{e}");
         }
+        let c = parse(&[
+            "--only", "wheel", "--tyres", "/t", "--quick", "--warm", "--jobs", "1",
+        ])
+        .unwrap();
+        assert_eq!(
+            (c.only, c.tyres, c.quick, c.warm, c.jobs),
+            (Some(bench::Only::Wheel), PathBuf::from("/t"), true, true, 1)
+        );
+        assert!(parse(&["--jobs", "0"]).unwrap_err().starts_with("--jobs 0"));
         for bad in ["PHY1", "NOPE=1", "PHY1=x", "PHY1=NaN"] {
             let e = parse(&["--model-error", bad]).unwrap_err();
             assert!(e.starts_with("--model-error"), "{bad}: {e}");

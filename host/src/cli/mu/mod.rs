@@ -17,7 +17,9 @@ pub enum MuCmd {
     /// `wheel` (0–3 = FL, FR, RL, RR) a car's log. The bank never reads alpha. EST columns:
     /// t,mu,sigma,state (identifiable, not_identifiable, fallback), with `wheel` for a car's log.
     Estimate(EstimateArgs),
-    /// Benchmark the estimator (the bank) and its peers on the simulation's manoeuvre suite.
+    /// Benchmark the estimator (the bank) and its peers on the simulation's manoeuvre suite, then
+    /// the bank on every tyre of a folder, on tyres that are not their file, at 100, 200 and
+    /// 1000 Hz (the wheel cases).
     Bench(bench::BenchArgs),
     /// The main job: a simulated manoeuvre on a road whose friction changes, the estimator at
     /// every wheel, a table on the terminal, plots and estimates written.
@@ -145,7 +147,16 @@ impl SideArg {
 pub fn run(cmd: MuCmd) -> Result<(), String> {
     match cmd {
         MuCmd::Estimate(a) => estimate(&a),
-        MuCmd::Bench(b) => crate::mu::bench::run(&b.config()?),
+        MuCmd::Bench(b) => {
+            let (cfg, seeds) = (b.config()?, b.seeds()?);
+            let t0 = std::time::Instant::now();
+            match seeds {
+                Some(s) => crate::mu::bench::run_seeds(&cfg, &s)?,
+                None => crate::mu::bench::run(&cfg)?,
+            }
+            eprintln!("({:.1} s)", t0.elapsed().as_secs_f64());
+            Ok(())
+        }
         MuCmd::Demo(d) => crate::mu::demo::run(&d.config()),
         MuCmd::Bound(b) => crate::mu::bound::run(&b.config()),
         MuCmd::Calibrate(a) => calibrate(&a),

@@ -274,6 +274,125 @@ pub fn against_the_others(per_case: &[(&Case, Vec<MethodResult>)]) -> String {
     md
 }
 
+/// "Warm start: the vehicle suite" (`--warm`): the bank on each case cold and warm (its second
+/// run in a row on one estimator, the clock continued), each cell "cold / warm", and the
+/// closing lines of both.
+pub fn warm_vehicle(
+    rows: &[(&Case, Metrics, Metrics)],
+    totals: &(Totals, Totals),
+    cases: usize,
+    issue_cases: usize,
+) -> String {
+    let mut md = String::from(
+        "\n## Warm start: the vehicle suite\n\n\
+         The bank on every case twice in a row on one estimator (its clock continued): cold is the \
+         first run, warm the second, from the state the first left. Each cell: cold / warm.\n\n\
+         | manoeuvre | road | wheel-surfaces within 150 ms | p95 err | off by > 0.2 | latency from util 0.5 [s] | detect change [s] | false change flags (of flags) | identifiable samples |\n\
+         |---|---|---|---|---|---|---|---|---|\n",
+    );
+    for (c, a, b) in rows {
+        let _ = writeln!(
+            md,
+            "| {} | {} | {} of {} / {} of {} | {} / {} | {:.2} % / {:.2} % | {} / {} | {} / {} | {} of {} / {} of {} | {} / {} |",
+            c.manoeuvre,
+            c.road,
+            a.ws_within,
+            a.ws_total,
+            b.ws_within,
+            b.ws_total,
+            fmt(a.err_p95, 3),
+            fmt(b.err_p95, 3),
+            100.0 * a.gross,
+            100.0 * b.gross,
+            fmt(a.latency, 3),
+            fmt(b.latency, 3),
+            fmt(a.detect, 3),
+            fmt(b.detect, 3),
+            a.false_alarms,
+            a.change_flags,
+            b.false_alarms,
+            b.change_flags,
+            a.n_identifiable,
+            b.n_identifiable,
+        );
+    }
+    md.push('\n');
+    for (name, t) in [("cold", &totals.0), ("warm", &totals.1)] {
+        let s = summary(&[(Method::Bank, t.clone())], cases, issue_cases);
+        for line in s.lines() {
+            let _ = writeln!(md, "{name}: {line}");
+        }
+    }
+    md
+}
+
+/// `seeds.md` of [`super::run_seeds`]: per seed and the worst over them, the bank's closing
+/// figures on the vehicle suite, and the wheel cases per level at the standard rate.
+pub fn seeds(reports: &[(u64, super::Report)]) -> String {
+    let list: Vec<String> = reports.iter().map(|(s, _)| s.to_string()).collect();
+    let mut md = format!(
+        "# gough mu bench over noise seeds {}
+
+Each seed's tables: seed-N/table.md.
+",
+        list.join(", ")
+    );
+    let vehicle: Vec<(u64, &(Totals, usize, usize))> = reports
+        .iter()
+        .filter_map(|(s, r)| r.vehicle.as_ref().map(|v| (*s, v)))
+        .collect();
+    if !vehicle.is_empty() {
+        md.push_str(
+            "\n## The vehicle suite: the bank\n\n\
+             | seed | cases within 150 ms (issue's) | wheel-surfaces within 150 ms (issue's) | cases within 150 ms (all) | wheel-surfaces within 150 ms (all) | false change alarms (of flags) | worst p95 | worst off by > 0.2 |\n\
+             |---|---|---|---|---|---|---|---|\n",
+        );
+        let row = |md: &mut String, name: &str, t: &Totals, n: usize, issue: usize| {
+            let _ = writeln!(
+                md,
+                "| {name} | {} of {issue} | {} of {} | {} of {n} | {} of {} | {} of {} | {} | {:.2} % |",
+                t.within_issue,
+                t.ws_issue.0,
+                t.ws_issue.1,
+                t.within,
+                t.ws.0,
+                t.ws.1,
+                t.alarms,
+                t.flags,
+                fmt(t.worst_p95, 3),
+                100.0 * t.worst_gross,
+            );
+        };
+        for (seed, (t, n, issue)) in &vehicle {
+            row(&mut md, &seed.to_string(), t, *n, *issue);
+        }
+        // The worst: the fewest within, the most alarms, the largest errors.
+        let mut w = vehicle[0].1 .0.clone();
+        for (_, (t, ..)) in &vehicle[1..] {
+            w.within = w.within.min(t.within);
+            w.within_issue = w.within_issue.min(t.within_issue);
+            w.ws.0 = w.ws.0.min(t.ws.0);
+            w.ws_issue.0 = w.ws_issue.0.min(t.ws_issue.0);
+            w.alarms = w.alarms.max(t.alarms);
+            w.flags = w.flags.max(t.flags);
+            w.worst_p95 = match (w.worst_p95, t.worst_p95) {
+                (Some(a), Some(b)) => Some(a.max(b)),
+                (a, b) => a.or(b),
+            };
+            w.worst_gross = w.worst_gross.max(t.worst_gross);
+        }
+        let (_, (_, n, issue)) = vehicle[0];
+        row(&mut md, "worst", &w, *n, *issue);
+    }
+    let wheel: Vec<(u64, &[(super::wheel::Level, super::wheel::tables::Tally)])> = reports
+        .iter()
+        .filter(|(_, r)| !r.wheel.is_empty())
+        .map(|(s, r)| (*s, r.wheel.as_slice()))
+        .collect();
+    md.push_str(&super::wheel::tables::seeds(&wheel));
+    md
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
