@@ -90,12 +90,13 @@ pub struct Config {
     pub jobs: usize,
 }
 
-/// One group of the bench's cases.
+/// One group of the bench's cases: the vehicle suite ([`suite`]) or the wheel cases
+/// ([`wheel`](mod@wheel)). (The variants' docs are `gough mu bench --help`'s.)
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
 pub enum Only {
-    /// The vehicle simulation's suite on the one tyre of `--tir` ([`suite`]).
+    /// The vehicle simulation's suite on the one tyre of `--tir`.
     Vehicle,
-    /// The wheel cases on every tyre of `--tyres` ([`wheel`](mod@wheel)).
+    /// The wheel cases on every tyre of `--tyres`.
     Wheel,
 }
 
