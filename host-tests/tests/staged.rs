@@ -369,3 +369,74 @@ fn a_scaled_friction_stage_refuses_what_is_not_finite() {
         .iter()
         .all(|v| v.is_finite()));
 }
+
+/// `Prepared::adjusted` is the file with λKx, λt scaled, QBZ1–QBZ3 scaled and QHZ1 shifted: on
+/// every oracle sweep that has a load stage, an adjusted load stage gives what `mf::eval` gives
+/// on the file so changed (f64, within 1e-9 of FNOMIN and of FNOMIN·R0).
+#[test]
+fn an_adjusted_load_stage_is_the_file_with_the_keys_changed() {
+    use gough::mf::prepared::Adjust;
+    let a = Adjust {
+        kx: 0.93,
+        trail: 1.07,
+        trail_shape: 0.95,
+        trail_shift: 0.0015,
+    };
+    let mut checked = 0;
+    for (path, tyre, opts) in sweeps() {
+        if opts.turn_slip {
+            continue;
+        }
+        let p = params(&tyre);
+        let mut q = p.clone();
+        q.lkx *= a.kx;
+        q.ltr *= a.trail;
+        q.qbz1 *= a.trail_shape;
+        q.qbz2 *= a.trail_shape;
+        q.qbz3 *= a.trail_shape;
+        q.qhz1 += a.trail_shift;
+        let (tol_f, tol_m) = (1e-9 * p.fnomin, 1e-9 * p.fnomin * p.unloaded_radius);
+        for i in rows(&path) {
+            let Ok(prep) = Prepared::new::<Libm>(&p, &Operating::from(&i), &opts) else {
+                continue;
+            };
+            let Ok(f) = prep.adjusted(&a).eval::<Libm>(i.kappa, i.alpha) else {
+                continue;
+            };
+            let o = mf::eval::<f64, Libm>(&q, &i, &opts).unwrap();
+            assert!(
+                (f.fx - o.fx).abs() <= tol_f
+                    && (f.fy - o.fy).abs() <= tol_f
+                    && (f.mz - o.mz).abs() <= tol_m,
+                "{}: {:?}: adjusted {} {} {}, file changed {} {} {}",
+                path.display(),
+                i,
+                f.fx,
+                f.fy,
+                f.mz,
+                o.fx,
+                o.fy,
+                o.mz
+            );
+            checked += 1;
+        }
+    }
+    assert!(checked > 1000, "{checked} points");
+    // NONE is the file, to the bit.
+    let p = params("MagicFormula61_Parameters");
+    let i = Input {
+        fz: 5000.0,
+        alpha: 0.05,
+        kappa: -0.03,
+        vx: 20.0,
+        ..Input::default()
+    };
+    let prep = Prepared::new::<Libm>(&p, &Operating::from(&i), &Options::default()).unwrap();
+    let (f0, f1) = (
+        prep.eval::<Libm>(i.kappa, i.alpha).unwrap(),
+        prep.adjusted(&Adjust::NONE)
+            .eval::<Libm>(i.kappa, i.alpha)
+            .unwrap(),
+    );
+    assert_eq!((f0.fx, f0.fy, f0.mz), (f1.fx, f1.fy, f1.mz));
+}

@@ -137,6 +137,32 @@ pub struct SlopesMu<F> {
     pub lmu: Partials<F>,
 }
 
+/// How the tyre on the car differs from its file, as the load stage takes it
+/// ([`Prepared::adjusted`]): scales of Kxκ, of the peak trail Dt and of Bt, and a shift of SHt
+/// \[rad\]. [`Adjust::NONE`] is the file.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Adjust<F> {
+    /// Scale of the longitudinal slip stiffness Kxκ (as λKx).
+    pub kx: F,
+    /// Scale of the peak trail Dt (as λt).
+    pub trail: F,
+    /// Scale of the trail's stiffness factor Bt (as QBZ1–QBZ3 together): its shape.
+    pub trail_shape: F,
+    /// Shift of the trail's SHt \[rad\] (as QHZ1), in the file's side's axes.
+    pub trail_shift: F,
+}
+
+impl<F: Float> Adjust<F> {
+    /// No adjustment: the file.
+    pub const NONE: Adjust<F> = Adjust {
+        kx: F::ONE,
+        trail: F::ONE,
+        trail_shape: F::ONE,
+        trail_shift: F::ZERO,
+    };
+}
+
 /// The load stage of the Magic Formula at one (Fz, γ, p, Vx), with the friction stage at the
 /// file's λμx, λμy. See the [module doc](self).
 ///
@@ -232,6 +258,23 @@ impl<F: Float> Prepared<F> {
             w: &self.w,
             mz: &self.mz,
         }
+    }
+
+    /// The load stage adjusted to a tyre that differs from its file ([`Adjust`]): Kxκ (28),
+    /// (4.E15) and Dt (52), (A60) scaled, Bt's load part (50), (A58) scaled, SHt (54), (4.E35)
+    /// shifted — what scaling λKx, λt, QBZ1–QBZ3 and adding to QHZ1 in the file would give,
+    /// without building the load stage again (a few multiplications). The friction stage at the
+    /// file's own λμ is made again.
+    pub fn adjusted(&self, a: &Adjust<F>) -> Self {
+        let mut p = *self;
+        p.fx0.k_xk = self.fx0.k_xk * a.kx;
+        p.mz.k_ratio = self.mz.k_ratio * a.kx;
+        p.mz0.d_t = self.mz0.d_t * a.trail;
+        p.mz.d_t = self.mz.d_t * a.trail;
+        p.mz0.b_t1 = self.mz0.b_t1 * a.trail_shape;
+        p.mz0.s_ht = self.mz0.s_ht + a.trail_shift;
+        p.mu = p.view().mu_stage::<F>(p.c.lmux_star, p.c.lmuy_star);
+        p
     }
 
     /// The friction stage at λμx* = `lmu_x`, λμy* = `lmu_y` (4.E7) (these replace the file's
