@@ -21,10 +21,12 @@
 
 pub mod bank;
 pub mod batch;
+pub mod calibration;
 pub mod config;
 pub mod estimate;
 pub mod fit;
 pub mod likelihood;
+pub mod noise;
 pub mod preview;
 
 pub use bank::{Bank, BuildError, SLOTS, VISIT};

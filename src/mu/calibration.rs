@@ -1,0 +1,422 @@
+//! The tyre on the car relative to its file: the few properties by which a real tyre differs
+//! from its `.tir` (temperature, wear, pressure, production spread), estimated online by each
+//! wheel's estimator and shared by all its surface hypotheses (they are the tyre's, not the
+//! road's).
+//!
+//! ## The properties ([`Property`])
+//! What moves the friction estimate when it is off (docs/estimator.md, "A tyre that is not its
+//! file"), as the Magic Formula's load stage takes it ([`crate::mf::prepared::Adjust`]):
+//! - **trail**: ln of the peak-trail scale (Dt, λt) — the aligning torque's arm; 10 % off moves
+//!   μ read at utilisation 0.5 by up to 0.5 on a dry road;
+//! - **trail shape**: ln of the scale of Bt — how fast the trail collapses towards the limit;
+//! - **trail shift**: SHt − SHy \[rad\] — the trail's registration against the force (an offset
+//!   of the Fy shift PHY1 acts as the opposite offset of QHZ1: the slip angle is not measured);
+//! - **kx**: ln of the longitudinal slip stiffness scale (Kxκ, λKx) — braking reads μ from Fx
+//!   against the measured κ.
+//!
+//! Not among them, measured and left out: the cornering stiffness scale (λKy) — without the slip
+//! angle it only rescales the α′ each hypothesis fits, so the forces and the torque do not tell
+//! it; pressure acts through the four above (on the bundled MF 6.1 file ±15 % moves the trail by
+//! ∓13 % and Kxκ by ∓16 %, μy by < 1 %).
+//!
+//! ## The estimate
+//! A Kalman filter over θ with a random-walk drift (each property may move by its prior σ over
+//! `cal_tau`), one step per batch the bank's gates let through ([`crate::mu::bank`]): the
+//! batch's normalised residuals at the likeliest hypothesis, their slopes in θ, and in the
+//! nuisances of that batch — its slips α′, κ′ (free) and its surface μ (the identification's σ,
+//! or anything on the grid) — processed row by row over the state (θ, α′, κ′, μ); the nuisances
+//! are dropped after the step. So only what the batch says of the tyre beyond its slips and
+//! beyond the surface it may be on moves the calibration.
+//!
+//! Exported and imported ([`Calibration::export`], [`Calibration::import`]) as values and σ, so
+//! that a device starts warm after power-up.
+
+use crate::math::{Backend, Float};
+use crate::mf::prepared::Adjust;
+
+/// Number of calibrated properties.
+pub const PROPERTIES: usize = 4;
+
+/// A calibrated property (the index into [`Calibration::theta`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Property {
+    /// ln of the peak-trail scale.
+    Trail,
+    /// ln of the scale of Bt.
+    TrailShape,
+    /// SHt − SHy \[rad\].
+    TrailShift,
+    /// ln of the longitudinal slip stiffness scale.
+    Kx,
+}
+
+impl Property {
+    /// All, in index order.
+    pub const ALL: [Property; PROPERTIES] = [
+        Property::Trail,
+        Property::TrailShape,
+        Property::TrailShift,
+        Property::Kx,
+    ];
+    /// Name as in logs and files: `trail`, `trail_shape`, `trail_shift`, `kx`.
+    pub const fn name(self) -> &'static str {
+        match self {
+            Property::Trail => "trail",
+            Property::TrailShape => "trail_shape",
+            Property::TrailShift => "trail_shift",
+            Property::Kx => "kx",
+        }
+    }
+    /// Whether the property is a scale (stored as its logarithm) rather than a shift.
+    pub const fn is_scale(self) -> bool {
+        !matches!(self, Property::TrailShift)
+    }
+}
+
+/// The calibration: the properties' values θ (logarithms of scales, the shift in rad) and
+/// their covariance.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Calibration<F> {
+    /// Values, by [`Property`] index.
+    pub theta: [F; PROPERTIES],
+    /// Covariance of θ.
+    pub cov: [[F; PROPERTIES]; PROPERTIES],
+    /// Batches that moved it since it was made (saturating).
+    pub batches: u32,
+}
+
+/// A calibration as it crosses a boundary (the protocol, the C API, files): values and σ, the
+/// scales as factors (1 = the file), the shift in rad.
+#[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize, serde::Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Exported {
+    /// Trail scale, trail-shape scale, trail shift \[rad\], Kxκ scale.
+    pub value: [f32; PROPERTIES],
+    /// Their σ (of the scale's logarithm: a relative σ; of the shift in rad).
+    pub sigma: [f32; PROPERTIES],
+    /// Batches that moved it.
+    pub batches: u32,
+}
+
+/// Why a calibration was refused on import.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum CalibrationError {
+    /// A value or σ is not a finite number, a scale is not positive, or a σ is negative.
+    NotFinite,
+    /// A value lies beyond the bound the estimator keeps it in (`cal_bound` prior σ).
+    OutOfBounds,
+}
+
+impl core::fmt::Display for CalibrationError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str(match self {
+            CalibrationError::NotFinite => "a calibration value or σ is not a finite, valid number",
+            CalibrationError::OutOfBounds => "a calibration value lies beyond its bound",
+        })
+    }
+}
+
+impl core::error::Error for CalibrationError {}
+
+/// Nuisances of one calibration step: the batch's slips α′, κ′ and its surface μ.
+pub const NUISANCES: usize = 3;
+const STATE: usize = PROPERTIES + NUISANCES;
+
+impl<F: Float> Calibration<F> {
+    /// The file as it is, with prior σ `sigma` of each property.
+    pub fn file(sigma: &[F; PROPERTIES]) -> Self {
+        let mut cov = [[F::ZERO; PROPERTIES]; PROPERTIES];
+        for (i, (row, s)) in cov.iter_mut().zip(sigma.iter()).enumerate() {
+            if let Some(x) = row.get_mut(i) {
+                *x = *s * *s;
+            }
+        }
+        Calibration {
+            theta: [F::ZERO; PROPERTIES],
+            cov,
+            batches: 0,
+        }
+    }
+
+    /// The load stage's adjustment this calibration stands for.
+    pub fn adjust<M: Backend<F>>(&self) -> Adjust<F> {
+        let [trail, shape, shift, kx] = self.theta;
+        Adjust {
+            kx: M::exp(kx),
+            trail: M::exp(trail),
+            trail_shape: M::exp(shape),
+            trail_shift: shift,
+        }
+    }
+
+    /// σ of property `p`.
+    pub fn sigma<M: Backend<F>>(&self, p: Property) -> F {
+        let i = p as usize;
+        M::sqrt(
+            self.cov
+                .get(i)
+                .and_then(|r| r.get(i))
+                .copied()
+                .unwrap_or(F::ZERO)
+                .max(F::ZERO),
+        )
+    }
+
+    /// The drift over `dt` seconds: each variance grows by its prior's over `tau`, up to it.
+    pub fn drift(&mut self, dt: F, tau: F, prior: &[F; PROPERTIES]) {
+        let q = dt / tau.max(F::from_f64(1e-3));
+        for (i, s) in prior.iter().enumerate() {
+            if let Some(x) = self.cov.get_mut(i).and_then(|r| r.get_mut(i)) {
+                *x = (*x + *s * *s * q).min(*s * *s);
+            }
+        }
+    }
+
+    /// One Kalman step on a batch: `r` its normalised residuals (measured − model)/σ at the
+    /// linearisation point, `h_cal[i][j]` the slope of row i's model part (over its σ) in θj,
+    /// `h_nuis[i][k]` in the nuisances (α′, κ′, μ) and `nuis_var` their prior variances. θ moves
+    /// by what the batch says beyond the nuisances; each value is kept within `bound`·its prior
+    /// σ. Rows whose slopes are all zero (not measured) are skipped. A step that is not finite
+    /// is not taken.
+    #[allow(clippy::indexing_slicing)] // constant sizes: i, j < STATE (the arrays' own lengths)
+    pub fn step(
+        &mut self,
+        r: &[F; 4],
+        h_cal: &[[F; PROPERTIES]; 4],
+        h_nuis: &[[F; NUISANCES]; 4],
+        nuis_var: &[F; NUISANCES],
+        prior: &[F; PROPERTIES],
+        bound: F,
+    ) {
+        let mut p = [[F::ZERO; STATE]; STATE];
+        for i in 0..PROPERTIES {
+            for j in 0..PROPERTIES {
+                p[i][j] = self.cov[i][j];
+            }
+        }
+        for k in 0..NUISANCES {
+            p[PROPERTIES + k][PROPERTIES + k] = nuis_var[k];
+        }
+        let mut dx = [F::ZERO; STATE];
+        for i in 0..4 {
+            let mut h = [F::ZERO; STATE];
+            h[..PROPERTIES].copy_from_slice(&h_cal[i]);
+            h[PROPERTIES..].copy_from_slice(&h_nuis[i]);
+            if h.iter().all(|x| *x == F::ZERO) {
+                continue;
+            }
+            let mut ph = [F::ZERO; STATE];
+            for a in 0..STATE {
+                for b in 0..STATE {
+                    ph[a] += p[a][b] * h[b];
+                }
+            }
+            let mut s = F::ONE;
+            let mut pred = F::ZERO;
+            for a in 0..STATE {
+                s += h[a] * ph[a];
+                pred += h[a] * dx[a];
+            }
+            let inn = r[i] - pred;
+            for a in 0..STATE {
+                dx[a] += ph[a] * inn / s;
+            }
+            for a in 0..STATE {
+                for b in 0..STATE {
+                    p[a][b] -= ph[a] * ph[b] / s;
+                }
+            }
+        }
+        let finite = dx.iter().all(|x| x.is_finite())
+            && p.iter()
+                .take(PROPERTIES)
+                .all(|row| row.iter().all(|x| x.is_finite()));
+        if !finite {
+            return;
+        }
+        for i in 0..PROPERTIES {
+            let lim = bound * prior[i];
+            self.theta[i] = (self.theta[i] + dx[i]).max(-lim).min(lim);
+            for j in 0..PROPERTIES {
+                self.cov[i][j] = p[i][j];
+            }
+            // Never below zero on the diagonal (rounding).
+            self.cov[i][i] = self.cov[i][i].max(F::ZERO);
+        }
+        self.batches = self.batches.saturating_add(1);
+    }
+
+    /// Values and σ for a boundary ([`Exported`]).
+    pub fn export<M: Backend<F>>(&self) -> Exported {
+        let mut out = Exported {
+            batches: self.batches,
+            ..Exported::default()
+        };
+        for (k, p) in Property::ALL.iter().enumerate() {
+            let t = self.theta.get(k).copied().unwrap_or(F::ZERO);
+            let v = if p.is_scale() { M::exp(t) } else { t };
+            if let (Some(o), Some(s)) = (out.value.get_mut(k), out.sigma.get_mut(k)) {
+                *o = v.to_f64() as f32;
+                *s = self.sigma::<M>(*p).to_f64() as f32;
+            }
+        }
+        out
+    }
+
+    /// A calibration from values and σ ([`Exported`]), the covariance diagonal; refused when a
+    /// number is not valid or a value lies beyond `bound`·its prior σ.
+    pub fn import<M: Backend<F>>(
+        e: &Exported,
+        prior: &[F; PROPERTIES],
+        bound: F,
+    ) -> Result<Self, CalibrationError> {
+        let mut c = Calibration::file(prior);
+        c.batches = e.batches;
+        for (k, p) in Property::ALL.iter().enumerate() {
+            let (Some(v), Some(s), Some(pr)) = (e.value.get(k), e.sigma.get(k), prior.get(k))
+            else {
+                return Err(CalibrationError::NotFinite);
+            };
+            let (v, s) = (F::from_f64(f64::from(*v)), F::from_f64(f64::from(*s)));
+            if !(v.is_finite() && s.is_finite() && s >= F::ZERO) || (p.is_scale() && v <= F::ZERO) {
+                return Err(CalibrationError::NotFinite);
+            }
+            let t = if p.is_scale() { M::ln(v) } else { v };
+            if t.abs() > bound * *pr {
+                return Err(CalibrationError::OutOfBounds);
+            }
+            if let (Some(x), Some(row)) = (c.theta.get_mut(k), c.cov.get_mut(k)) {
+                *x = t;
+                if let Some(d) = row.get_mut(k) {
+                    *d = s * s;
+                }
+            }
+        }
+        Ok(c)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::math::Libm;
+
+    const PRIOR: [f64; PROPERTIES] = [0.1, 0.1, 0.002, 0.1];
+
+    #[test]
+    fn a_step_moves_theta_towards_what_explains_the_residual_and_shrinks_its_variance() {
+        let mut c = Calibration::<f64>::file(&PRIOR);
+        // One row whose model part grows with the trail: the data say +5 % (r = 5 at a slope
+        // of 100 per unit ln-scale), the nuisances do not touch that row.
+        let mut h = [[0.0; PROPERTIES]; 4];
+        h[2][0] = 100.0;
+        let r = [0.0, 0.0, 5.0, 0.0];
+        let hn = [[0.0; NUISANCES]; 4];
+        c.step(&r, &h, &hn, &[1.0; NUISANCES], &PRIOR, 4.0);
+        assert!((c.theta[0] - 0.05).abs() < 1e-3, "{:?}", c.theta);
+        assert!(c.sigma::<Libm>(Property::Trail) < 0.011);
+        assert_eq!(c.theta[1], 0.0);
+        assert_eq!(c.batches, 1);
+    }
+
+    #[test]
+    fn a_nuisance_that_explains_the_row_as_well_takes_it() {
+        // The same row, but a free nuisance (the surface) moves it alike: nothing is left for θ.
+        let mut c = Calibration::<f64>::file(&PRIOR);
+        let mut h = [[0.0; PROPERTIES]; 4];
+        h[2][0] = 100.0;
+        let mut hn = [[0.0; NUISANCES]; 4];
+        hn[2][2] = 100.0;
+        c.step(
+            &[0.0, 0.0, 5.0, 0.0],
+            &h,
+            &hn,
+            &[1e6, 1e6, 1e6],
+            &PRIOR,
+            4.0,
+        );
+        assert!(c.theta[0].abs() < 1e-4, "{:?}", c.theta);
+        assert!(c.sigma::<Libm>(Property::Trail) > 0.099);
+    }
+
+    #[test]
+    fn drift_grows_the_variance_up_to_the_prior_and_export_import_round_trips() {
+        let mut c = Calibration::<f64>::file(&PRIOR);
+        c.cov[0][0] = 1e-6;
+        c.theta = [0.05, -0.02, 0.001, 0.03];
+        c.drift(60.0, 120.0, &PRIOR);
+        assert!((c.cov[0][0] - (1e-6 + 0.005)).abs() < 1e-12);
+        c.drift(1e6, 120.0, &PRIOR);
+        assert!((c.cov[0][0] - 0.01).abs() < 1e-15);
+        let e = c.export::<Libm>();
+        assert!((e.value[0] - 0.05f64.exp() as f32).abs() < 1e-6);
+        assert!((e.value[2] - 0.001).abs() < 1e-9);
+        let d = Calibration::<f64>::import::<Libm>(&e, &PRIOR, 4.0).unwrap();
+        for k in 0..PROPERTIES {
+            assert!((d.theta[k] - c.theta[k]).abs() < 1e-6);
+            assert!((d.cov[k][k].sqrt() - c.cov[k][k].sqrt()).abs() < 1e-6);
+        }
+    }
+
+    #[test]
+    fn import_refuses_what_is_not_a_calibration() {
+        let ok = Calibration::<f32>::file(&[0.1, 0.1, 0.002, 0.1]).export::<Libm>();
+        let prior = [0.1f32, 0.1, 0.002, 0.1];
+        for bad in [
+            Exported {
+                value: [f32::NAN, 1.0, 0.0, 1.0],
+                ..ok
+            },
+            Exported {
+                value: [0.0, 1.0, 0.0, 1.0],
+                ..ok
+            },
+            Exported {
+                value: [1.0, 1.0, 0.0, -1.0],
+                ..ok
+            },
+            Exported {
+                sigma: [0.1, -0.1, 0.0, 0.1],
+                ..ok
+            },
+            Exported {
+                sigma: [f32::INFINITY, 0.1, 0.0, 0.1],
+                ..ok
+            },
+        ] {
+            assert_eq!(
+                Calibration::<f32>::import::<Libm>(&bad, &prior, 4.0),
+                Err(CalibrationError::NotFinite)
+            );
+        }
+        let far = Exported {
+            value: [2.0, 1.0, 0.0, 1.0],
+            ..ok
+        };
+        assert_eq!(
+            Calibration::<f32>::import::<Libm>(&far, &prior, 4.0),
+            Err(CalibrationError::OutOfBounds)
+        );
+        assert!(Calibration::<f32>::import::<Libm>(&ok, &prior, 4.0).is_ok());
+    }
+
+    #[test]
+    fn a_step_on_non_finite_numbers_changes_nothing() {
+        let mut c = Calibration::<f64>::file(&PRIOR);
+        let before = c;
+        let mut h = [[0.0; PROPERTIES]; 4];
+        h[1][0] = f64::NAN;
+        c.step(
+            &[0.0, 1.0, 0.0, 0.0],
+            &h,
+            &[[0.0; NUISANCES]; 4],
+            &[1.0; NUISANCES],
+            &PRIOR,
+            4.0,
+        );
+        assert_eq!(c, before);
+    }
+}
