@@ -181,7 +181,7 @@ impl<F: Float> Calibration<F> {
     /// by what the batch says beyond the nuisances; each value is kept within `bound`·its prior
     /// σ. Rows whose slopes are all zero (not measured) are skipped. A step that is not finite
     /// is not taken.
-    #[allow(clippy::indexing_slicing)] // constant sizes: i, j < STATE (the arrays' own lengths)
+    #[allow(clippy::indexing_slicing, clippy::needless_range_loop)] // constant sizes: i, j < STATE (the arrays' own lengths)
     pub fn step(
         &mut self,
         r: &[F; 4],
