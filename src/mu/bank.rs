@@ -31,7 +31,9 @@
 //! bench measures.
 
 use super::batch::{Batch, Batcher, Sample, MAX_GAP_US};
-use super::config::{mu_y0, Config, CELLS};
+use super::calibration::{Calibration, CalibrationError, Exported, NUISANCES};
+use super::config::{mu_y0, Config, Grid, CELLS};
+use super::estimate::State;
 use super::estimate::{Estimate, Report};
 use super::fit::Fit;
 use super::likelihood::Likelihood;
@@ -53,7 +55,8 @@ pub const SLOTS: usize = 3;
 pub enum BuildError {
     /// The model's μy0 at FNOMIN is not a positive number (nonsense parameters).
     NoFriction,
-    /// The grid of hypotheses is empty or not positive (`mu_lo`, `mu_step`), or `batch` is 0.
+    /// The grid of hypotheses is empty or not positive (`mu_lo`, `mu_step`, `mu_hi_rel`),
+    /// `batch_us` is 0, or the calibration's σ, time or bound are not positive.
     BadConfig,
 }
 
@@ -116,6 +119,17 @@ pub struct Bank<F> {
     mixing: Option<Reading<F>>,
     /// Whether that reading has waited a sample for a slot.
     mix_waited: bool,
+    /// The tyre on the car relative to its file ([`crate::mu::calibration`]).
+    cal: Calibration<F>,
+    /// Running maximum and minimum of |F|/Fz over the last `cal_sweep_time` (the sweep that
+    /// lets a batch away from the linear range calibrate).
+    f_hi: F,
+    f_lo: F,
+    /// Time the estimate has been identifiable without a change \[s\].
+    ident_s: F,
+    /// The likeliest surface's χ², averaged over the recent excited batches (the mismatch
+    /// indication).
+    fit_avg: F,
     /// What the last [`Bank::update`]'s work did (tests of the per-sample budget).
     #[cfg(test)]
     trace: WorkTrace,
@@ -137,10 +151,16 @@ impl<F: Float> Bank<F> {
             return Err(BuildError::BadConfig);
         }
         let mu_y0 = mu_y0::<F, M>(params).ok_or(BuildError::NoFriction)?;
+        let r0 = if params.unloaded_radius > F::ZERO {
+            params.unloaded_radius
+        } else {
+            // A file without a radius (not one the reader accepts): a car's.
+            F::from_f64(0.3)
+        };
         Ok(Bank {
             cfg,
-            batches: Batcher::new(params.fnomin),
-            fit: Fit::new(params, side, mu_y0),
+            batches: Batcher::new(&cfg, params.fnomin, r0),
+            fit: Fit::new(&cfg, params, side, mu_y0),
             likelihood: Likelihood::new(),
             report: Report::new(&cfg),
             pending: None,
@@ -154,9 +174,74 @@ impl<F: Float> Bank<F> {
             fitted: 0,
             mixing: None,
             mix_waited: false,
+            cal: Calibration::file(&cfg.cal_sigma),
+            f_hi: F::ZERO,
+            f_lo: F::ZERO,
+            ident_s: F::ZERO,
+            fit_avg: F::ZERO,
             #[cfg(test)]
             trace: WorkTrace::default(),
         })
+    }
+
+    /// The calibration of the tyre on the car ([`crate::mu::calibration`]).
+    pub fn calibration(&self) -> &Calibration<F> {
+        &self.cal
+    }
+
+    /// Starts from calibration `c` (one exported earlier, [`Bank::import_calibration`] for its
+    /// values and σ): from the next batch on the surfaces are read relative to it. Refused,
+    /// nothing changed, when a number is not finite or a value lies beyond its bound
+    /// (`cal_bound` prior σ).
+    pub fn set_calibration<M: Backend<F>>(
+        &mut self,
+        c: &Calibration<F>,
+    ) -> Result<(), CalibrationError> {
+        let ok = c.theta.iter().all(|x| x.is_finite())
+            && c.cov.iter().all(|r| r.iter().all(|x| x.is_finite()))
+            && c.cov
+                .iter()
+                .enumerate()
+                .all(|(i, r)| r.get(i).is_some_and(|d| *d >= F::ZERO));
+        if !ok {
+            return Err(CalibrationError::NotFinite);
+        }
+        for (t, s) in c.theta.iter().zip(self.cfg.cal_sigma.iter()) {
+            if t.abs() > self.cfg.cal_bound * *s {
+                return Err(CalibrationError::OutOfBounds);
+            }
+        }
+        self.cal = *c;
+        Ok(())
+    }
+
+    /// Starts from a calibration exported earlier as values and σ ([`Calibration::export`]);
+    /// see [`Bank::set_calibration`].
+    pub fn import_calibration<M: Backend<F>>(
+        &mut self,
+        e: &Exported,
+    ) -> Result<(), CalibrationError> {
+        let c = Calibration::import::<M>(e, &self.cfg.cal_sigma, self.cfg.cal_bound)?;
+        self.cal = c;
+        Ok(())
+    }
+
+    /// The sensors' noise as the bank tracks it (Fx/Fz, Fy/Fz, Mz \[N·m\], κ), beside the
+    /// configured start in `Config` (the online check of `sigma_f_rel`, `sigma_mz_rel`,
+    /// `sigma_kappa`).
+    pub fn noise<M: Backend<F>>(&self) -> [F; 4] {
+        let n = self.batches.noise();
+        [
+            n.sigma::<M>(0),
+            n.sigma::<M>(1),
+            n.sigma::<M>(2),
+            n.sigma::<M>(3),
+        ]
+    }
+
+    /// The grid of surface hypotheses of this tyre.
+    pub fn grid(&self) -> &Grid<F> {
+        self.fit.grid()
     }
 
     /// μy0 of the tyre: μ of its test surface.
@@ -184,7 +269,7 @@ impl<F: Float> Bank<F> {
             .zip(self.likelihood.nll.iter())
             .enumerate()
         {
-            *o = (self.fit.mu_c(&self.cfg, k), c.alpha, c.kappa, *l, *x);
+            *o = (self.fit.mu_c(k), c.alpha, c.kappa, *l, *x);
         }
         out
     }
@@ -248,7 +333,9 @@ impl<F: Float> Bank<F> {
         if !self.batches.push::<M>(&self.cfg, s, dt_us) {
             return self.report.current();
         }
-        self.report.check_force::<M>(&self.cfg, self.batches.sums());
+        let f_rel = self.batches.noise().sigma::<M>(1);
+        self.report
+            .check_force::<M>(&self.cfg, self.batches.sums(), f_rel);
         if let Some(b) = self.batches.close::<M>(&self.cfg) {
             if self.pending.is_some() {
                 // The previous batch's fit did not finish (cannot happen with ⌈CELLS/batch⌉
@@ -264,16 +351,21 @@ impl<F: Float> Bank<F> {
                 }
             }
             // Every cell's κ′ follows the measured κ′ from batch to batch (its own offset kept).
-            if let Some(d) = self.batches.kappa_step(&self.cfg, &b) {
+            if let Some(d) = self.batches.kappa_step::<M>(&b) {
                 self.fit.follow_kappa(d);
             }
             self.select(&b);
+            let adjust = self.cal.adjust::<M>();
             let sx = self
                 .fit
-                .prepare::<M>(params, (self.n_active > 0).then_some(&b));
+                .prepare::<M>(params, &adjust, (self.n_active > 0).then_some(&b));
             if let Some(sx) = sx {
                 self.batches.set_sigma_kappa(sx);
             }
+            // The next batches' σ in this load's scales and the calibration's trail.
+            let trail_var = self.cal.cov.first().and_then(|r| r.first()).copied();
+            self.batches
+                .set_scales(self.fit.kappa_scale(), trail_var.unwrap_or(F::ZERO));
             if self.fit.prepared() {
                 self.pending = Some(b);
             } else {
@@ -325,7 +417,7 @@ impl<F: Float> Bank<F> {
     /// have room for it; otherwise it waits for the next sample, and no longer (then it takes a
     /// slot of its own: with one sample per batch every sample closes one).
     fn work<M: Backend<F>>(&mut self) {
-        let batch = usize::from(self.cfg.batch.max(1));
+        let batch = usize::from(self.batches.per_batch().max(1));
         let Some(b) = self.pending else {
             self.mix_waiting::<M>();
             return;
@@ -427,19 +519,90 @@ impl<F: Float> Bank<F> {
         self.fit.forget(d);
     }
 
-    /// Folds a fitted batch into the likelihoods and updates the estimate.
+    /// Folds a fitted batch into the likelihoods and updates the calibration and the estimate.
     fn finish<M: Backend<F>>(&mut self, b: &Batch<F>) {
         self.age::<M>(b.dt, b.dist);
         let best = self.fit.best_of_batch();
         self.report.roll(&self.cfg, b);
-        if b.excited(&self.cfg) && best <= self.cfg.chi2_explain {
+        let excited = b.excited(&self.cfg);
+        // The likeliest cell, fitted first on this batch: how well it explains it.
+        let first = self.skip.map(usize::from);
+        let chi2_first = first
+            .and_then(|k| self.fit.chi2().get(k).copied())
+            .filter(|x| x.is_finite());
+        if excited {
+            let c = &self.cfg;
+            let w = (b.dt / c.mismatch_time.max(F::from_f64(1e-3))).min(F::ONE);
+            let x = chi2_first.unwrap_or(c.chi2_explain).min(c.chi2_explain);
+            self.fit_avg += (x - self.fit_avg) * w;
+        }
+        if let (Some(k), Some(x)) = (first, chi2_first) {
+            self.calibrate::<M>(b, k, x);
+        }
+        if excited && best <= self.cfg.chi2_explain {
             self.likelihood.fold(&self.cfg, self.fit.chi2(), best);
         }
         self.likelihood.normalise(&self.cfg);
+        let at_bound = self
+            .cal
+            .theta
+            .iter()
+            .zip(self.cfg.cal_sigma.iter())
+            .any(|(t, s)| t.abs() >= self.cfg.cal_bound * *s * F::from_f64(0.999));
+        let mismatch = self.fit_avg > self.cfg.mismatch_chi2 || at_bound;
         self.report
-            .update::<M>(&self.cfg, &self.likelihood, &self.fit);
+            .update::<M>(&self.cfg, &self.likelihood, &self.fit, mismatch);
         let r = self.fit.peak_ratio::<M>(self.report.current().mu);
         self.report.set_peak_ratio(r);
+    }
+
+    /// The calibration's step on batch `b`, linearised at cell `k` (the likeliest, which
+    /// explains the batch with χ² `chi2`): the drift, then — when the batch is excited, the cell
+    /// explains it, and either its force is in the linear range of every surface (`cal_util` of
+    /// the lowest hypothesis) or the force has swept (`cal_sweep`) and the estimate has been
+    /// identifiable for `cal_settle` — a Kalman step with the batch's slips free and its surface
+    /// at the identification's μ (twice its σ) or, outside an identification, anywhere on the
+    /// grid ([`Calibration::step`]). A steady operating point tells μ and the tyre apart no
+    /// better over many batches than over one, and right after a change of surface the old
+    /// surface's cell with another trail explains the new road: neither calibrates.
+    fn calibrate<M: Backend<F>>(&mut self, b: &Batch<F>, k: usize, chi2: F) {
+        let c = self.cfg;
+        self.cal.drift(b.dt, c.cal_tau, &c.cal_sigma);
+        if !c.calibrate || b.fz <= F::ZERO {
+            return;
+        }
+        let f = M::sqrt(b.fy.0.sq() + b.fx.map_or(F::ZERO, |(v, _)| v.sq()));
+        let fr = f / b.fz;
+        let decay = M::exp(-b.dt / c.cal_sweep_time.max(F::from_f64(1e-3)));
+        self.f_hi = fr.max(self.f_hi * decay + fr * (F::ONE - decay));
+        self.f_lo = fr.min(self.f_lo * decay + fr * (F::ONE - decay));
+        let est = self.report.current();
+        if est.state == State::Identifiable && !est.change {
+            self.ident_s += b.dt;
+        } else {
+            self.ident_s = F::ZERO;
+        }
+        let swept = self.f_hi - self.f_lo >= c.cal_sweep * self.f_hi;
+        let settled = self.ident_s >= c.cal_settle;
+        let linear = fr <= c.cal_util * self.fit.grid().lowest();
+        if !(b.excited(&c) && chi2 <= c.chi2_identifiable && (linear || (swept && settled))) {
+            return;
+        }
+        let Some((r, h_cal, h_nuis)) = self.fit.calibration_slopes::<M>(k, b) else {
+            return;
+        };
+        // The slips free (ten times their scales), the surface as known.
+        let (ua, uk) = self.fit.slip_units_of(k);
+        let top = self.fit.grid().mu_of(CELLS - 1);
+        let mu_var = if est.state == State::Identifiable {
+            (F::TWO * est.sigma).sq()
+        } else {
+            top * top
+        };
+        let ten = F::from_f64(10.0);
+        let nuis: [F; NUISANCES] = [(ten * ua).sq(), (ten * uk).sq(), mu_var];
+        self.cal
+            .step(&r, &h_cal, &h_nuis, &nuis, &c.cal_sigma, c.cal_bound);
     }
 
     /// Mixes in the reading from ahead that waits, if any ([`Reading::mix_into`]); a held value
@@ -449,8 +612,9 @@ impl<F: Float> Bank<F> {
         if let Some(r) = &self.mixing {
             r.mix_into::<M>(&mut self.likelihood);
             let c = &self.cfg;
+            let grid = self.fit.grid();
             self.report
-                .drop_held_if(|h| r.excludes(c.cell_of(h), c.hold_nll));
+                .drop_held_if(|h| r.excludes(grid.cell_of(h), c.hold_nll));
             self.mixing = None;
         }
     }

@@ -8,13 +8,18 @@
 //! - **κ′ from the measured κ**: the transient slip κ′ lags the measured κ by the relaxation
 //!   length σκ (eq. 20 for a constant σκ: a first-order lag over σκ/|Vx|), with σκ of the last
 //!   batch's load; its batch mean is one more residual of the fit.
-//! - **Batches**: the estimator works on means of `batch` samples (10 at 1 kHz: a 100 Hz
-//!   estimator). Each batch's Fz, Fx, Fy, Mz, γ, Vx and κ′ are averaged; their σ is the sensor
-//!   noise over √n plus a model-error term plus a share (`spread`) of the channel's spread
-//!   within the batch beyond its noise (where the point moves along a bent curve within the
-//!   batch, the mean of the forces is not the force at the mean slips).
+//! - **Batches**: the estimator works on means over `batch_us` of samples (10 ms: a 100 Hz
+//!   estimator at any sample rate — 10 samples at 1 kHz, 2 at 200 Hz, 1 at 100 Hz or less).
+//!   Each batch's Fz, Fx, Fy, Mz, γ, Vx and κ′ are averaged; their σ is the sensors' noise
+//!   ([`crate::mu::noise`], tracked from the data) over √n, plus a model-error term stated in
+//!   the tyre's scales (shares of |F| and Fz, of |Mz| and Fz·R0, of the slip μy0·Fz/Kxκ at
+//!   which the linear range ends; the calibration's σ of the trail as a share of |Mz|), plus a
+//!   share (`spread`) of the channel's spread within the batch beyond its noise (where the
+//!   point moves along a bent curve within the batch, the mean of the forces is not the force
+//!   at the mean slips).
 //! - **From batch to batch** the measured κ′ moves every cell's κ′ (`Batcher::kappa_step`):
-//!   by the change shrunk towards 0 by the noise of a difference of two batch means.
+//!   by the change shrunk towards 0 by three times the noise of a difference of two batch
+//!   means.
 //!
 //! ## Time
 //! Only wrapping differences of the timestamps are used, so the estimator behaves identically
@@ -22,6 +27,7 @@
 //! step, or one over [`MAX_GAP_US`] restarts the batch (the evidence ages by the gap).
 
 use super::config::Config;
+use super::noise::Noise;
 use crate::math::{Backend, Float};
 
 /// The longest sample interval \[µs\] inside a batch; a longer one restarts it.
@@ -91,12 +97,14 @@ impl<F: Float> Sums<F> {
         }
     }
 
-    /// The means and σ of a full batch.
-    fn batch<M: Backend<F>>(&self, c: &Config<F>) -> Batch<F> {
+    /// The means and σ of a full batch: the sensors' noise `noise` (tracked), the model's
+    /// error at the tyre's scales `scale`.
+    fn batch<M: Backend<F>>(&self, c: &Config<F>, noise: &Noise<F>, scale: &Scales<F>) -> Batch<F> {
         let a = self;
         let n = F::from_index(a.n);
         let fz = a.fz / n;
-        let sf_meas = c.sigma_f_rel * fz;
+        let (sfx_rel, sfy_rel) = (noise.sigma::<M>(0), noise.sigma::<M>(1));
+        let (sigma_mz, sigma_kappa) = (noise.sigma::<M>(2), noise.sigma::<M>(3));
         let sqrt_n = M::sqrt(n);
         // The spread within the batch beyond the sensor noise: where the point moves along a bent
         // curve within the batch, the mean of the forces is not the force at the mean slips,
@@ -105,32 +113,37 @@ impl<F: Float> Sums<F> {
             let v = sum / n;
             (sq / n - v * v - noise * noise).max(F::ZERO) * c.spread
         };
-        let force = |sum: F, sq: F| {
+        let force = |sum: F, sq: F, rel: F| {
             let v = sum / n;
+            let sf_meas = rel * fz;
             let s2 = (sf_meas / sqrt_n).sq()
                 + (c.model_f_rel * v).sq()
                 + (c.model_f_abs * fz).sq()
-                + (c.sigma_f_rel * v / sqrt_n).sq()
+                + (rel * v / sqrt_n).sq()
                 + spread(sum, sq, sf_meas);
             (v, M::sqrt(s2).max(F::from_f64(1e-3)))
         };
         let [sq_fx, sq_fy, sq_mz, sq_k] = a.sq;
         let mz = a.mz / n;
+        // The trail's calibration σ counts as the torque's model error too: a trail known to
+        // ±σ moves Mz by ±σ·|Mz| at every utilisation (the trail's moment is nearly all of it
+        // below the limit).
         let smz = M::sqrt(
-            (c.sigma_mz / sqrt_n).sq()
+            (sigma_mz / sqrt_n).sq()
                 + (c.model_mz_rel * mz).sq()
-                + c.model_mz_abs.sq()
-                + spread(a.mz, sq_mz, c.sigma_mz),
+                + scale.trail_var * mz * mz
+                + (c.model_mz_abs * fz * scale.r0).sq()
+                + spread(a.mz, sq_mz, sigma_mz),
         )
         .max(F::from_f64(1e-3));
-        let fx = (a.n_fx == a.n).then(|| force(a.fx, sq_fx));
+        let fx = (a.n_fx == a.n).then(|| force(a.fx, sq_fx, sfx_rel));
         let kappa = (a.n_kappa == a.n).then(|| {
             let k = a.kappa / n;
             (
                 k,
                 M::sqrt(
-                    (c.sigma_kappa / sqrt_n).sq()
-                        + c.model_kappa.sq()
+                    (sigma_kappa / sqrt_n).sq()
+                        + (c.model_kappa * scale.kappa).sq()
                         + spread(a.kappa, sq_k, F::ZERO),
                 )
                 .max(F::from_f64(1e-4)),
@@ -145,13 +158,23 @@ impl<F: Float> Sums<F> {
                 F::from_f64(20.0)
             },
             fx,
-            fy: force(a.fy, sq_fy),
+            fy: force(a.fy, sq_fy, sfy_rel),
             mz: (mz, smz),
             kappa,
             dt: F::from_micros(a.us),
             dist: a.dist,
+            n: a.n,
         }
     }
+}
+
+/// The tyre's scales a batch's σ are stated in: R0, the longitudinal slip at which the linear
+/// range ends on the file's surface (μy0·Fz/Kxκ), the calibration's variance of the trail.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Scales<F> {
+    pub(crate) r0: F,
+    pub(crate) kappa: F,
+    pub(crate) trail_var: F,
 }
 
 /// A batch's means and their σ.
@@ -165,9 +188,10 @@ pub(crate) struct Batch<F> {
     pub(crate) fy: (F, F),
     pub(crate) mz: (F, F),
     pub(crate) kappa: Option<(F, F)>,
-    /// Seconds and metres covered.
+    /// Seconds and metres covered, and the samples it holds.
     pub(crate) dt: F,
     pub(crate) dist: F,
+    pub(crate) n: u16,
 }
 
 impl<F: Float> Batch<F> {
@@ -202,19 +226,62 @@ pub(crate) struct Batcher<F> {
     /// The measured κ′ of the last batch closed (cells' κ′ follow its changes).
     kappa_prev: Option<F>,
     bad: u32,
+    /// The sensors' noise, tracked ([`Noise`]).
+    noise: Noise<F>,
+    /// The mean sample interval \[µs\] (integer, so the same on every target) and the samples a
+    /// batch then holds.
+    dt_mean_us: u32,
+    per_batch: u16,
+    /// The scales of the σ.
+    scales: Scales<F>,
 }
 
 impl<F: Float> Batcher<F> {
-    /// Nothing collected, for a tyre of nominal load `fnomin` \[N\].
-    pub(crate) fn new(fnomin: F) -> Self {
+    /// Nothing collected, for a tyre of nominal load `fnomin` \[N\] and unloaded radius `r0`
+    /// \[m\]; the noise starts from the configured one.
+    pub(crate) fn new(c: &Config<F>, fnomin: F, r0: F) -> Self {
         Batcher {
             fnomin,
             sums: Sums::new(),
             last_t: None,
             kappa_lag: None,
-            sigma_kappa_len: F::from_f64(0.3),
+            sigma_kappa_len: r0,
             kappa_prev: None,
             bad: 0,
+            noise: Noise::new([
+                c.sigma_f_rel,
+                c.sigma_f_rel,
+                c.sigma_mz_rel * fnomin * r0,
+                c.sigma_kappa,
+            ]),
+            dt_mean_us: 0,
+            per_batch: 1,
+            scales: Scales {
+                r0,
+                kappa: F::from_f64(0.05),
+                trail_var: F::ZERO,
+            },
+        }
+    }
+
+    /// The sensors' noise as tracked so far.
+    pub(crate) fn noise(&self) -> &Noise<F> {
+        &self.noise
+    }
+
+    /// The samples a batch holds at the current sample rate (at least 1).
+    pub(crate) fn per_batch(&self) -> u16 {
+        self.per_batch
+    }
+
+    /// The longitudinal slip scale μy0·Fz/Kxκ and the calibration's variance of the trail that
+    /// the next batches' σ are stated in.
+    pub(crate) fn set_scales(&mut self, kappa: F, trail_var: F) {
+        if kappa.is_finite() && kappa > F::ZERO {
+            self.scales.kappa = kappa;
+        }
+        if trail_var.is_finite() && trail_var >= F::ZERO {
+            self.scales.trail_var = trail_var;
         }
     }
 
@@ -255,6 +322,18 @@ impl<F: Float> Batcher<F> {
         self.last_t = Some(s.t_us);
         if dt_us > MAX_GAP_US {
             self.restart();
+            self.noise.restart();
+        } else if dt_us > 0 {
+            // The sample interval, averaged over about 16 samples, and the samples a batch
+            // then holds (its duration `batch_us` at this rate, at least one).
+            self.dt_mean_us = if self.dt_mean_us == 0 {
+                dt_us
+            } else {
+                let d = i64::from(dt_us) - i64::from(self.dt_mean_us);
+                u32::try_from(i64::from(self.dt_mean_us) + d / 16).unwrap_or(dt_us)
+            };
+            let per = (c.batch_us.saturating_add(self.dt_mean_us / 2)) / self.dt_mean_us.max(1);
+            self.per_batch = u16::try_from(per).unwrap_or(u16::MAX).max(1);
         }
         Some(dt_us)
     }
@@ -275,6 +354,13 @@ impl<F: Float> Batcher<F> {
             }
         }
         let dt = F::from_micros(dt_us.min(MAX_GAP_US));
+        let nan = F::from_f64(f64::NAN);
+        self.noise.push([
+            s.fx.map_or(nan, |x| x / s.fz),
+            s.fy / s.fz,
+            s.mz,
+            s.kappa.unwrap_or(nan),
+        ]);
         // κ′ from the measured κ: first-order lag over σκ/|Vx| (eq. 20 for a constant σκ).
         if let Some(k) = s.kappa {
             let lag = match (self.kappa_lag, s.vx) {
@@ -315,27 +401,32 @@ impl<F: Float> Batcher<F> {
         true
     }
 
-    /// The batch, when it is full: its means and σ; collecting starts anew.
+    /// The batch, when it covers `batch_us` (within half a sample interval) or holds the most
+    /// samples a batch can: its means and σ; collecting starts anew.
     pub(crate) fn close<M: Backend<F>>(&mut self, c: &Config<F>) -> Option<Batch<F>> {
-        if self.sums.n < c.batch {
+        let covered = u64::from(self.sums.us) + u64::from(self.dt_mean_us / 2);
+        if self.sums.n == 0 || (covered < u64::from(c.batch_us) && self.sums.n < u16::MAX - 1) {
             return None;
         }
-        let b = self.sums.batch::<M>(c);
+        let b = self.sums.batch::<M>(c, &self.noise, &self.scales);
         self.sums = Sums::new();
         Some(b)
     }
 
     /// The change of the measured κ′ from the last batch to batch `b`, by which every cell's
-    /// κ′ follows (its own offset kept): shrunk towards 0 by the noise of a difference of two
-    /// batch means (d·d²/(d² + 2σκ²/n)), so that a change well above the noise (ABS) passes
-    /// whole and the noise of a steady κ is not fed into every cell's slip (it once moved a
-    /// saturated cell's κ′ by most of its value each batch, and the true surface lost to a
-    /// wrong one over a long steady turn on ice). `None` without κ in this or the last batch.
-    pub(crate) fn kappa_step(&mut self, c: &Config<F>, b: &Batch<F>) -> Option<F> {
+    /// κ′ follows (its own offset kept): shrunk towards 0 by three times the noise of a
+    /// difference of two batch means (d·d²/(d² + 9·2σκ²/n)), so that a change well above the
+    /// noise (ABS) passes whole and the noise of a steady κ is not fed into every cell's slip
+    /// (it once moved a saturated cell's κ′ by most of its value each batch, and the true
+    /// surface lost to a wrong one over a long steady turn on ice; on a small stiff tyre a
+    /// κ noise of 0.005 is all of its slip range at μ 0.25, and one σ of it moved every cell's
+    /// Fx by most of its grip). `None` without κ in this or the last batch.
+    pub(crate) fn kappa_step<M: Backend<F>>(&mut self, b: &Batch<F>) -> Option<F> {
         let step = match (b.kappa, self.kappa_prev) {
             (Some((k, _)), Some(prev)) => {
                 let raw = k - prev;
-                let v = F::TWO * c.sigma_kappa.sq() / F::from_index(c.batch);
+                let v =
+                    F::from_f64(18.0) * self.noise.sigma::<M>(3).sq() / F::from_index(b.n.max(1));
                 Some(if raw * raw + v > F::ZERO {
                     raw * raw * raw / (raw * raw + v)
                 } else {

@@ -2,11 +2,22 @@
 //! noise and the model's error, the gates of the likelihood and of the states.
 //!
 //! ## The grid
-//! [`CELLS`] hypotheses ("cells") of road surface μ = `mu_lo + k·mu_step`, each an interval of
-//! ±`mu_step`/2 about its centre ([`crate::mu::fit`] fits the surface within it), on the tyre
-//! file's scale: a surface μ is the wheel's own Magic Formula with λμx = λμy = μ/μy0 times the
-//! file's λμ, μy0 the file's μy at FNOMIN ([`mu_y0`]; architecture.md).
+//! [`CELLS`] hypotheses ("cells") of road surface μ from `mu_lo` (ice and below) to
+//! `mu_hi_rel`·μy0 (above the file's own test surface), each an interval reaching halfway to
+//! its neighbours ([`crate::mu::fit`] fits the surface within it), on the tyre file's scale: a
+//! surface μ is the wheel's own Magic Formula with λμx = λμy = μ/μy0 times the file's λμ, μy0
+//! the file's μy at FNOMIN ([`mu_y0`]; docs/architecture.md). The centres are `mu_step` apart
+//! where that reaches `mu_hi_rel`·μy0 with [`CELLS`] cells (a car tyre of μy0 ≈ 1); beyond, each
+//! step is at least ρ times its centre, ρ as small as reaches it ([`Grid`]): a racing tyre of
+//! μy0 3 gets steps of 0.05 up to μ ≈ 0.4 and of 13 % above.
+//!
+//! ## Scale-free
+//! Every setting is stated in the tyre's own scales or the data's: noise and model error as
+//! shares of Fz, FNOMIN·R0, |F|, |Mz| (the noise then tracked from the data,
+//! [`crate::mu::noise`]), slips in the slip at which each surface's linear range ends
+//! (μ·Fz/|Kyα|, μ·Fz/Kxκ), the grid in μy0, the batch in time.
 
+use super::calibration::PROPERTIES;
 use crate::math::{Backend, Float};
 use crate::mf::{self, Input, Options, Params};
 
@@ -20,17 +31,22 @@ pub const CELLS: usize = 25;
 pub struct Config<F> {
     /// Lowest surface hypothesis μ \[-\] (file's scale).
     pub mu_lo: F,
-    /// Spacing of the hypotheses \[-\]; the highest is `mu_lo + (CELLS−1)·mu_step`.
+    /// Smallest spacing of the hypotheses \[-\] (the grid's, where it reaches `mu_hi_rel`·μy0).
     pub mu_step: F,
-    /// Samples per batch (the estimator's update rate is the sample rate over this).
-    pub batch: u16,
+    /// Highest hypothesis as a multiple of the file's μy0 \[-\].
+    pub mu_hi_rel: F,
+    /// Duration of a batch \[µs\] (the estimator's update interval, at any sample rate).
+    pub batch_us: u32,
     /// Camber \[rad\] used when a sample carries none.
     pub gamma: F,
-    /// Aligning-torque sensor noise, rms \[N·m\].
-    pub sigma_mz: F,
-    /// Force sensor noise (Fx, Fy, Fz), rms, as a fraction of Fz \[-\].
+    /// Aligning-torque sensor noise, rms, as a share of FNOMIN·R0 \[-\] (the start of its
+    /// online estimate, [`crate::mu::noise`]; 7.5e-4 is 2 N·m on the bundled MF 6.1 car tyre).
+    pub sigma_mz_rel: F,
+    /// Force sensor noise (Fx, Fy, Fz), rms, as a fraction of Fz \[-\] (the start of its online
+    /// estimate).
     pub sigma_f_rel: F,
-    /// Longitudinal slip sensor noise, rms \[-\] (κ from wheel speed and a vehicle-speed estimate).
+    /// Longitudinal slip sensor noise, rms \[-\] (κ from wheel speed and a vehicle-speed
+    /// estimate; the start of its online estimate).
     pub sigma_kappa: F,
     /// Model error of the forces, as a fraction of |F| \[-\].
     pub model_f_rel: F,
@@ -39,9 +55,11 @@ pub struct Config<F> {
     pub model_f_abs: F,
     /// Model error of the aligning torque, as a fraction of |Mz| \[-\].
     pub model_mz_rel: F,
-    /// Model error of the aligning torque, absolute \[N·m\] (residual torque, conicity).
+    /// Model error of the aligning torque, as a share of Fz·R0 \[-\] (residual torque,
+    /// conicity; 3.8e-4 is 1 N·m on the bundled MF 6.1 car tyre at FNOMIN).
     pub model_mz_abs: F,
-    /// Model error of κ′ from the measured κ \[-\] (the relaxation filter's lag and σκ).
+    /// Model error of κ′ from the measured κ, as a share of the slip μy0·Fz/Kxκ at which the
+    /// file's surface leaves its linear range \[-\] (the relaxation filter's lag and σκ).
     pub model_kappa: F,
     /// Share of a channel's variance within a batch (beyond its noise) that counts as the
     /// batch mean's error \[-\]: a batch over which the point moves far along the curve says less.
@@ -98,24 +116,51 @@ pub struct Config<F> {
     /// batch that reached it): it ends when its aged σ exceeds `sigma_identifiable`. 0: every
     /// excited batch refreshes.
     pub inform_util: F,
+    /// Calibrate the tyre online ([`crate::mu::calibration`]).
+    pub calibrate: bool,
+    /// Prior σ of the calibrated properties (trail, trail shape: of their logarithms; trail
+    /// shift \[rad\]; Kxκ: of its logarithm) — how far a tyre on a car is taken to differ from its
+    /// file before the data say.
+    pub cal_sigma: [F; PROPERTIES],
+    /// Time over which a calibrated property may drift by its prior σ \[s\].
+    pub cal_tau: F,
+    /// A calibrated property is kept within this many prior σ.
+    pub cal_bound: F,
+    /// A batch calibrates away from the linear range only while |F|/Fz has swept at least this
+    /// share of its maximum over the last `cal_sweep_time` (a steady operating point tells μ
+    /// and the tyre apart no better over many batches than over one).
+    pub cal_sweep: F,
+    /// \[s\]
+    pub cal_sweep_time: F,
+    /// ... and while the estimate has been identifiable, without a change, this long \[s\].
+    pub cal_settle: F,
+    /// A batch whose |F| is below this utilisation of the lowest hypothesis (the linear range
+    /// of every surface) calibrates without either.
+    pub cal_util: F,
+    /// Averaging time of the model-mismatch indication \[s\].
+    pub mismatch_time: F,
+    /// The likeliest surface's χ², averaged, above which the calibrated model does not explain
+    /// the data ([`Estimate::mismatch`](crate::mu::Estimate::mismatch)).
+    pub mismatch_chi2: F,
 }
 
 impl<F: Float> Default for Config<F> {
     fn default() -> Self {
         let c = F::from_f64;
         Config {
-            mu_lo: c(0.1),
+            mu_lo: c(0.05),
             mu_step: c(0.05),
-            batch: 10,
+            mu_hi_rel: c(1.25),
+            batch_us: 10_000,
             gamma: F::ZERO,
-            sigma_mz: c(2.0),
+            sigma_mz_rel: c(7.5e-4),
             sigma_f_rel: c(0.01),
             sigma_kappa: c(0.005),
             model_f_rel: c(0.01),
             model_f_abs: c(0.005),
             model_mz_rel: c(0.03),
-            model_mz_abs: c(1.0),
-            model_kappa: c(0.005),
+            model_mz_abs: c(3.8e-4),
+            model_kappa: c(0.25),
             spread: c(1.0),
             vx_min: c(3.0),
             fz_min_rel: c(0.1),
@@ -138,28 +183,119 @@ impl<F: Float> Default for Config<F> {
             reseed_chi2: c(25.0),
             chi2_identifiable: c(12.0),
             inform_util: c(0.3),
+            calibrate: true,
+            cal_sigma: [c(0.1), c(0.1), c(0.002), c(0.1)],
+            cal_tau: c(120.0),
+            cal_bound: c(4.0),
+            cal_sweep: c(0.5),
+            cal_sweep_time: c(1.0),
+            cal_settle: c(0.5),
+            cal_util: c(0.4),
+            mismatch_time: c(1.0),
+            mismatch_chi2: c(4.0),
         }
     }
 }
 
 impl<F: Float> Config<F> {
-    /// Whether the grid and the batch can be used: `batch` > 0, `mu_lo` and `mu_step` positive.
+    /// Whether the grid and the batch can be used: `batch_us` > 0, `mu_lo`, `mu_step` and
+    /// `mu_hi_rel` positive, the calibration's σ, time and bound positive.
     pub(crate) fn usable(&self) -> bool {
-        self.batch > 0
-            && self.mu_lo.partial_cmp(&F::ZERO) == Some(core::cmp::Ordering::Greater)
-            && self.mu_step.partial_cmp(&F::ZERO) == Some(core::cmp::Ordering::Greater)
+        let pos = |x: F| x.partial_cmp(&F::ZERO) == Some(core::cmp::Ordering::Greater);
+        self.batch_us > 0
+            && pos(self.mu_lo)
+            && pos(self.mu_step)
+            && pos(self.mu_hi_rel)
+            && self.cal_sigma.iter().all(|s| pos(*s))
+            && pos(self.cal_tau)
+            && pos(self.cal_bound)
     }
+}
 
-    /// The cell nearest μ `mu`.
-    pub(crate) fn cell_of(&self, mu: F) -> usize {
-        ((mu - self.mu_lo) / self.mu_step + F::HALF)
-            .max(F::ZERO)
-            .floor_index(CELLS - 1)
+/// The grid of surface hypotheses of one tyre (see the module's "The grid").
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Grid<F> {
+    /// The cells' centres \[-\], increasing.
+    centre: [F; CELLS],
+    /// How far each cell's surface may move down and up from its centre: halfway to the
+    /// neighbours (at the ends, the other half; never below half the centre).
+    half: [(F, F); CELLS],
+}
+
+impl<F: Float> Grid<F> {
+    /// From `mu_lo` in steps of `mu_step` to at least `mu_hi_rel`·`mu_y0`, each step at least ρ
+    /// times its centre with ρ ≥ 0 as small as reaches it.
+    pub fn new(c: &Config<F>, mu_y0: F) -> Self {
+        let hi = c.mu_hi_rel * mu_y0;
+        let build = |rho: F| {
+            let mut g = [F::ZERO; CELLS];
+            let mut x = c.mu_lo;
+            for o in g.iter_mut() {
+                *o = x;
+                x += c.mu_step.max(rho * x);
+            }
+            g
+        };
+        let last = |g: &[F; CELLS]| g.last().copied().unwrap_or(F::ZERO);
+        let mut centre = build(F::ZERO);
+        if last(&centre) < hi {
+            // Bisection on ρ (40 halvings: far below any μ that matters).
+            let (mut a, mut b) = (F::ZERO, F::ONE);
+            for _ in 0..40 {
+                let m = (a + b) * F::HALF;
+                if last(&build(m)) < hi {
+                    a = m;
+                } else {
+                    b = m;
+                }
+            }
+            centre = build(b);
+        }
+        let mut half = [(F::ZERO, F::ZERO); CELLS];
+        for (k, h) in half.iter_mut().enumerate() {
+            let here = centre.get(k).copied().unwrap_or(F::ZERO);
+            let up = centre.get(k + 1).map(|g| (*g - here) * F::HALF);
+            let down = k
+                .checked_sub(1)
+                .and_then(|j| centre.get(j))
+                .map(|g| (here - *g) * F::HALF);
+            let step = c.mu_step * F::HALF;
+            *h = (
+                down.or(up).unwrap_or(step).min(here * F::HALF),
+                up.or(down).unwrap_or(step),
+            );
+        }
+        Grid { centre, half }
     }
 
     /// μ of cell `k`'s centre.
-    pub(crate) fn mu_of(&self, k: usize) -> F {
-        self.mu_lo + self.mu_step * F::from_index(k as u16)
+    pub fn mu_of(&self, k: usize) -> F {
+        self.centre.get(k).copied().unwrap_or(F::ZERO)
+    }
+
+    /// How far cell `k`'s surface may move down and up from its centre.
+    pub fn half(&self, k: usize) -> (F, F) {
+        self.half.get(k).copied().unwrap_or((F::ZERO, F::ZERO))
+    }
+
+    /// The lowest hypothesis.
+    pub fn lowest(&self) -> F {
+        self.mu_of(0)
+    }
+
+    /// The cell nearest μ `mu`.
+    pub fn cell_of(&self, mu: F) -> usize {
+        let mut best = 0;
+        let mut d = F::from_f64(f64::MAX);
+        for (k, g) in self.centre.iter().enumerate() {
+            let e = (*g - mu).abs();
+            if e < d {
+                d = e;
+                best = k;
+            }
+        }
+        best
     }
 }
 

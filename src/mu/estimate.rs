@@ -99,6 +99,11 @@ pub struct Estimate<F> {
     /// value); clear on every other. It is not repeated: a receiver that misses that one
     /// estimate sees the new μ only.
     pub change: bool,
+    /// The calibrated model does not explain the data: the likeliest surface's χ² over the
+    /// recent excited batches (`mismatch_time`) is above `mismatch_chi2`, or a calibrated
+    /// property is at its bound — the tyre is not what its file and the calibration can
+    /// describe, and μ is to be taken with care whatever its state.
+    pub mismatch: bool,
 }
 
 /// What a bank reports, and what its report rests on between batches: the held value, its
@@ -145,6 +150,7 @@ impl<F: Float> Report<F> {
                 state: State::Fallback,
                 mu_min: c.mu_lo,
                 change: false,
+                mismatch: false,
             },
             peak_ratio: F::ONE,
             floor: F::ZERO,
@@ -192,7 +198,7 @@ impl<F: Float> Report<F> {
     /// what the reported μ gives at this load (`peak_ratio`) makes the estimate
     /// not identifiable, drops the held value, and sets a lower bound of μ (`mu_min`, and the
     /// reported μ at least) for the next two batches.
-    pub(crate) fn check_force<M: Backend<F>>(&mut self, c: &Config<F>, a: &Sums<F>) {
+    pub(crate) fn check_force<M: Backend<F>>(&mut self, c: &Config<F>, a: &Sums<F>, f_rel: F) {
         if a.n < 3 || self.est.state == State::Fallback {
             return;
         }
@@ -204,7 +210,7 @@ impl<F: Float> Report<F> {
             return;
         }
         let f = M::sqrt(fx * fx + fy * fy) / fz;
-        let noise = M::sqrt(F::TWO * c.sigma_f_rel.sq() / n + c.model_f_abs.sq());
+        let noise = M::sqrt(F::TWO * f_rel.sq() / n + c.model_f_abs.sq());
         let bound = (f * (F::ONE - c.model_f_rel) - F::from_f64(3.0) * noise) / self.peak_ratio;
         if bound > self.est.mu && bound.is_finite() {
             self.floor = self.floor.max(bound);
@@ -245,15 +251,23 @@ impl<F: Float> Report<F> {
         M::sqrt(sigma * sigma + c.age_q_time * s + c.age_q_distance * m)
     }
 
-    /// The estimate from the cells' likelihoods `l` and surfaces (`fit`), after a batch; the
-    /// bound from a force the estimate could not produce counts down and holds.
-    pub(crate) fn update<M: Backend<F>>(&mut self, c: &Config<F>, l: &Likelihood<F>, fit: &Fit<F>) {
+    /// The estimate from the cells' likelihoods `l` and surfaces (`fit`), after a batch, with
+    /// the model-mismatch indication `mismatch`; the bound from a force the estimate could not
+    /// produce counts down and holds.
+    pub(crate) fn update<M: Backend<F>>(
+        &mut self,
+        c: &Config<F>,
+        l: &Likelihood<F>,
+        fit: &Fit<F>,
+        mismatch: bool,
+    ) {
         if self.floor_batches > 0 {
             self.floor_batches -= 1;
         } else {
             self.floor = F::ZERO;
         }
         self.estimate::<M>(c, l, fit);
+        self.est.mismatch = mismatch;
         if self.floor > F::ZERO && self.est.state != State::Fallback {
             self.est.mu = self.est.mu.max(self.floor);
             self.est.mu_min = self.est.mu_min.max(self.floor);
@@ -264,9 +278,11 @@ impl<F: Float> Report<F> {
     fn estimate<M: Backend<F>>(&mut self, c: &Config<F>, l: &Likelihood<F>, fit: &Fit<F>) {
         let m = l.best();
         let nll = |k: usize| l.get(k);
-        let h = c.mu_step;
+        // The grid's local spacing at the best cell.
+        let (down, up) = fit.grid().half(m);
+        let h = down + up;
         // The best cell's own surface (its centre and fitted offset).
-        let mu = fit.mu_c(c, m);
+        let mu = fit.mu_c(m);
         let mut var_curv = F::from_f64(f64::MAX);
         if let (Some(l0), Some(l1), Some(l2)) = (m.checked_sub(1).and_then(nll), nll(m), nll(m + 1))
         {
@@ -294,7 +310,7 @@ impl<F: Float> Report<F> {
         let mut far_open = false;
         let mut excluded = 0usize;
         for (k, lk) in l.nll.iter().enumerate() {
-            let mk = fit.mu_c(c, k);
+            let mk = fit.mu_c(k);
             let w = M::exp(-*lk);
             sw += w;
             s1 += w * mk;
@@ -346,6 +362,7 @@ impl<F: Float> Report<F> {
                 state: State::Identifiable,
                 mu_min,
                 change,
+                mismatch: false,
             };
             return;
         }
@@ -354,7 +371,9 @@ impl<F: Float> Report<F> {
         // against it (`hold_nll`), its σ growing with time and distance (`age_q_time`,
         // `age_q_distance`) until it reaches the prior's.
         if let Some((h, hs)) = self.held {
-            let against = l.get(c.cell_of(h)).is_some_and(|lh| lh > c.hold_nll);
+            let against = l
+                .get(fit.grid().cell_of(h))
+                .is_some_and(|lh| lh > c.hold_nll);
             let aged = Self::aged::<M>(c, hs, self.age_s, self.age_m);
             // Aged to the prior's σ, it is still kept while the evidence excludes some surface
             // (the data say something, and not that the held value is wrong): a steady
@@ -366,6 +385,7 @@ impl<F: Float> Report<F> {
                     state: State::NotIdentifiable,
                     mu_min,
                     change: false,
+                    mismatch: false,
                 };
                 return;
             }
@@ -378,6 +398,7 @@ impl<F: Float> Report<F> {
                 state: State::NotIdentifiable,
                 mu_min,
                 change: false,
+                mismatch: false,
             }
         } else {
             Estimate {
@@ -386,6 +407,7 @@ impl<F: Float> Report<F> {
                 state: State::Fallback,
                 mu_min: c.mu_lo,
                 change: false,
+                mismatch: false,
             }
         };
     }

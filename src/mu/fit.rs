@@ -36,24 +36,33 @@
 //! (architecture.md): no table, load, camber and combined slip enter through the model.
 
 use super::batch::Batch;
-use super::config::{Config, CELLS};
+use super::calibration::{NUISANCES, PROPERTIES};
+use super::config::{Config, Grid, CELLS};
 use crate::math::{Backend, Float};
-use crate::mf::prepared::{Mu, Operating, Prepared, Slopes};
+use crate::mf::prepared::{Adjust, Mu, Operating, Prepared, Slopes};
 use crate::mf::{self, Options, Params, Side};
 
 /// Cells out of contention per batch that may try a seed when their own fit is poor (cells in
 /// contention always may).
 pub const RESEEDS: usize = 6;
-/// A Gauss–Newton step no longer than this \[rad, -\] in α′ and κ′ …
-pub const TRUST_STEP: f64 = 0.002;
+/// A Gauss–Newton step no longer than this in α′ and κ′, in the cell's slip scales ([`Fit`]:
+/// μ·Fz/|Kyα| and μ·Fz/Kxκ, the slips at which its surface leaves the linear range) …
+pub const TRUST_STEP: f64 = 0.04;
 /// … whose linear model predicts a fall of χ² below this is taken without a trial evaluation
 /// (its χ² is the model's prediction).
 pub const TRUST_GAIN: f64 = 1.0;
-/// Prior information on a cell's surface offset \[1/μ²\]: σ 0.25 about the cell's centre, weak
-/// beside one informative batch; it bounds the step while the batches say nothing of μ.
-const OFFSET_PRIOR: f64 = 16.0;
-/// Slip angles \[rad\] a poorly fitting cell tries in turn (on the side of the lateral force).
-const SCAN: [f64; 8] = [0.01, 0.02, 0.035, 0.05, 0.08, 0.12, 0.2, 0.35];
+/// Prior σ of a cell's surface offset about its centre, in widths of the cell (5: σ 0.25 for a
+/// cell 0.05 wide): weak beside one informative batch; it bounds the step while the batches say
+/// nothing of μ.
+const OFFSET_PRIOR_WIDTHS: f64 = 5.0;
+/// Slip angles a poorly fitting cell tries in turn (on the side of the lateral force), in its
+/// slip scale μ·Fz/|Kyα|.
+const SCAN: [f64; 8] = [0.2, 0.4, 0.7, 1.0, 1.6, 2.5, 4.0, 7.0];
+/// The trust region's radius in the cell's slip scales: at a (re)start, the largest, the
+/// smallest.
+const DAMP_START: f64 = 0.4;
+const DAMP_MAX: f64 = 4.0;
+const DAMP_MIN: f64 = 0.002;
 /// The seeds' cycle: the three kinds of seed, the scan's points in turn on every third.
 const SCAN_PERIOD: u8 = 3 * SCAN.len() as u8;
 
@@ -64,9 +73,9 @@ pub(crate) struct Cell<F> {
     pub(crate) alpha: F,
     /// Transient longitudinal slip κ′ \[-\].
     pub(crate) kappa: F,
-    /// Trust-region radius of the next step (α′ \[rad\] and κ′ alike).
+    /// Trust-region radius of the next step, in the cell's slip scales.
     damp: F,
-    /// The surface's offset from the cell's centre \[-\], fitted within ±`mu_step`/2.
+    /// The surface's offset from the cell's centre \[-\], fitted within its interval.
     dmu: F,
     /// Information on `dmu` from the batches fitted so far \[1/μ²\], forgotten as ℓ is.
     info: F,
@@ -76,11 +85,14 @@ pub(crate) struct Cell<F> {
 /// cell's slips and surface, the χ² each found on its last batch, and the seeds.
 #[derive(Debug, Clone)]
 pub(crate) struct Fit<F> {
-    /// The file's λμx, λμy and μy0.
+    /// The file's λμx, λμy and μy0, and the grid of hypotheses.
     lmux: F,
     lmuy: F,
     mu_y0: F,
+    grid: Grid<F>,
     opts: Options,
+    /// The pending batch's slip scales at μ = 1: Fz/|Kyα| \[rad\], Fz/Kxκ \[-\].
+    slip: (F, F),
     /// The Magic Formula's load stage at the pending batch's Fz, γ, Vx.
     prep: Option<Prepared<F>>,
     cells: [Cell<F>; CELLS],
@@ -98,11 +110,11 @@ pub(crate) struct Fit<F> {
 impl<F: Float> Fit<F> {
     /// Cells at zero slip on their centres, for tyre `params` mounted on `side` (mirrored as
     /// `mf::eval` mirrors with `Options::mounted`), μy0 `mu_y0`.
-    pub(crate) fn new(params: &Params<F>, side: Option<Side>, mu_y0: F) -> Self {
+    pub(crate) fn new(cfg: &Config<F>, params: &Params<F>, side: Option<Side>, mu_y0: F) -> Self {
         let cell = Cell {
             alpha: F::ZERO,
             kappa: F::ZERO,
-            damp: F::from_f64(0.02),
+            damp: F::from_f64(DAMP_START),
             dmu: F::ZERO,
             info: F::ZERO,
         };
@@ -110,6 +122,8 @@ impl<F: Float> Fit<F> {
             lmux: params.lmux,
             lmuy: params.lmuy,
             mu_y0,
+            grid: Grid::new(cfg, mu_y0),
+            slip: (F::from_f64(0.05), F::from_f64(0.05)),
             opts: Options {
                 transient: true,
                 mounted: side,
@@ -130,6 +144,35 @@ impl<F: Float> Fit<F> {
         self.mu_y0
     }
 
+    /// The grid of hypotheses.
+    pub(crate) fn grid(&self) -> &Grid<F> {
+        &self.grid
+    }
+
+    /// The slip scales of surface `mu` at the pending batch's load: μ·Fz/|Kyα| \[rad\],
+    /// μ·Fz/Kxκ \[-\].
+    fn slip_units(&self, mu: F) -> (F, F) {
+        let lo = F::from_f64(1e-6);
+        ((mu * self.slip.0).max(lo), (mu * self.slip.1).max(lo))
+    }
+
+    /// [`Fit::slip_units`] of cell `k`'s surface.
+    pub(crate) fn slip_units_of(&self, k: usize) -> (F, F) {
+        self.slip_units(self.mu_c(k))
+    }
+
+    /// κ′'s σ about free rolling when neither κ nor Fx is measured: half the slip at which the
+    /// file's surface leaves its linear range.
+    fn pin(&self) -> F {
+        F::HALF * self.kappa_scale()
+    }
+
+    /// The longitudinal slip at which the file's surface leaves its linear range at the
+    /// pending batch's load, μy0·Fz/Kxκ.
+    pub(crate) fn kappa_scale(&self) -> F {
+        self.mu_y0 * self.slip.1
+    }
+
     /// The cells' fitted states.
     pub(crate) fn cells(&self) -> &[Cell<F>; CELLS] {
         &self.cells
@@ -141,8 +184,8 @@ impl<F: Float> Fit<F> {
     }
 
     /// Cell `k`'s surface: its centre plus its fitted offset.
-    pub(crate) fn mu_c(&self, c: &Config<F>, k: usize) -> F {
-        c.mu_of(k) + self.cells.get(k).map_or(F::ZERO, |c| c.dmu)
+    pub(crate) fn mu_c(&self, k: usize) -> F {
+        self.grid.mu_of(k) + self.cells.get(k).map_or(F::ZERO, |c| c.dmu)
     }
 
     /// Moves every cell's κ′ by `d` (within ±1): the measured κ′'s change between batches.
@@ -159,12 +202,14 @@ impl<F: Float> Fit<F> {
         }
     }
 
-    /// Evaluates the load stage of batch `b` for tyre `params` (`None` when it cannot be:
-    /// non-finite or no contact), and starts the batch's count of seeds. Returns σκ \[m\] at
-    /// that load (the κ′ lag's relaxation length), when evaluated.
+    /// Evaluates the load stage of batch `b` for tyre `params` as the calibration `adjust`
+    /// has it ([`Prepared::adjusted`]; `None` when it cannot be: non-finite or no contact), takes
+    /// the batch's slip scales from it, and starts the batch's count of seeds. Returns σκ \[m\]
+    /// at that load (the κ′ lag's relaxation length), when evaluated.
     pub(crate) fn prepare<M: Backend<F>>(
         &mut self,
         params: &Params<F>,
+        adjust: &Adjust<F>,
         b: Option<&Batch<F>>,
     ) -> Option<F> {
         self.prep = b.and_then(|b| {
@@ -175,10 +220,16 @@ impl<F: Float> Fit<F> {
                 vx: b.vx,
                 p: None,
             };
-            Prepared::new::<M>(params, &op, &self.opts).ok()
+            Prepared::new::<M>(params, &op, &self.opts)
+                .ok()
+                .map(|p| p.adjusted(adjust))
         });
         self.reseeds = 0;
         let pr = self.prep.as_ref()?;
+        let (kya, kxk, fz) = (pr.k_ya().abs(), pr.k_xk().abs(), pr.fz());
+        if kya > F::ZERO && kxk > F::ZERO && fz > F::ZERO && (fz / kya).is_finite() {
+            self.slip = (fz / kya, fz / kxk);
+        }
         let (sx, _) = mf::sigma::sigma::<F, M>(params, pr.conditioned(), pr.k_xk(), pr.k_ya());
         Some(sx)
     }
@@ -237,7 +288,7 @@ impl<F: Float> Fit<F> {
         let Some(cell) = self.cells.get(k).copied() else {
             return F::ZERO;
         };
-        let mu_c = self.mu_c(cfg, k);
+        let mu_c = self.mu_c(k);
         let lambda = mu_c / self.mu_y0;
         let Some(prep) = self.prep.as_ref() else {
             return F::ZERO;
@@ -269,8 +320,9 @@ impl<F: Float> Fit<F> {
             g0 += j[0] * *r;
             g1 += j[1] * *r;
         }
-        // A trust region of radius `cell.damp` (in α′ and κ′ alike) around a barely damped
-        // Gauss–Newton step: it grows while steps succeed and shrinks when one fails.
+        // A trust region of radius `cell.damp` in the cell's slip scales around a barely damped
+        // Gauss–Newton step: it grows while steps succeed and shrinks when one fails. κ′'s
+        // scale is at least the measured κ′'s σ (a step within its noise is no leap).
         let eps = F::from_f64(1e-9);
         let reg = F::from_f64(1e-6);
         h00 = h00 * (F::ONE + reg) + eps;
@@ -295,7 +347,9 @@ impl<F: Float> Fit<F> {
         if det > F::ZERO && det.is_finite() {
             let mut da = (h11 * g0 - h01 * g1) / det;
             let mut dk = (h00 * g1 - h01 * g0) / det;
-            let len = da.abs().max(dk.abs());
+            let (ua, uk) = self.slip_units(mu_c);
+            let uk = b.kappa.map_or(uk, |(_, s)| uk.max(s));
+            let len = (da / ua).abs().max((dk / uk).abs());
             if len > cell.damp {
                 let s = cell.damp / len;
                 da *= s;
@@ -309,7 +363,7 @@ impl<F: Float> Fit<F> {
             for (r, j) in r0.iter().zip(jac.iter()) {
                 pred += (*r - j[0] * sa - j[1] * sk).sq();
             }
-            let small = sa.abs().max(sk.abs()) <= F::from_f64(TRUST_STEP)
+            let small = (sa / ua).abs().max((sk / uk).abs()) <= F::from_f64(TRUST_STEP)
                 && chi0 - pred < F::from_f64(TRUST_GAIN);
             if small {
                 // A small step that changes little: the linear model is trusted, and the step
@@ -323,16 +377,17 @@ impl<F: Float> Fit<F> {
                         chi = norm2(&r1);
                         next.alpha = na;
                         next.kappa = nk;
-                        next.damp = (cell.damp * F::TWO).min(F::from_f64(0.2));
+                        next.damp = (cell.damp * F::TWO).min(F::from_f64(DAMP_MAX));
                     }
                     _ => {
-                        next.damp = (len.min(cell.damp) * F::from_f64(0.25)).max(F::from_f64(1e-4));
+                        next.damp =
+                            (len.min(cell.damp) * F::from_f64(0.25)).max(F::from_f64(DAMP_MIN));
                     }
                 }
             }
         }
         // Then the surface within the cell: a step of its offset on the residuals the slip step
-        // leaves (predicted by the slopes), within ±mu_step/2.
+        // leaves (predicted by the slopes), within its interval.
         if let Some(jm) = jmu {
             let (sa, sk) = (next.alpha - cell.alpha, next.kappa - cell.kappa);
             let (mut jj, mut jr, mut rr) = (F::ZERO, F::ZERO, F::ZERO);
@@ -346,12 +401,12 @@ impl<F: Float> Fit<F> {
             // Recursive least squares over the batches (the information of the earlier ones,
             // forgotten as ℓ is, in `info`) with a weak prior about the cell's centre: the
             // offset follows what the recent batches together say, not the latest batch's noise.
-            let half = F::HALF * cfg.mu_step;
-            let p0 = F::from_f64(OFFSET_PRIOR);
-            let nd = clamp(
-                cell.dmu + (jr - p0 * cell.dmu) / (cell.info + jj + p0),
-                half,
-            );
+            let (down, up) = self.grid.half(k);
+            let width = F::from_f64(OFFSET_PRIOR_WIDTHS) * (down + up);
+            let p0 = F::ONE / (width * width).max(F::from_f64(1e-12));
+            let nd = (cell.dmu + (jr - p0 * cell.dmu) / (cell.info + jj + p0))
+                .max(-down)
+                .min(up);
             let d = nd - cell.dmu;
             let mut pred = F::ZERO;
             for (o, m) in rp.iter().zip(jm.iter()) {
@@ -381,10 +436,11 @@ impl<F: Float> Fit<F> {
             let pick = if contending { 1 } else { self.scan % 3 };
             let sa = match pick {
                 0 => sa,
-                1 => side(self.brush_alpha::<M>(cfg, k, b)),
+                1 => side(self.brush_alpha::<M>(k, b)),
                 _ => {
                     let i = usize::from(self.scan / 3) % SCAN.len();
-                    side(F::from_f64(SCAN.get(i).copied().unwrap_or(0.0)))
+                    let (ua, _) = self.slip_units(mu_c);
+                    side(F::from_f64(SCAN.get(i).copied().unwrap_or(0.0)) * ua)
                 }
             };
             if let Some((r2, _)) = self.residuals::<M>(&mu, b, sa, sk, false) {
@@ -392,7 +448,7 @@ impl<F: Float> Fit<F> {
                     chi = norm2(&r2);
                     next.alpha = sa;
                     next.kappa = sk;
-                    next.damp = F::from_f64(0.02);
+                    next.damp = F::from_f64(DAMP_START);
                 }
             }
         }
@@ -406,16 +462,77 @@ impl<F: Float> Fit<F> {
         }
     }
 
+    /// What the calibration's step needs of batch `b` at cell `k` ([`crate::mu::calibration`]):
+    /// the normalised residuals there, their model part's slopes in the calibrated properties
+    /// (by differences of the adjusted load stage: one more adjustment and evaluation each) and
+    /// in the nuisances α′, κ′ (the dual numbers) and the cell's surface μ. `None` without a
+    /// load stage or when a number is not finite.
+    #[allow(clippy::type_complexity)]
+    pub(crate) fn calibration_slopes<M: Backend<F>>(
+        &self,
+        k: usize,
+        b: &Batch<F>,
+    ) -> Option<([F; 4], [[F; PROPERTIES]; 4], [[F; NUISANCES]; 4])> {
+        let cell = self.cells.get(k).copied()?;
+        let prep = self.prep.as_ref()?;
+        let mu_c = self.mu_c(k);
+        let lambda = mu_c / self.mu_y0;
+        let (lx, ly) = (self.lmux * lambda, self.lmuy * lambda);
+        let (r0, jn, jm) = self.residuals_mu::<M>(lx, ly, mu_c, b, cell.alpha, cell.kappa)?;
+        // Steps of the differences: 1 % of a scale, a tenth of a milliradian of the shift.
+        let (hs, hh) = (F::from_f64(0.01), F::from_f64(1e-4));
+        let es = M::exp(hs);
+        let steps = [
+            Adjust {
+                trail: es,
+                ..Adjust::NONE
+            },
+            Adjust {
+                trail_shape: es,
+                ..Adjust::NONE
+            },
+            Adjust {
+                trail_shift: hh,
+                ..Adjust::NONE
+            },
+            Adjust {
+                kx: es,
+                ..Adjust::NONE
+            },
+        ];
+        let mut h_cal = [[F::ZERO; PROPERTIES]; 4];
+        for (j, (a, h)) in steps.iter().zip([hs, hs, hh, hs]).enumerate() {
+            let p = prep.adjusted(a);
+            let f = p
+                .eval_with::<M>(&p.with_mu(lx, ly), cell.kappa, cell.alpha)
+                .ok()?;
+            let r1 = res_of(b, &[f.fx, f.fy, f.mz], cell.kappa, self.pin());
+            for (row, (x1, x0)) in h_cal.iter_mut().zip(r1.iter().zip(r0.iter())) {
+                // The model's slope over σ: r = (measured − model)/σ.
+                if let Some(o) = row.get_mut(j) {
+                    *o = (*x0 - *x1) / h;
+                }
+            }
+        }
+        let mut h_nuis = [[F::ZERO; NUISANCES]; 4];
+        for (row, (j, m)) in h_nuis.iter_mut().zip(jn.iter().zip(jm.iter())) {
+            *row = [j[0], j[1], *m];
+        }
+        let ok = h_cal.iter().all(|r| F::all_finite(r)) && F::all_finite(&r0);
+        ok.then_some((r0, h_cal, h_nuis))
+    }
+
     /// |α′| at which the brush model (parabolic pressure, one friction coefficient) gives the
     /// batch's |Fy| on cell `k`'s surface: Fy = μFz·(1 − (1 − θ|α|)³), θ = Kyα/(3μFz), solved
     /// for |α|; the onset of full sliding (1/θ) when |Fy| ≥ μFz. A seed for a cell that lost
     /// its slips (e.g. deep in the saturated range after a fast reversal on a slippery road).
-    fn brush_alpha<M: Backend<F>>(&self, cfg: &Config<F>, k: usize, b: &Batch<F>) -> F {
-        let cap = F::from_f64(SCAN.last().copied().unwrap_or(0.35));
-        let mu_fz = self.mu_c(cfg, k) * b.fz;
+    fn brush_alpha<M: Backend<F>>(&self, k: usize, b: &Batch<F>) -> F {
+        let (ua, _) = self.slip_units(self.mu_c(k));
+        let cap = F::from_f64(SCAN.last().copied().unwrap_or(7.0)) * ua;
+        let mu_fz = self.mu_c(k) * b.fz;
         let kya = self.prep.as_ref().map_or(F::ZERO, |p| p.k_ya().abs());
         if !(mu_fz > F::ZERO && kya > F::ZERO) {
-            return F::from_f64(SCAN.first().copied().unwrap_or(0.01));
+            return F::from_f64(SCAN.first().copied().unwrap_or(0.2)) * ua;
         }
         let theta = kya / (F::from_f64(3.0) * mu_fz);
         let u = (b.fy.0.abs() / mu_fz).min(F::ONE);
@@ -444,7 +561,7 @@ impl<F: Float> Fit<F> {
         let mut j = [[F::ZERO; 2]; 4];
         let f = if jac {
             let (f, d) = prep.eval_d::<M>(mu, kappa, alpha).ok()?;
-            j = jac_of(b, &d);
+            j = jac_of(b, &d, self.pin());
             f
         } else {
             prep.eval_with::<M>(mu, kappa, alpha).ok()?
@@ -455,7 +572,7 @@ impl<F: Float> Fit<F> {
         {
             return None;
         }
-        Some((res_of(b, &m, kappa), j))
+        Some((res_of(b, &m, kappa, self.pin()), j))
     }
 
     /// [`Fit::residuals`] with the slopes, at λμx* = `lx`, λμy* = `ly` (surface `mu_c`), and
@@ -473,7 +590,7 @@ impl<F: Float> Fit<F> {
     ) -> Option<([F; 4], [[F; 2]; 4], [F; 4])> {
         let prep = self.prep.as_ref()?;
         let (f, d) = prep.eval_d_scale::<M>(lx, ly, kappa, alpha).ok()?;
-        let j = jac_of(b, &d.slip);
+        let j = jac_of(b, &d.slip, self.pin());
         let inv = F::ONE / mu_c;
         let jm = [
             b.fx.map_or(F::ZERO, |(_, s)| d.lmu.fx * inv / s),
@@ -488,12 +605,13 @@ impl<F: Float> Fit<F> {
         {
             return None;
         }
-        Some((res_of(b, &m, kappa), j, jm))
+        Some((res_of(b, &m, kappa, self.pin()), j, jm))
     }
 }
 
 /// The slopes of the normalised residuals' model part in (α′, κ′), from the slip stage's.
-fn jac_of<F: Float>(b: &Batch<F>, d: &Slopes<F>) -> [[F; 2]; 4] {
+/// Without κ and Fx, κ′ is pinned near free rolling with σ `pin`.
+fn jac_of<F: Float>(b: &Batch<F>, d: &Slopes<F>, pin: F) -> [[F; 2]; 4] {
     let sx = b.fx.map_or(F::ZERO, |(_, s)| F::ONE / s);
     [
         [d.alpha.fx * sx, d.kappa.fx * sx],
@@ -501,21 +619,21 @@ fn jac_of<F: Float>(b: &Batch<F>, d: &Slopes<F>) -> [[F; 2]; 4] {
         [d.alpha.mz / b.mz.1, d.kappa.mz / b.mz.1],
         match (b.kappa, b.fx) {
             (Some((_, s)), _) => [F::ZERO, F::ONE / s],
-            (None, None) => [F::ZERO, F::ONE / F::from_f64(0.01)],
+            (None, None) => [F::ZERO, F::ONE / pin],
             (None, Some(_)) => [F::ZERO, F::ZERO],
         },
     ]
 }
 
 /// The normalised residuals of (Fx, Fy, Mz, κ′) of the model's forces `f` at κ′ `kappa`.
-fn res_of<F: Float>(b: &Batch<F>, f: &[F; 3], kappa: F) -> [F; 4] {
+fn res_of<F: Float>(b: &Batch<F>, f: &[F; 3], kappa: F, pin: F) -> [F; 4] {
     let rx = b.fx.map_or(F::ZERO, |(v, s)| (v - f[0]) / s);
     let ry = (b.fy.0 - f[1]) / b.fy.1;
     let rm = (b.mz.0 - f[2]) / b.mz.1;
     let rk = match (b.kappa, b.fx) {
         (Some((v, s)), _) => (v - kappa) / s,
         // Neither κ nor Fx: κ′ is pinned near free rolling.
-        (None, None) => -kappa / F::from_f64(0.01),
+        (None, None) => -kappa / pin,
         (None, Some(_)) => F::ZERO,
     };
     [rx, ry, rm, rk]

@@ -341,10 +341,21 @@ mod tests {
 
     /// Front and rear over their streams, the rear with or without the preview; the rear's
     /// estimates.
+    /// The bank's defaults with the tyre's calibration known (a warm start, the simulated tyre
+    /// being its file): these tests are of the hand-over, not of a cold start, where a steady
+    /// turn at one slip angle cannot tell the trail from the surface (`crate::mu::calibration`).
+    fn warm() -> BankConfig<f64> {
+        let d = BankConfig::<f64>::default();
+        BankConfig {
+            cal_sigma: d.cal_sigma.map(|s| s * 0.1),
+            ..d
+        }
+    }
+
     fn pair(front: &[Sample<f64>], rear: &[Sample<f64>], with: bool) -> Vec<Estimate<f64>> {
         let p = tyre();
-        let mut f = Bank::new::<Libm>(&p, None, BankConfig::default()).unwrap();
-        let mut r = Bank::new::<Libm>(&p, None, BankConfig::default()).unwrap();
+        let mut f = Bank::new::<Libm>(&p, None, warm()).unwrap();
+        let mut r = Bank::new::<Libm>(&p, None, warm()).unwrap();
         let mut pv = Preview::new(Config::with_wheelbase(L)).unwrap();
         front
             .iter()
@@ -440,6 +451,7 @@ mod tests {
             mu_min: 0.4,
             state: State::Identifiable,
             change,
+            mismatch: false,
         }
     }
 

@@ -312,6 +312,7 @@ impl Estimate {
             state: self.state,
             mu_min: self.mu_min,
             change: self.change,
+            mismatch: false,
         }
     }
 }

@@ -31,12 +31,9 @@ pub fn stream(p: &Params<f32>, mu: f32, camber: f32) -> impl Iterator<Item = Mea
     Slalom::new(p, mu, camber).step_by(DECIMATE).take(SAMPLES)
 }
 
-/// The bank's settings at 100 Hz: the defaults with one sample per batch.
+/// The bank's settings for the 100 Hz streams: the defaults (a batch is 10 ms: one sample).
 pub fn config<F: Float>() -> Config<F> {
-    Config {
-        batch: 1,
-        ..Config::default()
-    }
+    Config::default()
 }
 
 /// A stream's measurement (f32, as the proto carries it) as the bank's sample in `F`.
