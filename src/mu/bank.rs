@@ -127,6 +127,8 @@ pub struct Bank<F> {
     f_lo: F,
     /// Time the estimate has been identifiable without a change \[s\].
     ident_s: F,
+    /// Time since the calibration's last step \[s\].
+    cal_wait: F,
     /// The likeliest surface's χ², averaged over the recent excited batches (the mismatch
     /// indication).
     fit_avg: F,
@@ -178,6 +180,7 @@ impl<F: Float> Bank<F> {
             f_hi: F::ZERO,
             f_lo: F::ZERO,
             ident_s: F::ZERO,
+            cal_wait: F::ZERO,
             fit_avg: F::ZERO,
             #[cfg(test)]
             trace: WorkTrace::default(),
@@ -585,9 +588,16 @@ impl<F: Float> Bank<F> {
         let swept = self.f_hi - self.f_lo >= c.cal_sweep * self.f_hi;
         let settled = self.ident_s >= c.cal_settle;
         let linear = fr <= c.cal_util * self.fit.grid().lowest();
+        self.cal_wait += b.dt;
         if !(b.excited(&c) && chi2 <= c.chi2_identifiable && (linear || (swept && settled))) {
             return;
         }
+        // At most one step per `cal_period`: the calibration drifts over minutes, and a step
+        // costs five evaluations (on the device as much as several cells' fits).
+        if self.cal_wait < c.cal_period {
+            return;
+        }
+        self.cal_wait = F::ZERO;
         let Some((r, h_cal, h_nuis)) = self.fit.calibration_slopes::<M>(k, b) else {
             return;
         };

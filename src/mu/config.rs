@@ -126,6 +126,8 @@ pub struct Config<F> {
     pub cal_tau: F,
     /// A calibrated property is kept within this many prior σ.
     pub cal_bound: F,
+    /// The calibration takes at most one step per this time \[s\].
+    pub cal_period: F,
     /// A batch calibrates away from the linear range only while |F|/Fz has swept at least this
     /// share of its maximum over the last `cal_sweep_time` (a steady operating point tells μ
     /// and the tyre apart no better over many batches than over one).
@@ -187,6 +189,7 @@ impl<F: Float> Default for Config<F> {
             cal_sigma: [c(0.1), c(0.1), c(0.002), c(0.1)],
             cal_tau: c(120.0),
             cal_bound: c(4.0),
+            cal_period: c(0.04),
             cal_sweep: c(0.5),
             cal_sweep_time: c(1.0),
             cal_settle: c(0.5),
