@@ -43,7 +43,7 @@
 //! one estimate.
 
 use super::batch::{Batch, Sums};
-use super::config::Config;
+use super::config::{Config, CELLS};
 use super::fit::Fit;
 use super::likelihood::Likelihood;
 use crate::math::{Backend, Float};
@@ -334,11 +334,16 @@ impl<F: Float> Report<F> {
         // Aged since the last batch that used enough of the reported surface to say something
         // of it.
         let aged_now = Self::aged::<M>(c, sigma, self.quiet_s, self.quiet_m);
+        // The highest hypothesis is not an identification: the surfaces above the grid are not
+        // there to be excluded, and what makes it likeliest is mostly a force every surface
+        // above it explains alike (the linear range; camber thrust).
+        let at_top = m + 1 >= CELLS;
         let identifiable = l.evidence
             && excluded > 0
             && aged_now <= c.sigma_identifiable
             && !far_open
             && fits
+            && !at_top
             && mu >= self.floor;
         let mu_min = if mu_min < F::from_f64(f64::MAX) {
             mu_min
