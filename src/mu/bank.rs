@@ -35,7 +35,7 @@ use super::calibration::{Calibration, CalibrationError, Exported, NUISANCES};
 use super::config::{mu_y0, Config, Grid, CELLS};
 use super::estimate::State;
 use super::estimate::{Estimate, Report};
-use super::fit::Fit;
+use super::fit::{Fit, Sensitivity};
 use super::likelihood::Likelihood;
 use super::preview::Reading;
 use crate::math::{Backend, Float};
@@ -129,6 +129,8 @@ pub struct Bank<F> {
     ident_s: F,
     /// Time since the calibration's last step \[s\].
     cal_wait: F,
+    /// The likeliest cell's slopes on the pending batch (how far the trail's σ moves μ there).
+    first_sens: Option<Sensitivity<F>>,
     /// The likeliest surface's χ², averaged over the recent excited batches (the mismatch
     /// indication).
     fit_avg: F,
@@ -181,6 +183,7 @@ impl<F: Float> Bank<F> {
             f_lo: F::ZERO,
             ident_s: F::ZERO,
             cal_wait: F::ZERO,
+            first_sens: None,
             fit_avg: F::ZERO,
             #[cfg(test)]
             trace: WorkTrace::default(),
@@ -436,6 +439,7 @@ impl<F: Float> Bank<F> {
             self.fitted += 1;
             self.skip = Some(k8);
             let chi2 = self.fit_cell::<M>(k, &b);
+            self.first_sens = self.fit.take_sensitivity();
             // (NaN counts as not explained.)
             let explains = chi2 <= self.cfg.chi2_identifiable;
             if !explains {
@@ -543,7 +547,8 @@ impl<F: Float> Bank<F> {
             self.calibrate::<M>(b, k, x);
         }
         if excited && best <= self.cfg.chi2_explain {
-            self.likelihood.fold(&self.cfg, self.fit.chi2(), best);
+            let u0 = b.force() / (self.fit.mu_y0() * b.fz);
+            self.likelihood.fold(&self.cfg, self.fit.chi2(), best, u0);
         }
         self.likelihood.normalise(&self.cfg);
         let at_bound = self
@@ -553,8 +558,16 @@ impl<F: Float> Bank<F> {
             .zip(self.cfg.cal_sigma.iter())
             .any(|(t, s)| t.abs() >= self.cfg.cal_bound * *s * F::from_f64(0.999));
         let mismatch = self.fit_avg > self.cfg.mismatch_chi2 || at_bound;
+        // What the trail's calibration σ leaves unknown of μ where this batch is: a steady
+        // operating point cannot tell a trail a few per cent off from another surface, however
+        // many batches it lasts (the likelihoods take each batch as independent evidence).
+        let trail_var = self.cal.cov.first().and_then(|r| r.first()).copied();
+        let sys_var = match (self.first_sens.take().and_then(|s| s.mu_per_trail()), trail_var) {
+            (Some(x), Some(v)) if excited => x * x * v,
+            _ => F::ZERO,
+        };
         self.report
-            .update::<M>(&self.cfg, &self.likelihood, &self.fit, mismatch);
+            .update::<M>(&self.cfg, &self.likelihood, &self.fit, mismatch, sys_var);
         let r = self.fit.peak_ratio::<M>(self.report.current().mu);
         self.report.set_peak_ratio(r);
     }

@@ -80,6 +80,9 @@ pub struct Config<F> {
     pub chi2_cap: F,
     /// Soft dead zone of a batch's χ² excess (d ↦ d²/(d + deadzone)).
     pub deadzone: F,
+    /// Batches at one operating point that count in full; beyond, each counts
+    /// 1/(1 + n/`novelty`) ([`crate::mu::likelihood`]).
+    pub novelty: F,
     /// A batch whose best cell's χ² exceeds this is not used.
     pub chi2_explain: F,
     /// Largest ℓ of a cell above the best (a switching probability of e^−switch_nll per batch).
@@ -171,6 +174,7 @@ impl<F: Float> Default for Config<F> {
             excitation: c(0.01),
             chi2_cap: c(8.0),
             deadzone: c(1.0),
+            novelty: c(10.0),
             chi2_explain: c(30.0),
             switch_nll: c(12.0),
             exclude_nll: c(4.5),

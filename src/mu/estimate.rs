@@ -260,13 +260,14 @@ impl<F: Float> Report<F> {
         l: &Likelihood<F>,
         fit: &Fit<F>,
         mismatch: bool,
+        sys_var: F,
     ) {
         if self.floor_batches > 0 {
             self.floor_batches -= 1;
         } else {
             self.floor = F::ZERO;
         }
-        self.estimate::<M>(c, l, fit);
+        self.estimate::<M>(c, l, fit, sys_var);
         self.est.mismatch = mismatch;
         if self.floor > F::ZERO && self.est.state != State::Fallback {
             self.est.mu = self.est.mu.max(self.floor);
@@ -275,7 +276,13 @@ impl<F: Float> Report<F> {
     }
 
     /// The estimate from the cells' likelihoods.
-    fn estimate<M: Backend<F>>(&mut self, c: &Config<F>, l: &Likelihood<F>, fit: &Fit<F>) {
+    fn estimate<M: Backend<F>>(
+        &mut self,
+        c: &Config<F>,
+        l: &Likelihood<F>,
+        fit: &Fit<F>,
+        sys_var: F,
+    ) {
         let m = l.best();
         let nll = |k: usize| l.get(k);
         // The grid's local spacing at the best cell.
@@ -327,7 +334,9 @@ impl<F: Float> Report<F> {
         let mean = s1 / sw;
         let var_post = (s2 / sw - mean * mean).max(F::ZERO);
         let var = var_post.max(var_curv.min(var_post.max(h * h)));
-        let sigma = M::sqrt(var + c.sigma_floor.sq());
+        // The likelihoods' spread, the floor, and what the calibration's σ of the tyre leaves
+        // unknown of μ at the latest batch's operating point (`sys_var`).
+        let sigma = M::sqrt(var + c.sigma_floor.sq() + sys_var.max(F::ZERO));
         // The reported surface must explain the latest batch (a cell that wins only because
         // the true one lost its slips is no identification).
         let fits = fit.chi2().get(m).is_some_and(|x| *x <= c.chi2_identifiable);
