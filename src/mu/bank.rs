@@ -31,11 +31,13 @@
 //! bench measures.
 
 use super::batch::{Batch, Batcher, Sample, MAX_GAP_US};
-use super::calibration::{Calibration, CalibrationError, Exported, NUISANCES};
+use super::calibration::{
+    mu_slopes, Calibration, CalibrationError, Exported, NUISANCES, PROPERTIES,
+};
 use super::config::{mu_y0, Config, Grid, CELLS};
 use super::estimate::State;
 use super::estimate::{Estimate, Report};
-use super::fit::{Fit, Sensitivity};
+use super::fit::Fit;
 use super::likelihood::Likelihood;
 use super::preview::Reading;
 use crate::math::{Backend, Float};
@@ -129,8 +131,10 @@ pub struct Bank<F> {
     ident_s: F,
     /// Time since the calibration's last step \[s\].
     cal_wait: F,
-    /// The likeliest cell's slopes on the pending batch (how far the trail's σ moves μ there).
-    first_sens: Option<Sensitivity<F>>,
+    /// The variance of μ the calibration's σ leaves at the latest operating point (its slopes
+    /// there, at most every `cal_period`), and the time since they were last taken \[s\].
+    sys_var: F,
+    sys_wait: F,
     /// The likeliest surface's χ², averaged over the recent excited batches (the mismatch
     /// indication).
     fit_avg: F,
@@ -183,7 +187,8 @@ impl<F: Float> Bank<F> {
             f_lo: F::ZERO,
             ident_s: F::ZERO,
             cal_wait: F::ZERO,
-            first_sens: None,
+            sys_var: F::ZERO,
+            sys_wait: F::ZERO,
             fit_avg: F::ZERO,
             #[cfg(test)]
             trace: WorkTrace::default(),
@@ -439,7 +444,6 @@ impl<F: Float> Bank<F> {
             self.fitted += 1;
             self.skip = Some(k8);
             let chi2 = self.fit_cell::<M>(k, &b);
-            self.first_sens = self.fit.take_sensitivity();
             // (NaN counts as not explained.)
             let explains = chi2 <= self.cfg.chi2_identifiable;
             if !explains {
@@ -544,11 +548,26 @@ impl<F: Float> Bank<F> {
             self.fit_avg += (x - self.fit_avg) * w;
         }
         if let (Some(k), Some(x)) = (first, chi2_first) {
-            self.calibrate::<M>(b, k, x);
+            // The calibration's slopes at the likeliest cell, at most every `cal_period` of
+            // excited batches: what its σ leaves unknown of μ here, and its own step.
+            self.sys_wait += b.dt;
+            let mut slopes = None;
+            if excited && self.sys_wait >= self.cfg.cal_period {
+                self.sys_wait = F::ZERO;
+                slopes = self.fit.calibration_slopes::<M>(k, b);
+                if let Some(s) = slopes.as_ref().and_then(|(_, hc, hn)| mu_slopes(hc, hn)) {
+                    self.sys_var = self.cal.mu_var(&s);
+                }
+            }
+            self.calibrate::<M>(b, k, x, slopes);
         }
         if excited && best <= self.cfg.chi2_explain {
-            let u0 = b.force() / (self.fit.mu_y0() * b.fz);
-            self.likelihood.fold(&self.cfg, self.fit.chi2(), best, u0);
+            // A model that does not explain the data (the mismatch indication's χ², averaged, above
+            // its threshold) says that much less: its χ² differences are scaled down by how far
+            // above (the Birge ratio).
+            let scale = self.fit_avg / self.cfg.mismatch_chi2.max(F::from_f64(1e-3));
+            self.likelihood
+                .fold(&self.cfg, self.fit.chi2(), best, scale);
         }
         self.likelihood.normalise(&self.cfg);
         let at_bound = self
@@ -556,15 +575,17 @@ impl<F: Float> Bank<F> {
             .theta
             .iter()
             .zip(self.cfg.cal_sigma.iter())
-            .any(|(t, s)| t.abs() >= self.cfg.cal_bound * *s * F::from_f64(0.999));
+            .any(|(t, s)| *s > F::ZERO && t.abs() >= self.cfg.cal_bound * *s * F::from_f64(0.999));
         let mismatch = self.fit_avg > self.cfg.mismatch_chi2 || at_bound;
-        // What the trail's calibration σ leaves unknown of μ where this batch is: a steady
-        // operating point cannot tell a trail a few per cent off from another surface, however
-        // many batches it lasts (the likelihoods take each batch as independent evidence).
-        let trail_var = self.cal.cov.first().and_then(|r| r.first()).copied();
-        let sys_var = match (self.first_sens.take().and_then(|s| s.mu_per_trail()), trail_var) {
-            (Some(x), Some(v)) if excited => x * x * v,
-            _ => F::ZERO,
+        // What the calibration's σ leaves unknown of μ where the batches are: a steady operating
+        // point cannot tell a trail a few per cent off from another surface, however many
+        // batches it lasts (the likelihoods take each batch as independent evidence).
+        // The evidence from ahead (the preview) is not this tyre's: only the wheel's own share
+        // of ℓ carries its calibration's σ.
+        let sys_var = if excited {
+            self.sys_var * (F::ONE - self.likelihood.external).max(F::ZERO)
+        } else {
+            F::ZERO
         };
         self.report
             .update::<M>(&self.cfg, &self.likelihood, &self.fit, mismatch, sys_var);
@@ -581,7 +602,14 @@ impl<F: Float> Bank<F> {
     /// grid ([`Calibration::step`]). A steady operating point tells μ and the tyre apart no
     /// better over many batches than over one, and right after a change of surface the old
     /// surface's cell with another trail explains the new road: neither calibrates.
-    fn calibrate<M: Backend<F>>(&mut self, b: &Batch<F>, k: usize, chi2: F) {
+    #[allow(clippy::type_complexity)]
+    fn calibrate<M: Backend<F>>(
+        &mut self,
+        b: &Batch<F>,
+        k: usize,
+        chi2: F,
+        slopes: Option<([F; 4], [[F; PROPERTIES]; 4], [[F; NUISANCES]; 4])>,
+    ) {
         let c = self.cfg;
         self.cal.drift(b.dt, c.cal_tau, &c.cal_sigma);
         if !c.calibrate || b.fz <= F::ZERO {
@@ -611,7 +639,8 @@ impl<F: Float> Bank<F> {
             return;
         }
         self.cal_wait = F::ZERO;
-        let Some((r, h_cal, h_nuis)) = self.fit.calibration_slopes::<M>(k, b) else {
+        let Some((r, h_cal, h_nuis)) = slopes.or_else(|| self.fit.calibration_slopes::<M>(k, b))
+        else {
             return;
         };
         // The slips free (ten times their scales), the surface as known.

@@ -299,6 +299,84 @@ impl<F: Float> Calibration<F> {
     }
 }
 
+/// How far the surface μ moves per unit of each calibrated property where a batch is, the
+/// slips left free: for each property's column of `h_cal` (the residuals' model part's slopes,
+/// as [`Calibration::step`] takes them), the least-squares (α′, κ′, μ) over `h_nuis` that
+/// stand in for it, and of those the μ. What an error of the calibration does to the surface
+/// read at this operating point (a steady one cannot tell them apart). A column no row sees
+/// (κ′ without κ) or two alike get a small ridge (the least-norm share); `None` when no row
+/// sees any nuisance or a number is not finite.
+#[allow(clippy::indexing_slicing, clippy::needless_range_loop)] // constant sizes: 3×3, 4×3, 4×4
+pub(crate) fn mu_slopes<F: Float>(
+    h_cal: &[[F; PROPERTIES]; 4],
+    h_nuis: &[[F; NUISANCES]; 4],
+) -> Option<[F; PROPERTIES]> {
+    let mut a = [[F::ZERO; NUISANCES]; NUISANCES];
+    for row in h_nuis.iter() {
+        for r in 0..NUISANCES {
+            for c in 0..NUISANCES {
+                a[r][c] += row[r] * row[c];
+            }
+        }
+    }
+    // Scaled so that the largest diagonal entry is 1 (the determinants stay in range), and a
+    // little ridge for the columns no row sees (κ′ without κ).
+    let top = a[0][0].max(a[1][1]).max(a[2][2]);
+    if top.partial_cmp(&F::ZERO) != Some(core::cmp::Ordering::Greater) || !top.is_finite() {
+        return None;
+    }
+    let inv = F::ONE / top;
+    for r in 0..NUISANCES {
+        for c in 0..NUISANCES {
+            a[r][c] *= inv;
+        }
+        a[r][r] = a[r][r] * F::from_f64(1.0 + 1e-9) + F::from_f64(1e-9);
+    }
+    let det3 = |m: &[[F; 3]; 3]| {
+        m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
+            - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
+            + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0])
+    };
+    let d = det3(&a);
+    if d.abs().partial_cmp(&F::ZERO) != Some(core::cmp::Ordering::Greater) || !d.is_finite() {
+        return None;
+    }
+    let mut out = [F::ZERO; PROPERTIES];
+    for j in 0..PROPERTIES {
+        // The nuisances' change that cancels the property's: −(HₙᵀHₙ)⁻¹Hₙᵀhⱼ; its μ by
+        // Cramer's rule.
+        let mut a2 = a;
+        for r in 0..NUISANCES {
+            let mut g = F::ZERO;
+            for i in 0..4 {
+                g -= h_nuis[i][r] * h_cal[i][j];
+            }
+            a2[r][2] = g * inv;
+        }
+        let x = det3(&a2) / d;
+        if !x.is_finite() {
+            return None;
+        }
+        out[j] = x;
+    }
+    Some(out)
+}
+
+impl<F: Float> Calibration<F> {
+    /// The variance of μ that the calibration's covariance leaves at an operating point whose
+    /// μ moves by `slopes` per unit of each property ([`mu_slopes`]): sᵀ·P·s.
+    #[allow(clippy::indexing_slicing)] // constant sizes
+    pub(crate) fn mu_var(&self, slopes: &[F; PROPERTIES]) -> F {
+        let mut v = F::ZERO;
+        for i in 0..PROPERTIES {
+            for j in 0..PROPERTIES {
+                v += slopes[i] * self.cov[i][j] * slopes[j];
+            }
+        }
+        v.max(F::ZERO)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -418,5 +496,57 @@ mod tests {
             4.0,
         );
         assert_eq!(c, before);
+    }
+
+    #[test]
+    fn mu_slopes_read_what_the_surface_stands_in_for() {
+        // Four rows, three nuisances (α′, κ′, μ) of unequal scales, all seen.
+        let hn = [
+            [120.0, 3.0, 900.0],
+            [-40.0, 800.0, 150.0],
+            [7.0, -2.0, 60.0],
+            [30.0, 5.0, -45.0],
+        ];
+        let mut h = [[0.0; PROPERTIES]; 4];
+        for i in 0..4 {
+            h[i][0] = 2.0 * hn[i][2]; // the trail moves the rows as +2 of μ does
+            h[i][1] = hn[i][0]; // the shape as α′ does: the surface does not move
+            h[i][2] = 0.5 * hn[i][2] - 3.0 * hn[i][1];
+        }
+        h[0][3] = 1.0; // and one the nuisances explain only in part
+        let s = mu_slopes(&h, &hn).unwrap();
+        assert!((s[0] + 2.0).abs() < 1e-6, "{s:?}");
+        assert!(s[1].abs() < 1e-6, "{s:?}");
+        assert!((s[2] + 0.5).abs() < 1e-6, "{s:?}");
+        assert!(s[3].is_finite());
+        // μ's variance from a diagonal covariance: Σ sₖ² σₖ².
+        let c = Calibration::<f64>::file(&PRIOR);
+        let v = c.mu_var(&s);
+        let want: f64 = (0..PROPERTIES)
+            .map(|k| s[k] * s[k] * PRIOR[k] * PRIOR[k])
+            .sum();
+        assert!((v - want).abs() < 1e-9 * want.max(1e-12), "{v} {want}");
+        // A calibration known exactly leaves μ nothing.
+        let exact = Calibration::<f64>::file(&[0.0; PROPERTIES]);
+        assert_eq!(exact.mu_var(&s), 0.0);
+    }
+
+    #[test]
+    fn mu_slopes_refuse_rows_that_do_not_determine_the_surface() {
+        let h = [[1.0; PROPERTIES]; 4];
+        assert_eq!(mu_slopes::<f64>(&h, &[[0.0; NUISANCES]; 4]), None);
+        let mut nan = [[1.0, 2.0, 3.0]; 4];
+        nan[1][2] = f64::NAN;
+        assert_eq!(mu_slopes::<f64>(&h, &nan), None);
+        // μ's column a copy of α′'s: the ridge shares the row between them, finite, and the
+        // likelihood (flat along that line) does not identify the surface there anyway.
+        let dup = [
+            [1.0, 0.0, 1.0],
+            [2.0, 1.0, 2.0],
+            [3.0, 0.0, 3.0],
+            [4.0, 1.0, 4.0],
+        ];
+        let s = mu_slopes::<f64>(&h, &dup).unwrap();
+        assert!(s.iter().all(|x| x.is_finite() && x.abs() < 1.0), "{s:?}");
     }
 }

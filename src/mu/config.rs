@@ -80,9 +80,6 @@ pub struct Config<F> {
     pub chi2_cap: F,
     /// Soft dead zone of a batch's χ² excess (d ↦ d²/(d + deadzone)).
     pub deadzone: F,
-    /// Batches at one operating point that count in full; beyond, each counts
-    /// 1/(1 + n/`novelty`) ([`crate::mu::likelihood`]).
-    pub novelty: F,
     /// A batch whose best cell's χ² exceeds this is not used.
     pub chi2_explain: F,
     /// Largest ℓ of a cell above the best (a switching probability of e^−switch_nll per batch).
@@ -174,7 +171,6 @@ impl<F: Float> Default for Config<F> {
             excitation: c(0.01),
             chi2_cap: c(8.0),
             deadzone: c(1.0),
-            novelty: c(10.0),
             chi2_explain: c(30.0),
             switch_nll: c(12.0),
             exclude_nll: c(4.5),
@@ -206,14 +202,18 @@ impl<F: Float> Default for Config<F> {
 
 impl<F: Float> Config<F> {
     /// Whether the grid and the batch can be used: `batch_us` > 0, `mu_lo`, `mu_step` and
-    /// `mu_hi_rel` positive, the calibration's σ, time and bound positive.
+    /// `mu_hi_rel` positive, the calibration's σ finite and ≥ 0 (0: the property known
+    /// exactly), its time and bound positive.
     pub(crate) fn usable(&self) -> bool {
         let pos = |x: F| x.partial_cmp(&F::ZERO) == Some(core::cmp::Ordering::Greater);
         self.batch_us > 0
             && pos(self.mu_lo)
             && pos(self.mu_step)
             && pos(self.mu_hi_rel)
-            && self.cal_sigma.iter().all(|s| pos(*s))
+            && self
+                .cal_sigma
+                .iter()
+                .all(|s| s.is_finite() && *s >= F::ZERO)
             && pos(self.cal_tau)
             && pos(self.cal_bound)
     }

@@ -269,6 +269,12 @@ impl<F: Float> Report<F> {
         }
         self.estimate::<M>(c, l, fit, sys_var);
         self.est.mismatch = mismatch;
+        // A change of surface is asserted only by a model that explains the data: under the
+        // mismatch indication the estimate still follows the evidence, but a jump between
+        // surfaces is as likely the tyre's own error.
+        if mismatch {
+            self.est.change = false;
+        }
         if self.floor > F::ZERO && self.est.state != State::Fallback {
             self.est.mu = self.est.mu.max(self.floor);
             self.est.mu_min = self.est.mu_min.max(self.floor);

@@ -93,8 +93,6 @@ pub(crate) struct Fit<F> {
     opts: Options,
     /// The pending batch's slip scales at μ = 1: Fz/|Kyα| \[rad\], Fz/Kxκ \[-\].
     slip: (F, F),
-    /// The slopes of the last cell fitted with its surface's slope (before its step).
-    last: Option<Sensitivity<F>>,
     /// The Magic Formula's load stage at the pending batch's Fz, γ, Vx.
     prep: Option<Prepared<F>>,
     cells: [Cell<F>; CELLS],
@@ -126,7 +124,6 @@ impl<F: Float> Fit<F> {
             mu_y0,
             grid: Grid::new(cfg, mu_y0),
             slip: (F::from_f64(0.05), F::from_f64(0.05)),
-            last: None,
             opts: Options {
                 transient: true,
                 mounted: side,
@@ -145,11 +142,6 @@ impl<F: Float> Fit<F> {
     /// μy0 of the tyre.
     pub(crate) fn mu_y0(&self) -> F {
         self.mu_y0
-    }
-
-    /// The slopes of the last cell fitted with its surface's slope, taken (see [`Sensitivity`]).
-    pub(crate) fn take_sensitivity(&mut self) -> Option<Sensitivity<F>> {
-        self.last.take()
     }
 
     /// The grid of hypotheses.
@@ -309,14 +301,7 @@ impl<F: Float> Fit<F> {
         // stage in dual numbers too (∂/∂μ = ∂/∂s / μ with both scalings times s).
         let fitted = if nll < cfg.switch_nll && mu_c > F::from_f64(1e-3) {
             self.residuals_mu::<M>(lx, ly, mu_c, b, cell.alpha, cell.kappa)
-                .map(|(r, j, jm, jt)| {
-                    self.last = Some(Sensitivity {
-                        slip: j,
-                        mu: jm,
-                        trail_mz: jt,
-                    });
-                    (r, j, Some(jm))
-                })
+                .map(|(r, j, jm)| (r, j, Some(jm)))
         } else {
             self.residuals::<M>(&mu, b, cell.alpha, cell.kappa, true)
                 .map(|(r, j)| (r, j, None))
@@ -493,7 +478,7 @@ impl<F: Float> Fit<F> {
         let mu_c = self.mu_c(k);
         let lambda = mu_c / self.mu_y0;
         let (lx, ly) = (self.lmux * lambda, self.lmuy * lambda);
-        let (r0, jn, jm, _) = self.residuals_mu::<M>(lx, ly, mu_c, b, cell.alpha, cell.kappa)?;
+        let (r0, jn, jm) = self.residuals_mu::<M>(lx, ly, mu_c, b, cell.alpha, cell.kappa)?;
         // Steps of the differences: 1 % of a scale, a tenth of a milliradian of the shift.
         let (hs, hh) = (F::from_f64(0.01), F::from_f64(1e-4));
         let es = M::exp(hs);
@@ -602,7 +587,7 @@ impl<F: Float> Fit<F> {
         b: &Batch<F>,
         alpha: F,
         kappa: F,
-    ) -> Option<([F; 4], [[F; 2]; 4], [F; 4], F)> {
+    ) -> Option<([F; 4], [[F; 2]; 4], [F; 4])> {
         let prep = self.prep.as_ref()?;
         let (f, d) = prep.eval_d_scale::<M>(lx, ly, kappa, alpha).ok()?;
         let j = jac_of(b, &d.slip, self.pin());
@@ -620,60 +605,7 @@ impl<F: Float> Fit<F> {
         {
             return None;
         }
-        // The trail's moment −t·Fy over Mz's σ: the Mz row's slope in the trail's logarithm.
-        let jt = -f.t * f.fy / b.mz.1;
-        if !jt.is_finite() {
-            return None;
-        }
-        Some((res_of(b, &m, kappa, self.pin()), j, jm, jt))
-    }
-}
-
-/// The slopes of a batch's normalised residuals' model part at a cell (rows Fx, Fy, Mz, κ′):
-/// in α′, κ′, the cell's surface μ, and (the Mz row alone) the trail's logarithm.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub(crate) struct Sensitivity<F> {
-    pub(crate) slip: [[F; 2]; 4],
-    pub(crate) mu: [F; 4],
-    pub(crate) trail_mz: F,
-}
-
-impl<F: Float> Sensitivity<F> {
-    /// How far μ moves per unit of the trail's logarithm where the batch is, the slips left
-    /// free: the least-squares (α′, κ′, μ) that stand in for a change of the trail.
-    /// `None` when the three columns do not determine it.
-    #[allow(clippy::indexing_slicing, clippy::needless_range_loop)] // 3×3 and 4×3: constant sizes
-    pub(crate) fn mu_per_trail(&self) -> Option<F> {
-        let cols = |i: usize| [self.slip[i][0], self.slip[i][1], self.mu[i]];
-        let mut a = [[F::ZERO; 3]; 3];
-        let mut g = [F::ZERO; 3];
-        for i in 0..4 {
-            let h = cols(i);
-            let t = if i == 2 { self.trail_mz } else { F::ZERO };
-            for r in 0..3 {
-                for c in 0..3 {
-                    a[r][c] += h[r] * h[c];
-                }
-                g[r] -= h[r] * t;
-            }
-        }
-        // A little ridge, relative to the diagonal, for the columns no row sees (κ′ without κ).
-        for r in 0..3 {
-            a[r][r] = a[r][r] * F::from_f64(1.0 + 1e-9) + F::from_f64(1e-12);
-        }
-        // Cramer's rule for the third unknown.
-        let det3 = |m: &[[F; 3]; 3]| {
-            m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
-                - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
-                + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0])
-        };
-        let d = det3(&a);
-        let mut a2 = a;
-        for r in 0..3 {
-            a2[r][2] = g[r];
-        }
-        let x = det3(&a2) / d;
-        (d.abs() > F::ZERO && x.is_finite()).then_some(x)
+        Some((res_of(b, &m, kappa, self.pin()), j, jm))
     }
 }
 
