@@ -1,4 +1,4 @@
-//! gough's C API (issue 41): the core for C firmware, as the static library `libgough.a` and
+//! gough's C API: the core for C firmware, as the static library `libgough.a` and
 //! the header `capi/include/gough.h` (generated from this crate by cbindgen: `cargo xtask header`;
 //! `cargo xtask test-all` fails when the checked-in header differs from a fresh generation).
 //!

@@ -284,7 +284,7 @@ fn uneven_road_modulates_the_load() {
     );
 }
 
-/// architecture.md: a road of friction μ scales the tyre so that μy at FNOMIN, γ = 0 is μ.
+/// docs/architecture.md: a road of friction μ scales the tyre so that μy at FNOMIN, γ = 0 is μ.
 #[test]
 fn road_friction_means_mu_y_at_fnomin() {
     let p = tyre();

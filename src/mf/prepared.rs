@@ -367,7 +367,7 @@ impl<F: Float> Prepared<F> {
 
     /// The friction stage at λμx* = `lmux_star`·s, λμy* = `lmuy_star`·s and the slip stage at
     /// s = 1, with the slopes in κ, α and, in [`SlopesMu::lmu`], ∂/∂s: the slope in a road's
-    /// friction relative to its value (a surface μ scales both λμx and λμy, architecture.md:
+    /// friction relative to its value (a surface μ scales both λμx and λμy, docs/architecture.md:
     /// ∂/∂μ = ∂/∂s / μ), where the file's λμx and λμy differ.
     pub fn eval_d_scale<M: Backend<F>>(
         &self,

@@ -306,7 +306,7 @@ impl<F: Float> Grid<F> {
     }
 }
 
-/// μy0 of a tyre: μy at FNOMIN, zero slip and camber, nominal pressure (architecture.md).
+/// μy0 of a tyre: μy at FNOMIN, zero slip and camber, nominal pressure (docs/architecture.md).
 pub fn mu_y0<F: Float, M: Backend<F>>(p: &Params<F>) -> Option<F> {
     let pres = if p.nompres > F::ZERO {
         Some(p.nompres)

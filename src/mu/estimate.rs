@@ -84,7 +84,7 @@ impl State {
 #[derive(Serialize, Deserialize, MaxSize, Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Estimate<F> {
-    /// Peak friction μ \[-\] on the tyre file's scale (architecture.md); the prior in `Fallback`.
+    /// Peak friction μ \[-\] on the tyre file's scale (docs/architecture.md); the prior in `Fallback`.
     pub mu: F,
     /// Standard deviation of μ \[-\] by the estimator's own account (the confidence).
     pub sigma: F,

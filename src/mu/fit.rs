@@ -33,7 +33,7 @@
 //!
 //! A cell's surface is the wheel's Magic Formula at the batch's load ([`Prepared`], its load
 //! stage evaluated once per batch) with the friction stage of λμx = λμy = μ/μy0 times the file's
-//! (architecture.md): no table, load, camber and combined slip enter through the model.
+//! (docs/architecture.md): no table, load, camber and combined slip enter through the model.
 
 use super::batch::Batch;
 use super::calibration::{NUISANCES, PROPERTIES};
@@ -293,7 +293,7 @@ impl<F: Float> Fit<F> {
         let Some(prep) = self.prep.as_ref() else {
             return F::ZERO;
         };
-        // The friction stage of this surface: λμx = λμy = μ/μy0 times the file's (architecture.md).
+        // The friction stage of this surface: λμx = λμy = μ/μy0 times the file's (docs/architecture.md).
         let (lx, ly) = (self.lmux * lambda, self.lmuy * lambda);
         let mu = prep.with_mu(lx, ly);
         // The residuals, their slopes in (α′, κ′) and — but for a cell held at the cap, out of

@@ -102,7 +102,7 @@ fn kernels<M: Backend<f32>>(name: &str, per_count: f64) {
     );
 }
 
-/// The staged Magic Formula (`mf::prepared`, issue 38) with backend `M` over the 256 points
+/// The staged Magic Formula (`mf::prepared`) with backend `M` over the 256 points
 /// of `points.rs`: the load stage (`Prepared::new`, one per point), the friction stage
 /// (`Prepared::with_mu`), the slip stage (`Prepared::eval`), the slip stage with ∂/∂κ and ∂/∂α
 /// (`eval_d`) and with ∂/∂λμ too (`eval_d_mu`). Each as `bench: <name> mean=<n> worst=<n>
@@ -430,7 +430,7 @@ fn main() -> ! {
     };
     let p64 = t.params;
     let p32 = p64.cast::<f32>();
-    // The combined Fx, Fy, Mz alone (issue 7's unit; what a friction or stability controller
+    // The combined Fx, Fy, Mz alone (the instruction target's unit; what a friction or stability controller
     // needs: `Options::moments` off), then with Mx and My.
     for (k, (moments, what)) in [
         (

@@ -1,4 +1,4 @@
-//! The Rust side of the C API's example (issue 41): the same work as
+//! The Rust side of the C API's example: the same work as
 //! `capi/examples/m4f/main.c`, through the Rust API the firmware uses (`gough::wheel::Corner`,
 //! `gough::mu::bank::Bank`, `gough::proto`, math backend `app::Math`), printing the same result
 //! lines — `cargo xtask test-all` compares them to the bit — and the same bench line for the

@@ -83,7 +83,7 @@ fn main() -> ! {
         };
         seen[k] = estimator_stream(2 + k as u32, est, p, stream);
     }
-    // The staged MF's slip stage (issue 38) at the grid's loads: brackets 4 (values), 5 (with
+    // The staged MF's slip stage at the grid's loads: brackets 4 (values), 5 (with
     // ∂/∂κ, ∂/∂α) and 6 (with ∂/∂λμ too).
     let preps: [Option<Prepared<f32>>; 16] = core::array::from_fn(|i| {
         Prepared::new::<Fast>(p, &Operating::from(&ins[i]), &opts).ok()

@@ -22,7 +22,7 @@
 //! truth of an MF 5.x tyre grows with √(Fz/Fz0).
 //!
 //! ## Scoring ([`run`], [`targets`])
-//! Issue 40's targets per tyre: named right (exactly the true effects named) at m ≥ 0.3, false
+//! The diagnosis's targets per tyre (docs/gap.md): named right (exactly the true effects named) at m ≥ 0.3, false
 //! alarms on none logs, held-out shrink achieved / achievable at m ≥ 0.3, pairs with both
 //! named at m = 1.
 //! Confusion matrix over effects (the verdict's top effect against the truth), with the cases

@@ -329,9 +329,8 @@ pub fn fit_pair_all(
 /// as the verdict is told from `none`: `a` must close a relevant share more of the gap than
 /// `b` (shrink difference ≥ `min_shrink`) *and* that must be significant against the noise
 /// floor ([`z_value`] of `b`'s held-out residual against `a`'s ≥ `min_z`). Otherwise the data
-/// cannot say which of the two it is. (Until issue 40 item 3 the test was a t-test on the K
-/// paired block shrinks: with 5 blocks, one block where the worse effect extrapolated badly
-/// made its standard error large enough to call a 0.75 and a 0.12 shrink indistinguishable.)
+/// cannot say which of the two it is (why not a t-test on the paired block shrinks: the
+/// "Two effects at once" of docs/gap.md).
 pub fn indistinguishable(
     a: &Score,
     b: &Score,

@@ -2,7 +2,7 @@
 //!
 //! Required columns `t,vx,alpha,kappa,gamma,fz,fx,fy,mz`; optional `p` (inflation pressure
 //! \[Pa\]; absent means INFLPRES), `phit` (turn slip \[1/m\]) and `mu` (reference road friction,
-//! on the tyre file's scale, see `shared/design/architecture.md`); other columns are ignored.
+//! on the tyre file's scale, see `docs/architecture.md`); other columns are ignored.
 //! Every error is one line naming the file, the line and the column.
 
 use crate::csvio;

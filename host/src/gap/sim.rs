@@ -17,10 +17,9 @@
 //! relaxation lengths (σ at each row's load, γ, p) are linear between the two rows, and with them
 //! the damping speed and the decay rate V/σ; the forcing is integrated exactly; the core takes
 //! sub-steps where V/σ moves faster than one step resolves (the load oscillating at several Hz
-//! in a 100 Hz log); the slips of row i are formed with row i's own σ. Until issue 40 the step
-//! held the midpoint kinematics with σ of the step's start and formed α' with that stale σ: on a
-//! 100 Hz log with Fz ±30 % at 8 Hz that missed the continuous model by several times the noise.
-//! σ does not depend on the slips, so each row's σ comes from one extra Magic Formula evaluation
+//! in a 100 Hz log); the slips of row i are formed with row i's own σ (a σ held from the step's
+//! start misses the continuous model by several times the noise on a 100 Hz log with Fz ±30 %
+//! at 8 Hz). σ does not depend on the slips, so each row's σ comes from one extra Magic Formula evaluation
 //! at the log's slips (moments off) before the row's own. Steps longer than
 //! [`gough::relax::MAX_DT`] are gaps.
 //!

@@ -91,7 +91,7 @@ pub struct RowState {
 }
 
 impl<'a> Model<'a> {
-    /// The tyre `base` mounted on `side`, surfaces scaled from the file's μy0 (architecture.md).
+    /// The tyre `base` mounted on `side`, surfaces scaled from the file's μy0 (docs/architecture.md).
     pub fn new(base: &'a Params<f64>, side: Side) -> Result<Model<'a>, String> {
         Ok(Model {
             base,

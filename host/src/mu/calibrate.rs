@@ -10,7 +10,7 @@
 //! slip angle α′ fitted for every trial offset δ of one parameter, and δ the minimum of the
 //! summed χ² of (Fy, Mz) over a grid, refined by a parabola; its σ from the parabola's
 //! curvature (χ² = −2 log-likelihood). The model is the core's Magic Formula (`mf::eval`),
-//! surfaces scaled as the bank scales them (λμ = λμ,file·μ/μy0, architecture.md).
+//! surfaces scaled as the bank scales them (λμ = λμ,file·μ/μy0, docs/architecture.md).
 //!
 //! What it needs: κ in the log, or no longitudinal force to speak of (a batch whose |Fx| is more
 //! than a tenth of its horizontal force is left out without κ); the known μ; enough batches

@@ -87,7 +87,7 @@ fn at_force(p: &Params<f64>, lam: f64, fz: f64, gamma: f64, force: f64) -> Optio
 pub fn map(p: &Params<f64>, with_fx: bool, gamma: f64) -> Result<Vec<Cell>, String> {
     // The bank builds on this tyre (an error here says why it cannot).
     Method::Bank.estimator(p, &Setup::one_wheel(None))?;
-    // Surfaces scaled from the file's μy0, as the simulation scales them (architecture.md).
+    // Surfaces scaled from the file's μy0, as the simulation scales them (docs/architecture.md).
     let mu0 = crate::sim::vehicle::mu_y0(p)?;
     let probe = Probe {
         p,

@@ -7,7 +7,7 @@
 //! slip-controlling ABS ([`abs`]). [`simulate`] runs it at a fixed step and returns a [`Log`];
 //! `plot` (feature `plot`) draws it.
 //!
-//! μ follows `shared/design/architecture.md`: a road of friction μ scales the tyre by
+//! μ follows `docs/architecture.md`: a road of friction μ scales the tyre by
 //! λμx = λμy = μ/μy0, so a log's `mu_true` column means what the estimator reports.
 //!
 //! Deterministic: the same [`SimConfig`] and tyre give bit-identical logs (no threads, no
@@ -84,7 +84,7 @@ pub const STOP_SPEED: f64 = 0.5;
 pub struct Log {
     /// Step h \[s\].
     pub dt: f64,
-    /// The tyre file's μy0 (architecture.md).
+    /// The tyre file's μy0 (docs/architecture.md).
     pub mu_y0: f64,
     /// Records in time order.
     pub records: Vec<Record>,

@@ -2,7 +2,7 @@
 //!
 //! ## Friction
 //! μ is the tyre–road peak friction on the scale of the tyre file's own test surface
-//! (`shared/design/architecture.md`): a road of friction μ scales the Magic Formula by
+//! (`docs/architecture.md`): a road of friction μ scales the Magic Formula by
 //! λμx = λμy = μ / μy0, μy0 the file's μy at Fz = FNOMIN, γ = 0, nominal pressure. This module
 //! only says which μ lies under a contact point; [`super::vehicle`] applies the scaling.
 //!

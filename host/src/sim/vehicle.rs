@@ -275,7 +275,7 @@ pub struct WheelRecord {
     pub fy: f64,
     /// Aligning moment Mz \[N·m\].
     pub mz: f64,
-    /// Road friction under the wheel μ \[-\] (architecture.md's μ).
+    /// Road friction under the wheel μ \[-\] (docs/architecture.md's μ).
     pub mu_true: f64,
     /// Wheel angular speed Ω \[rad/s\] (> 0 rolling forwards).
     pub omega: f64,
@@ -369,7 +369,7 @@ pub struct Vehicle {
     pub r: f64,
     /// Wheels in [`WHEELS`] order.
     pub wheels: [WheelState; 4],
-    /// The tyre file's μy at FNOMIN, γ = 0, nominal pressure (architecture.md's μy0).
+    /// The tyre file's μy at FNOMIN, γ = 0, nominal pressure (docs/architecture.md's μy0).
     pub mu_y0: f64,
     /// The record of the last step.
     pub last: Record,
@@ -384,7 +384,7 @@ pub struct Vehicle {
     static_fz: [f64; 4],
 }
 
-/// μy0: the file's μy at Fz = FNOMIN, zero camber, nominal pressure (architecture.md).
+/// μy0: the file's μy at Fz = FNOMIN, zero camber, nominal pressure (docs/architecture.md).
 pub fn mu_y0(tyre: &Params<f64>) -> Result<f64, String> {
     let p = if tyre.nompres > 0.0 {
         Some(tyre.nompres)

@@ -16,7 +16,7 @@
 //! Metrics per estimator and case, over the four wheels ([`metrics`](mod@metrics)):
 //! - μ error |μ̂ − μ| (mean and 95th percentile) over the samples the estimator calls
 //!   identifiable, and the share of them within twice the σ reported (whether σ is honest);
-//! - the utilisation |F|/(μ·Fz) (architecture.md) reached when the reported estimate first stays
+//! - the utilisation |F|/(μ·Fz) (docs/architecture.md) reached when the reported estimate first stays
 //!   within ±0.1 of the truth until the end of its surface (median over wheels);
 //! - latency: time from the utilisation first reaching 0.5 on a surface to the estimate staying
 //!   within ±0.1 (median over wheels);
