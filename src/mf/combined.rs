@@ -213,28 +213,13 @@ impl<F: Float> Arm<F> {
         }
     }
 
-    /// s \[m\] at lateral force `fy` \[N\], normalised load increment `dfz` and camber `gamma`
-    /// \[rad\]: s = R0·(ssz1 + ssz2·Fy/Fz0 + (ssz3 + ssz4·dfz)·γ)·λs (73), (A56) — Fy/Fz0 and γ,
-    /// not Fz0' and γ*, as the paper and TNO.
-    pub fn s(&self, fy: F, dfz: F, gamma: F) -> F {
-        self.s_at::<F>(fy, dfz, gamma)
-    }
-
-    /// [`Arm::s`] computed in `G` (a dual number carries ∂s/∂Fy).
+    /// s \[m\] at lateral force `fy` \[N\] (a dual number carries ∂s/∂Fy), normalised load
+    /// increment `dfz` and camber `gamma` \[rad\]: s = R0·(ssz1 + ssz2·Fy/Fz0 + (ssz3 +
+    /// ssz4·dfz)·γ)·λs (73), (A56) — Fy/Fz0 and γ, not Fz0' and γ*, as the paper and TNO.
     #[inline]
     pub fn s_at<G: Lift<F>>(&self, fy: G, dfz: F, gamma: F) -> G {
         let [s1, s2, s3, s4] = self.ssz;
         (fy / self.fz0 * s2 + s1 + (s3 + s4 * dfz) * gamma) * self.r0 * self.ls
-    }
-
-    /// [`Arm::s`] of the tyre as mounted: a mirrored tyre's arm is the mirror of the file's,
-    /// −s(−Fy, dfz, −γ), as `mf::eval` computes it for a wheel on the other side.
-    pub fn s_mounted(&self, mirrored: bool, fy: F, dfz: F, gamma: F) -> F {
-        if mirrored {
-            -self.s(-fy, dfz, -gamma)
-        } else {
-            self.s(fy, dfz, gamma)
-        }
     }
 }
 

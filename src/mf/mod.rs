@@ -2,8 +2,8 @@
 //!
 //! One entry point, [`eval`], computes in book order (the order of MFeval's `Solver.m`, and of
 //! the paper's appendix): conditioning of the inputs (`limits`) → `fx0` → `fy0` → `mz0`
-//! intermediates (`pure`) → `fx` → `fy` ([`combined`]) → `mx` → `my` (`moments`) → `mz`
-//! ([`combined`]) → relaxation lengths (`sigma`). Turn slip ([`turnslip`]) is an option. The
+//! intermediates (`pure`) → `fx` → `fy` (`combined`) → `mx` → `my` (`moments`) → `mz`
+//! (`combined`) → relaxation lengths (`sigma`). Turn slip ([`turnslip`]) is an option. The
 //! stage modules are the crate's own (`pure`, `limits`, `moments`, `sigma`); the equation map
 //! below says where each equation is.
 //!
@@ -22,9 +22,9 @@
 //! | Fx0 | (22)–(31) | (4.E9)–(4.E18) | `pure::fx0_load`, `pure::fx0_mu`, `pure::fx0_slip` |
 //! | Fy0 | (32)–(42) | (4.E19)–(4.E30) | `pure::fy0_load`, `pure::fy0_mu`, `pure::fy0_slip` |
 //! | t, Mzr (pure) | (43)–(56), reconstructed | (4.E31)–(4.E49), (A58), (A60) | `pure::mz0_load`, `pure::mz0_mu` |
-//! | Fx | (57)–(62), reconstructed | (4.E50)–(4.E57) | [`combined::fx_slip`] |
-//! | Fy | (13)–(16), (63)–(68) | (4.E58)–(4.E67) | [`combined::fy_slip`] |
-//! | Mz | (17), (18), (69)–(75) | (4.E71)–(4.E78), (A54)–(A56) | [`combined::mz_slip`] |
+//! | Fx | (57)–(62), reconstructed | (4.E50)–(4.E57) | `combined::fx_slip` |
+//! | Fy | (13)–(16), (63)–(68) | (4.E58)–(4.E67) | `combined::fy_slip` |
+//! | Mz | (17), (18), (69)–(75) | (4.E71)–(4.E78), (A54)–(A56) | `combined::mz_slip` |
 //! | Mx, My | — (MF 5.2 forms) | (A47)/(49 draft), (A48) | `moments::mx`, `moments::my` |
 //! | σx, σy | — (MF 5.2 forms) | Besselink eqs. (17)–(19) | `sigma::sigma` |
 //!
@@ -36,7 +36,7 @@
 //! The vertical model (loaded radius, contact patch, Fz from deflection) and the MF 6.2
 //! loaded-radius search: Fz is an input here. Transient behaviour is in the `relax` module.
 
-pub mod combined;
+pub(crate) mod combined;
 pub(crate) mod limits;
 pub(crate) mod moments;
 mod params;

@@ -3,7 +3,7 @@
 //! derivatives of Fx, Fy, Mz in κ, α and λμ from forward-mode dual numbers over the same code.
 //!
 //! [`crate::mf::eval`] is these three stages in a row, so the stages compute exactly what it
-//! computes: every formula is written once (in the crate's `mf::pure`, [`super::combined`] and
+//! computes: every formula is written once (in the crate's `mf::pure`, `mf::combined` and
 //! `mf::limits`), split by what it depends on:
 //!
 //! | stage | depends on | computes (paper / MF 5.2–6.1 equation numbers) |

@@ -45,7 +45,7 @@ use crate::mf::{self, Options, Params, Side};
 /// Cells out of contention per batch that may try a seed when their own fit is poor (cells in
 /// contention always may).
 pub const RESEEDS: usize = 6;
-/// A Gauss–Newton step no longer than this in α′ and κ′, in the cell's slip scales ([`Fit`]:
+/// A Gauss–Newton step no longer than this in α′ and κ′, in the cell's slip scales (`Fit`:
 /// μ·Fz/|Kyα| and μ·Fz/Kxκ, the slips at which its surface leaves the linear range) …
 pub const TRUST_STEP: f64 = 0.04;
 /// … whose linear model predicts a fall of χ² below this is taken without a trial evaluation
