@@ -72,6 +72,7 @@ where
             sigma: e.sigma.to_f64(),
             state: e.state,
             change: e.change,
+            mismatch: e.mismatch,
         }
     }
 }

@@ -83,6 +83,7 @@ pub fn run(a: &Config) -> Result<(), String> {
             sigma: f64::NAN,
             state: State::Fallback,
             change: false,
+            mismatch: false,
         });
         println!(
             "{:5} | {:.2} → {:.2} | {:.3} ± {:.3} | {} | {:.2} | {}",

@@ -52,6 +52,9 @@ pub struct Estimate {
     pub state: State,
     /// A change of surface was declared at this sample.
     pub change: bool,
+    /// The estimator says its model does not explain the data (the bank's
+    /// `gough::mu::Estimate::mismatch`; never set by the peers).
+    pub mismatch: bool,
 }
 
 /// A friction estimator on a car's samples.

@@ -37,6 +37,7 @@ fn prior() -> Estimate {
         sigma: 0.4,
         state: State::Fallback,
         change: false,
+        mismatch: false,
     }
 }
 
@@ -148,6 +149,7 @@ impl HsuGerdes {
                     sigma: 0.1,
                     state: State::Identifiable,
                     change: false,
+                    mismatch: false,
                 }
             }
             None => match self.est {
@@ -156,6 +158,7 @@ impl HsuGerdes {
                     sigma: 0.2,
                     state: State::NotIdentifiable,
                     change: false,
+                    mismatch: false,
                 },
                 None => prior(),
             },
@@ -246,6 +249,7 @@ impl SlipSlope {
                 sigma: 0.1,
                 state: State::Identifiable,
                 change: false,
+                mismatch: false,
             };
         }
         if self.have {
@@ -254,6 +258,7 @@ impl SlipSlope {
                 sigma: 0.2,
                 state: State::NotIdentifiable,
                 change: false,
+                mismatch: false,
             }
         } else {
             prior()

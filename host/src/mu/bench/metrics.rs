@@ -30,6 +30,11 @@ pub struct Metrics {
     /// Share of all the case's samples that are identifiable and off by more than 0.2 (the
     /// issue's limit: at most 0.5 %).
     pub gross: f64,
+    /// Share of all the case's samples with the model-mismatch indication set.
+    pub mismatch: f64,
+    /// Share of all the case's samples that are identifiable, off by more than 0.2 and without
+    /// the mismatch indication: a wrong answer the estimate gives no warning of.
+    pub gross_unflagged: f64,
     /// Median utilisation at which the estimate first stays within ±0.1.
     pub util_within: Option<f64>,
     /// Median latency from utilisation 0.5 to staying within ±0.1 \[s\].
@@ -272,6 +277,7 @@ pub fn metrics(traces: &[WheelTrace], ests: &[Vec<Estimate>]) -> Metrics {
     let (mut false_alarms, mut change_flags) = (0, 0);
     let mut covered = 0;
     let (mut gross, mut samples) = (0usize, 0usize);
+    let (mut mismatch, mut gross_unflagged) = (0usize, 0usize);
     let (mut ws_total, mut ws_within) = (0, 0);
     let (mut util_hi, mut ident_hi) = (0, 0);
     for (tr, est) in traces.iter().zip(ests) {
@@ -282,6 +288,7 @@ pub fn metrics(traces: &[WheelTrace], ests: &[Vec<Estimate>]) -> Metrics {
         false_alarms += false_change_flags(tr, est);
         change_flags += est.iter().filter(|e| e.change).count();
         for (i, e) in est.iter().enumerate() {
+            mismatch += usize::from(e.mismatch);
             if tr.util[i] >= 0.5 {
                 util_hi += 1;
                 ident_hi += usize::from(e.state == State::Identifiable);
@@ -291,6 +298,7 @@ pub fn metrics(traces: &[WheelTrace], ests: &[Vec<Estimate>]) -> Metrics {
                 errs.push(err);
                 covered += usize::from(err <= 2.0 * e.sigma);
                 gross += usize::from(err > GROSS);
+                gross_unflagged += usize::from(err > GROSS && !e.mismatch);
             }
         }
         let segs = segments(&tr.mu_true);
@@ -326,6 +334,8 @@ pub fn metrics(traces: &[WheelTrace], ests: &[Vec<Estimate>]) -> Metrics {
         err_p95,
         within_2sigma: (n > 0).then(|| covered as f64 / n as f64),
         gross: gross as f64 / samples.max(1) as f64,
+        mismatch: mismatch as f64 / samples.max(1) as f64,
+        gross_unflagged: gross_unflagged as f64 / samples.max(1) as f64,
         ws_total,
         ws_within,
         util_within: median(utils),
@@ -480,6 +490,7 @@ mod tests {
             sigma,
             state,
             change: false,
+            mismatch: false,
         };
         let est = vec![
             e(0.8, 0.4, State::Fallback),
@@ -512,6 +523,7 @@ mod tests {
             sigma: 0.02,
             state: State::Identifiable,
             change,
+            mismatch: false,
         };
         let run = |flags: &[(usize, f64)]| {
             let mut mu = 0.5;
@@ -571,6 +583,7 @@ mod tests {
             sigma: 0.02,
             state,
             change: false,
+            mismatch: false,
         };
         let est: Vec<Estimate> = (0..n)
             .map(|i| match i {
@@ -629,6 +642,7 @@ mod tests {
                 sigma: 0.02,
                 state: State::Identifiable,
                 change: false,
+                mismatch: false,
             })
             .collect();
         let ws = wheel_surfaces(std::slice::from_ref(&tr), std::slice::from_ref(&est));

@@ -32,6 +32,10 @@ pub struct Tally {
     pub worst_p95: Option<f64>,
     /// The worst case's share of samples identifiable and off by more than [`GROSS`].
     pub worst_gross: f64,
+    /// The worst case's share of those without the model-mismatch indication.
+    pub worst_gross_unflagged: f64,
+    /// Samples with the model-mismatch indication set (summed over the cases).
+    pub mismatch: f64,
     /// False change flags, and all change flags.
     pub flags: (usize, usize),
     /// Each step's read time \[s\] (none: never read).
@@ -55,6 +59,8 @@ impl Tally {
             (a, b) => a.or(b),
         };
         self.worst_gross = self.worst_gross.max(m.gross);
+        self.worst_gross_unflagged = self.worst_gross_unflagged.max(m.gross_unflagged);
+        self.mismatch += m.mismatch * m.n_samples as f64;
         self.flags.0 += m.false_alarms;
         self.flags.1 += m.change_flags;
         self.steps.extend(o.steps.iter().map(|s| s.read));
@@ -287,7 +293,7 @@ pub fn summary(run: &Run) -> String {
         let t = run.tally(|c| c.level == level && c.rate == RATE, false);
         let _ = writeln!(
             s,
-            "wheel cases, {} ({n_tyres} tyres, {} cases at {RATE} Hz): within ±0.1 within {TARGET_LATENCY} s of utilisation 0.5 on {}; {} false change alarms of {} change flags; worst p95 error {}; worst share of samples identifiable and off by > {GROSS}: {:.2} %; surface steps read within {TARGET_STEP} s: {} of {} (median {}, worst {}); identifiable on {} of the samples, {} of those at utilisation 0.5 or more.",
+            "wheel cases, {} ({n_tyres} tyres, {} cases at {RATE} Hz): within ±0.1 within {TARGET_LATENCY} s of utilisation 0.5 on {}; {} false change alarms of {} change flags; worst p95 error {}; worst share of samples identifiable and off by > {GROSS}: {:.2} % ({:.2} % without the model-mismatch indication, which is set on {:.1} % of the samples); surface steps read within {TARGET_STEP} s: {} of {} (median {}, worst {}); identifiable on {} of the samples, {} of those at utilisation 0.5 or more.",
             level.name(),
             t.cases,
             t.ws_cell(),
@@ -295,6 +301,8 @@ pub fn summary(run: &Run) -> String {
             t.flags.1,
             fmt(t.worst_p95, 3),
             100.0 * t.worst_gross,
+            100.0 * t.worst_gross_unflagged,
+            100.0 * t.mismatch / t.ident.1.max(1) as f64,
             t.steps.len() - t.steps_late(),
             t.steps.len(),
             seconds(t.step_median()),
@@ -675,12 +683,12 @@ pub fn markdown(run: &Run) -> String {
 }
 
 /// The header of `wheel_cases.csv`.
-pub const CSV_HEADER: &str = "tyre,scenario,level,rate_hz,seed,ky,kx,trail,shy_rad,sht_rad,pressure,samples,identifiable,samples_util05,identifiable_util05,err_mean,err_p95,within_2sigma,gross,ws_within,ws_total,change_flags,false_change_flags,steps,step_reads_s,steps_late,warm_identifiable,warm_err_p95,warm_gross,warm_ws_within,warm_change_flags,warm_false_change_flags,warm_step_reads_s,warm_steps_late,error\n";
+pub const CSV_HEADER: &str = "tyre,scenario,level,rate_hz,seed,ky,kx,trail,shy_rad,sht_rad,pressure,samples,identifiable,samples_util05,identifiable_util05,err_mean,err_p95,within_2sigma,gross,gross_unflagged,mismatch,ws_within,ws_total,change_flags,false_change_flags,steps,step_reads_s,steps_late,warm_identifiable,warm_err_p95,warm_gross,warm_ws_within,warm_change_flags,warm_false_change_flags,warm_step_reads_s,warm_steps_late,error\n";
 
 fn outcome_cells(o: &Outcome) -> String {
     let m = &o.metrics;
     format!(
-        "{},{},{},{},{},{},{},{:.5},{},{},{},{},{},{},{}",
+        "{},{},{},{},{},{},{},{:.5},{:.5},{:.5},{},{},{},{},{},{},{}",
         m.n_samples,
         m.n_identifiable,
         m.n_util_hi,
@@ -689,6 +697,8 @@ fn outcome_cells(o: &Outcome) -> String {
         fmt(m.err_p95, 4),
         fmt(m.within_2sigma, 4),
         m.gross,
+        m.gross_unflagged,
+        m.mismatch,
         m.ws_within,
         m.ws_total,
         m.change_flags,
@@ -756,7 +766,7 @@ pub fn csv(run: &Run) -> String {
                 }
             }
             Err(e) => {
-                let _ = writeln!(s, "{}{}", ",".repeat(29), csv_field(e));
+                let _ = writeln!(s, "{}{}", ",".repeat(31), csv_field(e));
             }
         }
     }
