@@ -32,7 +32,7 @@
 
 use super::batch::{Batch, Batcher, Sample, MAX_GAP_US};
 use super::calibration::{
-    mu_slopes, Calibration, CalibrationError, Exported, NUISANCES, PROPERTIES,
+    mu_slopes, Calibration, CalibrationError, Exported, Surface, NUISANCES, PROPERTIES,
 };
 use super::config::{mu_y0, Config, Grid, CELLS};
 use super::estimate::State;
@@ -123,6 +123,8 @@ pub struct Bank<F> {
     mix_waited: bool,
     /// The tyre on the car relative to its file ([`crate::mu::calibration`]).
     cal: Calibration<F>,
+    /// The road under the calibration's steps (its own state, shared across batches).
+    surface: Surface<F>,
     /// Running maximum and minimum of |F|/Fz over the last `cal_sweep_time` (the sweep that
     /// lets a batch away from the linear range calibrate).
     f_hi: F,
@@ -183,6 +185,7 @@ impl<F: Float> Bank<F> {
             mixing: None,
             mix_waited: false,
             cal: Calibration::file(&cfg.cal_sigma),
+            surface: Surface::unknown(),
             f_hi: F::ZERO,
             f_lo: F::ZERO,
             ident_s: F::ZERO,
@@ -621,6 +624,10 @@ impl<F: Float> Bank<F> {
         self.f_hi = fr.max(self.f_hi * decay + fr * (F::ONE - decay));
         self.f_lo = fr.min(self.f_lo * decay + fr * (F::ONE - decay));
         let est = self.report.current();
+        if c.cal_joint {
+            self.calibrate_joint::<M>(b, k, chi2, slopes, &est);
+            return;
+        }
         if est.state == State::Identifiable && !est.change {
             self.ident_s += b.dt;
         } else {
@@ -655,6 +662,55 @@ impl<F: Float> Bank<F> {
         let nuis: [F; NUISANCES] = [(ten * ua).sq(), (ten * uk).sq(), mu_var];
         self.cal
             .step(&r, &h_cal, &h_nuis, &nuis, &c.cal_sigma, c.cal_bound);
+    }
+
+    /// The calibration's step with the road a state of its own (`Config::cal_joint`): the road
+    /// ages as an unobserved μ does and starts afresh where it may have changed (a change flag,
+    /// the fallback, or the likeliest cell beyond what its σ allows); every excited batch the
+    /// likeliest cell explains steps, at most every `cal_period`.
+    #[allow(clippy::type_complexity)]
+    fn calibrate_joint<M: Backend<F>>(
+        &mut self,
+        b: &Batch<F>,
+        k: usize,
+        chi2: F,
+        slopes: Option<([F; 4], [[F; PROPERTIES]; 4], [[F; NUISANCES]; 4])>,
+        est: &Estimate<F>,
+    ) {
+        let c = self.cfg;
+        let mu_lin = self.fit.mu_c(k);
+        let (down, up) = self.fit.grid().half(k);
+        let w = down + up;
+        if self.surface.known {
+            self.surface.var += c.age_q_time * b.dt + c.age_q_distance * b.dist;
+        }
+        let far =
+            (self.surface.mu - mu_lin).abs() > F::from_f64(3.0) * M::sqrt(self.surface.var) + w;
+        if !self.surface.known || est.change || est.state == State::Fallback || far {
+            let s0 = est.sigma.max(w);
+            self.surface.start(mu_lin, s0 * s0);
+        }
+        self.cal_wait += b.dt;
+        if !(b.excited(&c) && chi2 <= c.chi2_identifiable) || self.cal_wait < c.cal_period {
+            return;
+        }
+        self.cal_wait = F::ZERO;
+        let Some((r, h_cal, h_nuis)) = slopes.or_else(|| self.fit.calibration_slopes::<M>(k, b))
+        else {
+            return;
+        };
+        let (ua, uk) = self.fit.slip_units_of(k);
+        let ten = F::from_f64(10.0);
+        self.cal.step_joint(
+            &r,
+            &h_cal,
+            &h_nuis,
+            [(ten * ua).sq(), (ten * uk).sq()],
+            mu_lin,
+            &mut self.surface,
+            &c.cal_sigma,
+            c.cal_bound,
+        );
     }
 
     /// Mixes in the reading from ahead that waits, if any ([`Reading::mix_into`]); a held value

@@ -87,6 +87,42 @@ pub struct Calibration<F> {
     pub batches: u32,
 }
 
+/// The surface the calibration's steps share ([`Calibration::step_joint`]): one road under the
+/// batches, its μ, variance and covariance with θ, forgotten when the road may have changed.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Surface<F> {
+    /// μ \[-\].
+    pub mu: F,
+    /// Its variance.
+    pub var: F,
+    /// Its covariance with θ.
+    pub cross: [F; PROPERTIES],
+    /// Whether it holds anything (false: the next step starts it at the batch's surface).
+    pub known: bool,
+}
+
+impl<F: Float> Surface<F> {
+    /// Nothing known.
+    pub fn unknown() -> Self {
+        Surface {
+            mu: F::ZERO,
+            var: F::ZERO,
+            cross: [F::ZERO; PROPERTIES],
+            known: false,
+        }
+    }
+
+    /// Starts at `mu` with variance `var`, uncorrelated with θ.
+    pub fn start(&mut self, mu: F, var: F) {
+        *self = Surface {
+            mu,
+            var,
+            cross: [F::ZERO; PROPERTIES],
+            known: true,
+        };
+    }
+}
+
 /// A calibration as it crosses a boundary (the protocol, the C API, files): values and σ, the
 /// scales as factors (1 = the file), the shift in rad.
 #[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize, serde::Deserialize)]
@@ -181,7 +217,6 @@ impl<F: Float> Calibration<F> {
     /// by what the batch says beyond the nuisances; each value is kept within `bound`·its prior
     /// σ. Rows whose slopes are all zero (not measured) are skipped. A step that is not finite
     /// is not taken.
-    #[allow(clippy::indexing_slicing, clippy::needless_range_loop)] // constant sizes: i, j < STATE (the arrays' own lengths)
     pub fn step(
         &mut self,
         r: &[F; 4],
@@ -191,15 +226,51 @@ impl<F: Float> Calibration<F> {
         prior: &[F; PROPERTIES],
         bound: F,
     ) {
+        let [va, vk, vm] = *nuis_var;
+        let mut s = Surface {
+            mu: F::ZERO,
+            var: vm,
+            cross: [F::ZERO; PROPERTIES],
+            known: true,
+        };
+        self.step_joint(r, h_cal, h_nuis, [va, vk], F::ZERO, &mut s, prior, bound);
+    }
+
+    /// [`Calibration::step`] with the surface a state of its own ([`Surface`]), kept from batch
+    /// to batch with its cross-covariance with θ: the batch's slips are nuisances, dropped
+    /// after the step, but the surface is one over the batches, so that batches at different
+    /// operating points on one road tell the tyre and the road apart. `mu_lin` is the surface
+    /// at which the residuals were linearised.
+    #[allow(
+        clippy::indexing_slicing,
+        clippy::needless_range_loop,
+        clippy::too_many_arguments
+    )] // constant sizes: i, j < STATE (the arrays' own lengths)
+    pub fn step_joint(
+        &mut self,
+        r: &[F; 4],
+        h_cal: &[[F; PROPERTIES]; 4],
+        h_nuis: &[[F; NUISANCES]; 4],
+        slip_var: [F; 2],
+        mu_lin: F,
+        surface: &mut Surface<F>,
+        prior: &[F; PROPERTIES],
+        bound: F,
+    ) {
+        const M: usize = PROPERTIES + 2;
         let mut p = [[F::ZERO; STATE]; STATE];
         for i in 0..PROPERTIES {
             for j in 0..PROPERTIES {
                 p[i][j] = self.cov[i][j];
             }
+            p[i][M] = surface.cross[i];
+            p[M][i] = surface.cross[i];
         }
-        for k in 0..NUISANCES {
-            p[PROPERTIES + k][PROPERTIES + k] = nuis_var[k];
-        }
+        p[PROPERTIES][PROPERTIES] = slip_var[0];
+        p[PROPERTIES + 1][PROPERTIES + 1] = slip_var[1];
+        p[M][M] = surface.var;
+        // The state's surface against the one the residuals were taken at.
+        let off = surface.mu - mu_lin;
         let mut dx = [F::ZERO; STATE];
         for i in 0..4 {
             let mut h = [F::ZERO; STATE];
@@ -215,7 +286,7 @@ impl<F: Float> Calibration<F> {
                 }
             }
             let mut s = F::ONE;
-            let mut pred = F::ZERO;
+            let mut pred = h[M] * off;
             for a in 0..STATE {
                 s += h[a] * ph[a];
                 pred += h[a] * dx[a];
@@ -231,9 +302,7 @@ impl<F: Float> Calibration<F> {
             }
         }
         let finite = dx.iter().all(|x| x.is_finite())
-            && p.iter()
-                .take(PROPERTIES)
-                .all(|row| row.iter().all(|x| x.is_finite()));
+            && p.iter().all(|row| row.iter().all(|x| x.is_finite()));
         if !finite {
             return;
         }
@@ -245,7 +314,10 @@ impl<F: Float> Calibration<F> {
             }
             // Never below zero on the diagonal (rounding).
             self.cov[i][i] = self.cov[i][i].max(F::ZERO);
+            surface.cross[i] = p[i][M];
         }
+        surface.mu += dx[M];
+        surface.var = p[M][M].max(F::ZERO);
         self.batches = self.batches.saturating_add(1);
     }
 
@@ -548,5 +620,46 @@ mod tests {
         ];
         let s = mu_slopes::<f64>(&h, &dup).unwrap();
         assert!(s.iter().all(|x| x.is_finite() && x.abs() < 1.0), "{s:?}");
+    }
+
+    #[test]
+    fn one_road_over_two_operating_points_tells_the_tyre_from_the_road() {
+        // Two batches whose row sees θ₀ and the road: alike at the first operating point,
+        // opposite at the second. Truth: θ₀ = 0.05, the road 0.02 above the cell's.
+        let mut h = [[0.0; PROPERTIES]; 4];
+        h[0][0] = 100.0;
+        let hn = |sign: f64| {
+            let mut x = [[0.0; NUISANCES]; 4];
+            x[0][2] = 100.0 * sign;
+            x
+        };
+        let r = |sign: f64| [100.0 * (0.05 + sign * 0.02), 0.0, 0.0, 0.0];
+        // Each batch's road its own nuisance: neither batch alone tells θ₀.
+        let mut apart = Calibration::<f64>::file(&PRIOR);
+        for sign in [1.0, -1.0] {
+            apart.step(&r(sign), &h, &hn(sign), &[1.0, 1.0, 1.0], &PRIOR, 4.0);
+        }
+        assert!(apart.theta[0].abs() < 0.005, "{:?}", apart.theta);
+        assert!(apart.sigma::<Libm>(Property::Trail) > 0.09);
+        // One road under both: θ₀ and the road are read.
+        let mut joint = Calibration::<f64>::file(&PRIOR);
+        let mut road = Surface::unknown();
+        road.start(0.5, 1.0);
+        for sign in [1.0, -1.0] {
+            joint.step_joint(
+                &r(sign),
+                &h,
+                &hn(sign),
+                [1.0, 1.0],
+                0.5,
+                &mut road,
+                &PRIOR,
+                4.0,
+            );
+        }
+        assert!((joint.theta[0] - 0.05).abs() < 0.002, "{:?}", joint.theta);
+        assert!((road.mu - 0.52).abs() < 0.002, "{road:?}");
+        assert!(joint.sigma::<Libm>(Property::Trail) < 0.02);
+        assert_eq!(joint.batches, 2);
     }
 }

@@ -118,6 +118,13 @@ pub struct Config<F> {
     pub inform_util: F,
     /// Calibrate the tyre online ([`crate::mu::calibration`]).
     pub calibrate: bool,
+    /// The calibration's steps share one road, a state of their own across batches
+    /// ([`crate::mu::calibration::Calibration::step_joint`]), and step on every excited batch
+    /// the likeliest surface explains; off (the default), each step takes the road as a
+    /// nuisance of its batch, gated on an identification held `cal_settle` over a sweep.
+    /// Experimental: on it converges from a slalom, but misleads the bench's exact cases
+    /// (docs/decisions.md, "Friction estimator v3").
+    pub cal_joint: bool,
     /// Prior σ of the calibrated properties (trail, trail shape: of their logarithms; trail
     /// shift \[rad\]; Kxκ: of its logarithm) — how far a tyre on a car is taken to differ from its
     /// file before the data say.
@@ -186,6 +193,7 @@ impl<F: Float> Default for Config<F> {
             chi2_identifiable: c(12.0),
             inform_util: c(0.3),
             calibrate: true,
+            cal_joint: false,
             cal_sigma: [c(0.1), c(0.1), c(0.002), c(0.1)],
             cal_tau: c(120.0),
             cal_bound: c(4.0),
