@@ -505,6 +505,12 @@ impl<F: Float> Car<F> {
         }
     }
 
+    /// The estimator of wheel `w`, if one runs (to hand it a calibration,
+    /// [`Bank::import_calibration`]).
+    pub fn estimator_mut(&mut self, w: Wheel) -> Option<&mut Bank<F>> {
+        self.corner_mut(w).estimator_mut()
+    }
+
     /// The preview of side `i` (0 left, 1 right), if one runs.
     pub fn preview(&self, i: usize) -> Option<&Preview<F>> {
         self.preview.as_ref().and_then(|p| p.get(i))
