@@ -14,6 +14,7 @@
 //! logarithm). Reading checks the form (every property once, no other, wheels 0–3 once each);
 //! whether the values are a calibration the estimator accepts (finite, within its bounds) is the
 //! core's to say when they are imported ([`gough::mu::Bank::import_calibration`]).
+use super::Estimator;
 use gough::mu::calibration::{Exported, Property, PROPERTIES};
 use gough::proto::Wheel;
 use serde::{Deserialize, Serialize};
@@ -146,6 +147,27 @@ impl CalibrationFile {
         std::fs::write(&tmp, text + "\n").map_err(err)?;
         std::fs::rename(&tmp, path).map_err(err)
     }
+}
+
+/// Starts `est`'s wheels from the calibrations in the file at `path` (`--calibration-in`); an
+/// error names the file and, for a calibration the estimator refuses, the wheel and why.
+pub fn load_into(est: &mut dyn Estimator, path: &Path) -> Result<(), String> {
+    for (w, c) in CalibrationFile::read(path)? {
+        est.set_calibration(w, &c)
+            .map_err(|e| format!("{}: wheel {}: refused: {e}", path.display(), w.index()))?;
+    }
+    Ok(())
+}
+
+/// Writes the calibrations of `est` at the wheels among `wheels` (each once, in wheel order) to
+/// the file at `path` (`--calibration-out`).
+pub fn save_from(est: &dyn Estimator, wheels: &[Wheel], path: &Path) -> Result<(), String> {
+    let cals: Vec<(Wheel, Exported)> = Wheel::ALL
+        .iter()
+        .filter(|w| wheels.contains(w))
+        .filter_map(|w| est.calibration(*w).map(|c| (*w, c)))
+        .collect();
+    CalibrationFile::new(&cals).write(path)
 }
 
 #[cfg(test)]

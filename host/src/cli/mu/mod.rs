@@ -242,26 +242,11 @@ fn estimate(a: &EstimateArgs) -> Result<(), String> {
     }
     let mut estimator = a.method.estimator(&t.params, &setup)?;
     if let Some(path) = &a.calibration_in {
-        for (w, c) in crate::mu::calfile::CalibrationFile::read(path)? {
-            estimator
-                .set_calibration(w, &c)
-                .map_err(|e| format!("{}: wheel {}: refused: {e}", path.display(), w.index()))?;
-        }
+        crate::mu::calfile::load_into(estimator.as_mut(), path)?;
     }
     let est = estimator.run(&log);
     if let Some(path) = &a.calibration_out {
-        let mut seen: Vec<Wheel> = Vec::new();
-        for w in &wheels {
-            if !seen.contains(w) {
-                seen.push(*w);
-            }
-        }
-        seen.sort_by_key(|w| w.index());
-        let cals: Vec<_> = seen
-            .iter()
-            .filter_map(|w| estimator.calibration(*w).map(|c| (*w, c)))
-            .collect();
-        crate::mu::calfile::CalibrationFile::new(&cals).write(path)?;
+        crate::mu::calfile::save_from(estimator.as_ref(), &wheels, path)?;
         eprintln!("calibration -> {}", path.display());
     }
     if let Some(dir) = a.out.parent().filter(|d| !d.as_os_str().is_empty()) {
