@@ -617,6 +617,7 @@ mod tests {
 
     /// `after` is `before` moved by nothing but the drift: θ and the batches equal, the
     /// off-diagonal terms equal, each variance between its value before and its prior's.
+    #[allow(clippy::needless_range_loop)] // i, j < 4: the 4×4 covariance
     fn only_drift(before: &Calibration<f64>, after: &Calibration<f64>, prior: &[f64; 4]) {
         assert_eq!(after.theta, before.theta);
         assert_eq!(after.batches, before.batches);
