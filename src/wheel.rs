@@ -505,6 +505,12 @@ impl<F: Float> Car<F> {
         }
     }
 
+    /// The estimator of wheel `w`, if one runs (to hand it a calibration,
+    /// [`Bank::import_calibration`]).
+    pub fn estimator_mut(&mut self, w: Wheel) -> Option<&mut Bank<F>> {
+        self.corner_mut(w).estimator_mut()
+    }
+
     /// The preview of side `i` (0 left, 1 right), if one runs.
     pub fn preview(&self, i: usize) -> Option<&Preview<F>> {
         self.preview.as_ref().and_then(|p| p.get(i))
@@ -571,5 +577,184 @@ impl<F: Float> Car<F> {
             p,
             &s,
         ))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    //! What never moves the tyre's calibration through the wheel pipeline: samples the
+    //! estimator refuses (not finite, Fz ≤ 0) are held — the estimate and the calibration as
+    //! they were — and counted (`Bank::bad_samples`); unexciting data (free rolling: no slip,
+    //! no force, no torque) leaves θ and the batch count as they were, and the covariance moves
+    //! only by the documented drift (`Calibration::drift`: each variance grows towards its
+    //! prior's, never beyond; the off-diagonal terms untouched).
+    use super::*;
+    use crate::math::Libm;
+    use crate::mu::calibration::{Calibration, Exported};
+    use proptest::prelude::*;
+
+    fn tyre() -> Params<f64> {
+        let text = include_str!("../host-tests/data/tyres/MagicFormula61_Parameters.tir");
+        crate::tir::parse(text).unwrap().params
+    }
+
+    /// A corner whose estimator starts from a calibration away from the file, with σ below the
+    /// prior (so that the drift has room to show).
+    fn warm_corner(p: &Params<f64>, side: Option<Side>) -> Corner<f64> {
+        let mut c = Corner::on(side);
+        c.start_estimator::<Libm>(p, mu::Config::default()).unwrap();
+        let e = Exported {
+            value: [1.05, 0.97, 0.0008, 1.04],
+            sigma: [0.03, 0.04, 0.0007, 0.05],
+            batches: 12,
+        };
+        c.estimator_mut()
+            .unwrap()
+            .import_calibration::<Libm>(&e)
+            .unwrap();
+        c
+    }
+
+    /// `after` is `before` moved by nothing but the drift: θ and the batches equal, the
+    /// off-diagonal terms equal, each variance between its value before and its prior's.
+    #[allow(clippy::needless_range_loop)] // i, j < 4: the 4×4 covariance
+    fn only_drift(before: &Calibration<f64>, after: &Calibration<f64>, prior: &[f64; 4]) {
+        assert_eq!(after.theta, before.theta);
+        assert_eq!(after.batches, before.batches);
+        for i in 0..4 {
+            for j in 0..4 {
+                if i == j {
+                    let (b, a, top) = (before.cov[i][i], after.cov[i][i], prior[i] * prior[i]);
+                    assert!(
+                        a >= b && a <= top.max(b),
+                        "var {i}: {b} -> {a} (prior {top})"
+                    );
+                } else {
+                    assert_eq!(after.cov[i][j], before.cov[i][j], "cov {i}{j}");
+                }
+            }
+        }
+    }
+
+    /// A value the estimator refuses: NaN, ±∞ or a load ≤ 0, in one of the measured fields.
+    fn bad_value() -> impl Strategy<Value = (usize, f64)> {
+        (
+            0usize..4,
+            prop_oneof![
+                Just(f64::NAN),
+                Just(f64::INFINITY),
+                Just(f64::NEG_INFINITY),
+                -1e6f64..=0.0,
+            ],
+        )
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(24))]
+
+        /// Only refused samples, from a warm start: the calibration and the estimate are held
+        /// to the bit, and every sample is counted.
+        #[test]
+        fn refused_samples_never_move_the_calibration(
+            rows in proptest::collection::vec((bad_value(), 0u32..5000, -1e4f64..1e4, -0.5f64..0.5, 0.0f64..60.0), 1..200),
+            side in prop_oneof![Just(None), Just(Some(Side::Left)), Just(Some(Side::Right))],
+        ) {
+            let p = tyre();
+            let mut c = warm_corner(&p, side);
+            let before = *c.estimator().unwrap().calibration();
+            let est0 = c.estimator().unwrap().current();
+            let mut t = 0u32;
+            for (k, ((field, bad), dt, f, kappa, vx)) in rows.iter().enumerate() {
+                t = t.wrapping_add(*dt);
+                let mut m = Measurement {
+                    t_us: t, fz: 4000.0, fy: *f, mz: f / 50.0, fx: Some(*f / 2.0),
+                    vx: Some(*vx), omega: None, alpha: Some(0.02), kappa: Some(*kappa), gamma: None,
+                };
+                match field {
+                    0 => m.fz = *bad,
+                    1 => m.fy = if bad.is_finite() { f64::NAN } else { *bad },
+                    2 => m.mz = if bad.is_finite() { f64::INFINITY } else { *bad },
+                    _ => m.fx = Some(if bad.is_finite() { f64::NEG_INFINITY } else { *bad }),
+                }
+                let _ = c.forces::<Libm>(&p, true, &m);
+                let e = c.estimate::<Libm>(&p, &m).unwrap();
+                prop_assert_eq!(e, est0, "the estimate is held");
+                let b = c.estimator().unwrap();
+                prop_assert_eq!(b.calibration(), &before);
+                prop_assert_eq!(b.bad_samples() as usize, k + 1);
+            }
+        }
+
+        /// Free rolling (no slip, no force, no torque, a steady load and speed), from a warm
+        /// start: θ and the batch count stay, the covariance only drifts.
+        #[test]
+        fn free_rolling_never_moves_the_calibration(
+            fz in 1500f64..8000.0,
+            vx in 1f64..60.0,
+            n in 100usize..1500,
+            side in prop_oneof![Just(None), Just(Some(Side::Left)), Just(Some(Side::Right))],
+        ) {
+            let p = tyre();
+            let mut c = warm_corner(&p, side);
+            let before = *c.estimator().unwrap().calibration();
+            let prior = c.estimator().unwrap().config().cal_sigma;
+            for i in 0..n {
+                let m = Measurement {
+                    t_us: 1000 * i as u32, fz, fy: 0.0, mz: 0.0, fx: Some(0.0), vx: Some(vx),
+                    omega: None, alpha: Some(0.0), kappa: Some(0.0), gamma: Some(0.0),
+                };
+                let o = c.forces::<Libm>(&p, true, &m).unwrap();
+                prop_assert!(o.fy.is_finite());
+                c.estimate::<Libm>(&p, &m).unwrap();
+                let b = c.estimator().unwrap();
+                only_drift(&before, b.calibration(), &prior);
+                prop_assert_eq!(b.bad_samples(), 0);
+            }
+        }
+    }
+
+    /// Refused samples between good ones: each is counted and the estimates stay finite. (The
+    /// estimate is not frozen on a refused sample: `Bank::update` spends the sample's slots on
+    /// the pending batch's fit before it checks the sample, so an estimate of earlier samples'
+    /// evidence may come out on it; the refused values themselves are never taken in.)
+    #[test]
+    fn refused_samples_among_good_ones_are_held_and_counted() {
+        let p = tyre();
+        let mut c = Corner::on(None);
+        c.start_estimator::<Libm>(&p, mu::Config::default())
+            .unwrap();
+        let mut last: Option<mu::Estimate<f64>> = None;
+        let mut refused = 0;
+        for i in 0..600u32 {
+            let a = 0.06 * (f64::from(i) / 300.0).min(1.0);
+            let mut m = Measurement {
+                t_us: 1000 * i,
+                fz: 4000.0,
+                fy: -60_000.0 * a,
+                mz: 1500.0 * a,
+                fx: None,
+                vx: Some(20.0),
+                omega: None,
+                alpha: Some(a),
+                kappa: None,
+                gamma: None,
+            };
+            let bad = i % 7 == 3;
+            if bad {
+                m.fz = if i % 2 == 0 { f64::NAN } else { -1.0 };
+                refused += 1;
+            }
+            let e = c.estimate::<Libm>(&p, &m).unwrap();
+            assert!(
+                e.mu.is_finite() && e.sigma.is_finite() && e.mu_min.is_finite(),
+                "{e:?}"
+            );
+            last = Some(e);
+        }
+        assert_eq!(c.estimator().unwrap().bad_samples(), refused);
+        assert!(
+            last.is_some_and(|e| e.state != mu::State::Fallback),
+            "{last:?}"
+        );
     }
 }

@@ -68,6 +68,19 @@
 #define GOUGH_E_PROTO -9
 
 /**
+ * A calibration was refused (`gough_*_set_calibration`): a value or σ is not a finite number, a
+ * scale is not positive or a σ is negative (`gough::mu::calibration::CalibrationError::NotFinite`).
+ * The calibration in use stays.
+ */
+#define GOUGH_E_CAL_INVALID -10
+
+/**
+ * A calibration was refused: a value lies beyond the bound the estimator keeps it in (4 prior
+ * σ: `CalibrationError::OutOfBounds`). The calibration in use stays.
+ */
+#define GOUGH_E_CAL_BOUNDS -11
+
+/**
  * Bytes of a `gough_params_t` (a parsed `.tir` file: f64 and f32 parameters).
  */
 #define GOUGH_PARAMS_SIZE 2624
@@ -180,6 +193,12 @@
 #define GOUGH_EST_NONE 2
 
 /**
+ * `flags`: the calibrated model does not explain the data (`gough::mu::Estimate::mismatch`):
+ * read μ with care.
+ */
+#define GOUGH_EST_MISMATCH 4
+
+/**
  * `gough_wheel_init` option: run the friction estimator (the bank) on the wheel's
  * measurements.
  */
@@ -197,6 +216,31 @@
  * `gough_wheel_init` option: the wheel is on the vehicle's right (see `GOUGH_WHEEL_LEFT`).
  */
 #define GOUGH_WHEEL_RIGHT 4
+
+/**
+ * `gough_calibration_t::value` index: the peak-trail scale (1 = the file).
+ */
+#define GOUGH_CAL_TRAIL 0
+
+/**
+ * `value` index: the scale of the trail's shape factor Bt.
+ */
+#define GOUGH_CAL_TRAIL_SHAPE 1
+
+/**
+ * `value` index: the trail's shift against the force, SHt − SHy [rad].
+ */
+#define GOUGH_CAL_TRAIL_SHIFT 2
+
+/**
+ * `value` index: the longitudinal slip stiffness scale (Kxκ).
+ */
+#define GOUGH_CAL_KX 3
+
+/**
+ * Number of calibrated properties.
+ */
+#define GOUGH_CAL_PROPERTIES 4
 
 /**
  * `gough_msg_t::kind`: no message (`gough_rx_feed`: not complete yet).
@@ -258,6 +302,17 @@
  * `CompactResults`, protocol types 0x08 and 0x85): only `kind` is set.
  */
 #define GOUGH_MSG_OTHER 11
+
+/**
+ * Device → host: a wheel's calibration (`wheel`, `calibration`), reported at a low rate.
+ */
+#define GOUGH_MSG_CALIBRATION 12
+
+/**
+ * Host → device: start a wheel's estimator from a calibration (`wheel`, `calibration`);
+ * acknowledged (code 11: refused).
+ */
+#define GOUGH_MSG_SET_CALIBRATION 13
 
 /**
  * Bytes of `.tir` text in one parameter chunk, at most.
@@ -624,6 +679,27 @@ typedef struct gough_estimate_t {
 } gough_estimate_t;
 
 /**
+ * An estimator's calibration of the tyre on the car relative to its file
+ * (`gough::mu::calibration::Exported`): what a device stores at power-down and hands back at
+ * power-up so that its estimators start warm.
+ */
+typedef struct gough_calibration_t {
+  /**
+   * By `GOUGH_CAL_*` index: trail scale, trail-shape scale, trail shift [rad], Kxκ scale
+   * (scales: 1 = the file, > 0).
+   */
+  float value[GOUGH_CAL_PROPERTIES];
+  /**
+   * Their σ (≥ 0): of a scale's logarithm (a relative σ), of the shift in rad.
+   */
+  float sigma[GOUGH_CAL_PROPERTIES];
+  /**
+   * Batches that moved the calibration (0: the file as it is).
+   */
+  uint32_t batches;
+} gough_calibration_t;
+
+/**
  * One wheel's friction estimator (`gough_estimator_init`). Opaque; points to its
  * `gough_params_t`.
  */
@@ -714,7 +790,8 @@ typedef struct gough_msg_t {
    */
   struct gough_measurement_t measurement;
   /**
-   * `GOUGH_MSG_FORCES`, `GOUGH_MSG_ESTIMATE`: wheel 0..3 (FL, FR, RL, RR).
+   * `GOUGH_MSG_FORCES`, `GOUGH_MSG_ESTIMATE`, `GOUGH_MSG_CALIBRATION`,
+   * `GOUGH_MSG_SET_CALIBRATION`: wheel 0..3 (FL, FR, RL, RR).
    */
   uint32_t wheel;
   /**
@@ -727,9 +804,15 @@ typedef struct gough_msg_t {
   struct gough_forces_t forces;
   /**
    * `GOUGH_MSG_ESTIMATE`: μ, σ, μ_min, state, and in `flags` the change of surface
-   * (`GOUGH_EST_CHANGE`; `GOUGH_EST_NONE` is not on the wire: ignored when sending).
+   * (`GOUGH_EST_CHANGE`) and the model mismatch (`GOUGH_EST_MISMATCH`); `GOUGH_EST_NONE` is
+   * not on the wire: ignored when sending.
    */
   struct gough_estimate_t estimate;
+  /**
+   * `GOUGH_MSG_CALIBRATION`, `GOUGH_MSG_SET_CALIBRATION`: the calibration (sent as it is:
+   * the receiving estimator checks it).
+   */
+  struct gough_calibration_t calibration;
   /**
    * `GOUGH_MSG_PARAM_BEGIN`: length of the `.tir` text [bytes].
    */
@@ -769,7 +852,7 @@ typedef struct gough_msg_t {
   /**
    * `GOUGH_MSG_ACK`: 0 ok, 1 bad hash, 2 bad length, 3 bad offset, 4 not in upload, 5 .tir
    * error (`ack_line`), 6 no params, 7 no slip, 8 evaluation error, 9 not supported,
-   * 10 bad settings.
+   * 10 bad settings, 11 bad calibration.
    */
   uint32_t ack_code;
   /**
@@ -869,6 +952,19 @@ int32_t gough_wheel_step(struct gough_wheel_t *w,
                          struct gough_estimate_t *est);
 
 /**
+ * The wheel's estimator's calibration of the tyre into `*out` (`gough_estimator_get_calibration`).
+ * `GOUGH_E_ARG`: the wheel runs no estimator (initialised without `GOUGH_WHEEL_ESTIMATOR`).
+ */
+int32_t gough_wheel_get_calibration(const struct gough_wheel_t *w, struct gough_calibration_t *out);
+
+/**
+ * The wheel's estimator starts from calibration `*cal` (`gough_estimator_set_calibration`).
+ * `GOUGH_E_ARG`: the wheel runs no estimator; `GOUGH_E_CAL_INVALID`, `GOUGH_E_CAL_BOUNDS`: refused,
+ * nothing changed.
+ */
+int32_t gough_wheel_set_calibration(struct gough_wheel_t *w, const struct gough_calibration_t *cal);
+
+/**
  * Starts the friction estimator (`gough::mu::bank::Bank`, default settings, the tyre as the
  * file describes it) of one wheel on tyre `p`. **`p` must outlive the estimator** and stay
  * unchanged while it runs (the estimator keeps a pointer to it). `GOUGH_E_MODEL`: the tyre
@@ -893,6 +989,22 @@ int32_t gough_estimator_init_on(struct gough_estimator_t *e,
 int32_t gough_estimator_update(struct gough_estimator_t *e,
                                const struct gough_sample_t *s,
                                struct gough_estimate_t *out);
+
+/**
+ * The estimator's calibration of the tyre into `*out`: each property's value and σ, and how
+ * many batches moved it.
+ */
+int32_t gough_estimator_get_calibration(const struct gough_estimator_t *e,
+                                        struct gough_calibration_t *out);
+
+/**
+ * The estimator starts from calibration `*cal` (one `gough_estimator_get_calibration` gave
+ * earlier, stored across a power cycle): from its next batch on the surfaces are read relative
+ * to it. Refused, nothing changed: `GOUGH_E_CAL_INVALID` (a value or σ not a finite number, a
+ * scale ≤ 0, a σ < 0), `GOUGH_E_CAL_BOUNDS` (a value beyond 4 prior σ).
+ */
+int32_t gough_estimator_set_calibration(struct gough_estimator_t *e,
+                                        const struct gough_calibration_t *cal);
 
 /**
  * Starts one side's front-to-rear preview (`gough::mu::preview`: what the front wheel's

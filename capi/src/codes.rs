@@ -24,3 +24,10 @@ pub const GOUGH_E_NOSLIP: i32 = -8;
 /// A CAN frame or message was dropped by the reassembler (bad header, CRC, order, timeout,
 /// version, type or body); counted as the Rust `proto::Counters` count it.
 pub const GOUGH_E_PROTO: i32 = -9;
+/// A calibration was refused (`gough_*_set_calibration`): a value or σ is not a finite number, a
+/// scale is not positive or a σ is negative (`gough::mu::calibration::CalibrationError::NotFinite`).
+/// The calibration in use stays.
+pub const GOUGH_E_CAL_INVALID: i32 = -10;
+/// A calibration was refused: a value lies beyond the bound the estimator keeps it in (4 prior
+/// σ: `CalibrationError::OutOfBounds`). The calibration in use stays.
+pub const GOUGH_E_CAL_BOUNDS: i32 = -11;

@@ -1,5 +1,5 @@
 //! The friction estimator alone (`gough::mu::Bank`): its samples, its start on a tyre and side, its
-//! update.
+//! update, and its calibration of the tyre (`gough::mu::calibration`) out and in.
 
 use crate::*;
 
@@ -106,17 +106,108 @@ pub unsafe extern "C" fn gough_estimator_update(
         // SAFETY: non-null, the caller's sample.
         let sample = sample(&unsafe { s.read() })?;
         let r = est.bank.update::<Fast>(&est.params.p32, &sample);
-        let state = state_code(r.state);
         // SAFETY: non-null, the caller's output.
-        unsafe {
-            out.write(gough_estimate_t {
-                mu: r.mu,
-                sigma: r.sigma,
-                mu_min: r.mu_min,
-                state,
-                flags: if r.change { GOUGH_EST_CHANGE } else { 0 },
-            })
-        };
+        unsafe { out.write(estimate_c(&r)) };
         Ok(())
+    })
+}
+
+/// `gough_calibration_t::value` index: the peak-trail scale (1 = the file).
+pub const GOUGH_CAL_TRAIL: usize = 0;
+/// `value` index: the scale of the trail's shape factor Bt.
+pub const GOUGH_CAL_TRAIL_SHAPE: usize = 1;
+/// `value` index: the trail's shift against the force, SHt − SHy [rad].
+pub const GOUGH_CAL_TRAIL_SHIFT: usize = 2;
+/// `value` index: the longitudinal slip stiffness scale (Kxκ).
+pub const GOUGH_CAL_KX: usize = 3;
+/// Number of calibrated properties.
+pub const GOUGH_CAL_PROPERTIES: usize = 4;
+
+/// An estimator's calibration of the tyre on the car relative to its file
+/// (`gough::mu::calibration::Exported`): what a device stores at power-down and hands back at
+/// power-up so that its estimators start warm.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Default)]
+pub struct gough_calibration_t {
+    /// By `GOUGH_CAL_*` index: trail scale, trail-shape scale, trail shift [rad], Kxκ scale
+    /// (scales: 1 = the file, > 0).
+    pub value: [f32; GOUGH_CAL_PROPERTIES],
+    /// Their σ (≥ 0): of a scale's logarithm (a relative σ), of the shift in rad.
+    pub sigma: [f32; GOUGH_CAL_PROPERTIES],
+    /// Batches that moved the calibration (0: the file as it is).
+    pub batches: u32,
+}
+
+/// Writes `bank`'s calibration into `out` (`GOUGH_E_NULL` if null).
+pub(crate) unsafe fn write_calibration(
+    bank: &Bank<f32>,
+    out: *mut gough_calibration_t,
+) -> Result<(), i32> {
+    if out.is_null() {
+        return Err(GOUGH_E_NULL);
+    }
+    let e = bank.calibration().export::<Fast>();
+    // SAFETY: non-null, the caller's output.
+    unsafe {
+        out.write(gough_calibration_t {
+            value: e.value,
+            sigma: e.sigma,
+            batches: e.batches,
+        })
+    };
+    Ok(())
+}
+
+/// Hands `bank` the calibration at `cal` (`GOUGH_E_NULL` if null; refusals as codes).
+pub(crate) unsafe fn read_calibration(
+    bank: &mut Bank<f32>,
+    cal: *const gough_calibration_t,
+) -> Result<(), i32> {
+    if cal.is_null() {
+        return Err(GOUGH_E_NULL);
+    }
+    // SAFETY: non-null, the caller's calibration.
+    let c = unsafe { cal.read() };
+    let e = mu::calibration::Exported {
+        value: c.value,
+        sigma: c.sigma,
+        batches: c.batches,
+    };
+    bank.import_calibration::<Fast>(&e)
+        .map_err(|err| match err {
+            mu::calibration::CalibrationError::NotFinite => GOUGH_E_CAL_INVALID,
+            mu::calibration::CalibrationError::OutOfBounds => GOUGH_E_CAL_BOUNDS,
+        })
+}
+
+/// The estimator's calibration of the tyre into `*out`: each property's value and σ, and how
+/// many batches moved it.
+#[no_mangle]
+pub unsafe extern "C" fn gough_estimator_get_calibration(
+    e: *const gough_estimator_t,
+    out: *mut gough_calibration_t,
+) -> i32 {
+    ret(|| {
+        // SAFETY: an estimator storage or null.
+        let est: &EstIn = unsafe { get(e, MAGIC_EST)? };
+        // SAFETY: the caller's output or null (checked there).
+        unsafe { write_calibration(&est.bank, out) }
+    })
+}
+
+/// The estimator starts from calibration `*cal` (one `gough_estimator_get_calibration` gave
+/// earlier, stored across a power cycle): from its next batch on the surfaces are read relative
+/// to it. Refused, nothing changed: `GOUGH_E_CAL_INVALID` (a value or σ not a finite number, a
+/// scale ≤ 0, a σ < 0), `GOUGH_E_CAL_BOUNDS` (a value beyond 4 prior σ).
+#[no_mangle]
+pub unsafe extern "C" fn gough_estimator_set_calibration(
+    e: *mut gough_estimator_t,
+    cal: *const gough_calibration_t,
+) -> i32 {
+    ret(|| {
+        // SAFETY: an estimator storage or null; exclusive for the call.
+        let est: &mut EstIn = unsafe { get_mut(e, MAGIC_EST)? };
+        // SAFETY: the caller's calibration or null (checked there).
+        unsafe { read_calibration(&mut est.bank, cal) }
     })
 }

@@ -78,6 +78,9 @@ pub const GOUGH_EST_CHANGE: u32 = 1;
 /// `flags`: no estimator runs (a wheel initialised without `GOUGH_WHEEL_ESTIMATOR`): μ is the
 /// prior.
 pub const GOUGH_EST_NONE: u32 = 2;
+/// `flags`: the calibrated model does not explain the data (`gough::mu::Estimate::mismatch`):
+/// read μ with care.
+pub const GOUGH_EST_MISMATCH: u32 = 4;
 /// `gough_wheel_init` option: run the friction estimator (the bank) on the wheel's
 /// measurements.
 pub const GOUGH_WHEEL_ESTIMATOR: u32 = 1;
@@ -147,14 +150,17 @@ pub(crate) fn state_code(s: mu::State) -> i32 {
     }
 }
 
-/// An estimate as C's (the change flag as `GOUGH_EST_CHANGE`).
+/// An estimate as C's (the change flag as `GOUGH_EST_CHANGE`, the mismatch indication as
+/// `GOUGH_EST_MISMATCH`).
 pub(crate) fn estimate_c(e: &mu::Estimate<f32>) -> gough_estimate_t {
+    let change = if e.change { GOUGH_EST_CHANGE } else { 0 };
+    let mismatch = if e.mismatch { GOUGH_EST_MISMATCH } else { 0 };
     gough_estimate_t {
         mu: e.mu,
         sigma: e.sigma,
         mu_min: e.mu_min,
         state: state_code(e.state),
-        flags: if e.change { GOUGH_EST_CHANGE } else { 0 },
+        flags: change | mismatch,
     }
 }
 
@@ -274,5 +280,38 @@ pub unsafe extern "C" fn gough_wheel_step(
                 })
             }
         }
+    })
+}
+
+/// The wheel's estimator's calibration of the tyre into `*out` (`gough_estimator_get_calibration`).
+/// `GOUGH_E_ARG`: the wheel runs no estimator (initialised without `GOUGH_WHEEL_ESTIMATOR`).
+#[no_mangle]
+pub unsafe extern "C" fn gough_wheel_get_calibration(
+    w: *const gough_wheel_t,
+    out: *mut gough_calibration_t,
+) -> i32 {
+    ret(|| {
+        // SAFETY: a wheel storage or null.
+        let wi: &WheelIn = unsafe { get(w, MAGIC_WHEEL)? };
+        let bank = wi.wheel.estimator().ok_or(GOUGH_E_ARG)?;
+        // SAFETY: the caller's output or null (checked there).
+        unsafe { write_calibration(bank, out) }
+    })
+}
+
+/// The wheel's estimator starts from calibration `*cal` (`gough_estimator_set_calibration`).
+/// `GOUGH_E_ARG`: the wheel runs no estimator; `GOUGH_E_CAL_INVALID`, `GOUGH_E_CAL_BOUNDS`: refused,
+/// nothing changed.
+#[no_mangle]
+pub unsafe extern "C" fn gough_wheel_set_calibration(
+    w: *mut gough_wheel_t,
+    cal: *const gough_calibration_t,
+) -> i32 {
+    ret(|| {
+        // SAFETY: a wheel storage or null; exclusive for the call.
+        let wi: &mut WheelIn = unsafe { get_mut(w, MAGIC_WHEEL)? };
+        let bank = wi.wheel.estimator_mut().ok_or(GOUGH_E_ARG)?;
+        // SAFETY: the caller's calibration or null (checked there).
+        unsafe { read_calibration(bank, cal) }
     })
 }

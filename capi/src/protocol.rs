@@ -28,6 +28,11 @@ pub const GOUGH_MSG_ACK: u32 = 10;
 /// A complete message the C API does not map (the four-wheel `CompactBatch` and
 /// `CompactResults`, protocol types 0x08 and 0x85): only `kind` is set.
 pub const GOUGH_MSG_OTHER: u32 = 11;
+/// Device → host: a wheel's calibration (`wheel`, `calibration`), reported at a low rate.
+pub const GOUGH_MSG_CALIBRATION: u32 = 12;
+/// Host → device: start a wheel's estimator from a calibration (`wheel`, `calibration`);
+/// acknowledged (code 11: refused).
+pub const GOUGH_MSG_SET_CALIBRATION: u32 = 13;
 /// Bytes of `.tir` text in one parameter chunk, at most.
 pub const GOUGH_CHUNK_LEN: usize = 48;
 /// Frames of one message, at most (classic CAN, 8 bytes each).
@@ -54,15 +59,20 @@ pub struct gough_msg_t {
     pub kind: u32,
     /// `GOUGH_MSG_MEASUREMENT`.
     pub measurement: gough_measurement_t,
-    /// `GOUGH_MSG_FORCES`, `GOUGH_MSG_ESTIMATE`: wheel 0..3 (FL, FR, RL, RR).
+    /// `GOUGH_MSG_FORCES`, `GOUGH_MSG_ESTIMATE`, `GOUGH_MSG_CALIBRATION`,
+    /// `GOUGH_MSG_SET_CALIBRATION`: wheel 0..3 (FL, FR, RL, RR).
     pub wheel: u32,
     /// `GOUGH_MSG_FORCES`, `GOUGH_MSG_ESTIMATE`: timestamp of the measurement [µs].
     pub t_us: u32,
     /// `GOUGH_MSG_FORCES`: the forces (ISO-W, contact point; flags are 16 bits on the wire).
     pub forces: gough_forces_t,
     /// `GOUGH_MSG_ESTIMATE`: μ, σ, μ_min, state, and in `flags` the change of surface
-    /// (`GOUGH_EST_CHANGE`; `GOUGH_EST_NONE` is not on the wire: ignored when sending).
+    /// (`GOUGH_EST_CHANGE`) and the model mismatch (`GOUGH_EST_MISMATCH`); `GOUGH_EST_NONE` is
+    /// not on the wire: ignored when sending.
     pub estimate: gough_estimate_t,
+    /// `GOUGH_MSG_CALIBRATION`, `GOUGH_MSG_SET_CALIBRATION`: the calibration (sent as it is:
+    /// the receiving estimator checks it).
+    pub calibration: gough_calibration_t,
     /// `GOUGH_MSG_PARAM_BEGIN`: length of the `.tir` text [bytes].
     pub param_len: u32,
     /// `GOUGH_MSG_PARAM_BEGIN`, `GOUGH_MSG_PARAM_COMMIT`: CRC-32 of the text.
@@ -83,7 +93,7 @@ pub struct gough_msg_t {
     pub ack_seq: u32,
     /// `GOUGH_MSG_ACK`: 0 ok, 1 bad hash, 2 bad length, 3 bad offset, 4 not in upload, 5 .tir
     /// error (`ack_line`), 6 no params, 7 no slip, 8 evaluation error, 9 not supported,
-    /// 10 bad settings.
+    /// 10 bad settings, 11 bad calibration.
     pub ack_code: u32,
     /// `GOUGH_MSG_ACK` with code 5: 1-based line of the first error (0: the whole file).
     pub ack_line: u32,
@@ -133,6 +143,11 @@ const ZERO_MSG: gough_msg_t = gough_msg_t {
         mu_min: 0.0,
         state: 0,
         flags: 0,
+    },
+    calibration: gough_calibration_t {
+        value: [0.0; GOUGH_CAL_PROPERTIES],
+        sigma: [0.0; GOUGH_CAL_PROPERTIES],
+        batches: 0,
     },
     param_len: 0,
     param_hash: 0,
@@ -200,6 +215,7 @@ fn ack_code(c: proto::AckCode) -> (u32, u32) {
         A::EvalError => (8, 0),
         A::NotSupported => (9, 0),
         A::BadSettings => (10, 0),
+        A::BadCalibration => (11, 0),
     }
 }
 
@@ -217,6 +233,7 @@ fn ack_from(code: u32, line: u32) -> Option<proto::AckCode> {
         8 => A::EvalError,
         9 => A::NotSupported,
         10 => A::BadSettings,
+        11 => A::BadCalibration,
         _ => return None,
     })
 }
@@ -283,6 +300,19 @@ fn to_c(m: &Msg) -> gough_msg_t {
             o.wheel = e.wheel.index() as u32;
             o.t_us = e.t_us;
             o.estimate = estimate_c(&e.estimate());
+        }
+        Msg::Calibration(c) | Msg::SetCalibration(c) => {
+            o.kind = if matches!(m, Msg::Calibration(_)) {
+                GOUGH_MSG_CALIBRATION
+            } else {
+                GOUGH_MSG_SET_CALIBRATION
+            };
+            o.wheel = c.wheel.index() as u32;
+            o.calibration = gough_calibration_t {
+                value: c.value,
+                sigma: c.sigma,
+                batches: c.batches,
+            };
         }
         Msg::Status(_) => o.kind = GOUGH_MSG_STATUS,
         Msg::CompactBatch(_) | Msg::CompactResults(_) => o.kind = GOUGH_MSG_OTHER,
@@ -367,7 +397,22 @@ fn from_c(m: &gough_msg_t) -> Result<Msg, i32> {
                 },
                 mu_min: e.mu_min,
                 change: e.flags & GOUGH_EST_CHANGE != 0,
+                mismatch: e.flags & GOUGH_EST_MISMATCH != 0,
             })
+        }
+        GOUGH_MSG_CALIBRATION | GOUGH_MSG_SET_CALIBRATION => {
+            let c = &m.calibration;
+            let state = proto::CalibrationState {
+                wheel: wheel()?,
+                value: c.value,
+                sigma: c.sigma,
+                batches: c.batches,
+            };
+            if m.kind == GOUGH_MSG_CALIBRATION {
+                Msg::Calibration(state)
+            } else {
+                Msg::SetCalibration(state)
+            }
         }
         GOUGH_MSG_ACK => Msg::Ack(proto::Ack {
             of: u8::try_from(m.ack_of).map_err(|_| GOUGH_E_ARG)?,

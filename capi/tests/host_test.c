@@ -363,6 +363,65 @@ static void errors(const char *root) {
     s.mz = NAN;
     CHECK(gough_estimator_update(&est, &s, &e) == GOUGH_E_NONFINITE, "NaN Mz");
 
+    /* The calibration out and in: a fresh estimator has the file's (scales 1, no batches); a
+     * stored one goes in and comes out the same; refusals leave it as it was. */
+    {
+        gough_calibration_t c, c2;
+        CHECK(gough_estimator_get_calibration(&est, &c) == GOUGH_OK && c.batches == 0 &&
+                  c.value[GOUGH_CAL_TRAIL] == 1.0f && c.value[GOUGH_CAL_KX] == 1.0f &&
+                  c.value[GOUGH_CAL_TRAIL_SHIFT] == 0.0f && c.sigma[GOUGH_CAL_TRAIL] > 0.0f,
+              "file calibration: trail %g kx %g batches %u", (double)c.value[GOUGH_CAL_TRAIL],
+              (double)c.value[GOUGH_CAL_KX], c.batches);
+        gough_calibration_t warm = c;
+        warm.value[GOUGH_CAL_TRAIL] = 1.05f;
+        warm.value[GOUGH_CAL_KX] = 0.95f;
+        warm.sigma[GOUGH_CAL_TRAIL] = 0.02f;
+        warm.batches = 40;
+        CHECK(gough_estimator_set_calibration(&est, &warm) == GOUGH_OK, "set calibration");
+        CHECK(gough_estimator_get_calibration(&est, &c2) == GOUGH_OK && c2.batches == 40 &&
+                  fabsf(c2.value[GOUGH_CAL_TRAIL] - 1.05f) < 1e-5f &&
+                  fabsf(c2.value[GOUGH_CAL_KX] - 0.95f) < 1e-5f &&
+                  fabsf(c2.sigma[GOUGH_CAL_TRAIL] - 0.02f) < 1e-6f,
+              "calibration round trip: trail %g kx %g sigma %g", (double)c2.value[0],
+              (double)c2.value[3], (double)c2.sigma[0]);
+        gough_calibration_t bad_cal = warm;
+        bad_cal.value[GOUGH_CAL_TRAIL] = NAN;
+        CHECK(gough_estimator_set_calibration(&est, &bad_cal) == GOUGH_E_CAL_INVALID, "NaN value");
+        bad_cal = warm;
+        bad_cal.value[GOUGH_CAL_KX] = -1.0f;
+        CHECK(gough_estimator_set_calibration(&est, &bad_cal) == GOUGH_E_CAL_INVALID,
+              "negative scale");
+        bad_cal = warm;
+        bad_cal.sigma[GOUGH_CAL_TRAIL_SHAPE] = -0.1f;
+        CHECK(gough_estimator_set_calibration(&est, &bad_cal) == GOUGH_E_CAL_INVALID,
+              "negative sigma");
+        bad_cal = warm;
+        bad_cal.value[GOUGH_CAL_TRAIL] = 3.0f; /* ln 3 = 1.1, beyond 4 prior sigma (0.4) */
+        CHECK(gough_estimator_set_calibration(&est, &bad_cal) == GOUGH_E_CAL_BOUNDS,
+              "beyond bounds");
+        CHECK(gough_estimator_get_calibration(&est, &c2) == GOUGH_OK && c2.batches == 40 &&
+                  fabsf(c2.value[GOUGH_CAL_TRAIL] - 1.05f) < 1e-5f,
+              "refusals change nothing");
+        CHECK(gough_estimator_get_calibration(&est0, &c2) == GOUGH_E_UNINIT, "uninit get");
+        CHECK(gough_estimator_set_calibration(&est0, &warm) == GOUGH_E_UNINIT, "uninit set");
+        CHECK(gough_estimator_get_calibration(&est, NULL) == GOUGH_E_NULL, "null get");
+        CHECK(gough_estimator_set_calibration(&est, NULL) == GOUGH_E_NULL, "null set");
+        /* A wheel's pipeline: the same through its estimator; none without one. */
+        CHECK(gough_wheel_set_calibration(&wheel, &warm) == GOUGH_OK &&
+                  gough_wheel_get_calibration(&wheel, &c2) == GOUGH_OK && c2.batches == 40 &&
+                  fabsf(c2.value[GOUGH_CAL_KX] - 0.95f) < 1e-5f,
+              "wheel calibration round trip");
+        CHECK(gough_wheel_set_calibration(&wheel, &bad_cal) == GOUGH_E_CAL_BOUNDS,
+              "wheel: beyond bounds");
+        static gough_wheel_t plain;
+        CHECK(gough_wheel_init(&plain, &p, 0) == GOUGH_OK &&
+                  gough_wheel_get_calibration(&plain, &c2) == GOUGH_E_ARG &&
+                  gough_wheel_set_calibration(&plain, &warm) == GOUGH_E_ARG,
+              "wheel without an estimator");
+        static gough_wheel_t never;
+        CHECK(gough_wheel_get_calibration(&never, &c2) == GOUGH_E_UNINIT, "uninit wheel get");
+    }
+
     /* The front-to-rear preview: errors; then a front and a rear estimator in a steady turn
      * (forces from gough_mf_eval), the rear told what the front read 2.9 m later: both read
      * the tyre's own surface. */
@@ -491,6 +550,35 @@ static void errors(const char *root) {
               got.estimate.flags == GOUGH_EST_CHANGE,
           "estimate round trip: kind %u flags %u mu_min %g", got.kind, got.estimate.flags,
           (double)got.estimate.mu_min);
+    /* The model-mismatch flag (protocol v4) crosses too. */
+    em.estimate.flags = GOUGH_EST_MISMATCH;
+    CHECK(gough_msg_encode(&em, 12, frames, GOUGH_MAX_FRAMES, &nf) == GOUGH_OK, "mismatch");
+    for (size_t i = 0; i < nf; i++) gough_rx_feed(&rx, &frames[i], 0, &got);
+    CHECK(got.kind == GOUGH_MSG_ESTIMATE && got.estimate.flags == GOUGH_EST_MISMATCH,
+          "mismatch round trip: flags %u", got.estimate.flags);
+    /* A calibration both ways: the device's report (0x311) and the host's warm start (0x301). */
+    {
+        gough_msg_t cm;
+        memset(&cm, 0, sizeof cm);
+        cm.wheel = 2;
+        for (int k = 0; k < GOUGH_CAL_PROPERTIES; k++) {
+            cm.calibration.value[k] = 1.0f + 0.01f * (float)k;
+            cm.calibration.sigma[k] = 0.05f;
+        }
+        cm.calibration.batches = 123456;
+        const uint32_t kinds[2] = {GOUGH_MSG_CALIBRATION, GOUGH_MSG_SET_CALIBRATION};
+        const uint32_t ids[2] = {0x311, 0x301};
+        for (int k = 0; k < 2; k++) {
+            cm.kind = kinds[k];
+            CHECK(gough_msg_encode(&cm, 13, frames, GOUGH_MAX_FRAMES, &nf) == GOUGH_OK &&
+                      nf == 8 && frames[0].id == ids[k],
+                  "calibration %u: %zu frames id 0x%x", kinds[k], nf, frames[0].id);
+            for (size_t i = 0; i < nf; i++) gough_rx_feed(&rx, &frames[i], 0, &got);
+            CHECK(got.kind == kinds[k] && got.wheel == 2 && got.calibration.batches == 123456 &&
+                      !memcmp(&got.calibration, &cm.calibration, sizeof cm.calibration),
+                  "calibration round trip: kind %u", got.kind);
+        }
+    }
     em.estimate.flags = 0;
     CHECK(gough_msg_encode(&em, 10, frames, GOUGH_MAX_FRAMES, &nf) == GOUGH_OK, "estimate");
     for (size_t i = 0; i < nf; i++) gough_rx_feed(&rx, &frames[i], 0, &got);
@@ -527,8 +615,14 @@ static void errors(const char *root) {
     for (size_t i = 0; i < nf; i++) gough_rx_feed(&rx, &frames[i], 0, &got);
     CHECK(got.kind == GOUGH_MSG_ACK && got.ack_code == 10 && got.ack_of == GOUGH_MSG_SETTINGS,
           "bad-settings ack: kind %u code %u", got.kind, got.ack_code);
+    am.ack_of = 0x09; /* SetCalibration */
     am.ack_code = 11;
-    CHECK(gough_msg_encode(&am, 15, frames, GOUGH_MAX_FRAMES, &nf) == GOUGH_E_ARG,
+    CHECK(gough_msg_encode(&am, 15, frames, GOUGH_MAX_FRAMES, &nf) == GOUGH_OK, "ack");
+    for (size_t i = 0; i < nf; i++) gough_rx_feed(&rx, &frames[i], 0, &got);
+    CHECK(got.kind == GOUGH_MSG_ACK && got.ack_code == 11 && got.ack_of == 0x09,
+          "bad-calibration ack: kind %u code %u", got.kind, got.ack_code);
+    am.ack_code = 12;
+    CHECK(gough_msg_encode(&am, 16, frames, GOUGH_MAX_FRAMES, &nf) == GOUGH_E_ARG,
           "unknown ack code");
     CHECK(gough_rx_feed(&rx0, &frames[0], 0, &got) == GOUGH_E_UNINIT, "uninitialised rx");
     CHECK(gough_rx_feed(&rx, NULL, 0, &got) == GOUGH_E_NULL, "null frame");

@@ -17,12 +17,20 @@
 //! (the `bench` output gives mean and worst instructions per wheel per sample); its state,
 //! about 1.5 KB per wheel, lives in the App. A tyre the estimator cannot use (no friction at
 //! FNOMIN) gets forces and no `Estimate`.
+//!
+//! ## The calibration
+//! Each running estimator's calibration of the tyre (`gough::mu::calibration`) is reported as a
+//! `Calibration` message once a second per wheel: one wheel every [`CAL_PERIOD_MS`] / 4, in
+//! turn, at the end of a tick (after its forces and estimates). A `SetCalibration` hands a
+//! wheel's estimator a calibration stored earlier (a warm start), acknowledged `Ok`,
+//! `BadCalibration` (refused, its calibration stays) or `NoParams` (no estimator runs on that
+//! wheel). A restart of the estimators (parameters, settings) forgets it: send it after them.
 
 use gough::mf::Params;
 use gough::proto::{
-    self, crc32, id, link, Ack, AckCode, Command, CompactBatch, CompactResults, CompactWheelResult,
-    Estimate, Feed, Forces, Measurement, Msg, MsgType, ParamSource, Reassembler, Settings, Status,
-    MAX_TIR_LEN, MSG_BUF,
+    self, crc32, id, link, Ack, AckCode, CalibrationState, Command, CompactBatch, CompactResults,
+    CompactWheelResult, Estimate, Feed, Forces, Measurement, Msg, MsgType, ParamSource,
+    Reassembler, Settings, Status, Wheel, MAX_TIR_LEN, MSG_BUF,
 };
 use gough::wheel::{self, Car};
 
@@ -48,6 +56,8 @@ const TX_ATTEMPTS: u32 = 100_000;
 const RX_BUDGET: usize = 64;
 /// Measurements (single-wheel or four-wheel batches) waiting for the next tick.
 pub const QUEUE: usize = 16;
+/// Each wheel's calibration is reported once per this period \[ms\] (the wheels in turn).
+pub const CAL_PERIOD_MS: u32 = 1000;
 
 /// A queued piece of work: one wheel's measurement, or a four-wheel batch answered by one
 /// `CompactResults`; each with the sequence number of its frames.
@@ -100,6 +110,9 @@ pub struct App {
     /// stack painting); `None`: reported as 0.
     pub stack_probe: Option<fn() -> u32>,
     now_ms: u32,
+    /// The wheel whose calibration is reported next, and when the last report went out \[ms\].
+    cal_next: usize,
+    cal_sent_ms: u32,
 }
 
 impl Default for App {
@@ -136,6 +149,8 @@ impl App {
             can_stop: false,
             stack_probe: None,
             now_ms: 0,
+            cal_next: 0,
+            cal_sent_ms: 0,
         }
     }
 
@@ -380,6 +395,10 @@ impl App {
                 // The estimators are started on the new tyre already (`set_params`).
                 self.ack(can, MsgType::ParamCommit, seq, code);
             }
+            Msg::SetCalibration(c) => {
+                let code = self.set_calibration(&c);
+                self.ack(can, MsgType::SetCalibration, seq, code);
+            }
             Msg::Settings(s) => {
                 let code = match self.apply_settings(s) {
                     Ok(()) => AckCode::Ok,
@@ -408,6 +427,7 @@ impl App {
             | Msg::Estimate(_)
             | Msg::Status(_)
             | Msg::Ack(_)
+            | Msg::Calibration(_)
             | Msg::CompactResults(_) => {}
             Msg::CompactMeasurement(_) => {} // turned into a Measurement above
         }
@@ -440,6 +460,40 @@ impl App {
                 self.send(can, &Msg::Estimate(e));
             }
         }
+        if let Some(c) = self.calibration_due(now_ms) {
+            self.send(can, &Msg::Calibration(c));
+        }
+    }
+
+    /// Wheel `c.wheel`'s estimator starts from calibration `c` (as a `SetCalibration` does):
+    /// `Ok`, `BadCalibration` when it refuses it (nothing changed), `NoParams` when no
+    /// estimator runs on that wheel.
+    pub fn set_calibration(&mut self, c: &CalibrationState) -> AckCode {
+        match self.car.estimator_mut(c.wheel) {
+            None => AckCode::NoParams,
+            Some(b) => match b.import_calibration::<Math>(&c.exported()) {
+                Ok(()) => AckCode::Ok,
+                Err(_) => AckCode::BadCalibration,
+            },
+        }
+    }
+
+    /// The calibration report due at `now_ms`, if any: every [`CAL_PERIOD_MS`] / 4 the next
+    /// wheel in turn whose estimator runs (so each wheel once per period; none without
+    /// estimators).
+    pub fn calibration_due(&mut self, now_ms: u32) -> Option<CalibrationState> {
+        if now_ms.wrapping_sub(self.cal_sent_ms) < CAL_PERIOD_MS / 4 {
+            return None;
+        }
+        self.cal_sent_ms = now_ms;
+        for _ in 0..Wheel::ALL.len() {
+            let w = Wheel::from_index(self.cal_next)?;
+            self.cal_next = (self.cal_next + 1) % Wheel::ALL.len();
+            if let Some(b) = self.car.corner(w).estimator() {
+                return Some(CalibrationState::new(w, &b.calibration().export::<Math>()));
+            }
+        }
+        None
     }
 
     /// One measurement through its wheel's pipeline ([`gough::wheel`]): the forces (or why

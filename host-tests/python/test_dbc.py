@@ -35,6 +35,9 @@ def frames(fd, compact=False, batch=False):
     return [json.loads(line) for line in out.splitlines()]
 
 
+WHEELS = ["FrontLeft", "FrontRight", "RearLeft", "RearRight"]
+
+
 def f32(x):
     """A JSON number (an f32 printed as f64) as the f32 it was."""
     return struct.unpack("<f", struct.pack("<f", x))[0]
@@ -79,7 +82,7 @@ def test_every_frame_decodes_to_the_hosts_values(fd, compact, batch):
             assert sig["last_frame"] == (k == len(m["frames"]) - 1)
             if k == 0:
                 assert sig["msg_len"] == len(m["encoded"]) // 2
-                assert sig["proto_version"] == 3
+                assert sig["proto_version"] == 4
                 assert str(sig["msg_type"]) == m["type"]
                 if any(s.startswith("first_bytes") for s in sig):
                     raw = dbm.decode(data, decode_choices=False)
@@ -90,6 +93,15 @@ def test_every_frame_decodes_to_the_hosts_values(fd, compact, batch):
             else:
                 got += payload(sig, "next_bytes", dbm.length - 2)
             seen.add((m["type"], k > 0))
+        if m["type"] in ("Calibration", "SetCalibration"):
+            # 37 body bytes at fixed offsets: wheel, 4 + 4 f32, batches u32 LE.
+            body = bytes.fromhex(m["encoded"])[2:-4]
+            want = m["msg"]
+            assert len(body) == 37
+            assert WHEELS[body[0]] == want["wheel"]
+            vals = struct.unpack("<8f", body[1:33])
+            assert list(vals) == [f32(x) for x in want["value"] + want["sigma"]]
+            assert int.from_bytes(body[33:37], "little") == want["batches"]
         # The byte signals carry the message exactly (what the host encoded and decoded).
         assert got[: len(m["encoded"]) // 2] == bytes.fromhex(m["encoded"])
         if fd and m["type"] in ("Forces", "Estimate"):
@@ -109,6 +121,7 @@ def test_every_frame_decodes_to_the_hosts_values(fd, compact, batch):
                 assert sig["mu_min"] == f32(want["mu_min"])
                 raw = dbm.decode(bytes.fromhex(m["frames"][0]), decode_choices=False)
                 assert raw["change"] == int(want["change"])
+                assert raw["mismatch"] == int(want["mismatch"])
             enc = bytes.fromhex(m["encoded"])
             assert sig[f"{pre}_crc"] == int.from_bytes(enc[-4:], "little")
         if fd and m["type"] == "CompactMeasurement":
@@ -141,6 +154,7 @@ def test_every_frame_decodes_to_the_hosts_values(fd, compact, batch):
                 assert raw[f"{name}_change"] == (st >> 2) & 1
                 assert raw[f"{name}_mf_flags"] == (st >> 3) & 1
                 assert raw[f"{name}_present"] == (st >> 4) & 1
+                assert raw[f"{name}_mismatch"] == (st >> 5) & 1
                 if st & 16:
                     assert str(sig[f"{name}_present"]) == "Present"
                     seen.add(("ResultsPhysical", str(sig[f"{name}_state"])))
@@ -155,7 +169,7 @@ def test_every_frame_decodes_to_the_hosts_values(fd, compact, batch):
             assert len(states) >= 2, states
         return
     meas = "CompactMeasurement" if compact else "Measurement"
-    assert {meas, "Forces", "Estimate"} <= kinds
+    assert {meas, "Forces", "Estimate", "Calibration", "SetCalibration"} <= kinds
     if not fd:
         assert (meas, True) in seen and ("Estimate", True) in seen
     if fd and compact:

@@ -30,13 +30,14 @@ import zlib
 
 import can
 
-PROTO_VERSION = 3
+PROTO_VERSION = 4
 ID_MEASUREMENT, ID_CONFIG, ID_RESULT, ID_STATUS = 0x300, 0x301, 0x310, 0x311
 ID_COMPACT, ID_BATCH, ID_BATCH_RESULT = 0x302, 0x303, 0x312
 T_MEASUREMENT, T_COMMAND, T_FORCES, T_ESTIMATE, T_STATUS, T_ACK = 0x01, 0x06, 0x81, 0x82, 0x83, 0x84
 T_COMPACT, T_BATCH, T_BATCH_RESULTS = 0x07, 0x08, 0x85
 T_SETTINGS = 0x05
-ACK_OK, ACK_BAD_SETTINGS = 0, 10
+T_SET_CALIBRATION, T_CALIBRATION = 0x09, 0x86
+ACK_OK, ACK_BAD_SETTINGS, ACK_BAD_CALIBRATION = 0, 10, 11
 ABSENT = -32768  # compact fields: an absent optional value
 CMD_STATUS_REQUEST, CMD_STOP = 1, 2
 
@@ -160,14 +161,16 @@ def decode_forces(b):
 
 
 def decode_estimate(b):
-    """wheel u8, t_us u32 LE, mu f32, sigma f32, state varint, mu_min f32, change bool (v2)."""
+    """wheel u8, t_us u32 LE, mu f32, sigma f32, state varint, mu_min f32, change bool (v2),
+    mismatch bool (v4)."""
     wheel = b[0]
     t_us, mu, sigma = struct.unpack("<Iff", b[1:13])
     state, i = varint(b, 13)
     (mu_min,) = struct.unpack("<f", b[i:i + 4])
     change = b[i + 4]
     assert change in (0, 1), f"change byte {change}"
-    assert i + 5 == len(b), "estimate body length"
+    assert b[i + 5] in (0, 1), f"mismatch byte {b[i + 5]}"
+    assert i + 6 == len(b), "estimate body length"
     return wheel, t_us, mu, sigma, state, mu_min, bool(change)
 
 
@@ -357,6 +360,38 @@ def main():
             ok = of == T_SETTINGS and code == want and len(body) == 3
             print(f"{'ok  ' if ok else 'FAIL'} settings with wheelbase {wheelbase} m: ack code {code} "
                   f"(expected {want})")
+            fails += not ok
+
+        # The calibration (v4): the device reports each running wheel's about once a second
+        # (wheel u8, 4 values f32, 4 sigma f32, batches u32 LE); a SetCalibration is taken
+        # (Ack Ok), one with a scale that is not positive refused (BadCalibration, code 11).
+        reported = None
+        deadline = time.time() + 5.0
+        while reported is None and time.time() < deadline:
+            send(ID_CONFIG, message(T_COMMAND, bytes([CMD_STATUS_REQUEST])))
+            while True:
+                t, body = rx.recv()
+                if t == T_CALIBRATION:
+                    reported = body
+                if t == T_STATUS:
+                    break
+            time.sleep(0.1)
+        ok = reported is not None and len(reported) == 37 and reported[0] < 4
+        if ok:
+            vals = struct.unpack("<8f", reported[1:33])
+            ok = all(v > 0 for v in vals[:2]) and vals[3] > 0 and all(s >= 0 for s in vals[4:])
+        print(f"{'ok  ' if ok else 'FAIL'} calibration reported: {reported.hex() if reported else None}")
+        fails += not ok
+        good = bytes([1]) + struct.pack("<8fI", 1.02, 0.99, 0.0005, 1.05, 0.02, 0.05, 0.001, 0.03, 7)
+        bad = bytes([1]) + struct.pack("<8fI", -1.0, 0.99, 0.0005, 1.05, 0.02, 0.05, 0.001, 0.03, 7)
+        for body_, want in ((good, ACK_OK), (bad, ACK_BAD_CALIBRATION)):
+            send(ID_CONFIG, message(T_SET_CALIBRATION, body_))
+            while True:
+                t, body = rx.recv()
+                if t == T_ACK:
+                    break
+            ok = body[0] == T_SET_CALIBRATION and body[2] == want and len(body) == 3
+            print(f"{'ok  ' if ok else 'FAIL'} set calibration: ack code {body[2]} (expected {want})")
             fails += not ok
 
         # A damaged message: the device must drop it and count it.

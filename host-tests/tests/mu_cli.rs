@@ -1077,3 +1077,121 @@ fn estimate_to(log: &Path, out: &Path, extra: &[&str]) -> String {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     std::fs::read_to_string(out).unwrap()
 }
+
+/// `--calibration-out` then `--calibration-in` on the bundled replay log: the file names each
+/// property, the second run starts from the first's calibration (its batches carried on, its
+/// first estimates not the cold start's), and a file the estimator refuses is a one-line error.
+#[test]
+fn a_calibration_file_starts_the_next_run_warm() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let log = root.join("examples/replay_log.csv");
+    let log = log.to_str().unwrap();
+    let t = tyre();
+    let (e1, e2) = (tmp("cal-e1.csv"), tmp("cal-e2.csv"));
+    let (c1, c2) = (tmp("cal-1.json"), tmp("cal-2.json"));
+    let run = |out: &Path, extra: &[&str]| {
+        let mut args = vec!["mu", "estimate", "--tir", &t, "--log", log];
+        args.extend(["--out", out.to_str().unwrap()]);
+        args.extend(extra);
+        let o = gough(&args);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    };
+    run(&e1, &["--calibration-out", c1.to_str().unwrap()]);
+    run(
+        &e2,
+        &[
+            "--calibration-in",
+            c1.to_str().unwrap(),
+            "--calibration-out",
+            c2.to_str().unwrap(),
+        ],
+    );
+    let batches = |p: &Path| -> Vec<u64> {
+        let v: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(p).unwrap()).unwrap();
+        assert_eq!(v["format"], "gough-calibration-1");
+        v["wheels"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|w| {
+                for name in ["trail", "trail_shape", "trail_shift", "kx"] {
+                    assert!(
+                        w["properties"][name]["value"].as_f64().unwrap().is_finite(),
+                        "{w}"
+                    );
+                    assert!(
+                        w["properties"][name]["sigma"].as_f64().unwrap() >= 0.0,
+                        "{w}"
+                    );
+                }
+                w["batches"].as_u64().unwrap()
+            })
+            .collect()
+    };
+    let (b1, b2) = (batches(&c1), batches(&c2));
+    assert_eq!(b1.len(), 2, "the log's two wheels");
+    assert!(b1.iter().all(|b| *b > 0), "the log calibrates: {b1:?}");
+    // The second run started from the first's batches and added its own.
+    assert!(b1.iter().zip(&b2).all(|(a, b)| b > a), "{b1:?} -> {b2:?}");
+    let rows = |p: &Path| -> Vec<String> {
+        std::fs::read_to_string(p)
+            .unwrap()
+            .lines()
+            .skip(1)
+            .map(String::from)
+            .collect()
+    };
+    let (r1, r2) = (rows(&e1), rows(&e2));
+    assert_eq!(r1.len(), r2.len());
+    let first_diff = r1.iter().zip(&r2).position(|(a, b)| a != b);
+    assert!(
+        first_diff.is_some_and(|k| k < 40),
+        "a warm start reads the first batches differently: first difference at {first_diff:?}"
+    );
+    // Refused: a value beyond its bound (the core's check), a property misspelt (the file's).
+    let bad = tmp("cal-bad.json");
+    let text = std::fs::read_to_string(&c1).unwrap();
+    let v: serde_json::Value = serde_json::from_str(&text).unwrap();
+    let mut far = v.clone();
+    far["wheels"][0]["properties"]["trail"]["value"] = 5.0.into();
+    std::fs::write(&bad, far.to_string()).unwrap();
+    let args = |p: &Path| {
+        let mut a = vec!["mu", "estimate", "--tir", &t, "--log", log, "--out"];
+        a.push(e2.to_str().unwrap());
+        a.push("--calibration-in");
+        a.push(p.to_str().unwrap());
+        a.iter().map(|s| s.to_string()).collect::<Vec<_>>()
+    };
+    let run_err = |p: &Path, says: &str| {
+        let a = args(p);
+        let o = gough(&a.iter().map(String::as_str).collect::<Vec<_>>());
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success() && err.contains(says), "{err}");
+        assert_eq!(err.trim().lines().count(), 1, "{err}");
+    };
+    run_err(
+        &bad,
+        "wheel 0: refused: a calibration value lies beyond its bound",
+    );
+    let text = text.replacen("\"kx\"", "\"kappa_x\"", 1);
+    std::fs::write(&bad, text).unwrap();
+    run_err(&bad, "unknown property 'kappa_x'");
+    // The peers keep no calibration (and read one wheel's log: this one has two).
+    let o = gough(&[
+        "mu",
+        "estimate",
+        "--tir",
+        &t,
+        "--log",
+        log,
+        "--out",
+        e2.to_str().unwrap(),
+        "--method",
+        "slip-slope",
+        "--calibration-out",
+        c2.to_str().unwrap(),
+    ]);
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("slip-slope"));
+}

@@ -140,6 +140,7 @@ pub fn results() -> [Msg; 2] {
             state: gough::mu::State::Identifiable,
             mu_min: 0.75,
             change: false,
+            mismatch: false,
         }),
     ]
 }

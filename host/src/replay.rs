@@ -16,7 +16,8 @@ use crate::device::Device;
 use gough::math::{Backend, Fast, Libm};
 use gough::mf::Params;
 use gough::proto::{
-    AckCode, Command, Estimate, Forces, Measurement, Msg, MsgType, Settings, Wheel,
+    AckCode, CalibrationState, Command, Estimate, Forces, Measurement, Msg, MsgType, Settings,
+    Wheel,
 };
 use gough::wheel;
 use std::collections::VecDeque;
@@ -187,6 +188,17 @@ pub fn host_f32(
     log: &[Measurement],
     backend: Backend32,
 ) -> Result<Vec<Reply>, String> {
+    host_f32_calibrated(p, settings, log, backend).map(|(r, _)| r)
+}
+
+/// [`host_f32`], and then each running estimator's calibration (wheel order) as the device
+/// reports it ([`gough::proto::Msg::Calibration`]).
+pub fn host_f32_calibrated(
+    p: &Params<f32>,
+    settings: &Settings,
+    log: &[Measurement],
+    backend: Backend32,
+) -> Result<(Vec<Reply>, Vec<CalibrationState>), String> {
     match backend {
         Backend32::Fast => run::<Fast>(p, settings, log),
         Backend32::Libm => run::<Libm>(p, settings, log),
@@ -197,7 +209,7 @@ fn run<M: Backend<f32>>(
     p: &Params<f32>,
     settings: &Settings,
     log: &[Measurement],
-) -> Result<Vec<Reply>, String> {
+) -> Result<(Vec<Reply>, Vec<CalibrationState>), String> {
     let mut car = wheel::Car::new();
     // As the device: settings out of range are refused; a tyre without friction gets forces
     // and no estimates.
@@ -211,7 +223,7 @@ fn run<M: Backend<f32>>(
     if let Err(e @ wheel::StartError::Preview(_)) = car.start_estimators::<M>(p, cfg, preview) {
         return Err(format!("wheelbase {} m: {e}", settings.wheelbase));
     }
-    Ok(log
+    let replies = log
         .iter()
         .map(|m| {
             let x = wheel::Measurement::from(m);
@@ -225,7 +237,15 @@ fn run<M: Backend<f32>>(
                 estimate: estimate.map(|e| Estimate::new(m.wheel, m.t_us, &e)),
             }
         })
-        .collect())
+        .collect();
+    let cals = Wheel::ALL
+        .iter()
+        .filter_map(|w| {
+            let b = car.corner(*w).estimator()?;
+            Some(CalibrationState::new(*w, &b.calibration().export::<M>()))
+        })
+        .collect();
+    Ok((replies, cals))
 }
 
 /// Distance in units in the last place between two f32 (0 when equal; large across signs).

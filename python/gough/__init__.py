@@ -141,7 +141,7 @@ def _col(cols: Mapping[str, Any], name: str, n: int | None = None, required=True
 
 
 def estimate_mu(tyre: Tyre, log, method: str = "bank", precision: str = "f64",
-                wheelbase: float | None = None):
+                wheelbase: float | None = None, calibration_in=None, calibration_out=None):
     """The friction estimator of `gough mu estimate` over a log (a DataFrame, a dict of arrays
     or a CSV/Parquet path) with its columns: t [s], fz, fy [N], mz [N·m] required; fx [N],
     vx [m/s], kappa, alpha, gamma [rad] optional. Returns a DataFrame t, mu, sigma, state
@@ -150,7 +150,11 @@ def estimate_mu(tyre: Tyre, log, method: str = "bank", precision: str = "f64",
     with `wheelbase` [m] each rear wheel is told what its front wheel read (`gough mu estimate
     --wheelbase`); the DataFrame then has a `wheel` column. `method`: 'bank' (the product's
     estimator), or a published peer on one wheel's log, 'hsu-gerdes' or 'slip-slope' (as
-    `gough mu estimate --method`); `precision`: the bank's float path, 'f64' or 'f32'."""
+    `gough mu estimate --method`); `precision`: the bank's float path, 'f64' or 'f32'.
+    `calibration_in`: a calibration file (as `gough mu estimate --calibration-in`) each wheel's
+    bank starts from (a warm start; a file of another form or values the bank refuses raise
+    ValueError); `calibration_out`: where to write each wheel's calibration after the log (as
+    `--calibration-out`). The bank's only."""
     import pandas as pd
 
     cols = _columns(log)
@@ -160,7 +164,9 @@ def estimate_mu(tyre: Tyre, log, method: str = "bank", precision: str = "f64",
     opt = [_col(cols, c, n, required=False) for c in ("fx", "vx", "kappa", "alpha", "gamma")]
     wheel = _col(cols, "wheel", required=False)
     mu, sigma, state = _gough._estimate_mu(tyre._inner, t, *req, *opt, "fx" in cols, method, precision,
-                                           wheel, None if wheelbase is None else float(wheelbase))
+                                           wheel, None if wheelbase is None else float(wheelbase),
+                                           None if calibration_in is None else os.fspath(calibration_in),
+                                           None if calibration_out is None else os.fspath(calibration_out))
     out = {"t": t}
     if wheel is not None:
         out["wheel"] = wheel.astype(np.int64)

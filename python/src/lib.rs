@@ -169,7 +169,7 @@ type Estimates<'py> = (
 /// preview. Returns (mu, sigma, state names).
 #[pyfunction]
 #[allow(clippy::too_many_arguments)]
-#[pyo3(signature = (tyre, t, fz, fy, mz, fx, vx, kappa, alpha, gamma, has_fx, method="bank", precision="f64", wheel=None, wheelbase=None))]
+#[pyo3(signature = (tyre, t, fz, fy, mz, fx, vx, kappa, alpha, gamma, has_fx, method="bank", precision="f64", wheel=None, wheelbase=None, calibration_in=None, calibration_out=None))]
 fn _estimate_mu<'py>(
     py: Python<'py>,
     tyre: &Tyre,
@@ -187,6 +187,8 @@ fn _estimate_mu<'py>(
     precision: &str,
     wheel: Option<PyReadonlyArray1<'py, f64>>,
     wheelbase: Option<f64>,
+    calibration_in: Option<std::path::PathBuf>,
+    calibration_out: Option<std::path::PathBuf>,
 ) -> PyResult<Estimates<'py>> {
     let method = Method::from_name(method).map_err(PyValueError::new_err)?;
     let prec = match precision {
@@ -239,6 +241,12 @@ fn _estimate_mu<'py>(
                 .collect::<PyResult<_>>()?
         }
     };
+    if (calibration_in.is_some() || calibration_out.is_some()) && !method.couples_wheels() {
+        return Err(PyValueError::new_err(format!(
+            "calibration_in/calibration_out are the bank's; the {} method keeps no calibration",
+            method.name()
+        )));
+    }
     let car = wheels.iter().any(|&w| w != Wheel::FrontLeft) || wheelbase.is_some();
     if car && !method.couples_wheels() {
         return Err(PyValueError::new_err(
@@ -299,7 +307,17 @@ fn _estimate_mu<'py>(
     };
     let params = &tyre.params;
     let est = py
-        .detach(|| method.estimator(params, &setup).map(|mut e| e.run(&log)))
+        .detach(|| -> Result<_, String> {
+            let mut e = method.estimator(params, &setup)?;
+            if let Some(path) = &calibration_in {
+                mu::calfile::load_into(e.as_mut(), path)?;
+            }
+            let est = e.run(&log);
+            if let Some(path) = &calibration_out {
+                mu::calfile::save_from(e.as_ref(), &wheels, path)?;
+            }
+            Ok(est)
+        })
         .map_err(PyValueError::new_err)?;
     let m: Vec<f64> = est.iter().map(|e| e.mu).collect();
     let s: Vec<f64> = est.iter().map(|e| e.sigma).collect();

@@ -109,3 +109,35 @@ def test_a_four_wheel_log_equals_cli_with_the_preview(gough_cli, tmp_path):
         gough.estimate_mu(tyre, log, method="hsu-gerdes")
     with pytest.raises(ValueError, match="column wheel: 4"):
         gough.estimate_mu(tyre, {"t": [0.0], "wheel": [4], "fz": [4e3], "fy": [0.0], "mz": [0.0]})
+
+
+def test_calibration_in_and_out_as_the_cli(gough_cli, tmp_path):
+    """`calibration_out` writes the file `gough mu estimate --calibration-out` writes; with it as
+    `calibration_in` the next run starts warm (its batches carried on, its first estimates not
+    the cold start's); a file the bank refuses raises."""
+    log = EXAMPLES / "replay_log.csv"
+    tyre = gough.Tyre.from_tir(TIR61)
+    py1, cli1 = tmp_path / "py1.json", tmp_path / "cli1.json"
+    cold = gough.estimate_mu(tyre, log, calibration_out=py1)
+    gough_cli("mu", "estimate", "--tir", TIR61, "--log", log, "--out", tmp_path / "e.csv",
+              "--calibration-out", cli1)
+    assert json.loads(py1.read_text()) == json.loads(cli1.read_text())
+    c1 = json.loads(py1.read_text())
+    assert c1["format"] == "gough-calibration-1"
+    assert [w["wheel"] for w in c1["wheels"]] == [0, 1]
+    assert all(w["batches"] > 0 for w in c1["wheels"])
+    assert all(set(w["properties"]) == {"trail", "trail_shape", "trail_shift", "kx"}
+               for w in c1["wheels"])
+    py2 = tmp_path / "py2.json"
+    warm = gough.estimate_mu(tyre, log, calibration_in=py1, calibration_out=py2)
+    c2 = json.loads(py2.read_text())
+    assert all(b["batches"] > a["batches"] for a, b in zip(c1["wheels"], c2["wheels"]))
+    assert not np.array_equal(cold.mu.to_numpy()[:40], warm.mu.to_numpy()[:40])
+    bad = json.loads(py1.read_text())
+    bad["wheels"][0]["properties"]["trail"]["value"] = 5.0  # ln 5 beyond 4 prior σ
+    (tmp_path / "bad.json").write_text(json.dumps(bad))
+    with pytest.raises(ValueError, match="wheel 0: refused"):
+        gough.estimate_mu(tyre, log, calibration_in=tmp_path / "bad.json")
+    with pytest.raises(ValueError, match="keeps no calibration"):
+        gough.estimate_mu(tyre, EXAMPLES / "gap_camber.csv", method="slip-slope",
+                          calibration_out=tmp_path / "x.json")

@@ -15,12 +15,12 @@
 //! fields at fixed offsets (one-byte enums, fixed-width integers, `f32`), so the FD file
 //! multiplexes these identifiers' first frames on `msg_type` and gives the bodies as physical
 //! signals: `wheel`, `t_us`, `Fx`, `Fy`, `Mz` and `flags` of `Forces`; `wheel`, `t_us`, `mu`,
-//! `sigma`, `state` (a value table), `mu_min` and `change` (the change-of-surface flag, 0/1) of
-//! `Estimate`; the scaled fields of `CompactMeasurement`;
+//! `sigma`, `state` (a value table), `mu_min`, `change` (the change-of-surface flag, 0/1) and
+//! `mismatch` (the model-mismatch flag, 0/1) of `Estimate`; the scaled fields of `CompactMeasurement`;
 //! and each message's CRC-32; on [`id::BATCH_RESULT`] the four-wheel `CompactResults` (one
 //! 64-byte frame): `results_t_us`, per wheel (`FL_`, `FR_`, `RL_`, `RR_`) `Fx`, `Fy`, `Mz`,
 //! `mu`, `sigma`, `mu_min` (scaled), `state` (a value table with `NoEstimate`), `change`,
-//! `mf_flags`, `present` (bits of the status byte), and `results_crc`. The four-wheel
+//! `mf_flags`, `present`, `mismatch` (bits of the status byte), and `results_crc`. The four-wheel
 //! `CompactBatch` ([`id::BATCH`], two 48-byte frames) has byte signals only.
 //! A bus log then shows μ per wheel without gough. On classic CAN
 //! these messages span several frames, and only their bytes are signals.
@@ -103,9 +103,9 @@ const FORCES: [Field; 7] = [
     ("forces_crc", 19, 4, Kind::U, 1.0, "", &[]),
 ];
 
-/// `Estimate`'s body: wheel (1), t_us (4), μ, σ (f32), state (1), μ_min (f32), change (bool,
-/// one byte 0/1), then the CRC-32.
-const ESTIMATE: [Field; 8] = [
+/// `Estimate`'s body: wheel (1), t_us (4), μ, σ (f32), state (1), μ_min (f32), change and
+/// mismatch (bools, one byte 0/1 each), then the CRC-32.
+const ESTIMATE: [Field; 9] = [
     ("estimate_wheel", 0, 1, Kind::U, 1.0, "", WHEELS),
     ("estimate_t_us", 1, 4, Kind::U, 1.0, "us", &[]),
     ("mu", 5, 4, Kind::F, 1.0, "", &[]),
@@ -121,7 +121,8 @@ const ESTIMATE: [Field; 8] = [
     ),
     ("mu_min", 14, 4, Kind::F, 1.0, "", &[]),
     ("change", 18, 1, Kind::U, 1.0, "", &["NoChange", "Change"]),
-    ("estimate_crc", 19, 4, Kind::U, 1.0, "", &[]),
+    ("mismatch", 19, 1, Kind::U, 1.0, "", MISMATCH),
+    ("estimate_crc", 20, 4, Kind::U, 1.0, "", &[]),
 ];
 
 /// `CompactMeasurement`'s body: wheel (1), t_us (4), then i16 counts (u16 for Fz), then the
@@ -144,13 +145,15 @@ const COMPACT: [Field; 12] = [
 const STATES4: &[&str] = &["Identifiable", "NotIdentifiable", "Fallback", "NoEstimate"];
 const CHANGE: &[&str] = &["NoChange", "Change"];
 const PRESENT: &[&str] = &["Absent", "Present"];
+const MISMATCH: &[&str] = &["Explained", "Mismatch"];
 
 /// One wheel's signals of `CompactResults` (12 bytes from `4 + 12 i`): Fx, Fy, Mz (i16),
-/// μ, σ (u16), μ_min (u8), status (state bits 0–1, change bit 2, MF flags bit 3, present bit 4).
+/// μ, σ (u16), μ_min (u8), status (state bits 0–1, change bit 2, MF flags bit 3, present bit 4,
+/// mismatch bit 5).
 /// Counts −32768 (i16), 65535 (u16), 255 (u8) mean "not available".
 macro_rules! wheel_results {
     ($b:expr, $fx:literal, $fy:literal, $mz:literal, $mu:literal, $sigma:literal, $mu_min:literal,
-     $state:literal, $change:literal, $flags:literal, $present:literal) => {
+     $state:literal, $change:literal, $flags:literal, $present:literal, $mismatch:literal) => {
         [
             ($fx, $b, 2, Kind::I, 1.0, "N", &[]),
             ($fy, $b + 2, 2, Kind::I, 1.0, "N", &[]),
@@ -162,11 +165,12 @@ macro_rules! wheel_results {
             ($change, $b + 11, 1, Kind::Bits(2, 1), 1.0, "", CHANGE),
             ($flags, $b + 11, 1, Kind::Bits(3, 1), 1.0, "", &[]),
             ($present, $b + 11, 1, Kind::Bits(4, 1), 1.0, "", PRESENT),
+            ($mismatch, $b + 11, 1, Kind::Bits(5, 1), 1.0, "", MISMATCH),
         ]
     };
 }
 
-const RESULTS_FL: [Field; 10] = wheel_results!(
+const RESULTS_FL: [Field; 11] = wheel_results!(
     4,
     "FL_Fx",
     "FL_Fy",
@@ -177,9 +181,10 @@ const RESULTS_FL: [Field; 10] = wheel_results!(
     "FL_state",
     "FL_change",
     "FL_mf_flags",
-    "FL_present"
+    "FL_present",
+    "FL_mismatch"
 );
-const RESULTS_FR: [Field; 10] = wheel_results!(
+const RESULTS_FR: [Field; 11] = wheel_results!(
     16,
     "FR_Fx",
     "FR_Fy",
@@ -190,9 +195,10 @@ const RESULTS_FR: [Field; 10] = wheel_results!(
     "FR_state",
     "FR_change",
     "FR_mf_flags",
-    "FR_present"
+    "FR_present",
+    "FR_mismatch"
 );
-const RESULTS_RL: [Field; 10] = wheel_results!(
+const RESULTS_RL: [Field; 11] = wheel_results!(
     28,
     "RL_Fx",
     "RL_Fy",
@@ -203,9 +209,10 @@ const RESULTS_RL: [Field; 10] = wheel_results!(
     "RL_state",
     "RL_change",
     "RL_mf_flags",
-    "RL_present"
+    "RL_present",
+    "RL_mismatch"
 );
-const RESULTS_RR: [Field; 10] = wheel_results!(
+const RESULTS_RR: [Field; 11] = wheel_results!(
     40,
     "RR_Fx",
     "RR_Fy",
@@ -216,7 +223,8 @@ const RESULTS_RR: [Field; 10] = wheel_results!(
     "RR_state",
     "RR_change",
     "RR_mf_flags",
-    "RR_present"
+    "RR_present",
+    "RR_mismatch"
 );
 /// `CompactResults`' body: t_us (4), the four wheels (12 bytes each), then the CRC-32.
 const RESULTS_T: [Field; 2] = [

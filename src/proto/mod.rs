@@ -33,6 +33,7 @@
 //! and status requests are the recovery path) and CAN FD on the SLCAN transport (Lawicel
 //! SLCAN has no FD frames; FD segmentation is exercised by the unit tests and fuzzers).
 
+pub mod calibration;
 pub mod crc;
 pub mod dbc;
 pub mod frame;
@@ -46,6 +47,7 @@ pub mod segmenter;
 pub mod slcan;
 pub mod status;
 
+pub use calibration::CalibrationState;
 pub use crc::crc32;
 pub use frame::{Frame, FrameRepr, Position};
 pub use measurement::*;
@@ -61,7 +63,7 @@ use postcard::experimental::max_size::MaxSize;
 
 /// Protocol version, the first byte of every encoded message. A receiver drops messages of
 /// another version ([`Error::Version`]).
-pub const PROTO_VERSION: u8 = 3;
+pub const PROTO_VERSION: u8 = 4;
 
 /// Longest encoded message \[bytes\]: header (2) + the largest postcard body + CRC (4). It fits
 /// the one-byte length field of the first frame.
@@ -80,10 +82,10 @@ pub const FRAME_TIMEOUT_MS: u32 = 50;
 /// | id | direction | carries |
 /// |---|---|---|
 /// | `0x300` | host → device | [`Msg::Measurement`] |
-/// | `0x301` | host → device | [`Msg::ParamBegin`], [`Msg::ParamChunk`], [`Msg::ParamCommit`], [`Msg::Settings`], [`Msg::Command`] |
+/// | `0x301` | host → device | [`Msg::ParamBegin`], [`Msg::ParamChunk`], [`Msg::ParamCommit`], [`Msg::Settings`], [`Msg::Command`], [`Msg::SetCalibration`] |
 /// | `0x302` | host → device | [`Msg::CompactMeasurement`] |
 /// | `0x310` | device → host | [`Msg::Forces`], [`Msg::Estimate`] |
-/// | `0x311` | device → host | [`Msg::Status`], [`Msg::Ack`] |
+/// | `0x311` | device → host | [`Msg::Status`], [`Msg::Ack`], [`Msg::Calibration`] |
 /// | `0x303` | host → device | [`Msg::CompactBatch`] |
 /// | `0x312` | device → host | [`Msg::CompactResults`] |
 pub mod id {
@@ -119,9 +121,14 @@ pub mod id {
         match t {
             T::Measurement => MEASUREMENT,
             T::CompactMeasurement => COMPACT,
-            T::ParamBegin | T::ParamChunk | T::ParamCommit | T::Settings | T::Command => CONFIG,
+            T::ParamBegin
+            | T::ParamChunk
+            | T::ParamCommit
+            | T::Settings
+            | T::Command
+            | T::SetCalibration => CONFIG,
             T::Forces | T::Estimate => RESULT,
-            T::Status | T::Ack => STATUS,
+            T::Status | T::Ack | T::Calibration => STATUS,
             T::CompactBatch => BATCH,
             T::CompactResults => BATCH_RESULT,
         }

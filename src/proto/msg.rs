@@ -11,8 +11,8 @@
 
 use super::crc::crc32;
 use super::{
-    Ack, Command, CompactBatch, CompactMeasurement, CompactResults, Estimate, Forces, Measurement,
-    ParamBegin, ParamChunk, ParamCommit, Settings, Status,
+    Ack, CalibrationState, Command, CompactBatch, CompactMeasurement, CompactResults, Estimate,
+    Forces, Measurement, ParamBegin, ParamChunk, ParamCommit, Settings, Status,
 };
 use super::{Error, PROTO_VERSION};
 use postcard::experimental::max_size::MaxSize;
@@ -40,6 +40,8 @@ pub enum MsgType {
     CompactMeasurement = 0x07,
     /// [`Msg::CompactBatch`]
     CompactBatch = 0x08,
+    /// [`Msg::SetCalibration`]
+    SetCalibration = 0x09,
     /// [`Msg::Forces`]
     Forces = 0x81,
     /// [`Msg::Estimate`]
@@ -50,11 +52,13 @@ pub enum MsgType {
     Ack = 0x84,
     /// [`Msg::CompactResults`]
     CompactResults = 0x85,
+    /// [`Msg::Calibration`]
+    Calibration = 0x86,
 }
 
 impl MsgType {
     /// Every type, in code order.
-    pub const ALL: [MsgType; 13] = [
+    pub const ALL: [MsgType; 15] = [
         MsgType::Measurement,
         MsgType::ParamBegin,
         MsgType::ParamChunk,
@@ -63,11 +67,13 @@ impl MsgType {
         MsgType::Command,
         MsgType::CompactMeasurement,
         MsgType::CompactBatch,
+        MsgType::SetCalibration,
         MsgType::Forces,
         MsgType::Estimate,
         MsgType::Status,
         MsgType::Ack,
         MsgType::CompactResults,
+        MsgType::Calibration,
     ];
     /// The type of a header byte, if known.
     pub fn from_u8(b: u8) -> Option<MsgType> {
@@ -89,6 +95,8 @@ impl MsgType {
             MsgType::Ack => "Ack",
             MsgType::CompactBatch => "CompactBatch",
             MsgType::CompactResults => "CompactResults",
+            MsgType::SetCalibration => "SetCalibration",
+            MsgType::Calibration => "Calibration",
         }
     }
 }
@@ -113,6 +121,8 @@ pub enum Msg {
     CompactMeasurement(CompactMeasurement),
     /// Host → device: one sample instant of up to four wheels in scaled integers.
     CompactBatch(CompactBatch),
+    /// Host → device: start a wheel's estimator from this calibration (warm start).
+    SetCalibration(CalibrationState),
     /// Device → host: predicted forces.
     Forces(Forces),
     /// Device → host: friction estimate.
@@ -123,6 +133,8 @@ pub enum Msg {
     Ack(Ack),
     /// Device → host: the four wheels' forces and estimates answering a [`CompactBatch`].
     CompactResults(CompactResults),
+    /// Device → host: a wheel's calibration, at a low rate.
+    Calibration(CalibrationState),
 }
 
 fn body<T: DeserializeOwned>(b: &[u8]) -> Result<T, Error> {
@@ -145,6 +157,8 @@ impl Msg {
             Msg::CompactMeasurement(_) => MsgType::CompactMeasurement,
             Msg::CompactBatch(_) => MsgType::CompactBatch,
             Msg::CompactResults(_) => MsgType::CompactResults,
+            Msg::SetCalibration(_) => MsgType::SetCalibration,
+            Msg::Calibration(_) => MsgType::Calibration,
             Msg::Forces(_) => MsgType::Forces,
             Msg::Estimate(_) => MsgType::Estimate,
             Msg::Status(_) => MsgType::Status,
@@ -167,6 +181,8 @@ impl Msg {
             Msg::CompactMeasurement(m) => postcard::to_slice(m, rest),
             Msg::CompactBatch(m) => postcard::to_slice(m, rest),
             Msg::CompactResults(m) => postcard::to_slice(m, rest),
+            Msg::SetCalibration(m) => postcard::to_slice(m, rest),
+            Msg::Calibration(m) => postcard::to_slice(m, rest),
             Msg::Forces(m) => postcard::to_slice(m, rest),
             Msg::Estimate(m) => postcard::to_slice(m, rest),
             Msg::Status(m) => postcard::to_slice(m, rest),
@@ -210,6 +226,8 @@ impl Msg {
             MsgType::CompactMeasurement => Msg::CompactMeasurement(body(b)?),
             MsgType::CompactBatch => Msg::CompactBatch(body(b)?),
             MsgType::CompactResults => Msg::CompactResults(body(b)?),
+            MsgType::SetCalibration => Msg::SetCalibration(body(b)?),
+            MsgType::Calibration => Msg::Calibration(body(b)?),
             MsgType::Forces => Msg::Forces(body(b)?),
             MsgType::Estimate => Msg::Estimate(body(b)?),
             MsgType::Status => Msg::Status(body(b)?),

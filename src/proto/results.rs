@@ -18,7 +18,7 @@ use serde::{Deserialize, Serialize};
 /// | `mz` | i16 | 0.1 N·m | ±3 276.7 N·m | −32 768 |
 /// | `mu`, `sigma` | u16 | 1e-4 | 0 ..= 6.5534 | 65 535 |
 /// | `mu_min` | u8 | 0.01, rounded **down** (stays a lower bound) | 0 ..= 2.54 | 255 |
-/// | `status` | u8 | bits 0–1 state (0 Identifiable, 1 NotIdentifiable, 2 Fallback, 3 no estimate), bit 2 change, bit 3 MF flags non-zero (an input clipped or regularised), bit 4 wheel present; bits 5–7 are 0 | | |
+/// | `status` | u8 | bits 0–1 state (0 Identifiable, 1 NotIdentifiable, 2 Fallback, 3 no estimate), bit 2 change, bit 3 MF flags non-zero (an input clipped or regularised), bit 4 wheel present, bit 5 model mismatch ([`Estimate::mismatch`], v4); bits 6–7 are 0 | | |
 ///
 /// "Not available" marks a value the device has not got (no forces: no parameters, no slip or
 /// an evaluation error, counted in `Status::eval_errors`; no estimate: μ, σ, μ_min) or cannot
@@ -44,7 +44,8 @@ pub struct CompactWheelResult {
     pub sigma: u16,
     /// μ_min \[0.01\], rounded down, or [`CompactWheelResult::NA_U8`].
     pub mu_min: u8,
-    /// State (bits 0–1), change (bit 2), MF flags non-zero (bit 3), present (bit 4).
+    /// State (bits 0–1), change (bit 2), MF flags non-zero (bit 3), present (bit 4), mismatch
+    /// (bit 5).
     pub status: u8,
 }
 
@@ -90,6 +91,8 @@ impl CompactWheelResult {
     pub const MF_FLAGS: u8 = 1 << 3;
     /// Status: the wheel is present.
     pub const PRESENT: u8 = 1 << 4;
+    /// Status: the calibrated model does not explain the data ([`Estimate::mismatch`]).
+    pub const MISMATCH: u8 = 1 << 5;
 
     fn status(forces: Option<&Forces>, estimate: Option<&Estimate>) -> u8 {
         let state = estimate.map_or(Self::NO_ESTIMATE, |e| e.state as u8);
@@ -103,7 +106,12 @@ impl CompactWheelResult {
         } else {
             0
         };
-        Self::PRESENT | state | change | flags
+        let mismatch = if estimate.is_some_and(|e| e.mismatch) {
+            Self::MISMATCH
+        } else {
+            0
+        };
+        Self::PRESENT | state | change | flags | mismatch
     }
 
     /// A present wheel's results, or `None` when a value is out of range or not finite (no
@@ -198,6 +206,10 @@ impl CompactWheelResult {
     pub fn change(&self) -> bool {
         self.status & Self::CHANGE != 0
     }
+    /// The model-mismatch flag.
+    pub fn mismatch(&self) -> bool {
+        self.status & Self::MISMATCH != 0
+    }
 }
 
 /// The four wheels' results answering one [`CompactBatch`](super::CompactBatch) (type 0x85, identifier
@@ -263,7 +275,7 @@ impl Forces {
 
 /// Road friction estimate of one wheel, sent after each measurement once the estimator runs.
 ///
-/// Fields after `state` were added in protocol v2 (`mu_min`, `change`).
+/// Fields after `state` were added in protocol v2 (`mu_min`, `change`) and v4 (`mismatch`).
 #[derive(Serialize, Deserialize, MaxSize, Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Estimate {
@@ -288,6 +300,10 @@ pub struct Estimate {
     /// bank's `change_min`); clear on every other. It is not repeated: a receiver that misses
     /// that one estimate sees the new μ only.
     pub change: bool,
+    /// The calibrated model does not explain the data (the estimator's mismatch indication,
+    /// [`crate::mu::Estimate::mismatch`]): read μ with care, the tyre is not what the
+    /// calibration says. Protocol v4.
+    pub mismatch: bool,
 }
 
 impl Estimate {
@@ -301,6 +317,7 @@ impl Estimate {
             state: e.state,
             mu_min: e.mu_min,
             change: e.change,
+            mismatch: e.mismatch,
         }
     }
 
@@ -312,7 +329,7 @@ impl Estimate {
             state: self.state,
             mu_min: self.mu_min,
             change: self.change,
-            mismatch: false,
+            mismatch: self.mismatch,
         }
     }
 }

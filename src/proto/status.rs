@@ -74,6 +74,10 @@ pub enum AckCode {
     NotSupported,
     /// A [`Settings`](super::Settings) field is out of range ([`Settings::wheelbase`](super::Settings::wheelbase)); the settings in use stay.
     BadSettings,
+    /// A [`SetCalibration`](super::Msg::SetCalibration) the wheel's estimator refused (a value
+    /// or σ not a valid number, or a value beyond its bound:
+    /// [`CalibrationError`](crate::mu::calibration::CalibrationError)); its calibration stays.
+    BadCalibration,
 }
 
 impl From<wheel::Error> for AckCode {

@@ -97,6 +97,19 @@ pub(crate) fn largest() -> Vec<Msg> {
             state: State::Fallback,
             mu_min: 0.1,
             change: true,
+            mismatch: true,
+        }),
+        Msg::SetCalibration(CalibrationState {
+            wheel: Wheel::RearRight,
+            value: [f32::MAX; 4],
+            sigma: [f32::MAX; 4],
+            batches: u32::MAX,
+        }),
+        Msg::Calibration(CalibrationState {
+            wheel: Wheel::RearRight,
+            value: [f32::MAX; 4],
+            sigma: [f32::MAX; 4],
+            batches: u32::MAX,
         }),
         Msg::Status(Status {
             firmware: [255; 3],
@@ -148,7 +161,7 @@ fn measurement_bytes() {
     let mut buf = [0xa5u8; MAX_MSG_LEN];
     let n = m.encode(&mut buf).unwrap();
     let body: &[u8] = &[
-        0x03, 0x01, // version 3, type Measurement
+        0x04, 0x01, // version 4, type Measurement
         0x01, // wheel FrontRight
         0xe8, 0x03, 0x00, 0x00, // t_us 1000
         0x00, 0x00, 0x80, 0x3f, // fz 1.0
@@ -165,7 +178,7 @@ fn measurement_bytes() {
 
 #[test]
 fn settings_bytes() {
-    // Protocol v3: limits (bool), fallback_mu and wheelbase (f32 LE); 9 body bytes.
+    // Protocol v3 and v4: limits (bool), fallback_mu and wheelbase (f32 LE); 9 body bytes.
     let m = Msg::Settings(Settings {
         limits: true,
         fallback_mu: 0.5,
@@ -174,7 +187,7 @@ fn settings_bytes() {
     let mut buf = [0u8; MAX_MSG_LEN];
     let n = m.encode(&mut buf).unwrap();
     let body: &[u8] = &[
-        0x03, 0x05, // version 3, type Settings
+        0x04, 0x05, // version 4, type Settings
         0x01, // limits
         0x00, 0x00, 0x00, 0x3f, // fallback_mu 0.5
         0x00, 0x00, 0x20, 0x40, // wheelbase 2.5
@@ -211,7 +224,7 @@ fn decode_errors() {
         b[l - 4..].copy_from_slice(&c.to_le_bytes());
     };
     // Another version (v1; v2, before `Settings` carried the wheelbase; v4): dropped.
-    for other in [1, 2, PROTO_VERSION + 1] {
+    for other in [1, 2, 3, PROTO_VERSION + 1] {
         let mut v = buf[..n].to_vec();
         v[0] = other;
         reseal(&mut v);
@@ -264,7 +277,7 @@ fn round_trip_classic_and_fd() {
             assert_eq!(got, Some(m));
         }
         assert_eq!(r.counters().dropped(), 0);
-        assert_eq!(r.counters().messages, 13);
+        assert_eq!(r.counters().messages, 15);
     }
 }
 
@@ -430,6 +443,7 @@ fn compact_results() {
         state: State::NotIdentifiable,
         mu_min: 0.3,
         change: true,
+        mismatch: false,
     };
     let w = CompactWheelResult::new(Some(&f), Some(&e)).unwrap();
     assert_eq!(CompactWheelResult::or_na(Some(&f), Some(&e)), w);
@@ -438,8 +452,19 @@ fn compact_results() {
         (812, -1501, 413, 9123, 432, 30)
     );
     assert_eq!(w.state(), Some(State::NotIdentifiable));
-    assert!(w.change() && w.present());
+    assert!(w.change() && w.present() && !w.mismatch());
     assert_eq!(w.status & CompactWheelResult::MF_FLAGS, 0);
+    // The mismatch indication: bit 5 (v4).
+    let wm = CompactWheelResult::new(
+        Some(&f),
+        Some(&Estimate {
+            mismatch: true,
+            ..e
+        }),
+    )
+    .unwrap();
+    assert_eq!(wm.status, w.status | CompactWheelResult::MISMATCH);
+    assert!(wm.mismatch());
     assert!((w.mu().unwrap() - e.mu).abs() <= 0.5e-4 + 1e-7);
     // μ_min rounds down: it stays a lower bound.
     let e2 = Estimate { mu_min: 0.349, ..e };
@@ -510,15 +535,15 @@ fn new_types_need_no_version_bump() {
 
 #[test]
 fn known_frames() {
-    // Command::StatusRequest, seq 5, classic: two frames 80 05 07 | 03 06 01 | crc.
+    // Command::StatusRequest, seq 5, classic: two frames 80 05 07 | 04 06 01 | crc.
     let m = Msg::Command(Command::StatusRequest);
     let fs = frames(&m, 5, Mtu::Classic);
-    let crc = crc32(&[3, 6, 1]).to_le_bytes();
+    let crc = crc32(&[4, 6, 1]).to_le_bytes();
     assert_eq!(fs.len(), 2);
-    assert_eq!(fs[0], [0x80, 5, 7, 3, 6, 1, crc[0], crc[1]]);
+    assert_eq!(fs[0], [0x80, 5, 7, 4, 6, 1, crc[0], crc[1]]);
     assert_eq!(fs[1], [0x41, 5, crc[2], crc[3], 0, 0, 0, 0]);
     let fd = frames(&m, 5, Mtu::Fd);
-    let mut one = vec![0xc0, 5, 7, 3, 6, 1, crc[0], crc[1], crc[2], crc[3]];
+    let mut one = vec![0xc0, 5, 7, 4, 6, 1, crc[0], crc[1], crc[2], crc[3]];
     one.resize(64, 0);
     assert_eq!(fd, [one]);
     // An estimate on CAN FD: one 32-byte frame on RESULT.
@@ -530,21 +555,58 @@ fn known_frames() {
         state: State::Identifiable,
         mu_min: 0.375,
         change: true,
+        mismatch: true,
     });
     let fd = frames(&e, 1, Mtu::Fd);
     assert_eq!(fd.len(), 1);
     assert_eq!(fd[0].len(), 32);
-    // header c0 01 len 25 | version 3, Estimate | wheel 2, t_us 7 ..
-    assert_eq!(fd[0][..7], [0xc0, 1, 25, 3, 0x82, 2, 7]);
+    // header c0 01 len 26 | version 4, Estimate | wheel 2, t_us 7 ..
+    assert_eq!(fd[0][..7], [0xc0, 1, 26, 4, 0x82, 2, 7]);
     assert_eq!(fd[0][10..14], 0.5f32.to_le_bytes());
     assert_eq!(fd[0][14..18], 0.25f32.to_le_bytes());
     assert_eq!(fd[0][18], 0, "state Identifiable");
     assert_eq!(fd[0][19..23], 0.375f32.to_le_bytes());
     assert_eq!(fd[0][23], 1, "change");
-    assert_eq!(fd[0][24..28], crc32(&fd[0][3..24]).to_le_bytes());
-    assert!(fd[0][28..].iter().all(|&b| b == 0), "padding");
-    // On classic CAN: 25 bytes in 5 frames (5 in the first, 6 in each next).
+    assert_eq!(fd[0][24], 1, "mismatch");
+    assert_eq!(fd[0][25..29], crc32(&fd[0][3..25]).to_le_bytes());
+    assert!(fd[0][29..].iter().all(|&b| b == 0), "padding");
+    // On classic CAN: 26 bytes in 5 frames (5 in the first, 6 in each next).
     assert_eq!(frames(&e, 1, Mtu::Classic).len(), 5);
+}
+
+#[test]
+fn calibration_bytes_both_ways() {
+    let e = crate::mu::calibration::Exported {
+        value: [1.05, 0.5, -0.001, 2.0],
+        sigma: [0.25, 0.125, 0.0625, 1.0],
+        batches: 0x0102_0304,
+    };
+    let c = CalibrationState::new(Wheel::FrontRight, &e);
+    assert_eq!(c.exported(), e);
+    let mut want = vec![4u8, 0x86, 1];
+    for x in e.value.iter().chain(e.sigma.iter()) {
+        want.extend_from_slice(&x.to_le_bytes());
+    }
+    want.extend_from_slice(&[4, 3, 2, 1]);
+    let crc = crc32(&want);
+    want.extend_from_slice(&crc.to_le_bytes());
+    for (m, t, cid) in [
+        (Msg::Calibration(c), 0x86u8, id::STATUS),
+        (Msg::SetCalibration(c), 0x09, id::CONFIG),
+    ] {
+        want[1] = t;
+        let crc = crc32(&want[..want.len() - 4]);
+        let n = want.len();
+        want[n - 4..].copy_from_slice(&crc.to_le_bytes());
+        let mut buf = [0xa5u8; MSG_BUF];
+        let n = m.encode(&mut buf).unwrap();
+        assert_eq!(&buf[..n], &want[..], "{m:?}");
+        assert_eq!(Msg::decode(&buf[..n]), Ok(m));
+        assert_eq!(id::of(m.msg_type()), cid);
+        // 43 bytes: one 64-byte FD frame, 8 classic frames.
+        assert_eq!(frames(&m, 0, Mtu::Fd).len(), 1);
+        assert_eq!(frames(&m, 0, Mtu::Classic).len(), 8);
+    }
 }
 
 #[test]
@@ -744,7 +806,7 @@ fn any_msg() -> impl Strategy<Value = Msg> {
             0f32..1.0,
             0usize..3,
             0f32..2.0,
-            any::<bool>()
+            0u8..4
         )
             .prop_map(
                 |(w, t_us, mu, sigma, st, mu_min, change)| Msg::Estimate(Estimate {
@@ -754,9 +816,30 @@ fn any_msg() -> impl Strategy<Value = Msg> {
                     sigma,
                     state: [State::Identifiable, State::NotIdentifiable, State::Fallback][st],
                     mu_min,
-                    change
+                    change: change & 1 == 1,
+                    mismatch: change & 2 == 2,
                 })
             ),
+        (
+            0usize..4,
+            any::<bool>(),
+            proptest::array::uniform4(-10f32..10.0),
+            proptest::array::uniform4(0f32..1.0),
+            any::<u32>()
+        )
+            .prop_map(|(w, host, value, sigma, batches)| {
+                let c = CalibrationState {
+                    wheel: Wheel::from_index(w).unwrap(),
+                    value,
+                    sigma,
+                    batches,
+                };
+                if host {
+                    Msg::SetCalibration(c)
+                } else {
+                    Msg::Calibration(c)
+                }
+            }),
     ]
 }
 

@@ -14,8 +14,8 @@
 use cortex_m_rt::entry;
 use cortex_m_semihosting::hprintln;
 use embedded_can::Frame as _;
-use gough::proto::slcan::{self, CanFrame, Decoder, Line};
 use gough::mu::State;
+use gough::proto::slcan::{self, CanFrame, Decoder, Line};
 use gough::proto::*;
 use gough_firmware::app::App;
 use gough_firmware::mps2;
@@ -195,6 +195,7 @@ fn main() -> ! {
             state: State::Identifiable,
             mu_min: 0.5,
             change: true,
+            mismatch: true,
         }),
         Msg::Ack(Ack {
             of: 4,
@@ -417,9 +418,7 @@ fn main() -> ! {
                 mu0
             );
             check(
-                n_forces == SAMPLES
-                    && e.state == State::Identifiable
-                    && (e.mu - mu0).abs() <= 0.1,
+                n_forces == SAMPLES && e.state == State::Identifiable && (e.mu - mu0).abs() <= 0.1,
                 "estimator on the device reads the tyre's own surface within 0.1",
                 &mut fails,
             );

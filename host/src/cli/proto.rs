@@ -24,7 +24,9 @@ pub enum ProtoCmd {
     },
     /// The frames of a replay as the bus carries them: each measurement of a log, and the
     /// forces (or acknowledgement) and estimate the device's pipeline answers (run on the host
-    /// in f32, as `gough replay --check` does). One JSON object per message: identifier,
+    /// in f32, as `gough replay --check` does), then each wheel's calibration after the log as
+    /// the device reports it (`Calibration`) and as a host sends it back (`SetCalibration`;
+    /// not with `--batch`). One JSON object per message: identifier,
     /// frames (hex), the encoded message (hex) and the message as the host's reassembler
     /// decodes it from those frames.
     Frames {
@@ -107,7 +109,7 @@ pub fn run(cmd: ProtoCmd) -> Result<(), String> {
                 batches(&t.params.cast::<f32>(), &rows, &mut msgs)?;
                 sent.clear();
             }
-            let replies = replay::host_f32(
+            let (replies, cals) = replay::host_f32_calibrated(
                 &t.params.cast::<f32>(),
                 &Settings::default(),
                 &rows,
@@ -126,6 +128,12 @@ pub fn run(cmd: ProtoCmd) -> Result<(), String> {
                 if let Some(e) = r.estimate {
                     msgs.push(Msg::Estimate(e));
                 }
+            }
+            // The wheels' calibrations as the device reports them, and as a host hands them
+            // back to start a device warm.
+            if !batch {
+                msgs.extend(cals.iter().map(|c| Msg::Calibration(*c)));
+                msgs.extend(cals.iter().map(|c| Msg::SetCalibration(*c)));
             }
             let mut s = String::new();
             let mut seq = [0u8; id::ALL.len()];
@@ -236,6 +244,15 @@ fn frames_json(
         ),
         Msg::Estimate(x) => ("Estimate", serde_json::to_value(x), Some(x.t_us), None),
         Msg::Ack(x) => ("Ack", serde_json::to_value(x), None, None),
+        Msg::Calibration(x) | Msg::SetCalibration(x) => (
+            d.msg_type().name(),
+            Ok(serde_json::json!({
+                "wheel": serde_json::to_value(x.wheel).map_err(|e| e.to_string())?,
+                "value": x.value, "sigma": x.sigma, "batches": x.batches,
+            })),
+            None,
+            None,
+        ),
         Msg::CompactMeasurement(x) => (
             "CompactMeasurement",
             Ok(serde_json::json!({

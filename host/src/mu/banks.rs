@@ -8,6 +8,7 @@ use super::estimator::{Estimate, Estimator, Sample, Setup};
 use gough::math::{Backend, Float, Libm};
 use gough::mf::Params;
 use gough::mu::bank::Bank;
+use gough::mu::calibration::Exported;
 use gough::mu::preview::{self, Preview};
 use gough::proto::Wheel;
 
@@ -74,5 +75,15 @@ where
             change: e.change,
             mismatch: e.mismatch,
         }
+    }
+
+    fn calibration(&self, wheel: Wheel) -> Option<Exported> {
+        Some(self.banks[wheel.index()].calibration().export::<Libm>())
+    }
+
+    fn set_calibration(&mut self, wheel: Wheel, c: &Exported) -> Result<(), String> {
+        self.banks[wheel.index()]
+            .import_calibration::<Libm>(c)
+            .map_err(|e| e.to_string())
     }
 }

@@ -11,6 +11,7 @@
 //! sees them as the device does; one wheel's log is wheel `FrontLeft` alone.
 
 use gough::mf::{Params, Side};
+use gough::mu::calibration::Exported;
 use gough::mu::preview;
 use gough::mu::State;
 use gough::proto::Wheel;
@@ -62,6 +63,18 @@ pub trait Estimator {
     /// Takes the next sample of wheel `wheel` (the wheels' samples interleaved as measured,
     /// each wheel's in time order); returns that wheel's estimate.
     fn update(&mut self, wheel: Wheel, s: &Sample) -> Estimate;
+
+    /// Wheel `wheel`'s calibration of the tyre (`gough::mu::calibration`), if the method
+    /// calibrates (the bank; the peers do not).
+    fn calibration(&self, _wheel: Wheel) -> Option<Exported> {
+        None
+    }
+
+    /// Wheel `wheel`'s estimator starts from calibration `c` (a warm start); an error saying
+    /// why when it refuses it (the core's check) or the method does not calibrate.
+    fn set_calibration(&mut self, _wheel: Wheel, _c: &Exported) -> Result<(), String> {
+        Err("this method keeps no calibration of the tyre".into())
+    }
 
     /// Runs over a log of `(wheel, sample)` pairs in order: an estimate per pair.
     fn run(&mut self, log: &[(Wheel, Sample)]) -> Vec<Estimate> {

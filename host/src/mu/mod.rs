@@ -7,6 +7,7 @@
 pub mod banks;
 pub mod bench;
 pub mod bound;
+pub mod calfile;
 pub mod calibrate;
 #[cfg(feature = "plot")]
 pub mod demo;

@@ -120,6 +120,16 @@ pub struct EstimateArgs {
     /// TYRESIDE differs. A car's log (a `wheel` column) mounts FL, RL left and FR, RR right.
     #[arg(long, value_enum, default_value_t = SideArg::File)]
     pub side: SideArg,
+    /// Start each wheel's estimator from the calibration of the tyre in this file (JSON, as
+    /// `--calibration-out` writes it: per wheel the properties trail, trail_shape, trail_shift,
+    /// kx with value and σ, and the batches): a warm start. A file of another form, or values
+    /// the estimator refuses (not finite, beyond its bounds), are an error. Bank method only.
+    #[arg(long, value_name = "FILE")]
+    pub calibration_in: Option<PathBuf>,
+    /// Write each wheel's calibration of the tyre after the log to this file (JSON). Bank
+    /// method only.
+    #[arg(long, value_name = "FILE")]
+    pub calibration_out: Option<PathBuf>,
 }
 
 /// `--side` of `gough mu estimate`.
@@ -224,7 +234,21 @@ fn estimate(a: &EstimateArgs) -> Result<(), String> {
         mounted: crate::mu::mounting(&wheels, a.side.side()),
         preview,
     };
-    let est = a.method.estimator(&t.params, &setup)?.run(&log);
+    if (a.calibration_in.is_some() || a.calibration_out.is_some()) && !a.method.couples_wheels() {
+        return Err(format!(
+            "--calibration-in/--calibration-out are the bank's; the {} method keeps no calibration",
+            a.method.name()
+        ));
+    }
+    let mut estimator = a.method.estimator(&t.params, &setup)?;
+    if let Some(path) = &a.calibration_in {
+        crate::mu::calfile::load_into(estimator.as_mut(), path)?;
+    }
+    let est = estimator.run(&log);
+    if let Some(path) = &a.calibration_out {
+        crate::mu::calfile::save_from(estimator.as_ref(), &wheels, path)?;
+        eprintln!("calibration -> {}", path.display());
+    }
     if let Some(dir) = a.out.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
     }
