@@ -88,12 +88,12 @@
 /**
  * Bytes of a `gough_wheel_t` (one wheel's transient filter and bank estimator).
  */
-#define GOUGH_WHEEL_SIZE 2496
+#define GOUGH_WHEEL_SIZE 2560
 
 /**
  * Bytes of a `gough_estimator_t` (one wheel's bank estimator, `gough::mu::bank::Bank`).
  */
-#define GOUGH_ESTIMATOR_SIZE 2432
+#define GOUGH_ESTIMATOR_SIZE 2496
 
 /**
  * Bytes of a `gough_rx_t` (a reassembler of one CAN identifier's messages).

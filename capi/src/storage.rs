@@ -7,9 +7,9 @@ use crate::*;
 /// Bytes of a `gough_params_t` (a parsed `.tir` file: f64 and f32 parameters).
 pub const GOUGH_PARAMS_SIZE: usize = 2624;
 /// Bytes of a `gough_wheel_t` (one wheel's transient filter and bank estimator).
-pub const GOUGH_WHEEL_SIZE: usize = 2496;
+pub const GOUGH_WHEEL_SIZE: usize = 2560;
 /// Bytes of a `gough_estimator_t` (one wheel's bank estimator, `gough::mu::bank::Bank`).
-pub const GOUGH_ESTIMATOR_SIZE: usize = 2432;
+pub const GOUGH_ESTIMATOR_SIZE: usize = 2496;
 /// Bytes of a `gough_rx_t` (a reassembler of one CAN identifier's messages).
 pub const GOUGH_RX_SIZE: usize = 256;
 /// Bytes of a `gough_preview_t` (one side's front-to-rear preview, `gough::mu::preview`).

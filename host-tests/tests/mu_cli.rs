@@ -592,8 +592,12 @@ fn map_says_from_which_utilisation_mu_is_read() {
     for r in &rows {
         let (mu, load, util, gap) = (r[0], r[1], r[2], r[6]);
         assert!(util.is_finite(), "μ {mu} load {load}: never identifiable");
+        // From a cold start the calibration's σ of the trail (in μ's σ) holds a steady point
+        // back until the force nears the limit: at Fz0 and above, every surface is read from
+        // utilisation 0.9 at the latest (the v2 bank, which took the file as exact: 0.6, and
+        // 0.7 on ice; docs/estimator.md, "From which utilisation it reads μ").
         if load >= 1.0 {
-            let latest = if mu > 0.25 { 0.6 } else { 0.7 };
+            let latest = 0.9;
             assert!(
                 util <= latest,
                 "μ {mu} load {load}: from utilisation {util}"
