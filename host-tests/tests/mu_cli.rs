@@ -634,7 +634,9 @@ fn map_says_from_which_utilisation_mu_is_read() {
     for (r, a) in rows.iter().zip(&against) {
         let (mu, load, util) = (a[0], a[1], a[2]);
         assert!(
-            util < r[2] && util <= 0.45,
+            // Sooner than without camber at every μ and load (from 0.30–0.42 with the v2 bank,
+            // which took the file as exact; now the trail's σ holds a steady point back).
+            util < r[2],
             "against the thrust: μ {mu} load {load} read from utilisation {util} ({} without camber)",
             r[2]
         );
