@@ -466,60 +466,106 @@ impl<F: Float> Fit<F> {
     /// the normalised residuals there, their model part's slopes in the calibrated properties
     /// (by differences of the adjusted load stage: one more adjustment and evaluation each) and
     /// in the nuisances α′, κ′ (the dual numbers) and the cell's surface μ. `None` without a
-    /// load stage or when a number is not finite.
+    /// load stage or when a number is not finite. In pieces, each about a slot of a sample's
+    /// work: [`Fit::calibration_base`], then [`Fit::calibration_column`] per property.
     #[allow(clippy::type_complexity)]
     pub(crate) fn calibration_slopes<M: Backend<F>>(
         &self,
         k: usize,
         b: &Batch<F>,
     ) -> Option<([F; 4], [[F; PROPERTIES]; 4], [[F; NUISANCES]; 4])> {
+        let (r0, h_nuis) = self.calibration_base::<M>(k, b)?;
+        let mut h_cal = [[F::ZERO; PROPERTIES]; 4];
+        for j in 0..PROPERTIES {
+            let col = self.calibration_column::<M>(k, b, j, &r0)?;
+            for (row, x) in h_cal.iter_mut().zip(col.iter()) {
+                if let Some(o) = row.get_mut(j) {
+                    *o = *x;
+                }
+            }
+        }
+        let ok = h_cal.iter().all(|r| F::all_finite(r)) && F::all_finite(&r0);
+        ok.then_some((r0, h_cal, h_nuis))
+    }
+
+    /// [`Fit::calibration_slopes`]' first piece: the normalised residuals at cell `k` and their
+    /// slopes in the nuisances (α′, κ′, μ). `None` without a load stage or when not finite.
+    pub(crate) fn calibration_base<M: Backend<F>>(
+        &self,
+        k: usize,
+        b: &Batch<F>,
+    ) -> Option<([F; 4], [[F; NUISANCES]; 4])> {
+        let cell = self.cells.get(k).copied()?;
+        let mu_c = self.mu_c(k);
+        let lambda = mu_c / self.mu_y0;
+        let (lx, ly) = (self.lmux * lambda, self.lmuy * lambda);
+        let (r0, jn, jm) = self.residuals_mu::<M>(lx, ly, mu_c, b, cell.alpha, cell.kappa)?;
+        let mut h_nuis = [[F::ZERO; NUISANCES]; 4];
+        for (row, (j, m)) in h_nuis.iter_mut().zip(jn.iter().zip(jm.iter())) {
+            *row = [j[0], j[1], *m];
+        }
+        Some((r0, h_nuis))
+    }
+
+    /// [`Fit::calibration_slopes`]' piece for property `j`: the slopes of the residuals' model
+    /// part at cell `k` in it, by the difference of the load stage adjusted by a step of it
+    /// (1 % of a scale, a tenth of a milliradian of the shift) from `r0`
+    /// ([`Fit::calibration_base`]). `None` without a load stage or when the evaluation fails.
+    pub(crate) fn calibration_column<M: Backend<F>>(
+        &self,
+        k: usize,
+        b: &Batch<F>,
+        j: usize,
+        r0: &[F; 4],
+    ) -> Option<[F; 4]> {
         let cell = self.cells.get(k).copied()?;
         let prep = self.prep.as_ref()?;
         let mu_c = self.mu_c(k);
         let lambda = mu_c / self.mu_y0;
         let (lx, ly) = (self.lmux * lambda, self.lmuy * lambda);
-        let (r0, jn, jm) = self.residuals_mu::<M>(lx, ly, mu_c, b, cell.alpha, cell.kappa)?;
-        // Steps of the differences: 1 % of a scale, a tenth of a milliradian of the shift.
         let (hs, hh) = (F::from_f64(0.01), F::from_f64(1e-4));
         let es = M::exp(hs);
-        let steps = [
-            Adjust {
-                trail: es,
-                ..Adjust::NONE
-            },
-            Adjust {
-                trail_shape: es,
-                ..Adjust::NONE
-            },
-            Adjust {
-                trail_shift: hh,
-                ..Adjust::NONE
-            },
-            Adjust {
-                kx: es,
-                ..Adjust::NONE
-            },
-        ];
-        let mut h_cal = [[F::ZERO; PROPERTIES]; 4];
-        for (j, (a, h)) in steps.iter().zip([hs, hs, hh, hs]).enumerate() {
-            let p = prep.adjusted(a);
-            let f = p
-                .eval_with::<M>(&p.with_mu(lx, ly), cell.kappa, cell.alpha)
-                .ok()?;
-            let r1 = res_of(b, &[f.fx, f.fy, f.mz], cell.kappa, self.pin());
-            for (row, (x1, x0)) in h_cal.iter_mut().zip(r1.iter().zip(r0.iter())) {
-                // The model's slope over σ: r = (measured − model)/σ.
-                if let Some(o) = row.get_mut(j) {
-                    *o = (*x0 - *x1) / h;
-                }
-            }
+        let (a, h) = match j {
+            0 => (
+                Adjust {
+                    trail: es,
+                    ..Adjust::NONE
+                },
+                hs,
+            ),
+            1 => (
+                Adjust {
+                    trail_shape: es,
+                    ..Adjust::NONE
+                },
+                hs,
+            ),
+            2 => (
+                Adjust {
+                    trail_shift: hh,
+                    ..Adjust::NONE
+                },
+                hh,
+            ),
+            _ => (
+                Adjust {
+                    kx: es,
+                    ..Adjust::NONE
+                },
+                hs,
+            ),
+        };
+        let p = prep.adjusted(&a);
+        let f = p
+            .eval_with::<M>(&p.with_mu(lx, ly), cell.kappa, cell.alpha)
+            .ok()?;
+        let r1 = res_of(b, &[f.fx, f.fy, f.mz], cell.kappa, self.pin());
+        let mut col = [F::ZERO; 4];
+        for (o, (x1, x0)) in col.iter_mut().zip(r1.iter().zip(r0.iter())) {
+            // The model's slope over σ: r = (measured − model)/σ.
+            *o = (*x0 - *x1) / h;
         }
-        let mut h_nuis = [[F::ZERO; NUISANCES]; 4];
-        for (row, (j, m)) in h_nuis.iter_mut().zip(jn.iter().zip(jm.iter())) {
-            *row = [j[0], j[1], *m];
-        }
-        let ok = h_cal.iter().all(|r| F::all_finite(r)) && F::all_finite(&r0);
-        ok.then_some((r0, h_cal, h_nuis))
+        Some(col)
     }
 
     /// |α′| at which the brush model (parabolic pressure, one friction coefficient) gives the
