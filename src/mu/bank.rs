@@ -644,6 +644,7 @@ impl<F: Float> Bank<F> {
             // takes them, the variance and the step (this one has fitted cells already).
             let ready = self
                 .slope_job
+                .as_ref()
                 .is_some_and(|j| j.pieces >= SLOPE_PIECES || j.failed);
             let batch = usize::from(self.batches.per_batch().max(1));
             let spare = usize::from(self.batches.sums().n) + 1 < batch;
@@ -781,9 +782,12 @@ impl<F: Float> Bank<F> {
     /// The calibration's work a finish left ([`Deferred`]), if any: in the sample after the
     /// finish, before the next batch closes (its load stage takes the calibration).
     fn calibrate_deferred<M: Backend<F>>(&mut self) {
+        // (Tested first: taking the `Option` moves the whole of it, every sample.)
+        if self.deferred.is_none() {
+            return;
+        }
         if let Some(d) = self.deferred.take() {
-            let b = d.b;
-            self.calibration_work::<M>(usize::from(d.k), &b, d.sys, d.drift, d.step);
+            self.calibration_work::<M>(usize::from(d.k), &d.b, d.sys, d.drift, d.step);
         }
     }
 
