@@ -432,6 +432,7 @@ impl<F: Float> Bank<F> {
             }
             self.select(&b);
             self.slope_job = None;
+            self.fit.set_thorough(false);
             let adjust = self.cal.adjust::<M>();
             let sx = self
                 .fit
@@ -517,6 +518,7 @@ impl<F: Float> Bank<F> {
             if !explains {
                 self.report.withdraw();
             }
+            self.fit.set_thorough(!explains);
             if self.wants_slopes::<M>(&b, chi2) {
                 self.slope_job = Some(SlopeJob {
                     pieces: 0,
