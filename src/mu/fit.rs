@@ -11,7 +11,10 @@
 //!   batch's χ² (the trust region then grows; otherwise it shrinks), except a small one (at most
 //!   [`TRUST_STEP`] in α′ and κ′, its linear model predicting a fall of χ² below
 //!   [`TRUST_GAIN`]): that one is taken untried, and the batch's χ² is the one its linear model
-//!   predicts. From batch to batch every cell's κ′ moves with the measured κ′
+//!   predicts — as is the step of a cell held at the cap (out of reach of the best) whose
+//!   predicted χ² leaves it unable to explain the batch (above `chi2_explain`), but on a batch
+//!   the likeliest cell does not explain (the road may have changed to that cell's). From batch
+//!   to batch every cell's κ′ moves with the measured κ′
 //!   ([`crate::mu::batch`]).
 //! - **Seeds**: a cell that fits the batch badly tries a seed: the best cell's slips, the brush
 //!   model's slip angle for the batch's |Fy| on its own surface, or a point of a scan (at most
