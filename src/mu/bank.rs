@@ -23,6 +23,16 @@
 //! A reading from ahead ([`Bank::preview`], [`crate::mu::preview`]) takes a slot of a sample's
 //! work as a cell's fit does: it waits for the first the batch's fit can spare, a sample at most.
 //!
+//! The calibration's slopes at the likeliest cell (the variance of μ its σ leaves, and its step,
+//! each at most every `cal_period`: as much work as two cells' fits) are taken in pieces — the
+//! residuals, then one property's column each — in the slots the batch's fit leaves free, from
+//! the sample that fits that cell on, when the finish will want them (`Bank::wants_slopes`);
+//! the cell's slips and the load stage do not change until the finish, so the pieces are what
+//! the finish would compute. Those the slots had no room for, the finish takes — or, when a
+//! sample before the next batch closes is left, that sample, with the variance and the step
+//! (the variance then reaches the estimate a batch later; only on the device's rates, 10
+//! samples a batch: at 200 Hz the finish is on the sample that closes the next batch).
+//!
 //! ## Cost
 //! Bounded per sample, no allocation: each fit is one Magic Formula evaluation with the slip
 //! derivatives and one without (the trial; none for a small step), plus one more for a poorly
@@ -42,6 +52,10 @@ use super::likelihood::Likelihood;
 use super::preview::Reading;
 use crate::math::{Backend, Float};
 use crate::mf::{Params, Side};
+
+/// The calibration's slopes at the likeliest cell ([`crate::mu::fit::Fit::calibration_slopes`]):
+/// the normalised residuals, their slopes in the properties and in the nuisances.
+type Slopes<F> = ([F; 4], [[F; PROPERTIES]; 4], [[F; NUISANCES]; 4]);
 
 /// A cell out of contention is fitted on every `VISIT`th batch (and on every batch the likeliest
 /// cell does not explain).
@@ -90,6 +104,45 @@ struct WorkTrace {
     /// A reading that had waited a sample was mixed in, in a slot of its own.
     own_slot: bool,
 }
+
+/// The calibration's slopes at the pending batch's likeliest cell, taken in pieces in the
+/// slots the batch's fit leaves free ([`Bank::work`]) when its finish will want them: the
+/// residuals and their slopes in the nuisances, then one property's column per piece. The
+/// cell's slips and the batch's load stage do not change after the cell's fit until the batch
+/// is finished, so the pieces give what the finish would have computed.
+#[derive(Debug, Clone, Copy)]
+struct SlopeJob<F> {
+    /// Pieces taken: 0 none, 1 the residuals, 1 + j + 1 the column of property j too.
+    pieces: u8,
+    /// A piece failed (no load stage, an evaluation that failed): no slopes.
+    failed: bool,
+    r0: [F; 4],
+    h_cal: [[F; PROPERTIES]; 4],
+    h_nuis: [[F; NUISANCES]; 4],
+}
+
+/// What a batch's finish leaves to the next sample when the calibration's slopes it wants are
+/// not all taken yet and a sample before the next batch closes can take them
+/// ([`Bank::calibrate_deferred`]): the rest of the slopes at the likeliest cell, the variance of
+/// μ they give (`sys`) and the calibration's drift and Kalman step (`step`: the nuisances' prior
+/// variances). The cell's slips and the batch's load stage stay those of the finish until the
+/// next batch closes.
+#[derive(Debug, Clone, Copy)]
+struct Deferred<F> {
+    /// The likeliest cell and its batch.
+    k: u8,
+    b: Batch<F>,
+    /// Whether to take the variance of μ the calibration's σ leaves (`sys_var`).
+    sys: bool,
+    /// The drift's time \[s\] (the drift comes between the variance and the step, as on a
+    /// finish).
+    drift: F,
+    /// The step's nuisances' prior variances, when a step is due.
+    step: Option<[F; NUISANCES]>,
+}
+
+/// A [`SlopeJob`]'s pieces: the residuals, then a column per property.
+const SLOPE_PIECES: u8 = 1 + PROPERTIES as u8;
 
 /// One wheel's friction estimator. A few hundred bytes of state and a reference to the tyre's
 /// parameters; no allocation; bounded work per sample.
@@ -140,6 +193,10 @@ pub struct Bank<F> {
     /// The likeliest surface's χ², averaged over the recent excited batches (the mismatch
     /// indication).
     fit_avg: F,
+    /// The calibration's slopes the pending batch's finish will want, as far as taken.
+    slope_job: Option<SlopeJob<F>>,
+    /// The calibration's work a finish left to the next sample.
+    deferred: Option<Deferred<F>>,
     /// What the last [`Bank::update`]'s work did (tests of the per-sample budget).
     #[cfg(test)]
     trace: WorkTrace,
@@ -193,6 +250,8 @@ impl<F: Float> Bank<F> {
             sys_var: F::ZERO,
             sys_wait: F::ZERO,
             fit_avg: F::ZERO,
+            slope_job: None,
+            deferred: None,
             #[cfg(test)]
             trace: WorkTrace::default(),
         })
@@ -220,6 +279,8 @@ impl<F: Float> Bank<F> {
         if !ok {
             return Err(CalibrationError::NotFinite);
         }
+        // The last finish's step first: `c` replaces the calibration it moved.
+        self.calibrate_deferred::<M>();
         for (t, s) in c.theta.iter().zip(self.cfg.cal_sigma.iter()) {
             if t.abs() > self.cfg.cal_bound * *s {
                 return Err(CalibrationError::OutOfBounds);
@@ -236,6 +297,7 @@ impl<F: Float> Bank<F> {
         e: &Exported,
     ) -> Result<(), CalibrationError> {
         let c = Calibration::import::<M>(e, &self.cfg.cal_sigma, self.cfg.cal_bound)?;
+        self.calibrate_deferred::<M>();
         self.cal = c;
         Ok(())
     }
@@ -364,11 +426,16 @@ impl<F: Float> Bank<F> {
                     }
                 }
             }
+            // The last finish's calibration work, if no sample since took it (before the cells'
+            // slips move and the next load stage takes the calibration).
+            self.calibrate_deferred::<M>();
             // Every cell's κ′ follows the measured κ′ from batch to batch (its own offset kept).
             if let Some(d) = self.batches.kappa_step::<M>(&b) {
                 self.fit.follow_kappa(d);
             }
             self.select(&b);
+            self.slope_job = None;
+            self.fit.set_thorough(false);
             let adjust = self.cal.adjust::<M>();
             let sx = self
                 .fit
@@ -431,6 +498,8 @@ impl<F: Float> Bank<F> {
     /// have room for it; otherwise it waits for the next sample, and no longer (then it takes a
     /// slot of its own: with one sample per batch every sample closes one).
     fn work<M: Backend<F>>(&mut self) {
+        // The last finish's calibration work first (the batch's fit ended before).
+        self.calibrate_deferred::<M>();
         let batch = usize::from(self.batches.per_batch().max(1));
         let Some(b) = self.pending else {
             self.mix_waiting::<M>();
@@ -451,6 +520,16 @@ impl<F: Float> Bank<F> {
             let explains = chi2 <= self.cfg.chi2_identifiable;
             if !explains {
                 self.report.withdraw();
+            }
+            self.fit.set_thorough(!explains);
+            if self.wants_slopes::<M>(&b, chi2) {
+                self.slope_job = Some(SlopeJob {
+                    pieces: 0,
+                    failed: false,
+                    r0: [F::ZERO; 4],
+                    h_cal: [[F::ZERO; PROPERTIES]; 4],
+                    h_nuis: [[F::ZERO; NUISANCES]; 4],
+                });
             }
             // Nor are the other cells' last χ² evidence any longer (a cell out of contention
             // keeps its last one between visits, and its slips are as old): the road may have
@@ -510,6 +589,13 @@ impl<F: Float> Bank<F> {
         // The batch's finish takes a slot too: a sample whose fits (and mixture) filled its
         // slots leaves it to the next sample.
         let finish = self.next >= CELLS && done + usize::from(mixed) < slots;
+        // The slots left (the finish keeps its own, the sample that closes a batch one for the
+        // load stage) take pieces of the calibration's slopes, two per slot (a piece is one
+        // evaluation, a fit two or three).
+        let closing = usize::from(self.batches.sums().n) + 1 >= batch;
+        let used = done + usize::from(mixed) + usize::from(finish) + usize::from(closing);
+        let free = slots.saturating_sub(used);
+        self.slope_pieces::<M>(&b, 2 * free);
         #[cfg(test)]
         {
             let load = done + usize::from(mixed);
@@ -554,15 +640,31 @@ impl<F: Float> Bank<F> {
             // The calibration's slopes at the likeliest cell, at most every `cal_period` of
             // excited batches: what its σ leaves unknown of μ here, and its own step.
             self.sys_wait += b.dt;
-            let mut slopes = None;
-            if excited && self.sys_wait >= self.cfg.cal_period {
+            let sys = excited && self.sys_wait >= self.cfg.cal_period;
+            if sys {
                 self.sys_wait = F::ZERO;
-                slopes = self.fit.calibration_slopes::<M>(k, b);
-                if let Some(s) = slopes.as_ref().and_then(|(_, hc, hn)| mu_slopes(hc, hn)) {
-                    self.sys_var = self.cal.mu_var(&s);
-                }
             }
-            self.calibrate::<M>(b, k, x, slopes);
+            let step = self.calibrate::<M>(b, k, x);
+            // Slopes still to take, and a sample before the next batch closes: that sample
+            // takes them, the variance and the step (this one has fitted cells already).
+            let ready = self
+                .slope_job
+                .as_ref()
+                .is_some_and(|j| j.pieces >= SLOPE_PIECES || j.failed);
+            let batch = usize::from(self.batches.per_batch().max(1));
+            let spare = usize::from(self.batches.sums().n) + 1 < batch;
+            match u8::try_from(k) {
+                Ok(k8) if (sys || step.is_some()) && !ready && spare => {
+                    self.deferred = Some(Deferred {
+                        k: k8,
+                        b: *b,
+                        sys,
+                        drift: b.dt,
+                        step,
+                    });
+                }
+                _ => self.calibration_work::<M>(k, b, sys, b.dt, step),
+            }
         }
         if excited && best <= self.cfg.chi2_explain {
             // A model that does not explain the data (the mismatch indication's χ², averaged, above
@@ -597,26 +699,25 @@ impl<F: Float> Bank<F> {
     }
 
     /// The calibration's step on batch `b`, linearised at cell `k` (the likeliest, which
-    /// explains the batch with χ² `chi2`): the drift, then — when the batch is excited, the cell
-    /// explains it, and either its force is in the linear range of every surface (`cal_util` of
-    /// the lowest hypothesis) or the force has swept (`cal_sweep`) and the estimate has been
-    /// identifiable for `cal_settle` — a Kalman step with the batch's slips free and its surface
-    /// at the identification's μ (twice its σ) or, outside an identification, anywhere on the
-    /// grid ([`Calibration::step`]). A steady operating point tells μ and the tyre apart no
-    /// better over many batches than over one, and right after a change of surface the old
-    /// surface's cell with another trail explains the new road: neither calibrates.
-    #[allow(clippy::type_complexity)]
+    /// explains the batch with χ² `chi2`): whether it is due, and then the prior variances of
+    /// its nuisances. Due when the batch is excited, the cell explains it, and either its force
+    /// is in the linear range of every surface (`cal_util` of the lowest hypothesis) or the
+    /// force has swept (`cal_sweep`) and the estimate has been identifiable for `cal_settle`,
+    /// at most every `cal_period`: then a Kalman step ([`Calibration::step`],
+    /// [`Bank::calibration_work`]) with the batch's slips free and its surface at the
+    /// identification's μ (twice its σ) or, outside an identification, anywhere on the grid. A
+    /// steady operating point tells μ and the tyre apart no better over many batches than over
+    /// one, and right after a change of surface the old surface's cell with another trail
+    /// explains the new road: neither calibrates.
     fn calibrate<M: Backend<F>>(
         &mut self,
         b: &Batch<F>,
         k: usize,
         chi2: F,
-        slopes: Option<([F; 4], [[F; PROPERTIES]; 4], [[F; NUISANCES]; 4])>,
-    ) {
+    ) -> Option<[F; NUISANCES]> {
         let c = self.cfg;
-        self.cal.drift(b.dt, c.cal_tau, &c.cal_sigma);
         if !c.calibrate || b.fz <= F::ZERO {
-            return;
+            return None;
         }
         let f = M::sqrt(b.fy.0.sq() + b.fx.map_or(F::ZERO, |(v, _)| v.sq()));
         let fr = f / b.fz;
@@ -638,18 +739,14 @@ impl<F: Float> Bank<F> {
         let linear = fr <= c.cal_util * self.fit.grid().lowest();
         self.cal_wait += b.dt;
         if !(b.excited(&c) && chi2 <= c.chi2_identifiable && (linear || (swept && settled))) {
-            return;
+            return None;
         }
         // At most one step per `cal_period`: the calibration drifts over minutes, and a step
         // costs five evaluations (on the device as much as several cells' fits).
         if self.cal_wait < c.cal_period {
-            return;
+            return None;
         }
         self.cal_wait = F::ZERO;
-        let Some((r, h_cal, h_nuis)) = slopes.or_else(|| self.fit.calibration_slopes::<M>(k, b))
-        else {
-            return;
-        };
         // The slips free (ten times their scales), the surface as known.
         let (ua, uk) = self.fit.slip_units_of(k);
         let top = self.fit.grid().mu_of(CELLS - 1);
@@ -659,9 +756,119 @@ impl<F: Float> Bank<F> {
             top * top
         };
         let ten = F::from_f64(10.0);
-        let nuis: [F; NUISANCES] = [(ten * ua).sq(), (ten * uk).sq(), mu_var];
-        self.cal
-            .step(&r, &h_cal, &h_nuis, &nuis, &c.cal_sigma, c.cal_bound);
+        Some([(ten * ua).sq(), (ten * uk).sq(), mu_var])
+    }
+
+    /// The calibration's work on batch `b` at cell `k`: its slopes there (when `sys` or
+    /// `step` wants them), the variance of μ its σ leaves there (`sys`), its drift over
+    /// `drift` seconds, and its step (`step`: the nuisances' prior variances).
+    fn calibration_work<M: Backend<F>>(
+        &mut self,
+        k: usize,
+        b: &Batch<F>,
+        sys: bool,
+        drift: F,
+        step: Option<[F; NUISANCES]>,
+    ) {
+        let c = self.cfg;
+        let slopes = if sys || step.is_some() {
+            self.slopes::<M>(k, b)
+        } else {
+            None
+        };
+        if sys {
+            if let Some(s) = slopes.as_ref().and_then(|(_, hc, hn)| mu_slopes(hc, hn)) {
+                self.sys_var = self.cal.mu_var(&s);
+            }
+        }
+        self.cal.drift(drift, c.cal_tau, &c.cal_sigma);
+        if let (Some(nuis), Some((r, h_cal, h_nuis))) = (step, slopes) {
+            self.cal
+                .step(&r, &h_cal, &h_nuis, &nuis, &c.cal_sigma, c.cal_bound);
+        }
+    }
+
+    /// The calibration's work a finish left ([`Deferred`]), if any: in the sample after the
+    /// finish, before the next batch closes (its load stage takes the calibration).
+    fn calibrate_deferred<M: Backend<F>>(&mut self) {
+        // (Tested first: taking the `Option` moves the whole of it, every sample.)
+        if self.deferred.is_none() {
+            return;
+        }
+        if let Some(d) = self.deferred.take() {
+            self.calibration_work::<M>(usize::from(d.k), &d.b, d.sys, d.drift, d.step);
+        }
+    }
+
+    /// Whether the finish of the pending batch `b`, whose likeliest cell has χ² `chi2`, will
+    /// most likely want the calibration's slopes ([`Bank::finish`], [`Bank::calibrate`]): the
+    /// variance of μ is due, or a step of the calibration passes its gates (as far as they can
+    /// be told before the finish: whether the estimate stays identifiable is read now).
+    fn wants_slopes<M: Backend<F>>(&self, b: &Batch<F>, chi2: F) -> bool {
+        let c = &self.cfg;
+        let excited = b.excited(c);
+        if !chi2.is_finite() || !excited {
+            return false;
+        }
+        if self.sys_wait + b.dt >= c.cal_period {
+            return true;
+        }
+        if !c.calibrate
+            || b.fz <= F::ZERO
+            || chi2 > c.chi2_identifiable
+            || self.cal_wait + b.dt < c.cal_period
+        {
+            return false;
+        }
+        let f = M::sqrt(b.fy.0.sq() + b.fx.map_or(F::ZERO, |(v, _)| v.sq()));
+        let fr = f / b.fz;
+        if fr <= c.cal_util * self.fit.grid().lowest() {
+            return true;
+        }
+        let decay = M::exp(-b.dt / c.cal_sweep_time.max(F::from_f64(1e-3)));
+        let f_hi = fr.max(self.f_hi * decay + fr * (F::ONE - decay));
+        let f_lo = fr.min(self.f_lo * decay + fr * (F::ONE - decay));
+        let est = self.report.current();
+        let ident = est.state == State::Identifiable && !est.change;
+        let settled = ident && self.ident_s + b.dt >= c.cal_settle;
+        f_hi - f_lo >= c.cal_sweep * f_hi && settled
+    }
+
+    /// Takes up to `budget` pieces of the calibration's slopes at the pending batch's
+    /// likeliest cell (the residuals count two, a column one).
+    fn slope_pieces<M: Backend<F>>(&mut self, b: &Batch<F>, mut budget: usize) {
+        let (Some(k), Some(job)) = (self.skip.map(usize::from), self.slope_job.as_mut()) else {
+            return;
+        };
+        while job.pieces < SLOPE_PIECES && !job.failed {
+            let cost = if job.pieces == 0 { 2 } else { 1 };
+            if budget < cost {
+                break;
+            }
+            budget -= cost;
+            slope_piece::<F, M>(&self.fit, job, k, b);
+        }
+    }
+
+    /// The calibration's slopes at cell `k` of batch `b`
+    /// ([`crate::mu::fit::Fit::calibration_slopes`]): the pieces taken ahead for it, and the
+    /// rest now.
+    fn slopes<M: Backend<F>>(&mut self, k: usize, b: &Batch<F>) -> Option<Slopes<F>> {
+        match self.slope_job.take() {
+            Some(mut job) if self.skip.map(usize::from) == Some(k) => {
+                while job.pieces < SLOPE_PIECES && !job.failed {
+                    slope_piece::<F, M>(&self.fit, &mut job, k, b);
+                }
+                let ok = !job.failed
+                    && job.h_cal.iter().all(|r| F::all_finite(r))
+                    && F::all_finite(&job.r0);
+                let out = ok.then_some((job.r0, job.h_cal, job.h_nuis));
+                // Kept for the step that may want them after the variance did.
+                self.slope_job = Some(job);
+                out
+            }
+            _ => self.fit.calibration_slopes::<M>(k, b),
+        }
     }
 
     /// The calibration's step with the road a state of its own (`Config::cal_joint`): the road
@@ -726,6 +933,37 @@ impl<F: Float> Bank<F> {
             self.mixing = None;
         }
     }
+}
+
+/// The next piece of `job` at cell `k` of batch `b` ([`SlopeJob`]).
+fn slope_piece<F: Float, M: Backend<F>>(
+    fit: &Fit<F>,
+    job: &mut SlopeJob<F>,
+    k: usize,
+    b: &Batch<F>,
+) {
+    if job.pieces == 0 {
+        match fit.calibration_base::<M>(k, b) {
+            Some((r0, h_nuis)) => {
+                job.r0 = r0;
+                job.h_nuis = h_nuis;
+            }
+            None => job.failed = true,
+        }
+    } else {
+        let j = usize::from(job.pieces - 1);
+        match fit.calibration_column::<M>(k, b, j, &job.r0) {
+            Some(col) => {
+                for (row, x) in job.h_cal.iter_mut().zip(col.iter()) {
+                    if let Some(o) = row.get_mut(j) {
+                        *o = *x;
+                    }
+                }
+            }
+            None => job.failed = true,
+        }
+    }
+    job.pieces += 1;
 }
 
 #[cfg(test)]

@@ -233,9 +233,8 @@ impl<F: Float> Config<F> {
 pub struct Grid<F> {
     /// The cells' centres \[-\], increasing.
     centre: [F; CELLS],
-    /// How far each cell's surface may move down and up from its centre: halfway to the
-    /// neighbours (at the ends, the other half; never below half the centre).
-    half: [(F, F); CELLS],
+    /// Half the configured step (`mu_step`): how far a cell may move with no neighbour.
+    step_half: F,
 }
 
 impl<F: Float> Grid<F> {
@@ -267,21 +266,10 @@ impl<F: Float> Grid<F> {
             }
             centre = build(b);
         }
-        let mut half = [(F::ZERO, F::ZERO); CELLS];
-        for (k, h) in half.iter_mut().enumerate() {
-            let here = centre.get(k).copied().unwrap_or(F::ZERO);
-            let up = centre.get(k + 1).map(|g| (*g - here) * F::HALF);
-            let down = k
-                .checked_sub(1)
-                .and_then(|j| centre.get(j))
-                .map(|g| (here - *g) * F::HALF);
-            let step = c.mu_step * F::HALF;
-            *h = (
-                down.or(up).unwrap_or(step).min(here * F::HALF),
-                up.or(down).unwrap_or(step),
-            );
+        Grid {
+            centre,
+            step_half: c.mu_step * F::HALF,
         }
-        Grid { centre, half }
     }
 
     /// μ of cell `k`'s centre.
@@ -289,9 +277,23 @@ impl<F: Float> Grid<F> {
         self.centre.get(k).copied().unwrap_or(F::ZERO)
     }
 
-    /// How far cell `k`'s surface may move down and up from its centre.
+    /// How far cell `k`'s surface may move down and up from its centre: halfway to the
+    /// neighbours (at the ends, the other half; never below half the centre). (Computed when
+    /// asked, once per cell's fit: a table of them was 200 bytes of every wheel's state.)
     pub fn half(&self, k: usize) -> (F, F) {
-        self.half.get(k).copied().unwrap_or((F::ZERO, F::ZERO))
+        let Some(here) = self.centre.get(k).copied() else {
+            return (F::ZERO, F::ZERO);
+        };
+        let up = self.centre.get(k + 1).map(|g| (*g - here) * F::HALF);
+        let down = k
+            .checked_sub(1)
+            .and_then(|j| self.centre.get(j))
+            .map(|g| (here - *g) * F::HALF);
+        let step = self.step_half;
+        (
+            down.or(up).unwrap_or(step).min(here * F::HALF),
+            up.or(down).unwrap_or(step),
+        )
     }
 
     /// The lowest hypothesis.

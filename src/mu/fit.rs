@@ -11,7 +11,10 @@
 //!   batch's χ² (the trust region then grows; otherwise it shrinks), except a small one (at most
 //!   [`TRUST_STEP`] in α′ and κ′, its linear model predicting a fall of χ² below
 //!   [`TRUST_GAIN`]): that one is taken untried, and the batch's χ² is the one its linear model
-//!   predicts. From batch to batch every cell's κ′ moves with the measured κ′
+//!   predicts — as is the step of a cell held at the cap (out of reach of the best) whose
+//!   predicted χ² leaves it unable to explain the batch (above `chi2_explain`), but on a batch
+//!   the likeliest cell does not explain (the road may have changed to that cell's). From batch
+//!   to batch every cell's κ′ moves with the measured κ′
 //!   ([`crate::mu::batch`]).
 //! - **Seeds**: a cell that fits the batch badly tries a seed: the best cell's slips, the brush
 //!   model's slip angle for the batch's |Fy| on its own surface, or a point of a scan (at most
@@ -105,6 +108,9 @@ pub(crate) struct Fit<F> {
     /// Seeds tried so far, modulo [`SCAN_PERIOD`] (all that `scan % 3` and `(scan / 3) % 8`
     /// read).
     scan: u8,
+    /// Whether every step of the pending batch is tried (the likeliest cell did not explain
+    /// it: the road may have changed, and a far cell may be the new one).
+    thorough: bool,
 }
 
 impl<F: Float> Fit<F> {
@@ -136,6 +142,7 @@ impl<F: Float> Fit<F> {
             reseeds: 0,
             best: (F::ZERO, F::ZERO),
             scan: 0,
+            thorough: false,
         }
     }
 
@@ -232,6 +239,12 @@ impl<F: Float> Fit<F> {
         }
         let (sx, _) = mf::sigma::sigma::<F, M>(params, pr.conditioned(), pr.k_xk(), pr.k_ya());
         Some(sx)
+    }
+
+    /// Tries every step of the pending batch (`true`: the likeliest cell did not explain it), or
+    /// lets a cell held at the cap take a hopeless step untried ([`Fit::fit_cell`]).
+    pub(crate) fn set_thorough(&mut self, on: bool) {
+        self.thorough = on;
     }
 
     /// Whether a batch's load stage is ready to fit on.
@@ -365,7 +378,14 @@ impl<F: Float> Fit<F> {
             }
             let small = (sa / ua).abs().max((sk / uk).abs()) <= F::from_f64(TRUST_STEP)
                 && chi0 - pred < F::from_f64(TRUST_GAIN);
-            if small {
+            // A cell held at the cap (out of reach of the best) whose step the linear model
+            // predicts to leave it unable to explain the batch (χ² above `chi2_explain`, far
+            // beyond the best's plus the per-batch cap of ℓ) takes the step untried as well: the
+            // trial could only confirm a χ² that changes nothing. Not while the likeliest cell
+            // does not explain the batch: then the road may have changed to that cell's, and
+            // its steps succeeding (the trust region growing) is how it catches up.
+            let hopeless = jmu.is_none() && pred > cfg.chi2_explain && !self.thorough;
+            if small || hopeless {
                 // A small step that changes little: the linear model is trusted, and the step
                 // taken without a trial evaluation (its χ² is the model's).
                 next.alpha = na;
@@ -466,60 +486,106 @@ impl<F: Float> Fit<F> {
     /// the normalised residuals there, their model part's slopes in the calibrated properties
     /// (by differences of the adjusted load stage: one more adjustment and evaluation each) and
     /// in the nuisances α′, κ′ (the dual numbers) and the cell's surface μ. `None` without a
-    /// load stage or when a number is not finite.
+    /// load stage or when a number is not finite. In pieces, each about a slot of a sample's
+    /// work: [`Fit::calibration_base`], then [`Fit::calibration_column`] per property.
     #[allow(clippy::type_complexity)]
     pub(crate) fn calibration_slopes<M: Backend<F>>(
         &self,
         k: usize,
         b: &Batch<F>,
     ) -> Option<([F; 4], [[F; PROPERTIES]; 4], [[F; NUISANCES]; 4])> {
+        let (r0, h_nuis) = self.calibration_base::<M>(k, b)?;
+        let mut h_cal = [[F::ZERO; PROPERTIES]; 4];
+        for j in 0..PROPERTIES {
+            let col = self.calibration_column::<M>(k, b, j, &r0)?;
+            for (row, x) in h_cal.iter_mut().zip(col.iter()) {
+                if let Some(o) = row.get_mut(j) {
+                    *o = *x;
+                }
+            }
+        }
+        let ok = h_cal.iter().all(|r| F::all_finite(r)) && F::all_finite(&r0);
+        ok.then_some((r0, h_cal, h_nuis))
+    }
+
+    /// [`Fit::calibration_slopes`]' first piece: the normalised residuals at cell `k` and their
+    /// slopes in the nuisances (α′, κ′, μ). `None` without a load stage or when not finite.
+    pub(crate) fn calibration_base<M: Backend<F>>(
+        &self,
+        k: usize,
+        b: &Batch<F>,
+    ) -> Option<([F; 4], [[F; NUISANCES]; 4])> {
+        let cell = self.cells.get(k).copied()?;
+        let mu_c = self.mu_c(k);
+        let lambda = mu_c / self.mu_y0;
+        let (lx, ly) = (self.lmux * lambda, self.lmuy * lambda);
+        let (r0, jn, jm) = self.residuals_mu::<M>(lx, ly, mu_c, b, cell.alpha, cell.kappa)?;
+        let mut h_nuis = [[F::ZERO; NUISANCES]; 4];
+        for (row, (j, m)) in h_nuis.iter_mut().zip(jn.iter().zip(jm.iter())) {
+            *row = [j[0], j[1], *m];
+        }
+        Some((r0, h_nuis))
+    }
+
+    /// [`Fit::calibration_slopes`]' piece for property `j`: the slopes of the residuals' model
+    /// part at cell `k` in it, by the difference of the load stage adjusted by a step of it
+    /// (1 % of a scale, a tenth of a milliradian of the shift) from `r0`
+    /// ([`Fit::calibration_base`]). `None` without a load stage or when the evaluation fails.
+    pub(crate) fn calibration_column<M: Backend<F>>(
+        &self,
+        k: usize,
+        b: &Batch<F>,
+        j: usize,
+        r0: &[F; 4],
+    ) -> Option<[F; 4]> {
         let cell = self.cells.get(k).copied()?;
         let prep = self.prep.as_ref()?;
         let mu_c = self.mu_c(k);
         let lambda = mu_c / self.mu_y0;
         let (lx, ly) = (self.lmux * lambda, self.lmuy * lambda);
-        let (r0, jn, jm) = self.residuals_mu::<M>(lx, ly, mu_c, b, cell.alpha, cell.kappa)?;
-        // Steps of the differences: 1 % of a scale, a tenth of a milliradian of the shift.
         let (hs, hh) = (F::from_f64(0.01), F::from_f64(1e-4));
         let es = M::exp(hs);
-        let steps = [
-            Adjust {
-                trail: es,
-                ..Adjust::NONE
-            },
-            Adjust {
-                trail_shape: es,
-                ..Adjust::NONE
-            },
-            Adjust {
-                trail_shift: hh,
-                ..Adjust::NONE
-            },
-            Adjust {
-                kx: es,
-                ..Adjust::NONE
-            },
-        ];
-        let mut h_cal = [[F::ZERO; PROPERTIES]; 4];
-        for (j, (a, h)) in steps.iter().zip([hs, hs, hh, hs]).enumerate() {
-            let p = prep.adjusted(a);
-            let f = p
-                .eval_with::<M>(&p.with_mu(lx, ly), cell.kappa, cell.alpha)
-                .ok()?;
-            let r1 = res_of(b, &[f.fx, f.fy, f.mz], cell.kappa, self.pin());
-            for (row, (x1, x0)) in h_cal.iter_mut().zip(r1.iter().zip(r0.iter())) {
-                // The model's slope over σ: r = (measured − model)/σ.
-                if let Some(o) = row.get_mut(j) {
-                    *o = (*x0 - *x1) / h;
-                }
-            }
+        let (a, h) = match j {
+            0 => (
+                Adjust {
+                    trail: es,
+                    ..Adjust::NONE
+                },
+                hs,
+            ),
+            1 => (
+                Adjust {
+                    trail_shape: es,
+                    ..Adjust::NONE
+                },
+                hs,
+            ),
+            2 => (
+                Adjust {
+                    trail_shift: hh,
+                    ..Adjust::NONE
+                },
+                hh,
+            ),
+            _ => (
+                Adjust {
+                    kx: es,
+                    ..Adjust::NONE
+                },
+                hs,
+            ),
+        };
+        let p = prep.adjusted(&a);
+        let f = p
+            .eval_with::<M>(&p.with_mu(lx, ly), cell.kappa, cell.alpha)
+            .ok()?;
+        let r1 = res_of(b, &[f.fx, f.fy, f.mz], cell.kappa, self.pin());
+        let mut col = [F::ZERO; 4];
+        for (o, (x1, x0)) in col.iter_mut().zip(r1.iter().zip(r0.iter())) {
+            // The model's slope over σ: r = (measured − model)/σ.
+            *o = (*x0 - *x1) / h;
         }
-        let mut h_nuis = [[F::ZERO; NUISANCES]; 4];
-        for (row, (j, m)) in h_nuis.iter_mut().zip(jn.iter().zip(jm.iter())) {
-            *row = [j[0], j[1], *m];
-        }
-        let ok = h_cal.iter().all(|r| F::all_finite(r)) && F::all_finite(&r0);
-        ok.then_some((r0, h_cal, h_nuis))
+        Some(col)
     }
 
     /// |α′| at which the brush model (parabolic pressure, one friction coefficient) gives the

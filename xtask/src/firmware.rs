@@ -239,7 +239,7 @@ pub fn test_m4f(passed: &mut u64) -> Result<(), String> {
     )?;
     python_client()?;
     *passed += 1;
-    step("STM32F405 with bxCAN (stm32f4xx-hal): build and link, flash/RAM/CCM (math::Fast; MF + transient filter + estimator: App, its four estimators and the stack in CCM)");
+    step("STM32F405 with bxCAN (stm32f4xx-hal): build and link, flash/RAM/CCM (math::Fast; MF + transient filter + estimator: the App and its four estimators in SRAM, the stack in CCM, ≥ 20 KiB of it)");
     run(fw_cargo().args([
         "build",
         "--release",

@@ -3,11 +3,13 @@
 //! `embedded_can::nb::Can`. defmt logs over RTT. Built and linked in CI (flash/RAM reported
 //! by `cargo xtask test-all`); not run there (no hardware).
 //!
-//! Memory (`boards/stm32f405.x`): the App (~41 KiB: the 32 KiB upload buffer, the four wheels'
-//! friction estimators ~6 KiB, the parameters) and the stack live in the 64 KiB CCM; the 128 KiB
-//! SRAM holds little else (`cargo xtask firmware` reports this image's SRAM and CCM use). The
-//! App's initial value is copied from flash into CCM first thing in `main` (cortex-m-rt
-//! initialises only SRAM).
+//! Memory (`boards/stm32f405.x`): the App (~46 KiB: the 32 KiB upload buffer, the four wheels'
+//! filters and friction estimators ~10 KiB, the parameters) lives in the 128 KiB SRAM with the
+//! rest of `.data`/`.bss`; the stack has the 64 KiB CCM to itself (core-coupled: no DMA, which
+//! the stack never needs), at least 20 KiB of it checked at link time (`cargo xtask firmware`
+//! reports this image's SRAM and CCM use). A static that should live in CCM goes in the
+//! `.ccmdata` section, whose initial values are copied from flash first thing in `main`
+//! (cortex-m-rt initialises only SRAM); none does now.
 //!
 //! The loop polls bxCAN (whose receive FIFOs hold 3 frames each) and runs a tick per
 //! millisecond; a parameter upload starts the estimators at once, so no long job runs between
@@ -26,8 +28,8 @@ use gough_firmware::{stack, BUNDLED_TIR};
 use stm32f4xx_hal::{can::Can, pac, prelude::*, rcc::Config};
 
 static TICKS: AtomicU32 = AtomicU32::new(0);
-/// The device state, in CCM (`.ccmdata`: its initial value is in flash, copied by `ccm_init`).
-#[link_section = ".ccmdata.APP"]
+/// The device state, in SRAM (`.data`: cortex-m-rt copies its initial value from flash); the
+/// stack has the CCM.
 static mut APP: App = App::new();
 
 extern "C" {
@@ -54,7 +56,8 @@ unsafe fn ccm_init() {
 
 #[entry]
 fn main() -> ! {
-    // SAFETY: first thing in main: nothing has touched APP; the stack lies above `.ccmdata`.
+    // SAFETY: first thing in main: nothing has touched a `.ccmdata` static; the stack lies
+    // above `.ccmdata`.
     unsafe { ccm_init() };
     // SAFETY: below the live frames.
     unsafe { stack::paint() };
