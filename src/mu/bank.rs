@@ -137,8 +137,17 @@ struct Deferred<F> {
     /// The drift's time \[s\] (the drift comes between the variance and the step, as on a
     /// finish).
     drift: F,
-    /// The step's nuisances' prior variances, when a step is due.
-    step: Option<[F; NUISANCES]>,
+    /// The step, when one is due.
+    step: Option<CalStep<F>>,
+}
+
+/// A calibration step that is due: with the batch's road a nuisance of its own (the prior
+/// variances of α′, κ′, μ), or with the road the calibration's state (`Config::cal_joint`: the
+/// slips' prior variances and the surface the residuals are taken at).
+#[derive(Debug, Clone, Copy)]
+enum CalStep<F> {
+    Apart([F; NUISANCES]),
+    Joint { slips: [F; 2], mu_lin: F },
 }
 
 /// A [`SlopeJob`]'s pieces: the residuals, then a column per property.
@@ -709,12 +718,7 @@ impl<F: Float> Bank<F> {
     /// steady operating point tells μ and the tyre apart no better over many batches than over
     /// one, and right after a change of surface the old surface's cell with another trail
     /// explains the new road: neither calibrates.
-    fn calibrate<M: Backend<F>>(
-        &mut self,
-        b: &Batch<F>,
-        k: usize,
-        chi2: F,
-    ) -> Option<[F; NUISANCES]> {
+    fn calibrate<M: Backend<F>>(&mut self, b: &Batch<F>, k: usize, chi2: F) -> Option<CalStep<F>> {
         let c = self.cfg;
         if !c.calibrate || b.fz <= F::ZERO {
             return None;
@@ -726,8 +730,7 @@ impl<F: Float> Bank<F> {
         self.f_lo = fr.min(self.f_lo * decay + fr * (F::ONE - decay));
         let est = self.report.current();
         if c.cal_joint {
-            self.calibrate_joint::<M>(b, k, chi2, slopes, &est);
-            return;
+            return self.calibrate_joint::<M>(b, k, chi2, &est);
         }
         if est.state == State::Identifiable && !est.change {
             self.ident_s += b.dt;
@@ -756,7 +759,7 @@ impl<F: Float> Bank<F> {
             top * top
         };
         let ten = F::from_f64(10.0);
-        Some([(ten * ua).sq(), (ten * uk).sq(), mu_var])
+        Some(CalStep::Apart([(ten * ua).sq(), (ten * uk).sq(), mu_var]))
     }
 
     /// The calibration's work on batch `b` at cell `k`: its slopes there (when `sys` or
@@ -768,7 +771,7 @@ impl<F: Float> Bank<F> {
         b: &Batch<F>,
         sys: bool,
         drift: F,
-        step: Option<[F; NUISANCES]>,
+        step: Option<CalStep<F>>,
     ) {
         let c = self.cfg;
         let slopes = if sys || step.is_some() {
@@ -782,9 +785,24 @@ impl<F: Float> Bank<F> {
             }
         }
         self.cal.drift(drift, c.cal_tau, &c.cal_sigma);
-        if let (Some(nuis), Some((r, h_cal, h_nuis))) = (step, slopes) {
-            self.cal
-                .step(&r, &h_cal, &h_nuis, &nuis, &c.cal_sigma, c.cal_bound);
+        match (step, slopes) {
+            (Some(CalStep::Apart(nuis)), Some((r, h_cal, h_nuis))) => {
+                self.cal
+                    .step(&r, &h_cal, &h_nuis, &nuis, &c.cal_sigma, c.cal_bound);
+            }
+            (Some(CalStep::Joint { slips, mu_lin }), Some((r, h_cal, h_nuis))) => {
+                self.cal.step_joint(
+                    &r,
+                    &h_cal,
+                    &h_nuis,
+                    slips,
+                    mu_lin,
+                    &mut self.surface,
+                    &c.cal_sigma,
+                    c.cal_bound,
+                );
+            }
+            _ => {}
         }
     }
 
@@ -873,17 +891,15 @@ impl<F: Float> Bank<F> {
 
     /// The calibration's step with the road a state of its own (`Config::cal_joint`): the road
     /// ages as an unobserved μ does and starts afresh where it may have changed (a change flag,
-    /// the fallback, or the likeliest cell beyond what its σ allows); every excited batch the
-    /// likeliest cell explains steps, at most every `cal_period`.
-    #[allow(clippy::type_complexity)]
+    /// the fallback, or the likeliest cell beyond what its σ allows); a step is due on every
+    /// excited batch the likeliest cell explains, at most every `cal_period`.
     fn calibrate_joint<M: Backend<F>>(
         &mut self,
         b: &Batch<F>,
         k: usize,
         chi2: F,
-        slopes: Option<([F; 4], [[F; PROPERTIES]; 4], [[F; NUISANCES]; 4])>,
         est: &Estimate<F>,
-    ) {
+    ) -> Option<CalStep<F>> {
         let c = self.cfg;
         let mu_lin = self.fit.mu_c(k);
         let (down, up) = self.fit.grid().half(k);
@@ -899,25 +915,15 @@ impl<F: Float> Bank<F> {
         }
         self.cal_wait += b.dt;
         if !(b.excited(&c) && chi2 <= c.chi2_identifiable) || self.cal_wait < c.cal_period {
-            return;
+            return None;
         }
         self.cal_wait = F::ZERO;
-        let Some((r, h_cal, h_nuis)) = slopes.or_else(|| self.fit.calibration_slopes::<M>(k, b))
-        else {
-            return;
-        };
         let (ua, uk) = self.fit.slip_units_of(k);
         let ten = F::from_f64(10.0);
-        self.cal.step_joint(
-            &r,
-            &h_cal,
-            &h_nuis,
-            [(ten * ua).sq(), (ten * uk).sq()],
+        Some(CalStep::Joint {
+            slips: [(ten * ua).sq(), (ten * uk).sq()],
             mu_lin,
-            &mut self.surface,
-            &c.cal_sigma,
-            c.cal_bound,
-        );
+        })
     }
 
     /// Mixes in the reading from ahead that waits, if any ([`Reading::mix_into`]); a held value
