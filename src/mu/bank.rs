@@ -444,7 +444,6 @@ impl<F: Float> Bank<F> {
             }
             self.select(&b);
             self.slope_job = None;
-            self.fit.set_thorough(false);
             let adjust = self.cal.adjust::<M>();
             let sx = self
                 .fit
@@ -530,7 +529,6 @@ impl<F: Float> Bank<F> {
             if !explains {
                 self.report.withdraw();
             }
-            self.fit.set_thorough(!explains);
             if self.wants_slopes::<M>(&b, chi2) {
                 self.slope_job = Some(SlopeJob {
                     pieces: 0,

@@ -108,9 +108,6 @@ pub(crate) struct Fit<F> {
     /// Seeds tried so far, modulo [`SCAN_PERIOD`] (all that `scan % 3` and `(scan / 3) % 8`
     /// read).
     scan: u8,
-    /// Whether every step of the pending batch is tried (the likeliest cell did not explain
-    /// it: the road may have changed, and a far cell may be the new one).
-    thorough: bool,
 }
 
 impl<F: Float> Fit<F> {
@@ -142,7 +139,6 @@ impl<F: Float> Fit<F> {
             reseeds: 0,
             best: (F::ZERO, F::ZERO),
             scan: 0,
-            thorough: false,
         }
     }
 
@@ -239,12 +235,6 @@ impl<F: Float> Fit<F> {
         }
         let (sx, _) = mf::sigma::sigma::<F, M>(params, pr.conditioned(), pr.k_xk(), pr.k_ya());
         Some(sx)
-    }
-
-    /// Tries every step of the pending batch (`true`: the likeliest cell did not explain it), or
-    /// lets a cell held at the cap take a hopeless step untried ([`Fit::fit_cell`]).
-    pub(crate) fn set_thorough(&mut self, on: bool) {
-        self.thorough = on;
     }
 
     /// Whether a batch's load stage is ready to fit on.
@@ -378,14 +368,7 @@ impl<F: Float> Fit<F> {
             }
             let small = (sa / ua).abs().max((sk / uk).abs()) <= F::from_f64(TRUST_STEP)
                 && chi0 - pred < F::from_f64(TRUST_GAIN);
-            // A cell held at the cap (out of reach of the best) whose step the linear model
-            // predicts to leave it unable to explain the batch (χ² above `chi2_explain`, far
-            // beyond the best's plus the per-batch cap of ℓ) takes the step untried as well: the
-            // trial could only confirm a χ² that changes nothing. Not while the likeliest cell
-            // does not explain the batch: then the road may have changed to that cell's, and
-            // its steps succeeding (the trust region growing) is how it catches up.
-            let hopeless = jmu.is_none() && pred > cfg.chi2_explain && !self.thorough;
-            if small || hopeless {
+            if small {
                 // A small step that changes little: the linear model is trusted, and the step
                 // taken without a trial evaluation (its χ² is the model's).
                 next.alpha = na;
