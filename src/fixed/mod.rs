@@ -48,9 +48,9 @@
 //! reciprocal from a 128-entry table and two Newton steps, no divide instruction). The square
 //! root, also `fixed`'s bit for bit, from a table of 1/√, two Newton steps, one Heron step with
 //! that quotient and an exact check of the square. On the Cortex-M0 (no `clz` either: leading
-//! zeros by binary search) that took the combined evaluation from 591,863 to 77,014
-//! instructions, and the kernels' polynomials in Q0.31 (below) to 68,137 (`cargo xtask
-//! test-all`).
+//! zeros by binary search) that took the combined evaluation down by about 8×, and the kernels'
+//! polynomials in Q0.31 (below) further (the M0 bench's figures: docs/backends.md, measured by
+//! `cargo xtask firmware --m0`).
 //!
 //! ## Kernels ([`FixMath`])
 //! Polynomials, with the minimax coefficients of the fast `f32` kernels (one table,
@@ -65,14 +65,14 @@
 //! ## Accuracy of the Magic Formula
 //! Against the `f64` path over the inputs of all 71 MFeval oracle sweeps (9497 rows, every
 //! version and mode): max |ΔFx|, |ΔFy| = 2.2e-7·FNOMIN, 1.8e-7 of the sweep's largest |F|
-//! (issue 7 asks ≤ 0.5 %); |ΔMz| = 1.3e-7·FNOMIN·R0. Printed and asserted by
+//! (the target: ≤ 0.5 %); |ΔMz| = 1.3e-7·FNOMIN·R0. Printed and asserted by
 //! `cargo test -p gough-host --release --test backends -- --nocapture`.
 //!
 //! ## What this module leaves out
-//! - Issue 7's ≤ 4 000 instructions per combined evaluation on a Cortex-M0: 68,137 (soft-float
-//!   `f32` 97,463). About 260 products and 35 quotients of 64-bit values per evaluation remain.
-//!   The Q15.16 experiment above costs 52,916; its operation count (237 products, 25 quotients,
-//!   40 kernel calls) puts MF 6.1 above 4,000 in any fixed-point format. `mul` and `div` are out of
+//! - The target of ≤ 4 000 instructions per combined evaluation on a Cortex-M0 (measured in
+//!   docs/backends.md, well above it): about 260 products and 35 quotients of 64-bit values per
+//!   evaluation remain, and the operation count of a Q15.16 experiment (237 products, 25
+//!   quotients, 40 kernel calls) puts MF 6.1 above 4,000 in any fixed-point format. `mul` and `div` are out of
 //!   line, which keeps `mf::eval::<Fix, _>` at about 14 kB of Thumb code instead of 210 kB.
 
 pub mod kernels;
