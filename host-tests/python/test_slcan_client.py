@@ -128,7 +128,10 @@ class Receiver:
         self.bus = bus
         self.partial = {}
 
-    def recv(self, timeout=10.0):
+    def recv(self, timeout=10.0, calibration=False):
+        """The next message from the device, as (type, body). The calibration reports the
+        device sends on its own, once a second per wheel, are passed over unless asked for
+        (`calibration`): they may come between a request and its answer."""
         end = time.time() + timeout
         while time.time() < end:
             f = self.bus.recv(timeout=max(0.01, end - time.time()))
@@ -149,6 +152,8 @@ class Receiver:
                 data, crc = buf[:-4], struct.unpack("<I", buf[-4:])[0]
                 assert zlib.crc32(data) == crc, "bad CRC from the device"
                 assert data[0] == PROTO_VERSION
+                if data[1] == T_CALIBRATION and not calibration:
+                    continue
                 return data[1], data[2:]
         raise AssertionError("timed out waiting for the device")
 
@@ -370,7 +375,7 @@ def main():
         while reported is None and time.time() < deadline:
             send(ID_CONFIG, message(T_COMMAND, bytes([CMD_STATUS_REQUEST])))
             while True:
-                t, body = rx.recv()
+                t, body = rx.recv(calibration=True)
                 if t == T_CALIBRATION:
                     reported = body
                 if t == T_STATUS:
