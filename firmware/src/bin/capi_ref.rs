@@ -187,7 +187,7 @@ fn main() -> ! {
                 e.sigma,
                 e.mu_min,
                 state_code(e.state),
-                u32::from(e.change),
+                u32::from(e.change) | (u32::from(e.mismatch) << 2),
             ),
             None => (Settings::default().fallback_mu, 1.0, 0.0, 2, 2),
         };
@@ -235,7 +235,7 @@ fn main() -> ! {
             e.sigma.to_bits(),
             e.mu_min.to_bits(),
             state,
-            u32::from(e.change)
+            u32::from(e.change) | (u32::from(e.mismatch) << 2)
         );
     }
 
