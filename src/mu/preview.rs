@@ -309,7 +309,7 @@ pub fn update<F: Float, M: Backend<F>>(
 mod tests {
     use super::*;
     use crate::math::Libm;
-    use crate::mu::bank::tests::{noisy, slips_stream, tyre};
+    use crate::mu::bank::tests::{noisy, slips_stream, tyre, warm};
     use crate::mu::Config as BankConfig;
     extern crate std;
     use std::vec::Vec;
@@ -345,14 +345,6 @@ mod tests {
     /// The bank's defaults with the tyre's calibration known (a warm start, the simulated tyre
     /// being its file): these tests are of the hand-over, not of a cold start, where a steady
     /// turn at one slip angle cannot tell the trail from the surface (`crate::mu::calibration`).
-    fn warm() -> BankConfig<f64> {
-        let d = BankConfig::<f64>::default();
-        BankConfig {
-            cal_sigma: d.cal_sigma.map(|s| s * 0.1),
-            ..d
-        }
-    }
-
     fn pair(front: &[Sample<f64>], rear: &[Sample<f64>], with: bool) -> Vec<Estimate<f64>> {
         let p = tyre();
         let mut f = Bank::new::<Libm>(&p, None, warm()).unwrap();
