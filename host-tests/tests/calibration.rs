@@ -120,3 +120,120 @@ fn sixty_seconds_of_slalom_calibrate_the_tyre_or_say_why_not() {
     }
     assert!(failures.is_empty(), "{failures:#?}");
 }
+
+/// The log of `parts` (scenarios run one after the other on `truth`, 200 Hz, noise seed 1) as
+/// one wheel's samples.
+fn log_of(
+    truth: &gough::mf::Params<f64>,
+    parts: &[Scenario],
+) -> Vec<(gough::proto::Wheel, gough_host::mu::Sample)> {
+    let mut out = Vec::new();
+    let mut t0 = 0.0;
+    for sc in parts {
+        let tr = scenario::simulate(truth, sc, 200.0, &Noise::default(), 1).unwrap();
+        for i in 0..tr.t.len() {
+            out.push((
+                gough::proto::Wheel::FrontLeft,
+                gough_host::mu::Sample {
+                    t: t0 + tr.t[i],
+                    fz: tr.fz[i],
+                    fy: tr.fy[i],
+                    mz: tr.mz[i],
+                    fx: Some(tr.fx[i]),
+                    vx: Some(tr.vx[i]),
+                    kappa: Some(tr.kappa[i]),
+                    alpha: None,
+                    gamma: Some(tr.gamma[i]),
+                },
+            ));
+        }
+        t0 += sc.duration + 0.005;
+    }
+    out
+}
+
+/// `gough mu calibrate`'s machinery (the online calibration on a road of known μ): a tyre off
+/// its file in every calibrated property, a 40 s slalom to utilisation 0.8 and 10 s of steady
+/// braking at utilisation 0.4 on μ 0.8. The trail, its shape and its shift are learnt on every
+/// tyre (within a quarter of the initial error); Kxκ moves towards the truth but falls short
+/// (a known limitation, docs/estimator.md: its σ can be too small), so for it the test asks
+/// only that it moves the right way and does not overshoot.
+#[test]
+fn a_known_road_calibrates_every_property() {
+    use gough_host::mu::calibrate;
+    let d = Perturbation {
+        trail: 1.08,
+        trail_shape: 0.93,
+        sht: 0.001,
+        kx: 0.92,
+        ..Perturbation::default()
+    };
+    let truth = [d.trail.ln(), d.trail_shape.ln(), d.sht - d.shy, d.kx.ln()];
+    let parts = [
+        Scenario {
+            manoeuvre: Manoeuvre::Slalom {
+                amplitude: 0.8,
+                freq: 0.5,
+            },
+            mu: [0.8, 0.8],
+            step: None,
+            duration: 40.0,
+        },
+        Scenario {
+            manoeuvre: Manoeuvre::SteadyBraking { util: 0.4 },
+            mu: [0.8, 0.8],
+            step: None,
+            duration: 10.0,
+        },
+    ];
+    println!("| tyre | property | truth | calibrated | σ | verdict |");
+    println!("|---|---|---|---|---|---|");
+    let mut failures = Vec::new();
+    for name in [
+        "MagicFormula61_Parameters.tir",
+        "FSAE_Defaults.tir",
+        "CityBus_Pac02Tire.tir",
+    ] {
+        let file = params(name);
+        let tr = d.apply(&file);
+        let log = log_of(&tr, &parts);
+        let cals = calibrate::calibrate(&file, 0.8, &log, [None; 4]).unwrap();
+        let c = cals[0].cal;
+        assert!(
+            cals[0].explained as f64 >= 0.99 * cals[0].excited as f64,
+            "{:?}",
+            cals[0]
+        );
+        for (k, p) in Property::ALL.iter().enumerate() {
+            let v = f64::from(c.value[k]);
+            let x = if p.is_scale() { v.ln() } else { v };
+            let s = f64::from(c.sigma[k]);
+            let t = truth[k];
+            let converged = (x - t).abs() <= 0.25 * t.abs() + 1e-12;
+            let honest = (x - t).abs() <= 2.0 * s + 1e-12;
+            println!(
+                "| {name} | {} | {t:+.4} | {x:+.4} | {s:.4} | {} |",
+                p.name(),
+                if converged {
+                    "converged"
+                } else if honest {
+                    "σ says why not"
+                } else {
+                    "WRONG"
+                }
+            );
+            let towards = x * t > 0.0 && (x - t).abs() < t.abs();
+            let ok = match p {
+                Property::Kx => towards,
+                _ => converged,
+            };
+            if !ok {
+                failures.push(format!(
+                    "{name} {}: {x:+.4} against {t:+.4}, σ {s:.4}",
+                    p.name()
+                ));
+            }
+        }
+    }
+    assert!(failures.is_empty(), "{failures:#?}");
+}

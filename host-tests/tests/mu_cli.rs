@@ -913,12 +913,15 @@ fn a_four_wheel_log_runs_each_wheel_and_the_preview() {
 }
 
 /// `gough mu calibrate` puts right a file whose force shift is 2 mrad off, from a log of a
-/// surface of known μ: the bench's step steer on μ 1.0, its left-hand wheels (the outer ones,
-/// near the limit) written as a car's log (each wheel in its own axes: the bundled file's
-/// right-hand tyre is mirrored for them), the file's PHY1 moved by +0.002. `auto` fits PHY1 and
-/// QHZ1, takes PHY1 (the smaller χ²) and writes a file whose PHY1 is within 1 mrad of the
-/// tyre's own; a μ the log never comes near, an unknown parameter or a noise that is not
-/// positive is a one-line error.
+/// surface of known μ: the bench's sine with dwell on μ 1.0 (a step steer, one operating point,
+/// cannot tell the trail's shift from its scale), its left-hand wheels written as a car's log
+/// (each wheel in its own axes: the bundled file's right-hand tyre is mirrored for them), the
+/// file's PHY1 moved by +0.002. The calibration's
+/// trail shift (SHt − SHy: without the slip angle an offset of PHY1 is one of QHZ1 the other
+/// way) reads +2 mrad within 0.5 mrad; the calibration file reads back as
+/// `--calibration-in` takes it; the written `.tir` has QHZ1 − PHY1 within 0.5 mrad of the
+/// tyre's own and the other coefficients as the calibration says. A μ outside the estimator's
+/// surfaces, a μ the log's batches cannot be, `--side` on a car's log: one-line errors.
 #[test]
 fn calibrate_puts_a_shifted_file_right() {
     use gough_host::mu::bench::{measure, simulate_case, suite, Sensors};
@@ -933,7 +936,12 @@ fn calibrate_puts_a_shifted_file_right() {
         set_in_tir(&text, gough::mf::Key::PHY1, p.phy1 + 0.002).unwrap(),
     )
     .unwrap();
-    let log = simulate_case(&p, &suite()[0]).unwrap();
+    let case = &suite()[5];
+    assert_eq!(
+        (case.manoeuvre, case.road.as_str()),
+        ("sine-dwell", "mu=1.0")
+    );
+    let log = simulate_case(&p, case).unwrap();
     let mut csv = String::from("t,wheel,fz,fy,mz,fx,vx,kappa,gamma\n");
     let tr: Vec<_> = [0, 2]
         .map(|w| (w, measure(&log, w, &Sensors::default(), 1)))
@@ -959,10 +967,12 @@ fn calibrate_puts_a_shifted_file_right() {
     let log_path = dir.join("log.csv");
     std::fs::write(&log_path, csv).unwrap();
     let out = dir.join("calibrated.tir");
-    let (w, l, o) = (
+    let cal = dir.join("cal.json");
+    let (w, l, o, cj) = (
         wrong.to_str().unwrap(),
         log_path.to_str().unwrap(),
         out.to_str().unwrap(),
+        cal.to_str().unwrap(),
     );
     let r = gough(&[
         "mu",
@@ -975,27 +985,38 @@ fn calibrate_puts_a_shifted_file_right() {
         "1.0",
         "--out",
         o,
+        "--calibration-out",
+        cj,
     ]);
     let stdout = String::from_utf8_lossy(&r.stdout);
     assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
     println!("{stdout}");
-    assert!(
-        stdout.contains("PHY1: ") && stdout.contains("QHZ1: "),
-        "{stdout}"
-    );
-    assert!(stdout.contains("(PHY1 = "), "{stdout}");
+    assert!(stdout.contains("wheel FrontLeft (") && stdout.contains("wheel RearLeft ("));
+    assert!(stdout.contains("the wheels combined"), "{stdout}");
+    let cals = gough_host::mu::calfile::CalibrationFile::read(&cal).unwrap();
+    assert_eq!(cals.len(), 2);
+    for (_, c) in &cals {
+        assert!(c.batches > 100, "{c:?}");
+        assert!((c.value[2] - 0.002).abs() < 0.0005, "trail shift {c:?}");
+    }
     let q = gough_host::tyre::load(&out).unwrap().params;
-    assert!(
-        (q.phy1 - p.phy1).abs() < 0.001,
-        "{} against {}",
-        q.phy1,
-        p.phy1
+    let (dq, dp) = (q.qhz1 - q.phy1, p.qhz1 - p.phy1);
+    assert!((dq - dp).abs() < 0.0005, "QHZ1 − PHY1 {dq} against {dp}");
+    let wr = gough_host::tyre::load(Path::new(w)).unwrap().params;
+    let one = gough_host::mu::calibrate::combine(
+        &cals.iter().map(|(_, c)| *c).collect::<Vec<_>>(),
+        &gough_host::mu::calibrate::config().cal_sigma,
     );
-    // A μ the log never comes near, an unknown parameter, a noise that is not positive.
+    assert!((q.ltr - wr.ltr * f64::from(one.value[0])).abs() < 1e-6 * wr.ltr.abs().max(1.0));
+    assert!((q.lkx - wr.lkx * f64::from(one.value[3])).abs() < 1e-6 * wr.lkx.abs().max(1.0));
+    // A μ outside the surfaces, a μ the log cannot be, --side on a car's log.
     for (extra, says) in [
-        (&["--mu", "3.0"][..], "near the limit"),
-        (&["--mu", "1.0", "--param", "PHZ9"][..], "no .tir parameter"),
-        (&["--mu", "1.0", "--noise-f", "0"][..], "noise"),
+        (&["--mu", "3.0"][..], "the estimator's surfaces"),
+        (&["--mu", "0.8"][..], "excited batches"),
+        (
+            &["--mu", "1.0", "--side", "left"][..],
+            "--side is a one-wheel log's",
+        ),
     ] {
         let mut args = vec!["mu", "calibrate", "--tir", w, "--log", l];
         args.extend_from_slice(extra);

@@ -187,6 +187,10 @@ pub struct Bank<F> {
     cal: Calibration<F>,
     /// The road under the calibration's steps (its own state, shared across batches).
     surface: Surface<F>,
+    /// A road whose μ the user knows ([`Bank::set_known_surface`]): its nearest cell and μ.
+    known: Option<(u8, F)>,
+    /// On a known road: excited batches, and those it explained (χ² ≤ `chi2_explain`).
+    known_batches: (u32, u32),
     /// Running maximum and minimum of |F|/Fz over the last `cal_sweep_time` (the sweep that
     /// lets a batch away from the linear range calibrate).
     f_hi: F,
@@ -252,6 +256,8 @@ impl<F: Float> Bank<F> {
             mix_waited: false,
             cal: Calibration::file(&cfg.cal_sigma),
             surface: Surface::unknown(),
+            known: None,
+            known_batches: (0, 0),
             f_hi: F::ZERO,
             f_lo: F::ZERO,
             ident_s: F::ZERO,
@@ -297,6 +303,44 @@ impl<F: Float> Bank<F> {
         }
         self.cal = *c;
         Ok(())
+    }
+
+    /// Calibrates on a road whose μ is known (`Some(μ)`, on the file's scale, as the estimate
+    /// reports it), e.g. a log of a test track: the surface each calibration step takes is that
+    /// road, held exactly ([`Calibration::step_joint`] with the road's variance zero), the cell
+    /// nearest it is fitted first on every batch and linearised at, and a step is due on every
+    /// excited batch that cell explains (χ² ≤ `chi2_explain`), at most every `cal_period`.
+    /// The sweep and identification gates of the online calibration are not needed: the road
+    /// is not a nuisance. `None` (the default) returns to the online calibration. Refused
+    /// (`false`, nothing changed) for a μ that is not finite or outside the bank's grid.
+    ///
+    /// The estimate is reported as always; what `gough mu calibrate` reads is
+    /// [`Bank::calibration`].
+    pub fn set_known_surface(&mut self, mu: Option<F>) -> bool {
+        self.known_batches = (0, 0);
+        let Some(mu) = mu else {
+            self.known = None;
+            return true;
+        };
+        let grid = self.fit.grid();
+        let top = grid.mu_of(CELLS - 1);
+        if !(mu.is_finite() && mu > F::ZERO && mu <= top) {
+            return false;
+        }
+        match u8::try_from(grid.cell_of(mu)) {
+            Ok(k) => {
+                self.known = Some((k, mu));
+                true
+            }
+            Err(_) => false,
+        }
+    }
+
+    /// On a known road ([`Bank::set_known_surface`], since it was set): the excited batches,
+    /// and how many of them the road explained (χ² ≤ `chi2_explain` at its cell). A log that is
+    /// not of that road shows as a small share explained.
+    pub fn known_surface_batches(&self) -> (u32, u32) {
+        self.known_batches
     }
 
     /// Starts from a calibration exported earlier as values and σ ([`Calibration::export`]);
@@ -472,7 +516,10 @@ impl<F: Float> Bank<F> {
     fn select(&mut self, b: &Batch<F>) {
         let excited = b.excited(&self.cfg);
         self.round = (self.round + 1) % VISIT;
-        let best = self.likelihood.best();
+        let best = match self.known {
+            Some((k, _)) => usize::from(k),
+            None => self.likelihood.best(),
+        };
         let cap = self.cfg.switch_nll - F::HALF;
         self.n_active = 0;
         for (k, (a, l)) in self
@@ -727,6 +774,9 @@ impl<F: Float> Bank<F> {
         self.f_hi = fr.max(self.f_hi * decay + fr * (F::ONE - decay));
         self.f_lo = fr.min(self.f_lo * decay + fr * (F::ONE - decay));
         let est = self.report.current();
+        if let Some((_, mu)) = self.known {
+            return self.calibrate_known(b, k, chi2, mu);
+        }
         if c.cal_joint {
             return self.calibrate_joint::<M>(b, k, chi2, &est);
         }
@@ -921,6 +971,31 @@ impl<F: Float> Bank<F> {
         Some(CalStep::Joint {
             slips: [(ten * ua).sq(), (ten * uk).sq()],
             mu_lin,
+        })
+    }
+
+    /// The calibration's step on a known road ([`Bank::set_known_surface`]): batch `b` at cell
+    /// `k` (the known road's, fitted first), whose χ² is `chi2`.
+    fn calibrate_known(&mut self, b: &Batch<F>, k: usize, chi2: F, mu: F) -> Option<CalStep<F>> {
+        let c = self.cfg;
+        self.surface.start(mu, F::ZERO);
+        self.cal_wait += b.dt;
+        let excited = b.excited(&c);
+        let explained = excited && chi2 <= c.chi2_explain;
+        let (e, x) = self.known_batches;
+        self.known_batches = (
+            e.saturating_add(u32::from(excited)),
+            x.saturating_add(u32::from(explained)),
+        );
+        if !explained || self.cal_wait < c.cal_period {
+            return None;
+        }
+        self.cal_wait = F::ZERO;
+        let (ua, uk) = self.fit.slip_units_of(k);
+        let ten = F::from_f64(10.0);
+        Some(CalStep::Joint {
+            slips: [(ten * ua).sq(), (ten * uk).sq()],
+            mu_lin: self.fit.mu_c(k),
         })
     }
 

@@ -26,11 +26,18 @@ where
     /// On tyre `p` (cast to `F`), the wheels mounted as `setup.mounted` says, with its preview;
     /// an error if the tyre gives the bank no model or the preview's configuration is not valid.
     pub fn new(p: &Params<f64>, setup: &Setup) -> Result<Self, String> {
+        Self::with_config(p, setup, gough::mu::Config::default())
+    }
+
+    /// [`Banks::new`] with the bank's configuration `cfg` at every wheel.
+    pub fn with_config(
+        p: &Params<f64>,
+        setup: &Setup,
+        cfg: gough::mu::Config<F>,
+    ) -> Result<Self, String> {
         let p = p.cast::<F>();
-        let new = |w: usize| {
-            Bank::new::<Libm>(&p, setup.mounted[w], gough::mu::Config::default())
-                .map_err(|e| e.to_string())
-        };
+        let new =
+            |w: usize| Bank::new::<Libm>(&p, setup.mounted[w], cfg).map_err(|e| e.to_string());
         let banks = [new(0)?, new(1)?, new(2)?, new(3)?];
         let previews = match setup.preview {
             Some(c) => {
@@ -44,6 +51,31 @@ where
             None => None,
         };
         Ok(Banks { p, banks, previews })
+    }
+}
+
+impl<F: Float> Banks<F> {
+    /// Every wheel calibrates on a road of known μ ([`Bank::set_known_surface`]; `None`: the
+    /// online calibration); an error for a μ the banks' grid does not hold.
+    pub fn set_known_surface(&mut self, mu: Option<f64>) -> Result<(), String> {
+        for b in &mut self.banks {
+            if !b.set_known_surface(mu.map(F::from_f64)) {
+                let top = b.grid().mu_of(gough::mu::CELLS - 1).to_f64();
+                return Err(format!(
+                    "μ {}: expected a finite μ in (0, {top:.3}] (the estimator's surfaces)",
+                    mu.unwrap_or(f64::NAN)
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
+impl<F: Float> Banks<F> {
+    /// Wheel `wheel`'s excited batches on the known road and how many it explained
+    /// ([`Bank::known_surface_batches`]).
+    pub fn known_surface_batches(&self, wheel: Wheel) -> (u32, u32) {
+        self.banks[wheel.index()].known_surface_batches()
     }
 }
 

@@ -607,3 +607,19 @@ proptest! {
         }
     }
 }
+
+/// A known road is taken only on the bank's grid and finite; `None` returns to the online
+/// calibration; nothing counted before a batch.
+#[test]
+fn a_known_surface_is_refused_outside_the_grid() {
+    let p = tyre();
+    let mut b = Bank::new::<Libm>(&p, None, Config::default()).unwrap();
+    let top = b.grid().mu_of(CELLS - 1);
+    for bad in [0.0, -0.3, f64::NAN, f64::INFINITY, top * 1.01] {
+        assert!(!b.set_known_surface(Some(bad)), "{bad}");
+    }
+    assert!(b.set_known_surface(Some(0.8)));
+    assert!(b.set_known_surface(Some(top)));
+    assert_eq!(b.known_surface_batches(), (0, 0));
+    assert!(b.set_known_surface(None));
+}

@@ -32,12 +32,13 @@ pub enum MuCmd {
     /// its rows (exact model, the bench's noise) 150 ms after the utilisation reaches 0.5, beside
     /// the bank's latency (as `gough mu bench` runs it), wheel by wheel.
     Bound(bench::BoundArgs),
-    /// Calibrate the tyre file's registration of Mz against Fy on a log of a surface whose μ is
-    /// known: the offset of PHY1 (the force's horizontal shift) or QHZ1 (the trail's) that best
-    /// explains the measured Fy and Mz near the limit, and the file with it.
+    /// Calibrate the tyre on a log of a road whose μ is known: the estimator's online
+    /// calibration (peak trail, trail shape, trail shift, Kxκ; each with its σ) run with the
+    /// road held at that μ, written as the file `gough mu estimate --calibration-in` reads,
+    /// and as a `.tir` with the calibration in its coefficients.
     ///
     /// LOG columns as `gough mu estimate` reads them (with `wheel` for several wheels, each
-    /// mounted on its side; one wheel's log as the file describes the tyre).
+    /// mounted on its side; one wheel's log as `--side` says).
     Calibrate(CalibrateArgs),
 }
 
@@ -47,26 +48,20 @@ pub struct CalibrateArgs {
     /// Tyre property file (.tir).
     #[arg(long)]
     pub tir: PathBuf,
-    /// Measurement log (CSV) on one surface.
+    /// Measurement log (CSV) on one road.
     #[arg(long)]
     pub log: PathBuf,
-    /// The surface's friction μ, on the file's scale (as the estimator reports it).
+    /// The road's friction μ, on the file's scale (as the estimator reports it).
     #[arg(long)]
     pub mu: f64,
-    /// The parameter to fit: `auto` fits PHY1 and QHZ1 and takes the one that explains the log
-    /// better; or any `.tir` key.
-    #[arg(long, default_value = "auto")]
-    pub param: String,
-    /// The offsets tried: ±RANGE about the file's value.
-    #[arg(long, default_value_t = 0.005)]
-    pub range: f64,
-    /// Force sensor noise, rms, as a fraction of Fz.
-    #[arg(long, default_value_t = 0.01)]
-    pub noise_f: f64,
-    /// Aligning-torque sensor noise, rms \[N·m\].
-    #[arg(long, default_value_t = 2.0)]
-    pub noise_mz: f64,
-    /// Write the calibrated file here.
+    /// The side of a one-wheel log's wheel (as `gough mu estimate --side`).
+    #[arg(long, value_enum, default_value = "file")]
+    pub side: SideArg,
+    /// Write each wheel's calibration here (JSON; `gough mu estimate --calibration-in`).
+    #[arg(long)]
+    pub calibration_out: Option<PathBuf>,
+    /// Write the tyre file with the calibration (the log's wheels combined) in its
+    /// coefficients here.
     #[arg(long)]
     pub out: Option<PathBuf>,
 }
@@ -284,79 +279,73 @@ fn estimate(a: &EstimateArgs) -> Result<(), String> {
 
 /// `gough mu calibrate`.
 fn calibrate(a: &CalibrateArgs) -> Result<(), String> {
-    use crate::mu::calibrate::{self, Noise, WheelLog};
-    use gough::mf::Key;
+    use crate::mu::calibrate;
+    use gough::mu::calibration::Property;
     let t = tyre::load(&a.tir)?;
-    let text = std::fs::read_to_string(&a.tir)
-        .map_err(|e| format!("{}: cannot read: {e}", a.tir.display()))?;
     let log = read_log(&a.log)?;
-    let noise = Noise {
-        f_rel: a.noise_f,
-        mz: a.noise_mz,
-    };
-    // Each wheel's samples in time order.
-    let per: Vec<Vec<_>> = Wheel::ALL
-        .iter()
-        .map(|&w| log.iter().filter(|r| r.0 == w).map(|r| r.1).collect())
-        .collect();
-    // A car's log mounts each wheel on its side (as `gough mu estimate` does); one wheel's log
-    // is taken as the file describes the tyre.
-    let wheels: Vec<Wheel> = log.iter().map(|r| r.0).collect();
-    let mounted = crate::mu::mounting(&wheels, None);
-    let logs: Vec<WheelLog> = per
-        .iter()
-        .zip(mounted)
-        .filter(|(r, _)| !r.is_empty())
-        .map(|(r, m)| WheelLog {
-            rows: r,
-            mounted: m,
-        })
-        .collect();
-    let keys: Vec<Key> = if a.param.eq_ignore_ascii_case("auto") {
-        vec![Key::PHY1, Key::QHZ1]
-    } else {
-        vec![Key::from_name(&a.param)
-            .ok_or_else(|| format!("--param {}: no .tir parameter of that name", a.param))?]
-    };
-    let mut best: Option<calibrate::Fit> = None;
-    for &k in &keys {
-        let f = calibrate::calibrate(&t.params, k, a.mu, &logs, &noise, a.range)?;
-        println!(
-            "{}: {:+.6} ± {:.6} (1σ) → {:.6}; χ² {:.1} against {:.1} at the file's {:.6} ({} batches of {} rows at utilisation ≥ {} of μ {})",
-            k.name(),
-            f.delta,
-            f.sigma,
-            t.params.get(k) + f.delta,
-            f.chi2,
-            f.chi2_file,
-            t.params.get(k),
-            f.batches,
-            calibrate::BATCH,
-            calibrate::UTIL_MIN,
-            a.mu
-        );
-        if best.as_ref().is_none_or(|b| f.chi2 < b.chi2) {
-            best = Some(f);
-        }
+    let wheels: Vec<Wheel> = log.iter().map(|(w, _)| *w).collect();
+    if wheels.iter().any(|&w| w != Wheel::FrontLeft) && a.side != SideArg::File {
+        return Err(format!(
+            "{}: --side is a one-wheel log's; a car's log mounts each wheel on its side",
+            a.log.display()
+        ));
     }
-    let f = best.ok_or("no parameter")?;
+    let mounted = crate::mu::mounting(&wheels, a.side.side());
+    let cals = calibrate::calibrate(&t.params, a.mu, &log, mounted)
+        .map_err(|e| format!("{}: {e}", a.log.display()))?;
+    let prior = calibrate::config().cal_sigma;
+    let show = |label: &str, c: &gough::mu::calibration::Exported| {
+        println!("{label}: {} steps", c.batches);
+        for (k, p) in Property::ALL.iter().enumerate() {
+            let (v, s) = (c.value[k], c.sigma[k]);
+            if p.is_scale() {
+                println!(
+                    "  {:<12} × {v:.4} ± {:.1} % (prior ± {:.1} %)",
+                    p.name(),
+                    100.0 * s,
+                    100.0 * prior[k]
+                );
+            } else {
+                println!(
+                    "  {:<12} {:+.3} mrad ± {:.3} mrad (prior ± {:.3} mrad)",
+                    p.name(),
+                    1e3 * v,
+                    1e3 * s,
+                    1e3 * prior[k]
+                );
+            }
+        }
+    };
+    for c in &cals {
+        show(
+            &format!(
+                "wheel {:?} (the road explains {} of {} excited batches)",
+                c.wheel, c.explained, c.excited
+            ),
+            &c.cal,
+        );
+    }
+    let all: Vec<_> = cals.iter().map(|c| c.cal).collect();
+    let one = calibrate::combine(&all, &prior);
+    if cals.len() > 1 {
+        show("the wheels combined", &one);
+    }
+    if let Some(path) = &a.calibration_out {
+        let pairs: Vec<_> = cals.iter().map(|c| (c.wheel, c.cal)).collect();
+        crate::mu::calfile::CalibrationFile::new(&pairs).write(path)?;
+        println!("-> {}", path.display());
+    }
     if let Some(out) = &a.out {
-        let v = t.params.get(f.key) + f.delta;
-        let new = calibrate::set_in_tir(&text, f.key, v)?;
+        let text = std::fs::read_to_string(&a.tir)
+            .map_err(|e| format!("{}: cannot read: {e}", a.tir.display()))?;
+        let new = calibrate::write_tir(&text, &t.params, &one)?;
         if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
             std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
         }
         std::fs::write(out, new).map_err(|e| format!("{}: {e}", out.display()))?;
-        // What was written reads back as a tyre with the calibrated value.
-        let back = tyre::load(out)?;
-        if back.params.get(f.key) != v {
-            return Err(format!(
-                "{}: {} did not read back",
-                out.display(),
-                f.key.name()
-            ));
-        }
-        println!("-> {} ({} = {v})", out.display(), f.key.name());
+        // What was written reads back.
+        tyre::load(out).map_err(|e| format!("{}: does not read back: {e}", out.display()))?;
+        println!("-> {}", out.display());
     }
     Ok(())
 }
