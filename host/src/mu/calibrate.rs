@@ -129,8 +129,7 @@ pub fn combine(cals: &[Exported], prior: &[f64; PROPERTIES]) -> Exported {
         let (mut info, mut sum) = (1.0 / (s0 * s0), 0.0);
         for c in cals {
             let s = f64::from(c.sigma[k]).max(1e-12);
-            let v = f64::from(c.value[k]);
-            let theta = if p.is_scale() { v.ln() } else { v };
+            let theta = theta_of(c)[k];
             // Each wheel's posterior carries the prior once; counted once in all.
             let i = (1.0 / (s * s) - 1.0 / (s0 * s0)).max(0.0);
             info += i;
@@ -146,20 +145,47 @@ pub fn combine(cals: &[Exported], prior: &[f64; PROPERTIES]) -> Exported {
     out
 }
 
+/// Tyre `p` with the calibration θ (`gough::mu::calibration::Calibration::theta`: ln of the
+/// trail scale, ln of the trail-shape scale, the trail shift in rad, ln of the Kxκ scale) in
+/// its coefficients: `LTR` × trail, `QBZ1`–`QBZ3` × trail shape, `QHZ1` + trail shift, `LKX` ×
+/// Kxκ — the coefficients through which the estimator applies it
+/// (`gough::mf::prepared::Adjust`).
+pub fn apply(p: &Params<f64>, theta: &[f64; PROPERTIES]) -> Params<f64> {
+    let [trail, shape, shift, kx] = *theta;
+    let mut q = p.clone();
+    q.ltr = p.ltr * trail.exp();
+    q.qbz1 = p.qbz1 * shape.exp();
+    q.qbz2 = p.qbz2 * shape.exp();
+    q.qbz3 = p.qbz3 * shape.exp();
+    q.qhz1 = p.qhz1 + shift;
+    q.lkx = p.lkx * kx.exp();
+    q
+}
+
+/// The θ of an exported calibration (logarithms of its scales, the shift as it is).
+pub fn theta_of(c: &Exported) -> [f64; PROPERTIES] {
+    let mut t = [0.0; PROPERTIES];
+    for (k, p) in Property::ALL.iter().enumerate() {
+        let v = f64::from(c.value[k]);
+        t[k] = if p.is_scale() { v.ln() } else { v };
+    }
+    t
+}
+
 /// The `.tir` text `text` of tyre `p` with calibration `c` put into its coefficients: `LTR`
 /// times the trail scale, `QBZ1`–`QBZ3` times the trail's shape scale, `QHZ1` plus the trail's
 /// shift, `LKX` times the Kxκ scale. A coefficient the text lacks is added to its section
 /// (`[SCALING_COEFFICIENTS]`, `[ALIGNING_COEFFICIENTS]`) unless its new value is the
 /// reader's default for a missing key.
 pub fn write_tir(text: &str, p: &Params<f64>, c: &Exported) -> Result<String, String> {
-    let v = |k: Property| f64::from(c.value[k as usize]);
+    let q = apply(p, &theta_of(c));
     let sets = [
-        (Key::LTR, p.ltr * v(Property::Trail)),
-        (Key::QBZ1, p.qbz1 * v(Property::TrailShape)),
-        (Key::QBZ2, p.qbz2 * v(Property::TrailShape)),
-        (Key::QBZ3, p.qbz3 * v(Property::TrailShape)),
-        (Key::QHZ1, p.qhz1 + v(Property::TrailShift)),
-        (Key::LKX, p.lkx * v(Property::Kx)),
+        (Key::LTR, q.ltr),
+        (Key::QBZ1, q.qbz1),
+        (Key::QBZ2, q.qbz2),
+        (Key::QBZ3, q.qbz3),
+        (Key::QHZ1, q.qhz1),
+        (Key::LKX, q.lkx),
     ];
     let mut out = text.to_string();
     for (key, value) in sets {

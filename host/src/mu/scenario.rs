@@ -203,6 +203,11 @@ pub struct Trace {
     /// True slip angle α and κ (the input, before relaxation).
     pub alpha: Vec<f64>,
     pub kappa_true: Vec<f64>,
+    /// The transient slips α′, κ′ the forces were evaluated at (`gough::relax`).
+    pub alpha_t: Vec<f64>,
+    pub kappa_t: Vec<f64>,
+    /// The true load \[N\].
+    pub fz_true: Vec<f64>,
 }
 
 /// μy0 of a parameter set (the bank's definition: μy at FNOMIN, zero slip and camber, nominal
@@ -477,7 +482,7 @@ pub fn simulate(
             vsx: -kappa * VX,
             vsy: VX * alpha.tan(),
         };
-        let (o, _) = tyre
+        let (o, slips) = tyre
             .step::<Libm>(
                 q,
                 &opts,
@@ -505,6 +510,9 @@ pub fn simulate(
             tr.util.push(o.fx.hypot(o.fy) / (mu * fz));
             tr.alpha.push(alpha);
             tr.kappa_true.push(kappa);
+            tr.alpha_t.push(slips.alpha);
+            tr.kappa_t.push(slips.kappa);
+            tr.fz_true.push(fz);
         }
     }
     Ok(tr)

@@ -221,6 +221,14 @@ pub struct BoundArgs {
     /// may use. Default 1 s (`ML_WINDOW`).
     #[arg(long)]
     pub ml_window: Option<f64>,
+    /// Bound the wheel cases instead (every tyre of `--tyres`, every scenario, exact and drawn
+    /// from the envelope, 200 Hz), beside the bank's wheel-surfaces within 150 ms: per tyre,
+    /// with the tyre exact and with its calibration unknown. Writes bound_wheel.md.
+    #[arg(long)]
+    pub wheel_cases: bool,
+    /// The tyre files of `--wheel-cases`.
+    #[arg(long, default_value = "host-tests/data/tyres")]
+    pub tyres: PathBuf,
 }
 
 impl BoundArgs {

@@ -163,6 +163,9 @@ pub fn run(cmd: MuCmd) -> Result<(), String> {
             Ok(())
         }
         MuCmd::Demo(d) => crate::mu::demo::run(&d.config()),
+        MuCmd::Bound(b) if b.wheel_cases => {
+            crate::mu::bound::run_wheel_cases(&b.tyres, b.seed, &b.out)
+        }
         MuCmd::Bound(b) => crate::mu::bound::run(&b.config()),
         MuCmd::Calibrate(a) => calibrate(&a),
         MuCmd::Map(a) => {
