@@ -296,6 +296,52 @@ fn digressive_friction_factor() {
     assert_eq!(c.lmuy_star, 0.5);
 }
 
+/// MF-Tyre 5.2: Mz = −t·(Fy − SVyκ) + Mzr + s·Fx with the SVyκ (4.E66), (4.E67) of the point's
+/// own Fy — at the actual camber, as MFeval 4.3.1 has it. DIFFERS FROM MFeval 4.0, which takes
+/// SVyκ at μy(γ = 0): on the bundled MF 5.2 tyre at Fz0, κ = 0.05, α = 0.1, γ = 0.12 rad the
+/// two are 0.50 N·m apart (docs/magic-formula.md). SVyκ and μy are computed here from the file's coefficients.
+#[test]
+fn mf52_mz_subtracts_its_own_svyk() {
+    let p = load(TYRES[0].1);
+    assert_eq!(p.version, Version::Mf52);
+    let (fz, kappa, alpha, gamma) = (p.fnomin, 0.05, 0.1, 0.12);
+    let o = eval64(
+        &p,
+        Input {
+            fz,
+            kappa,
+            alpha,
+            gamma,
+            vx: p.longvl,
+            ..Default::default()
+        },
+        &Options::default(),
+    );
+    assert!(o.flags.is_empty(), "{:?}", o.flags);
+    let fz0 = p.lfzo * p.fnomin;
+    let dfz = (fz - fz0) / fz0; // (4.E2a)
+    let g_y = gamma * p.lgay;
+    let mu_y0 = p.lmuy * (p.pdy1 + p.pdy2 * dfz); // (4.E23) at γ = 0
+    let mu_y = mu_y0 * (1.0 - p.pdy3 * g_y * g_y); // (4.E23)
+    let s_vyk = mu_y
+        * fz
+        * (p.rvy1 + p.rvy2 * dfz + p.rvy3 * gamma)
+        * (p.rvy4 * alpha).atan().cos()
+        * (p.rvy5 * (p.rvy6 * kappa).atan()).sin()
+        * p.lvyka; // (4.E67), (4.E66)
+    let s = combined::Arm::from_params(&p).s_at(o.fy, dfz, gamma); // (A56)
+    let mz_52 = -o.t * (o.fy - s_vyk) + o.m_zr + s * o.fx;
+    assert!((o.mz - mz_52).abs() < 1e-9, "{} vs {}", o.mz, mz_52);
+    // MFeval 4.0's form: SVyκ at μy(γ = 0).
+    let mz_40 = -o.t * (o.fy - s_vyk * mu_y0 / mu_y) + o.m_zr + s * o.fx;
+    assert!(
+        (o.mz - mz_40 - 0.5025).abs() < 1e-4,
+        "{} vs 4.0's {}",
+        o.mz,
+        mz_40
+    );
+}
+
 /// The paper, eq. (3): D is the peak value. With no shifts and E ≤ 1, C > 1, max |Fy0| = Dy.
 #[test]
 fn d_is_the_peak() {
