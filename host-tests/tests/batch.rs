@@ -1,9 +1,7 @@
 //! `mf::eval_batch` against `mf::eval` at every point of the MFeval oracle (every file, every
 //! useMode, MF 5.2, 6.1, 6.2 and the book's tyre): equal to the bit, in f64 and f32, every
-//! output column and the flags. And the fast `f64` kernels (`math::Fast64`) against `Libm`
-//! through the whole formula: within 1e-9·FNOMIN for forces, 1e-9·FNOMIN·R0 for moments (the
-//! budget of a fast `f64` path, issue 57); the measured maxima are printed.
-use gough::math::{Backend, Fast64, Float, Libm};
+//! output column and the flags.
+use gough::math::{Backend, Float, Libm};
 use gough::mf::{self, Columns, Flags, Input, Options, Output, Outputs, Params};
 use gough_host::csvio;
 use gough_host::mfrun::InputRow;
@@ -147,37 +145,4 @@ fn batch_equals_eval_to_the_bit_at_every_oracle_point() {
         points += inputs.len();
     }
     println!("batch = eval to the bit at {points} oracle points, f64 and f32");
-}
-
-#[test]
-fn fast64_within_1e_9_fnomin_of_libm_at_every_oracle_point() {
-    // Forces (and Kxκ, Kyα) against FNOMIN, moments against FNOMIN·R0, the rest relative.
-    let (mut force, mut moment, mut other) = (0.0f64, 0.0f64, 0.0f64);
-    let mut points = 0;
-    for (name, opts, p, inputs) in oracle() {
-        let (fast, fast_flags) = batch::<f64, Fast64>(&p, &inputs, &opts);
-        let (fnomin, r0) = (p.fnomin, p.unloaded_radius);
-        for (i, input) in inputs.iter().enumerate() {
-            let o = mf::eval::<f64, Libm>(&p, input, &opts).unwrap();
-            assert_eq!(fast_flags[i], o.flags, "{name} point {i}");
-            for (k, (got, want)) in fast[i].iter().zip(fields(&o)).enumerate() {
-                let err = (got - want).abs();
-                let (budget, worst) = match k {
-                    0 | 1 | 2 | 8 | 9 => (1e-9 * fnomin, &mut force),
-                    3 | 4 | 5 | 11 => (1e-9 * fnomin * r0, &mut moment),
-                    _ => (1e-9 * want.abs().max(1e-3), &mut other),
-                };
-                assert!(
-                    err <= budget,
-                    "{name} point {i} column {k}: Fast64 {got:e} Libm {want:e}"
-                );
-                *worst = worst.max(err / budget * 1e-9);
-            }
-        }
-        points += inputs.len();
-    }
-    println!(
-        "Fast64 vs Libm over {points} oracle points: forces {force:.1e}·FNOMIN, moments \
-         {moment:.1e}·FNOMIN·R0, μ, t, σ, κ {other:.1e} relative"
-    );
 }

@@ -18,7 +18,6 @@
 //! | [`Libm`] | always | the `libm` crate (musl port) | ≤ 1 ulp; the reference |
 //! | `Fast` | `fast` | minimax polynomials, pure f32 (`math::fast`) | ≤ 4e-7 relative (issue 7 asks 2e-6) |
 //! | `Micromath` | `micromath` | the `micromath` crate, wrapped (`math::micro`) | 1e-3 to 3e-2 absolute, ln 0.12, √ 6 % |
-//! | [`Fast64`] | always | — (`f64` only: branch-free sin, cos, tan, atan on fdlibm's polynomials; the rest `libm`) | ≤ 2 ulp (tan 4) |
 //!
 //! Through the whole Magic Formula (`host-tests/tests/backends.rs`, all oracle sweeps): f32 with
 //! `Fast` is as close to f64 as f32 with `Libm` (2e-6·FNOMIN); `Micromath` is 4e-2·FNOMIN off.
@@ -33,9 +32,6 @@ use core::ops::{Add, AddAssign, Div, Mul, MulAssign, Neg, Sub, SubAssign};
 
 pub mod dual;
 pub use dual::Dual;
-
-pub mod fast64;
-pub use fast64::Fast64;
 
 #[cfg(any(feature = "fast", feature = "fixed"))]
 pub(crate) mod minimax;
