@@ -100,9 +100,9 @@ class Tyre:
         rejects (e.g. not finite), naming its flat index.
 
         Runs in the core's batch without the GIL; `threads` (None: one per core from 8,192
-        points per thread on) splits large arrays. When every input is a Python or numpy
-        scalar, the point takes `eval_point`'s path and the values are numpy float64 scalars
-        (shape ()).
+        points per thread on) splits large arrays. One point takes `eval_point`'s path: when
+        every input is a Python or numpy scalar the values are numpy float64 scalars (shape ()),
+        else arrays of the broadcast shape.
         """
         if precision not in ("f64", "f32"):
             raise ValueError(f"precision '{precision}': expected f64 or f32")
@@ -118,7 +118,12 @@ class Tyre:
         arrs = [_f64(x, n) for x, n in (
             (fz, "fz"), (kappa, "kappa"), (alpha, "alpha"), (gamma, "gamma"),
             (phit, "phit"), (vx, "vx"), (p, "p"))]
-        shape = np.broadcast_shapes(*(a.shape for a in arrs))
+        shape = np.broadcast(*arrs).shape
+        if all(a.size == 1 for a in arrs):
+            # One point in arrays: the one-point path, the values reshaped (views of one array).
+            vals = self._inner._eval_point(*(float(a.flat[0]) for a in arrs), int(mode),
+                                           precision == "f32")
+            return dict(zip(OUTPUT_COLUMNS, np.array(vals).reshape((len(vals),) + shape)))
         # A single value goes down as one (the core repeats it); the others as the broadcast shape.
         flat = [a.ravel() if a.size == 1 else
                 np.ascontiguousarray(a if a.shape == shape else np.broadcast_to(a, shape)).ravel()

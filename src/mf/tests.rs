@@ -777,3 +777,105 @@ mod props_fix {
         }
     }
 }
+
+std::thread_local! {
+    /// Kernel calls of this thread: sin cos tan atan acos exp ln √.
+    static CALLS: core::cell::Cell<[u32; 8]> = const { core::cell::Cell::new([0; 8]) };
+}
+
+/// `Libm`, counting its calls (per thread).
+struct Counting;
+
+fn count(k: usize) {
+    CALLS.with(|c| {
+        let mut v = c.get();
+        v[k] += 1;
+        c.set(v);
+    });
+}
+
+impl crate::math::Backend<f64> for Counting {
+    fn sin(x: f64) -> f64 {
+        count(0);
+        libm::sin(x)
+    }
+    fn cos(x: f64) -> f64 {
+        count(1);
+        libm::cos(x)
+    }
+    fn tan(x: f64) -> f64 {
+        count(2);
+        libm::tan(x)
+    }
+    fn atan(x: f64) -> f64 {
+        count(3);
+        libm::atan(x)
+    }
+    fn acos(x: f64) -> f64 {
+        count(4);
+        libm::acos(x)
+    }
+    fn exp(x: f64) -> f64 {
+        count(5);
+        libm::exp(x)
+    }
+    fn ln(x: f64) -> f64 {
+        count(6);
+        libm::log(x)
+    }
+    fn sqrt(x: f64) -> f64 {
+        count(7);
+        libm::sqrt(x)
+    }
+}
+
+/// Where an evaluation's time goes (issue 57; docs/magic-formula.md, "Measured speed"): the
+/// kernel calls of one combined evaluation at Fz0, κ = −0.05, α = 0.05, Vx = 20 m/s, per
+/// version, γ = 0 and 0.03 rad, with and without Mx, My. Printed (`--nocapture`) and held to
+/// these counts, so that a change that adds a kernel call is seen.
+#[test]
+fn kernel_calls_per_evaluation() {
+    // (tyre, γ, moments) → (sin, cos, tan, atan, exp + ln, √).
+    let cases: [(usize, f64, bool, [u32; 6]); 8] = [
+        (0, 0.0, true, [6, 6, 3, 23, 2, 8]),
+        (0, 0.03, true, [6, 6, 3, 23, 2, 8]),
+        (0, 0.0, false, [5, 5, 3, 20, 2, 8]),
+        (1, 0.0, true, [5, 6, 3, 22, 1, 8]),
+        (1, 0.03, true, [7, 6, 3, 25, 1, 8]),
+        (1, 0.0, false, [4, 5, 3, 19, 1, 8]),
+        (1, 0.03, false, [6, 5, 3, 22, 1, 8]),
+        (2, 0.03, false, [6, 5, 3, 22, 1, 8]),
+    ];
+    for (t, gamma, moments, want) in cases {
+        let p = load(TYRES[t].1);
+        let i = Input {
+            fz: p.fnomin,
+            kappa: -0.05,
+            alpha: 0.05,
+            gamma,
+            vx: 20.0,
+            ..Default::default()
+        };
+        let opts = Options {
+            moments,
+            ..Options::default()
+        };
+        CALLS.with(|c| c.set([0; 8]));
+        let o = eval::<f64, Counting>(&p, &i, &opts).unwrap();
+        assert_eq!(o, eval64(&p, i, &opts));
+        let v = CALLS.with(|c| c.get());
+        let got = [v[0], v[1], v[2], v[3], v[4] + v[5] + v[6], v[7]];
+        std::println!(
+            "{} γ = {gamma} moments {moments}: sin {} cos {} tan {} atan {} acos/exp/ln {} √ {}: {} calls",
+            TYRES[t].0,
+            got[0],
+            got[1],
+            got[2],
+            got[3],
+            got[4],
+            got[5],
+            got.iter().sum::<u32>()
+        );
+        assert_eq!(got, want, "{} γ = {gamma} moments {moments}", TYRES[t].0);
+    }
+}
