@@ -1,12 +1,11 @@
 //! Batch evaluation over columns (structure of arrays): [`eval_batch`].
 //!
-//! Each point is [`super::eval`]'s — the same function body ([`super::eval_with`]), so a
-//! batch's outputs equal `mf::eval`'s at every point, to the bit (`host-tests/tests/batch.rs`
+//! Each point is [`super::eval`]'s — the function itself, so a batch's outputs equal
+//! `mf::eval`'s at every point, to the bit (`host-tests/tests/batch.rs`
 //! checks every MFeval oracle point). What the batch saves is what the caller does not ask for:
-//! the overturning and rolling resistance moments Mx, My (a quarter of an evaluation: two
-//! powers, five kernels) when neither column is asked for, the relaxation lengths σx, σy
-//! likewise; and the per-call overhead of a caller's loop (no `Result` per point, no `Output`
-//! copied out).
+//! the overturning and rolling resistance moments Mx, My (five to eight of 45–50 kernel calls,
+//! `mf::tests::kernel_calls_per_evaluation`) when neither column is asked for; and the per-call
+//! overhead of a caller's loop.
 //!
 //! No allocation, no panic: the columns' lengths are checked first ([`BatchError::Length`]); a
 //! rejected point stops the batch ([`BatchError::Point`], the points before it written).
@@ -16,7 +15,7 @@
 //! runs at the scalar speed of [`super::eval`] minus what it skips. See docs/magic-formula.md,
 //! "Measured speed", for the figures and the design that would vectorise it.
 
-use super::{eval_with, EvalError, Flags, Input, Options, Params};
+use super::{eval, EvalError, Flags, Input, Options, Params};
 use crate::math::{Backend, Float};
 
 /// The inputs of a batch, one column per input of [`super::Input`], every column as long as
@@ -78,7 +77,7 @@ pub struct Outputs<'a, F> {
     pub t: Option<&'a mut [F]>,
     /// Residual torque Mzr \[N·m\].
     pub m_zr: Option<&'a mut [F]>,
-    /// σx \[m\] (with `sigma_y`: computed only when one of them is asked for).
+    /// σx \[m\].
     pub sigma_x: Option<&'a mut [F]>,
     /// σy \[m\].
     pub sigma_y: Option<&'a mut [F]>,
@@ -148,8 +147,7 @@ fn check(column: &'static str, len: Option<usize>, expected: usize) -> Result<()
 
 /// The Magic Formula of `p.version` at every point of `inputs`, into the columns of `out` that
 /// are `Some`: at each point what [`super::eval`] gives there, to the bit (the same function).
-/// Mx, My are computed only when `out.mx` or `out.my` is asked for (and `opts.moments` is on),
-/// σx, σy only when `out.sigma_x` or `out.sigma_y` is.
+/// Mx, My are computed only when `out.mx` or `out.my` is asked for (and `opts.moments` is on).
 ///
 /// ```
 /// use gough::{math::Libm, mf::{self, Columns, Input, Options, Outputs, Params, Version}};
@@ -212,7 +210,6 @@ pub fn eval_batch<F: Float, M: Backend<F>>(
         moments: opts.moments && (out.mx.is_some() || out.my.is_some()),
         ..*opts
     };
-    let with_sigma = out.sigma_x.is_some() || out.sigma_y.is_some();
     let at = |c: &[F], i: usize| c.get(i).copied().unwrap_or(F::ZERO);
     for i in 0..n {
         let input = Input {
@@ -224,7 +221,7 @@ pub fn eval_batch<F: Float, M: Backend<F>>(
             vx: at(inputs.vx, i),
             p: inputs.p.and_then(|c| c.get(i).copied()),
         };
-        let o = eval_with::<F, M>(p, &input, &opts, with_sigma)
+        let o = eval::<F, M>(p, &input, &opts)
             .map_err(|error| BatchError::Point { index: i, error })?;
         put(&mut out.fx, i, o.fx);
         put(&mut out.fy, i, o.fy);

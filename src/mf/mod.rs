@@ -318,18 +318,6 @@ pub fn eval<F: Float, M: Backend<F>>(
     input: &Input<F>,
     opts: &Options,
 ) -> Result<Output<F>, EvalError> {
-    eval_with::<F, M>(p, input, opts, true)
-}
-
-/// [`eval`], with the relaxation lengths σx, σy only when `with_sigma` (else 0): the one definition
-/// that [`eval`] (always σ) and [`eval_batch`] (σ when asked for) run.
-#[inline(always)]
-pub(crate) fn eval_with<F: Float, M: Backend<F>>(
-    p: &Params<F>,
-    input: &Input<F>,
-    opts: &Options,
-    with_sigma: bool,
-) -> Result<Output<F>, EvalError> {
     if opts.turn_slip && !turnslip::available(p) {
         return Err(EvalError::TurnSlipUnavailable);
     }
@@ -362,11 +350,7 @@ pub(crate) fn eval_with<F: Float, M: Backend<F>>(
             (F::ZERO, F::ZERO)
         };
         let (k_xk, k_ya) = (prep.fx0.k_xk, prep.fy0.k_ya);
-        let (sigma_x, sigma_y) = if with_sigma {
-            sigma::sigma::<F, M>(p, c, k_xk, k_ya)
-        } else {
-            (F::ZERO, F::ZERO)
-        };
+        let (sigma_x, sigma_y) = sigma::sigma::<F, M>(p, c, k_xk, k_ya);
         let out = Output {
             fx: f.fx,
             fy: f.fy,
