@@ -191,7 +191,7 @@ pub struct Prepared<F> {
     mirrored: bool,
     fx0: Fx0Load<F>,
     fy0: Fy0Load<F>,
-    /// Fy0 at γ = 0 (MF 6.x's F'y (4.E74)); `None` at γ* = 0 and before MF 6.
+    /// Fy0 at γ = 0 (MF 6.x's F'y (4.E74)); `None` at γ* = 0.
     fy0_g0: Option<Fy0Load<F>>,
     mz0: Mz0Load<F>,
     w: WeightsLoad<F>,
@@ -453,7 +453,7 @@ pub(crate) struct View<'a, F> {
     pub(crate) mirrored: bool,
     pub(crate) fx0: &'a Fx0Load<F>,
     pub(crate) fy0: &'a Fy0Load<F>,
-    /// Fy0 at γ = 0 (MF 6.x's F'y (4.E74)); `None` at γ* = 0 and before MF 6.
+    /// Fy0 at γ = 0 (MF 6.x's F'y (4.E74)); `None` at γ* = 0.
     pub(crate) fy0_g0: Option<&'a Fy0Load<F>>,
     pub(crate) mz0: &'a Mz0Load<F>,
     pub(crate) w: &'a WeightsLoad<F>,
@@ -490,8 +490,10 @@ pub(crate) fn stages<F: Float, M: Backend<F>, R>(
     let turn_on = c.turn.is_some();
     let gamma_star = c.gamma_star;
     let fy0 = pure::fy0_load::<F, M>(p, &mut c, gamma_star, turn_on);
-    // Fy0 at γ = 0 for F'y (4.E74): MF 6.x only (MF 5.2's Mz takes the actual Fy − SVyκ).
-    let fy0_g0 = if gamma_star == F::ZERO || !p.version.is_mf6() {
+    // Fy0 at γ = 0 for F'y (4.E74) (MF 6.x; MF 5.2's Mz takes the actual Fy − SVyκ and does
+    // not read it, but testing the version here costs the device's MF 6.1 load stage 5
+    // instructions: docs/firmware.md).
+    let fy0_g0 = if gamma_star == F::ZERO {
         None
     } else {
         Some(pure::fy0_load::<F, M>(p, &mut c, F::ZERO, turn_on))
@@ -585,6 +587,12 @@ impl<F: Float> View<'_, F> {
             self.fy0.zeta2,
             &mut flags,
         );
+        // Fy0 at γ = 0 for MF 6.x's F'y; at γ* = 0 the Fy0 already computed (the common case
+        // on a car).
+        let fy0_g0 = match &self.fy0_g0 {
+            None => fy0,
+            Some(l) => pure::fy0_slip::<F, H, G, M>(l, &mu.fy0_g0, c, s.alpha_star, &mut flags),
+        };
         let fy_arm = match c.version {
             // MF-Tyre 5.2 (and the paper's (17), (69)): Mz = −t·(Fy − SVyκ) + Mzr + s·Fx, with
             // the Fy and the SVyκ (4.E66) of this point — the actual γ, so that Fy − SVyκ is
@@ -595,15 +603,8 @@ impl<F: Float> View<'_, F> {
             // oracle's MF 5.2 Mz with camber (docs/magic-formula.md).
             Version::Delft96 | Version::Mf52 => fy.fy - fy.s_vyk,
             // F'y (4.E74): Fy at γ = 0 (MF 6.x); the weighting Gyκ keeps the actual γ* (TNO,
-            // MFeval) and is taken without the turn-slip ζ2 (MFeval's `internalParams_sub0`). At
-            // γ* = 0 that is the Fy0 already computed (the common case on a car).
-            Version::Mf61 | Version::Mf62 => match &self.fy0_g0 {
-                None => fy.g_yk * fy0,
-                Some(l) => {
-                    fy.g_yk
-                        * pure::fy0_slip::<F, H, G, M>(l, &mu.fy0_g0, c, s.alpha_star, &mut flags)
-                } // (4.E74)
-            },
+            // MFeval) and is taken without the turn-slip ζ2 (MFeval's `internalParams_sub0`).
+            Version::Mf61 | Version::Mf62 => fy.g_yk * fy0_g0, // (4.E74)
         };
         let mz = combined::mz_slip::<F, H, G, M>(
             self.mz,
