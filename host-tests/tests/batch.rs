@@ -16,8 +16,11 @@ fn tyre_for(stem: &str) -> PathBuf {
     data().join("tyres").join(format!("{name}.tir"))
 }
 
-/// Every oracle file: (name, options, params, inputs).
-fn oracle() -> Vec<(String, Options, Params<f64>, Vec<Input<f64>>)> {
+/// One oracle file: its name, options, parameters and inputs.
+type OracleFile = (String, Options, Params<f64>, Vec<Input<f64>>);
+
+/// Every oracle file.
+fn oracle() -> Vec<OracleFile> {
     let mut files: Vec<PathBuf> = std::fs::read_dir(data().join("oracle"))
         .unwrap()
         .map(|e| e.unwrap().path())
