@@ -491,8 +491,8 @@ pub(crate) fn stages<F: Float, M: Backend<F>, R>(
     let gamma_star = c.gamma_star;
     let fy0 = pure::fy0_load::<F, M>(p, &mut c, gamma_star, turn_on);
     // Fy0 at γ = 0 for F'y (4.E74) (MF 6.x; MF 5.2's Mz takes the actual Fy − SVyκ and does
-    // not read it, but testing the version here costs the device's MF 6.1 load stage 5
-    // instructions: docs/firmware.md).
+    // not read it, but testing the version here cost the M4F bench's MF 6.1 load stage 5
+    // instructions, `mf_load_stage_fast` 2,211 → 2,216: MF 5.2 computes it unused).
     let fy0_g0 = if gamma_star == F::ZERO {
         None
     } else {
