@@ -3,11 +3,15 @@
 //!
 //! Then, per slip-stage evaluation (`mf::prepared`), the slip stage alone and with its slopes.
 //!
-//! `cargo bench --bench mf_eval`
+//! Then the batch (`mf::eval_batch`, issue 57): Fx, Fy, Mz at 4,096 random combined-slip points
+//! per iteration, MF 5.2, 6.1, 6.2, f64 (`Libm`) and f32 (`Libm`; `Fast` with the
+//! feature), points/s in criterion's "thrpt" — and the scalar `mf::eval` over the same points.
+//!
+//! `cargo bench --bench mf_eval` (`-- batch` for the batch groups alone)
 use criterion::{criterion_group, criterion_main, Criterion};
-use gough::math::Libm;
+use gough::math::{Backend, Float, Libm};
 use gough::mf::prepared::{Operating, Prepared};
-use gough::mf::{self, Input, Options, Params};
+use gough::mf::{self, Columns, Input, Options, Outputs, Params};
 use std::hint::black_box;
 
 const FILES: &[(&str, &str)] = &[
@@ -135,9 +139,111 @@ fn bench(c: &mut Criterion) {
     }
 }
 
+/// The batch's columns: `n` random combined-slip points (a fixed LCG): Fz 0.4–1.6·FNOMIN, κ
+/// ±0.3, α ±0.25 rad, γ ±0.05 rad, Vx 5–40 m/s.
+struct Points<F> {
+    fz: Vec<F>,
+    kappa: Vec<F>,
+    alpha: Vec<F>,
+    gamma: Vec<F>,
+    vx: Vec<F>,
+}
+
+fn points<F: Float>(fnomin: f64, n: usize) -> Points<F> {
+    let mut s = 0x9e37_79b9_7f4a_7c15u64;
+    let mut u = move || {
+        s = s
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(1_442_695_040_888_963_407);
+        (s >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let mut pts = Points {
+        fz: vec![],
+        kappa: vec![],
+        alpha: vec![],
+        gamma: vec![],
+        vx: vec![],
+    };
+    for _ in 0..n {
+        pts.fz.push(F::from_f64(fnomin * (0.4 + 1.2 * u())));
+        pts.kappa.push(F::from_f64(0.6 * u() - 0.3));
+        pts.alpha.push(F::from_f64(0.5 * u() - 0.25));
+        pts.gamma.push(F::from_f64(0.1 * u() - 0.05));
+        pts.vx.push(F::from_f64(5.0 + 35.0 * u()));
+    }
+    pts
+}
+
+fn batch_of<F: Float, M: Backend<F>>(
+    g: &mut criterion::BenchmarkGroup<'_, criterion::measurement::WallTime>,
+    label: &str,
+    p: &Params<F>,
+) {
+    let pts = points::<F>(p.fnomin.to_f64(), BATCH);
+    let cols = Columns {
+        fz: &pts.fz,
+        kappa: &pts.kappa,
+        alpha: &pts.alpha,
+        gamma: &pts.gamma,
+        vx: &pts.vx,
+        phit: None,
+        p: None,
+    };
+    let opts = Options::default();
+    let (mut fx, mut fy, mut mz) = (
+        vec![F::ZERO; BATCH],
+        vec![F::ZERO; BATCH],
+        vec![F::ZERO; BATCH],
+    );
+    g.bench_function(format!("eval_batch {label} (Fx, Fy, Mz)"), |b| {
+        b.iter(|| {
+            let mut out = Outputs {
+                fx: Some(&mut fx),
+                fy: Some(&mut fy),
+                mz: Some(&mut mz),
+                ..Outputs::default()
+            };
+            mf::eval_batch::<F, M>(p, black_box(&cols), &opts, &mut out).unwrap();
+        })
+    });
+    g.bench_function(format!("eval {label} (every output)"), |b| {
+        b.iter(|| {
+            for i in 0..BATCH {
+                let input = Input {
+                    fz: pts.fz[i],
+                    kappa: pts.kappa[i],
+                    alpha: pts.alpha[i],
+                    gamma: pts.gamma[i],
+                    phit: F::ZERO,
+                    vx: pts.vx[i],
+                    p: None,
+                };
+                black_box(mf::eval::<F, M>(p, black_box(&input), &opts).unwrap());
+            }
+        })
+    });
+}
+
+/// Points per batch iteration.
+const BATCH: usize = 4096;
+
+fn batch(c: &mut Criterion) {
+    for (name, text) in &FILES[1..] {
+        let p64: Params<f64> = gough::tir::parse(text).unwrap().params;
+        let p32 = p64.cast::<f32>();
+        let mut g = c.benchmark_group(format!("batch/{name}"));
+        g.throughput(criterion::Throughput::Elements(BATCH as u64));
+        batch_of::<f64, Libm>(&mut g, "f64 Libm", &p64);
+        batch_of::<f32, Libm>(&mut g, "f32 Libm", &p32);
+        #[cfg(feature = "fast")]
+        batch_of::<f32, gough::math::Fast>(&mut g, "f32 Fast", &p32);
+        g.finish();
+    }
+}
+
 criterion_group! {
     name = benches;
     config = Criterion::default().sample_size(30).measurement_time(std::time::Duration::from_secs(2));
-    targets = bench
+    targets = bench, batch
 }
 criterion_main!(benches);

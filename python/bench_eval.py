@@ -58,10 +58,20 @@ def main():
         for prec in ("f64", "f32"):
             dt = best_of(lambda: tyre.eval(fz, kappa, alpha, gamma, vx=16.7, precision=prec), a.repeat)
             rows.append((f"`Tyre.eval`, {prec}, combined (mode 111)", n, n / dt))
+            if n >= 100_000:
+                dt = best_of(lambda: tyre.eval(fz, kappa, alpha, gamma, vx=16.7, precision=prec,
+                                               threads=1), a.repeat)
+                rows.append((f"`Tyre.eval`, {prec}, combined (mode 111), `threads=1`", n, n / dt))
     n = 10_000
     fz, kappa, alpha, gamma = points(n, rng)
-    dt = best_of(lambda: [tyre.eval(fz[i], kappa[i], alpha[i], gamma[i], vx=16.7) for i in range(n)], 1)
-    rows.append(("`Tyre.eval` one point per call (Python loop), f64", n, n / dt))
+    pts = [(float(fz[i]), float(kappa[i]), float(alpha[i]), float(gamma[i])) for i in range(n)]
+    dt = best_of(lambda: [tyre.eval(f, k, al, g, vx=16.7) for f, k, al, g in pts], a.repeat)
+    rows.append(("`Tyre.eval` one point per call (Python floats, Python loop), f64", n, n / dt))
+    dt = best_of(lambda: [tyre.eval_point(f, k, al, g, vx=16.7) for f, k, al, g in pts], a.repeat)
+    rows.append(("`Tyre.eval_point` one point per call (Python loop), f64", n, n / dt))
+    one = [np.array([f]) for f, _, _, _ in pts[:2000]]
+    dt = best_of(lambda: [tyre.eval(x, 0.0, 0.05, vx=16.7) for x in one], a.repeat)
+    rows.append(("`Tyre.eval` one-element arrays (Python loop), f64", 2000, 2000 / dt))
     if a.gough:
         n = 100_000
         fz, kappa, alpha, gamma = points(n, rng)
@@ -75,10 +85,10 @@ def main():
     print(f"Machine: {platform.machine()}, {os.cpu_count()} cores, Python {platform.python_version()}, "
           f"numpy {np.__version__}; best of {a.repeat}; MagicFormula61_Parameters.tir, random points "
           "(Fz 1–8 kN, |κ| ≤ 0.3, |α| ≤ 0.25 rad, |γ| ≤ 0.05 rad, Vx 16.7 m/s).\n")
-    print("| what | points | points/s |")
-    print("|---|---:|---:|")
+    print("| what | points | points/s | µs per point |")
+    print("|---|---:|---:|---:|")
     for what, n, pps in rows:
-        print(f"| {what} | {n:,} | {pps:,.0f} |")
+        print(f"| {what} | {n:,} | {pps:,.0f} | {1e6 / pps:.3g} |")
 
 
 if __name__ == "__main__":

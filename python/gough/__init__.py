@@ -41,6 +41,10 @@ def _tir(fn, arg):
         raise TirError(msg, line, key) from None
 
 
+#: The scalar types `Tyre.eval` sends down its one-point path.
+_SCALARS = (float, int, np.float64, np.float32, np.int64, np.int32)
+
+
 def _f64(x, name: str) -> np.ndarray:
     try:
         return np.asarray(x, dtype=np.float64)
@@ -85,7 +89,7 @@ class Tyre:
         return self._inner.longvl
 
     def eval(self, fz, kappa, alpha, gamma=0.0, vx=None, p=None, phit=0.0, mode=111,
-             precision="f64") -> dict[str, np.ndarray]:
+             precision="f64", threads=None) -> dict[str, np.ndarray]:
         """The Magic Formula, vectorised: the inputs broadcast against each other (numpy rules)
         and every output has the broadcast shape.
 
@@ -94,18 +98,53 @@ class Tyre:
         no turn slip). Returns a dict with the columns of `gough mf eval`: Fx, Fy, Mz, Mx, My,
         mux, muy, Kya, Kxk, t, Mzr, sigmax, sigmay. Raises ValueError for a point the core
         rejects (e.g. not finite), naming its flat index.
+
+        Runs in the core's batch without the GIL; `threads` (None: one per core from 8,192
+        points per thread on) splits large arrays. One point takes `eval_point`'s path: when
+        every input is a Python or numpy scalar the values are numpy float64 scalars (shape ()),
+        else arrays of the broadcast shape.
         """
         if precision not in ("f64", "f32"):
             raise ValueError(f"precision '{precision}': expected f64 or f32")
+        if all(type(x) in _SCALARS for x in (fz, kappa, alpha, gamma, phit)) and \
+                (vx is None or type(vx) in _SCALARS) and (p is None or type(p) in _SCALARS):
+            vals = self._inner._eval_point(
+                float(fz), float(kappa), float(alpha), float(gamma), float(phit),
+                self._inner.longvl if vx is None else float(vx), 0.0 if p is None else float(p),
+                int(mode), precision == "f32")
+            return dict(zip(OUTPUT_COLUMNS, np.array(vals)))
         vx = self.longvl if vx is None else vx
         p = 0.0 if p is None else p
-        arrs = np.broadcast_arrays(*(_f64(x, n) for x, n in (
+        arrs = [_f64(x, n) for x, n in (
             (fz, "fz"), (kappa, "kappa"), (alpha, "alpha"), (gamma, "gamma"),
-            (phit, "phit"), (vx, "vx"), (p, "p"))))
-        shape = arrs[0].shape
-        flat = [np.ascontiguousarray(a).ravel() for a in arrs]
-        out = self._inner._eval(*flat, int(mode), precision == "f32")
+            (phit, "phit"), (vx, "vx"), (p, "p"))]
+        shape = np.broadcast(*arrs).shape
+        if all(a.size == 1 for a in arrs):
+            # One point in arrays: the one-point path, the values reshaped (views of one array).
+            vals = self._inner._eval_point(*(float(a.flat[0]) for a in arrs), int(mode),
+                                           precision == "f32")
+            return dict(zip(OUTPUT_COLUMNS, np.array(vals).reshape((len(vals),) + shape)))
+        # A single value goes down as one (the core repeats it); the others as the broadcast shape.
+        flat = [a.ravel() if a.size == 1 else
+                np.ascontiguousarray(a if a.shape == shape else np.broadcast_to(a, shape)).ravel()
+                for a in arrs]
+        out = self._inner._eval(*flat, int(mode), precision == "f32",
+                                None if threads is None else int(threads))
         return {k: v.reshape(shape) for k, v in out.items()}
+
+    def eval_point(self, fz: float, kappa: float, alpha: float, gamma: float = 0.0,
+                   vx: float | None = None, p: float | None = None, phit: float = 0.0,
+                   mode: int = 111, precision: str = "f64") -> tuple:
+        """The Magic Formula at one point, without numpy: a tuple of floats in the order of
+        `OUTPUT_COLUMNS` (Fx, Fy, Mz, Mx, My, mux, muy, Kya, Kxk, t, Mzr, sigmax, sigmay) —
+        the values `eval` gives at that point. For one call per point from Python (a
+        simulation step, a controller in the loop). Arguments as `eval`'s, scalars only."""
+        if precision not in ("f64", "f32"):
+            raise ValueError(f"precision '{precision}': expected f64 or f32")
+        return self._inner._eval_point(
+            float(fz), float(kappa), float(alpha), float(gamma), float(phit),
+            self._inner.longvl if vx is None else float(vx), 0.0 if p is None else float(p),
+            int(mode), precision == "f32")
 
 
 def _columns(log) -> Mapping[str, Any]:

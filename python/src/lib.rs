@@ -1,11 +1,13 @@
 //! `gough._gough`: the extension module under the Python package `gough` (python/gough/).
 //!
-//! It wraps, never re-implements: `.tir` text goes through `gough::tir::parse`, each point of
-//! `Tyre.eval` through `gough_host::mfrun::eval_row` (what `gough mf eval` runs), a friction
+//! It wraps, never re-implements: `.tir` text goes through `gough::tir::parse`, the points of
+//! `Tyre.eval` through the core's batch `gough::mf::eval_batch` (at each point what
+//! `gough_host::mfrun::eval_row`, which `gough mf eval` runs, gives, to the bit), a friction
 //! log through `gough_host::mu::Method::estimator` (what `gough mu estimate` runs), a gap log through
 //! `gough_host::gap::diagnose` (what `gough gap diagnose` runs). The pure-Python layer does the
 //! broadcasting and the pandas conversions; this module takes and returns flat `float64` arrays.
-use gough::mf::{Options, Params};
+use gough::math::{Backend, Libm};
+use gough::mf::{self as mf, BatchError, Columns, Options, Outputs, Params};
 use gough::proto::Wheel;
 use gough_host::gap;
 use gough_host::mfrun::{self, Precision};
@@ -14,7 +16,7 @@ use numpy::{IntoPyArray, PyArray1, PyReadonlyArray1};
 use pyo3::create_exception;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
-use pyo3::types::PyDict;
+use pyo3::types::{PyDict, PyTuple};
 
 create_exception!(
     _gough,
@@ -88,10 +90,13 @@ impl Tyre {
     }
 
     /// The Magic Formula at each point of equal-length 1-D float64 arrays (the Python layer
-    /// broadcasts). `p` = 0 means INFLPRES. Returns `{column: array}` with the columns of
-    /// `gough mf eval` after its inputs. Raises `ValueError` naming the first point that the
-    /// core rejects.
+    /// broadcasts), through the core's batch (`gough::mf::eval_batch`, the columns of
+    /// `gough mf eval`: each point equals `mfrun::eval_row`'s to the bit). `p` = 0 means
+    /// INFLPRES. Runs without the GIL, on `threads` threads (`None`: one per core when there
+    /// are at least [`PAR_MIN`] points per thread). Returns `{column: array}`; raises
+    /// `ValueError` naming the first point that the core rejects.
     #[allow(clippy::too_many_arguments)]
+    #[pyo3(signature = (fz, kappa, alpha, gamma, phit, vx, p, mode, f32, threads=None))]
     fn _eval<'py>(
         &self,
         py: Python<'py>,
@@ -104,49 +109,39 @@ impl Tyre {
         p: PyReadonlyArray1<'py, f64>,
         mode: u16,
         f32: bool,
+        threads: Option<usize>,
     ) -> PyResult<Bound<'py, PyDict>> {
-        let opts = Options::from_use_mode(mode).ok_or_else(|| {
-            PyValueError::new_err(format!(
-                "mode {mode}: expected 3 digits, each 1 or 2 (e.g. 111, 211, 121, 221, 112)"
-            ))
-        })?;
+        let opts = options(mode)?;
         let cols = [&fz, &kappa, &alpha, &gamma, &phit, &vx, &p].map(|a| a.as_slice());
         let mut s: Vec<&[f64]> = Vec::with_capacity(7);
         for c in cols {
             s.push(c.map_err(|e| PyValueError::new_err(e.to_string()))?);
         }
-        let n = s[0].len();
-        if s.iter().any(|c| c.len() != n) {
+        // A column of one value stands for every point (the Python layer's scalars).
+        let n = if s.iter().any(|c| c.is_empty()) {
+            0
+        } else {
+            s.iter().map(|c| c.len()).max().unwrap_or(0)
+        };
+        if s.iter().any(|c| c.len() != n && c.len() != 1) {
             return Err(PyValueError::new_err("inputs of different lengths"));
         }
-        let p32 = self.params.cast::<f32>();
-        let prec = if f32 { Precision::F32 } else { Precision::F64 };
         let mut out = vec![vec![0.0f64; n]; mfrun::OUTPUT_COLUMNS.len()];
         let params = &self.params;
-        let err = py.detach(|| {
-            for i in 0..n {
-                let row = mfrun::InputRow {
-                    fz: s[0][i],
-                    kappa: s[1][i],
-                    alpha: s[2][i],
-                    gamma: s[3][i],
-                    phit: s[4][i],
-                    vx: s[5][i],
-                    p: s[6][i],
-                };
-                match mfrun::eval_row(params, &p32, &row.input(), &opts, prec) {
-                    Ok(o) => {
-                        for (c, v) in out.iter_mut().zip(mfrun::output_values(&o)) {
-                            c[i] = v;
-                        }
-                    }
-                    Err(e) => return Some(format!("point {i}: {e}")),
-                }
-            }
-            None
+        let threads = threads.unwrap_or_else(|| {
+            let cores = std::thread::available_parallelism().map_or(1, |c| c.get());
+            cores.min(n / PAR_MIN).max(1)
         });
-        if let Some(e) = err {
-            return Err(PyValueError::new_err(e));
+        let err = py.detach(|| {
+            let cols = [s[0], s[1], s[2], s[3], s[4], s[5], s[6]];
+            if f32 {
+                batch::<f32>(&params.cast::<f32>(), cols, n, &opts, &mut out, threads)
+            } else {
+                batch::<f64>(params, cols, n, &opts, &mut out, threads)
+            }
+        });
+        if let Err(e) = err {
+            return Err(PyValueError::new_err(e.to_string()));
         }
         let d = PyDict::new(py);
         for (name, col) in mfrun::OUTPUT_COLUMNS.iter().zip(out) {
@@ -154,6 +149,202 @@ impl Tyre {
         }
         Ok(d)
     }
+
+    /// The Magic Formula at one point, without numpy: a tuple of the [`mfrun::OUTPUT_COLUMNS`]
+    /// as floats (`mfrun::eval_row`, what `gough mf eval` runs). `p` = 0 means INFLPRES.
+    #[allow(clippy::too_many_arguments)]
+    fn _eval_point<'py>(
+        &self,
+        py: Python<'py>,
+        fz: f64,
+        kappa: f64,
+        alpha: f64,
+        gamma: f64,
+        phit: f64,
+        vx: f64,
+        p: f64,
+        mode: u16,
+        f32: bool,
+    ) -> PyResult<Bound<'py, PyTuple>> {
+        let opts = options(mode)?;
+        let row = mfrun::InputRow {
+            fz,
+            kappa,
+            alpha,
+            gamma,
+            phit,
+            vx,
+            p,
+        };
+        let o = if f32 {
+            mfrun::eval_row(
+                &self.params,
+                &self.params.cast::<f32>(),
+                &row.input(),
+                &opts,
+                Precision::F32,
+            )
+        } else {
+            gough::mf::eval::<f64, Libm>(&self.params, &row.input(), &opts)
+        };
+        let o = o.map_err(|e| PyValueError::new_err(format!("point 0: {e}")))?;
+        PyTuple::new(py, mfrun::output_values(&o))
+    }
+}
+
+/// Points per thread below which `Tyre.eval` stays on one thread.
+const PAR_MIN: usize = 8192;
+
+fn options(mode: u16) -> PyResult<Options> {
+    Options::from_use_mode(mode).ok_or_else(|| {
+        PyValueError::new_err(format!(
+            "mode {mode}: expected 3 digits, each 1 or 2 (e.g. 111, 211, 121, 221, 112)"
+        ))
+    })
+}
+
+/// A float path of the batch: `f64` (the columns as they are) or `f32` (converted, as
+/// `mfrun::eval_row`'s f32 path converts a point).
+trait Path: gough::math::Float + Send + Sync
+where
+    Libm: Backend<Self>,
+{
+    fn from64(x: f64) -> Self;
+}
+impl Path for f64 {
+    fn from64(x: f64) -> Self {
+        x
+    }
+}
+impl Path for f32 {
+    fn from64(x: f64) -> Self {
+        x as f32
+    }
+}
+
+/// `mf::eval_batch` over the 7 input columns (fz, κ, α, γ, φt, Vx, p; p = 0: INFLPRES; a
+/// column of one value: that value at each of the `n` points) into
+/// the 13 output columns of [`mfrun::OUTPUT_COLUMNS`], in `threads` contiguous chunks on
+/// scoped threads; the first rejected point's error (its index in the whole batch).
+fn batch<F: Path>(
+    params: &Params<F>,
+    cols: [&[f64]; 7],
+    n: usize,
+    opts: &Options,
+    out: &mut [Vec<f64>],
+    threads: usize,
+) -> Result<(), BatchError>
+where
+    Libm: Backend<F>,
+{
+    // p = 0 is INFLPRES: the column carries the value `None` would take.
+    let inflpres = params.inflpres;
+    let conv = |c: &[f64], k: usize| -> Vec<F> {
+        let f = |x: f64| {
+            if k == 6 && x == 0.0 {
+                inflpres
+            } else {
+                F::from64(x)
+            }
+        };
+        match c {
+            [x] => vec![f(*x); n],
+            _ => c.iter().map(|&x| f(x)).collect(),
+        }
+    };
+    let ins: Vec<Vec<F>> = cols.iter().enumerate().map(|(k, c)| conv(c, k)).collect();
+    let mut res: Vec<Vec<F>> = vec![vec![F::ZERO; n]; 13];
+    let chunk = n.div_ceil(threads.max(1)).max(1);
+    let run = |start: usize, outs: Vec<&mut [F]>| -> Result<(), BatchError> {
+        let end = (start + chunk).min(n);
+        let c = |k: usize| &ins[k][start..end];
+        let columns = Columns {
+            fz: c(0),
+            kappa: c(1),
+            alpha: c(2),
+            gamma: c(3),
+            phit: Some(c(4)),
+            vx: c(5),
+            p: Some(c(6)),
+        };
+        let mut it = outs.into_iter();
+        let mut next = || it.next();
+        // In `mfrun::OUTPUT_COLUMNS` order: Fx Fy Mz Mx My mux muy Kya Kxk t Mzr sigmax sigmay.
+        let (fx, fy, mz, mx, my, mu_x, mu_y, k_ya, k_xk, t, m_zr, sigma_x, sigma_y) = (
+            next(),
+            next(),
+            next(),
+            next(),
+            next(),
+            next(),
+            next(),
+            next(),
+            next(),
+            next(),
+            next(),
+            next(),
+            next(),
+        );
+        let mut o = Outputs {
+            fx,
+            fy,
+            mz,
+            mx,
+            my,
+            mu_x,
+            mu_y,
+            k_ya,
+            k_xk,
+            t,
+            m_zr,
+            sigma_x,
+            sigma_y,
+            ..Outputs::default()
+        };
+        mf::eval_batch::<F, Libm>(params, &columns, opts, &mut o).map_err(|e| match e {
+            BatchError::Point { index, error } => BatchError::Point {
+                index: index + start,
+                error,
+            },
+            e => e,
+        })
+    };
+    // Each thread gets its chunk of every output column.
+    let mut per: Vec<Vec<&mut [F]>> = (0..n.div_ceil(chunk)).map(|_| Vec::new()).collect();
+    for col in res.iter_mut() {
+        for (k, part) in col.chunks_mut(chunk).enumerate() {
+            per[k].push(part);
+        }
+    }
+    let result = if per.len() <= 1 {
+        per.into_iter().next().map_or(Ok(()), |outs| run(0, outs))
+    } else {
+        std::thread::scope(|sc| {
+            let handles: Vec<_> = per
+                .into_iter()
+                .enumerate()
+                .map(|(k, outs)| {
+                    let run = &run;
+                    sc.spawn(move || run(k * chunk, outs))
+                })
+                .collect();
+            // The first error in point order: chunks are in order.
+            let mut first = Ok(());
+            for h in handles {
+                let r = h.join().unwrap_or_else(|e| std::panic::resume_unwind(e));
+                if first.is_ok() {
+                    first = r;
+                }
+            }
+            first
+        })
+    };
+    for (dst, src) in out.iter_mut().zip(&res) {
+        for (d, &x) in dst.iter_mut().zip(src) {
+            *d = x.to_f64();
+        }
+    }
+    result
 }
 
 /// μ, σ and the state names of an estimator run.

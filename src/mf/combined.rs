@@ -132,9 +132,9 @@ pub struct Fy<F> {
     pub fy: F,
     /// Gyκ (14), (4.E59). It does not depend on Fy0, μy or ζ2: the aligning torque reuses it.
     pub g_yk: F,
-    /// SVyκ per unit μy·ζ2 \[N\]: SVyκ = μy·ζ2·`s_vyk_per_mu` (with the low-speed reduction),
-    /// so that the aligning torque gets SVyκ at another μy without the kernels again.
-    pub s_vyk_per_mu: F,
+    /// SVyκ \[N\] (16), (4.E66), with the low-speed reduction: what MF 5.2's aligning torque
+    /// takes off Fy.
+    pub s_vyk: F,
 }
 
 /// Gyκ (14), (4.E59), (4.E60), with Byκ (15), (4.E62) and κS (4.E61): depends on neither Fy0
@@ -183,7 +183,7 @@ pub fn fy_slip<F: Float, H: Lift<F>, G: Lift<F> + Lift<H>, M: Backend<G>>(
     Fy {
         fy: g_yk * fy0 + s_vyk, // (13), (4.E58)
         g_yk,
-        s_vyk_per_mu,
+        s_vyk,
     }
 }
 

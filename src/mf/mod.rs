@@ -36,6 +36,7 @@
 //! The vertical model (loaded radius, contact patch, Fz from deflection) and the MF 6.2
 //! loaded-radius search: Fz is an input here. Transient behaviour is in the `relax` module.
 
+mod batch;
 pub(crate) mod combined;
 pub(crate) mod limits;
 pub(crate) mod moments;
@@ -45,6 +46,7 @@ pub(crate) mod pure;
 pub(crate) mod sigma;
 pub mod turnslip;
 
+pub use batch::{eval_batch, BatchError, Columns, Outputs};
 pub use params::{Key, Need, Params, Side, Since, Version, IGNORED_KEYS};
 
 use crate::math::{Backend, Float};

@@ -42,7 +42,9 @@ pub fn mx<F: Float, M: Backend<F>>(p: &Params<F>, c: &Conditioned<F>, fy: F) -> 
         + r0 * fy * p.lmx * (p.qsx13 + p.qsx14 * g.abs())
 }
 
-/// x^y for x ≥ 0 as exp(y·ln x); 0^y = 0 for y > 0 and 1 for y = 0.
+/// x^y for x ≥ 0 as exp(y·ln x); 0^y = 0 for y > 0 and 1 for y = 0. 1^y and x^0 are 1
+/// without the kernels (what exp(y·ln x) gives there: ln 1 = 0, exp 0 = 1): the pressure power
+/// at p = NOMPRES, the usual case, costs nothing.
 fn pow<F: Float, M: Backend<F>>(x: F, y: F) -> F {
     if x <= F::ZERO {
         if y == F::ZERO {
@@ -50,6 +52,8 @@ fn pow<F: Float, M: Backend<F>>(x: F, y: F) -> F {
         } else {
             F::ZERO
         }
+    } else if x == F::ONE || y == F::ZERO {
+        F::ONE
     } else {
         M::exp(y * M::ln(x))
     }

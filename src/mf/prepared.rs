@@ -191,7 +191,7 @@ pub struct Prepared<F> {
     mirrored: bool,
     fx0: Fx0Load<F>,
     fy0: Fy0Load<F>,
-    /// Fy0 at γ = 0 (MF 6.x's F'y (4.E74), MF 5.2's SVyκ at μy(γ = 0)); `None` at γ* = 0.
+    /// Fy0 at γ = 0 (MF 6.x's F'y (4.E74)); `None` at γ* = 0.
     fy0_g0: Option<Fy0Load<F>>,
     mz0: Mz0Load<F>,
     w: WeightsLoad<F>,
@@ -453,7 +453,7 @@ pub(crate) struct View<'a, F> {
     pub(crate) mirrored: bool,
     pub(crate) fx0: &'a Fx0Load<F>,
     pub(crate) fy0: &'a Fy0Load<F>,
-    /// Fy0 at γ = 0 (MF 6.x's F'y (4.E74), MF 5.2's SVyκ at μy(γ = 0)); `None` at γ* = 0.
+    /// Fy0 at γ = 0 (MF 6.x's F'y (4.E74)); `None` at γ* = 0.
     pub(crate) fy0_g0: Option<&'a Fy0Load<F>>,
     pub(crate) mz0: &'a Mz0Load<F>,
     pub(crate) w: &'a WeightsLoad<F>,
@@ -490,6 +490,9 @@ pub(crate) fn stages<F: Float, M: Backend<F>, R>(
     let turn_on = c.turn.is_some();
     let gamma_star = c.gamma_star;
     let fy0 = pure::fy0_load::<F, M>(p, &mut c, gamma_star, turn_on);
+    // Fy0 at γ = 0 for F'y (4.E74) (MF 6.x; MF 5.2's Mz takes the actual Fy − SVyκ and does
+    // not read it, but testing the version here cost the M4F bench's MF 6.1 load stage 5
+    // instructions, `mf_load_stage_fast` 2,211 → 2,216: MF 5.2 computes it unused).
     let fy0_g0 = if gamma_star == F::ZERO {
         None
     } else {
@@ -584,20 +587,23 @@ impl<F: Float> View<'_, F> {
             self.fy0.zeta2,
             &mut flags,
         );
-        // F'y (4.E74): Fy at γ = 0 (MF 6.x); the weighting Gyκ keeps the actual γ* (TNO,
-        // MFeval). At γ* = 0 that is the Fy0 already computed (the common case on a car).
-        let (fy0_g0, mu_y_g0) = match &self.fy0_g0 {
-            None => (fy0, mu_y),
-            Some(l) => (
-                pure::fy0_slip::<F, H, G, M>(l, &mu.fy0_g0, c, s.alpha_star, &mut flags),
-                mu.fy0_g0.mu_y,
-            ),
+        // Fy0 at γ = 0 for MF 6.x's F'y; at γ* = 0 the Fy0 already computed (the common case
+        // on a car).
+        let fy0_g0 = match &self.fy0_g0 {
+            None => fy0,
+            Some(l) => pure::fy0_slip::<F, H, G, M>(l, &mu.fy0_g0, c, s.alpha_star, &mut flags),
         };
-        // The weight and the κ-induced shift of F'y are taken without the turn-slip ζ2
-        // (MFeval's `internalParams_sub0`): Gyκ is Fy's own, SVyκ is Fy's per unit μy at
-        // μy(γ = 0).
         let fy_arm = match c.version {
-            Version::Delft96 | Version::Mf52 => fy.fy - fy.s_vyk_per_mu * mu_y_g0,
+            // MF-Tyre 5.2 (and the paper's (17), (69)): Mz = −t·(Fy − SVyκ) + Mzr + s·Fx, with
+            // the Fy and the SVyκ (4.E66) of this point — the actual γ, so that Fy − SVyκ is
+            // Gyκ·Fy0: the κ-induced side force acts at the contact centre, without trail.
+            // DIFFERS FROM MFeval 4.0: 4.0 subtracts an SVyκ at μy(γ = 0) (its γ = 0 evaluation's
+            // μy), which leaves (μy(γ) − μy(0))·SVyκ/μy(γ) under the trail; MFeval 4.3.1 follows
+            // the manual, as we do. Tests: `mf::tests::mf52_mz_subtracts_its_own_svyk`, the
+            // oracle's MF 5.2 Mz with camber (docs/magic-formula.md).
+            Version::Delft96 | Version::Mf52 => fy.fy - fy.s_vyk,
+            // F'y (4.E74): Fy at γ = 0 (MF 6.x); the weighting Gyκ keeps the actual γ* (TNO,
+            // MFeval) and is taken without the turn-slip ζ2 (MFeval's `internalParams_sub0`).
             Version::Mf61 | Version::Mf62 => fy.g_yk * fy0_g0, // (4.E74)
         };
         let mz = combined::mz_slip::<F, H, G, M>(

@@ -296,6 +296,52 @@ fn digressive_friction_factor() {
     assert_eq!(c.lmuy_star, 0.5);
 }
 
+/// MF-Tyre 5.2: Mz = −t·(Fy − SVyκ) + Mzr + s·Fx with the SVyκ (4.E66), (4.E67) of the point's
+/// own Fy — at the actual camber, as MFeval 4.3.1 has it. DIFFERS FROM MFeval 4.0, which takes
+/// SVyκ at μy(γ = 0): on the bundled MF 5.2 tyre at Fz0, κ = 0.05, α = 0.1, γ = 0.12 rad the
+/// two are 0.50 N·m apart (docs/magic-formula.md). SVyκ and μy are computed here from the file's coefficients.
+#[test]
+fn mf52_mz_subtracts_its_own_svyk() {
+    let p = load(TYRES[0].1);
+    assert_eq!(p.version, Version::Mf52);
+    let (fz, kappa, alpha, gamma) = (p.fnomin, 0.05, 0.1, 0.12);
+    let o = eval64(
+        &p,
+        Input {
+            fz,
+            kappa,
+            alpha,
+            gamma,
+            vx: p.longvl,
+            ..Default::default()
+        },
+        &Options::default(),
+    );
+    assert!(o.flags.is_empty(), "{:?}", o.flags);
+    let fz0 = p.lfzo * p.fnomin;
+    let dfz = (fz - fz0) / fz0; // (4.E2a)
+    let g_y = gamma * p.lgay;
+    let mu_y0 = p.lmuy * (p.pdy1 + p.pdy2 * dfz); // (4.E23) at γ = 0
+    let mu_y = mu_y0 * (1.0 - p.pdy3 * g_y * g_y); // (4.E23)
+    let s_vyk = mu_y
+        * fz
+        * (p.rvy1 + p.rvy2 * dfz + p.rvy3 * gamma)
+        * (p.rvy4 * alpha).atan().cos()
+        * (p.rvy5 * (p.rvy6 * kappa).atan()).sin()
+        * p.lvyka; // (4.E67), (4.E66)
+    let s = combined::Arm::from_params(&p).s_at(o.fy, dfz, gamma); // (A56)
+    let mz_52 = -o.t * (o.fy - s_vyk) + o.m_zr + s * o.fx;
+    assert!((o.mz - mz_52).abs() < 1e-9, "{} vs {}", o.mz, mz_52);
+    // MFeval 4.0's form: SVyκ at μy(γ = 0).
+    let mz_40 = -o.t * (o.fy - s_vyk * mu_y0 / mu_y) + o.m_zr + s * o.fx;
+    assert!(
+        (o.mz - mz_40 - 0.5025).abs() < 1e-4,
+        "{} vs 4.0's {}",
+        o.mz,
+        mz_40
+    );
+}
+
 /// The paper, eq. (3): D is the peak value. With no shifts and E ≤ 1, C > 1, max |Fy0| = Dy.
 #[test]
 fn d_is_the_peak() {
@@ -729,5 +775,108 @@ mod props_fix {
                 Err(e) => prop_assert!(false, "unexpected {e:?}"),
             }
         }
+    }
+}
+
+std::thread_local! {
+    /// Kernel calls of this thread: sin cos tan atan acos exp ln √.
+    static CALLS: core::cell::Cell<[u32; 8]> = const { core::cell::Cell::new([0; 8]) };
+}
+
+/// `Libm`, counting its calls (per thread).
+struct Counting;
+
+fn count(k: usize) {
+    CALLS.with(|c| {
+        let mut v = c.get();
+        v[k] += 1;
+        c.set(v);
+    });
+}
+
+impl crate::math::Backend<f64> for Counting {
+    fn sin(x: f64) -> f64 {
+        count(0);
+        libm::sin(x)
+    }
+    fn cos(x: f64) -> f64 {
+        count(1);
+        libm::cos(x)
+    }
+    fn tan(x: f64) -> f64 {
+        count(2);
+        libm::tan(x)
+    }
+    fn atan(x: f64) -> f64 {
+        count(3);
+        libm::atan(x)
+    }
+    fn acos(x: f64) -> f64 {
+        count(4);
+        libm::acos(x)
+    }
+    fn exp(x: f64) -> f64 {
+        count(5);
+        libm::exp(x)
+    }
+    fn ln(x: f64) -> f64 {
+        count(6);
+        libm::log(x)
+    }
+    fn sqrt(x: f64) -> f64 {
+        count(7);
+        libm::sqrt(x)
+    }
+}
+
+/// Where an evaluation's time goes (issue 57; docs/magic-formula.md, "Measured speed"): the
+/// kernel calls of one combined evaluation at Fz0, κ = −0.05, α = 0.05, Vx = 20 m/s, per
+/// version, γ = 0 and 0.03 rad, with and without Mx, My. Printed (`--nocapture`) and held to
+/// these counts, so that a change that adds a kernel call is seen.
+#[test]
+fn kernel_calls_per_evaluation() {
+    // (tyre, γ, moments) → (sin, cos, tan, atan, exp + ln, √).
+    let cases: [(usize, f64, bool, [u32; 6]); 8] = [
+        (0, 0.0, true, [6, 6, 3, 23, 2, 8]),
+        // MF 5.2 at γ ≠ 0 evaluates Fy0 at γ = 0 too, unused (5 calls; see `prepared::stages`).
+        (0, 0.03, true, [8, 6, 3, 26, 2, 8]),
+        (0, 0.0, false, [5, 5, 3, 20, 2, 8]),
+        (1, 0.0, true, [5, 6, 3, 22, 1, 8]),
+        (1, 0.03, true, [7, 6, 3, 25, 1, 8]),
+        (1, 0.0, false, [4, 5, 3, 19, 1, 8]),
+        (1, 0.03, false, [6, 5, 3, 22, 1, 8]),
+        (2, 0.03, false, [6, 5, 3, 22, 1, 8]),
+    ];
+    for (t, gamma, moments, want) in cases {
+        let p = load(TYRES[t].1);
+        let i = Input {
+            fz: p.fnomin,
+            kappa: -0.05,
+            alpha: 0.05,
+            gamma,
+            vx: 20.0,
+            ..Default::default()
+        };
+        let opts = Options {
+            moments,
+            ..Options::default()
+        };
+        CALLS.with(|c| c.set([0; 8]));
+        let o = eval::<f64, Counting>(&p, &i, &opts).unwrap();
+        assert_eq!(o, eval64(&p, i, &opts));
+        let v = CALLS.with(|c| c.get());
+        let got = [v[0], v[1], v[2], v[3], v[4] + v[5] + v[6], v[7]];
+        std::println!(
+            "{} γ = {gamma} moments {moments}: sin {} cos {} tan {} atan {} acos/exp/ln {} √ {}: {} calls",
+            TYRES[t].0,
+            got[0],
+            got[1],
+            got[2],
+            got[3],
+            got[4],
+            got[5],
+            got.iter().sum::<u32>()
+        );
+        assert_eq!(got, want, "{} γ = {gamma} moments {moments}", TYRES[t].0);
     }
 }

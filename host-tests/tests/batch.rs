@@ -1,0 +1,151 @@
+//! `mf::eval_batch` against `mf::eval` at every point of the MFeval oracle (every file, every
+//! useMode, MF 5.2, 6.1, 6.2 and the book's tyre): equal to the bit, in f64 and f32, every
+//! output column and the flags.
+use gough::math::{Backend, Float, Libm};
+use gough::mf::{self, Columns, Flags, Input, Options, Output, Outputs, Params};
+use gough_host::csvio;
+use gough_host::mfrun::InputRow;
+use std::path::{Path, PathBuf};
+
+fn data() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("data")
+}
+
+fn tyre_for(stem: &str) -> PathBuf {
+    let name = stem.strip_suffix("_mfeval40").unwrap_or(stem);
+    data().join("tyres").join(format!("{name}.tir"))
+}
+
+/// One oracle file: its name, options, parameters and inputs.
+type OracleFile = (String, Options, Params<f64>, Vec<Input<f64>>);
+
+/// Every oracle file.
+fn oracle() -> Vec<OracleFile> {
+    let mut files: Vec<PathBuf> = std::fs::read_dir(data().join("oracle"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "csv"))
+        .collect();
+    files.sort();
+    assert!(files.len() >= 70, "oracle files missing: {}", files.len());
+    files
+        .iter()
+        .map(|f| {
+            let name = f.file_stem().unwrap().to_str().unwrap().to_string();
+            let mut parts = name.split("__");
+            let (stem, _sweep, mode) = (
+                parts.next().unwrap(),
+                parts.next().unwrap(),
+                parts.next().unwrap(),
+            );
+            let mode: u16 = mode.trim_start_matches("mode").parse().unwrap();
+            let text = std::fs::read_to_string(tyre_for(stem)).unwrap();
+            let p: Params<f64> = gough::tir::parse(&text).unwrap().params;
+            let rows = csvio::read_with::<InputRow>(f, true).unwrap();
+            let inputs = rows.rows.iter().map(InputRow::input).collect();
+            (name, Options::from_use_mode(mode).unwrap(), p, inputs)
+        })
+        .collect()
+}
+
+/// The batch's 15 value columns and flags at every point (every column asked for).
+fn batch<F: Float, M: Backend<F>>(
+    p: &Params<F>,
+    inputs: &[Input<F>],
+    opts: &Options,
+) -> (Vec<[F; 15]>, Vec<Flags>) {
+    let col = |f: fn(&Input<F>) -> F| inputs.iter().map(f).collect::<Vec<F>>();
+    let (fz, kappa, alpha, gamma, vx, phit) = (
+        col(|i| i.fz),
+        col(|i| i.kappa),
+        col(|i| i.alpha),
+        col(|i| i.gamma),
+        col(|i| i.vx),
+        col(|i| i.phit),
+    );
+    // p = None is INFLPRES: the column carries that value (what `None` gives).
+    let pres: Vec<F> = inputs.iter().map(|i| i.p.unwrap_or(p.inflpres)).collect();
+    let cols = Columns {
+        fz: &fz,
+        kappa: &kappa,
+        alpha: &alpha,
+        gamma: &gamma,
+        vx: &vx,
+        phit: Some(&phit),
+        p: Some(&pres),
+    };
+    let n = inputs.len();
+    let mut c: Vec<Vec<F>> = vec![vec![F::ZERO; n]; 15];
+    let mut flags = vec![Flags::default(); n];
+    {
+        let mut it = c.iter_mut();
+        let mut next = || Some(it.next().unwrap().as_mut_slice());
+        let mut out = Outputs {
+            fx: next(),
+            fy: next(),
+            fz: next(),
+            mx: next(),
+            my: next(),
+            mz: next(),
+            mu_x: next(),
+            mu_y: next(),
+            k_xk: next(),
+            k_ya: next(),
+            t: next(),
+            m_zr: next(),
+            sigma_x: next(),
+            sigma_y: next(),
+            kappa: next(),
+            flags: Some(&mut flags),
+        };
+        mf::eval_batch::<F, M>(p, &cols, opts, &mut out).unwrap();
+    }
+    let rows = (0..n).map(|i| core::array::from_fn(|k| c[k][i])).collect();
+    (rows, flags)
+}
+
+fn fields<F: Copy>(o: &Output<F>) -> [F; 15] {
+    [
+        o.fx, o.fy, o.fz, o.mx, o.my, o.mz, o.mu_x, o.mu_y, o.k_xk, o.k_ya, o.t, o.m_zr, o.sigma_x,
+        o.sigma_y, o.kappa,
+    ]
+}
+
+#[test]
+fn batch_equals_eval_to_the_bit_at_every_oracle_point() {
+    let mut points = 0;
+    for (name, opts, p64, inputs) in oracle() {
+        let (rows, flags) = batch::<f64, Libm>(&p64, &inputs, &opts);
+        for (i, input) in inputs.iter().enumerate() {
+            let o = mf::eval::<f64, Libm>(&p64, input, &opts).unwrap();
+            let want = fields(&o).map(f64::to_bits);
+            assert_eq!(rows[i].map(f64::to_bits), want, "{name} f64 point {i}");
+            assert_eq!(flags[i], o.flags, "{name} f64 point {i}");
+        }
+        let p32 = p64.cast::<f32>();
+        let in32: Vec<Input<f32>> = inputs
+            .iter()
+            .map(|i| Input {
+                fz: i.fz as f32,
+                kappa: i.kappa as f32,
+                alpha: i.alpha as f32,
+                gamma: i.gamma as f32,
+                phit: i.phit as f32,
+                vx: i.vx as f32,
+                p: i.p.map(|x| x as f32),
+            })
+            .collect();
+        let (rows, flags) = batch::<f32, Libm>(&p32, &in32, &opts);
+        for (i, input) in in32.iter().enumerate() {
+            let o = mf::eval::<f32, Libm>(&p32, input, &opts).unwrap();
+            assert_eq!(
+                rows[i].map(f32::to_bits),
+                fields(&o).map(f32::to_bits),
+                "{name} f32 point {i}"
+            );
+            assert_eq!(flags[i], o.flags, "{name} f32 point {i}");
+        }
+        points += inputs.len();
+    }
+    println!("batch = eval to the bit at {points} oracle points, f64 and f32");
+}

@@ -1,0 +1,453 @@
+//! Batch evaluation over columns (structure of arrays): [`eval_batch`].
+//!
+//! Each point is [`super::eval`]'s — the function itself, so a batch's outputs equal
+//! `mf::eval`'s at every point, to the bit (`host-tests/tests/batch.rs`
+//! checks every MFeval oracle point). What the batch saves is what the caller does not ask for:
+//! the overturning and rolling resistance moments Mx, My (five to eight of 45–50 kernel calls,
+//! `mf::tests::kernel_calls_per_evaluation`) when neither column is asked for; and the per-call
+//! overhead of a caller's loop.
+//!
+//! No allocation, no panic: the columns' lengths are checked first ([`BatchError::Length`]); a
+//! rejected point stops the batch ([`BatchError::Point`], the points before it written).
+//!
+//! The per-point code has branches (limits, low speed, signs, the E ≠ 0 and S ≠ 0 paths, the
+//! turn-slip and camber paths), so the compiler does not vectorise it across points: a batch
+//! runs at the scalar speed of [`super::eval`] minus what it skips. See docs/magic-formula.md,
+//! "Measured speed", for the figures and the design that would vectorise it.
+
+use super::{eval, EvalError, Flags, Input, Options, Params};
+use crate::math::{Backend, Float};
+
+/// The inputs of a batch, one column per input of [`super::Input`], every column as long as
+/// `fz`. SI units, ISO-W, radians.
+#[derive(Debug, Clone, Copy)]
+pub struct Columns<'a, F> {
+    /// Vertical load Fz \[N\].
+    pub fz: &'a [F],
+    /// Longitudinal slip κ \[-\].
+    pub kappa: &'a [F],
+    /// Slip angle α \[rad\].
+    pub alpha: &'a [F],
+    /// Inclination γ \[rad\].
+    pub gamma: &'a [F],
+    /// Longitudinal speed Vx \[m/s\].
+    pub vx: &'a [F],
+    /// Turn slip φt \[1/m\]; `None`: 0 at every point.
+    pub phit: Option<&'a [F]>,
+    /// Inflation pressure p \[Pa\]; `None`: INFLPRES at every point.
+    pub p: Option<&'a [F]>,
+}
+
+impl<F> Columns<'_, F> {
+    /// The number of points (the length of `fz`).
+    pub fn len(&self) -> usize {
+        self.fz.len()
+    }
+    /// No point.
+    pub fn is_empty(&self) -> bool {
+        self.fz.is_empty()
+    }
+}
+
+/// The output columns a batch writes: one per field of [`super::Output`], each `None` (not
+/// computed where that saves work, not written) or as long as the inputs.
+#[derive(Debug, Default)]
+pub struct Outputs<'a, F> {
+    /// Fx \[N\].
+    pub fx: Option<&'a mut [F]>,
+    /// Fy \[N\].
+    pub fy: Option<&'a mut [F]>,
+    /// Fz used \[N\].
+    pub fz: Option<&'a mut [F]>,
+    /// Mx \[N·m\] (with `my`: computed only when one of them is asked for).
+    pub mx: Option<&'a mut [F]>,
+    /// My \[N·m\].
+    pub my: Option<&'a mut [F]>,
+    /// Mz \[N·m\].
+    pub mz: Option<&'a mut [F]>,
+    /// μx \[-\].
+    pub mu_x: Option<&'a mut [F]>,
+    /// |μy| \[-\].
+    pub mu_y: Option<&'a mut [F]>,
+    /// Kxκ \[N\].
+    pub k_xk: Option<&'a mut [F]>,
+    /// Kyα \[N/rad\].
+    pub k_ya: Option<&'a mut [F]>,
+    /// Pneumatic trail t \[m\].
+    pub t: Option<&'a mut [F]>,
+    /// Residual torque Mzr \[N·m\].
+    pub m_zr: Option<&'a mut [F]>,
+    /// σx \[m\].
+    pub sigma_x: Option<&'a mut [F]>,
+    /// σy \[m\].
+    pub sigma_y: Option<&'a mut [F]>,
+    /// κ after the low-speed reduction \[-\].
+    pub kappa: Option<&'a mut [F]>,
+    /// What was clipped or regularised.
+    pub flags: Option<&'a mut [Flags]>,
+}
+
+/// Why a batch stopped.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
+pub enum BatchError {
+    /// A column's length differs from `fz`'s; nothing was computed.
+    Length {
+        /// The column (the field's name in [`Columns`] or [`Outputs`]).
+        column: &'static str,
+        /// Its length.
+        len: usize,
+        /// The length of `fz`.
+        expected: usize,
+    },
+    /// The point at `index` was rejected; the points before it are written, none after.
+    Point {
+        /// Its index in the columns.
+        index: usize,
+        /// Why.
+        error: EvalError,
+    },
+}
+
+impl core::fmt::Display for BatchError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            BatchError::Length {
+                column,
+                len,
+                expected,
+            } => write!(f, "column {column}: {len} values, expected {expected}"),
+            BatchError::Point { index, error } => write!(f, "point {index}: {error}"),
+        }
+    }
+}
+
+impl core::error::Error for BatchError {}
+
+/// Writes `v` at `i` of an asked-for column.
+#[inline(always)]
+fn put<T>(col: &mut Option<&mut [T]>, i: usize, v: T) {
+    if let Some(x) = col.as_deref_mut().and_then(|c| c.get_mut(i)) {
+        *x = v;
+    }
+}
+
+/// The length check of one column.
+fn check(column: &'static str, len: Option<usize>, expected: usize) -> Result<(), BatchError> {
+    match len {
+        Some(len) if len != expected => Err(BatchError::Length {
+            column,
+            len,
+            expected,
+        }),
+        _ => Ok(()),
+    }
+}
+
+/// The Magic Formula of `p.version` at every point of `inputs`, into the columns of `out` that
+/// are `Some`: at each point what [`super::eval`] gives there, to the bit (the same function).
+/// Mx, My are computed only when `out.mx` or `out.my` is asked for (and `opts.moments` is on).
+///
+/// ```
+/// use gough::{math::Libm, mf::{self, Columns, Input, Options, Outputs, Params, Version}};
+/// let mut p = Params::<f64>::zeroed(Version::Mf52); // a made-up tyre, for the example
+/// p.fnomin = 4000.0; p.unloaded_radius = 0.3; p.longvl = 16.7; p.vxlow = 1.0;
+/// p.pcy1 = 1.3; p.pdy1 = 1.0; p.pky1 = -20.0; p.pky2 = 2.0; p.pcx1 = 1.6; p.pdx1 = 1.0;
+/// p.pkx1 = 20.0; p.qcz1 = 1.2; p.qbz1 = 10.0; p.qdz1 = 0.1;
+/// let opts = Options { limits: false, ..Options::default() };
+/// let (fz, kappa, alpha) = ([4000.0, 3000.0], [0.0, -0.05], [0.05, 0.02]);
+/// let cols = Columns { fz: &fz, kappa: &kappa, alpha: &alpha, gamma: &[0.0; 2], vx: &[20.0; 2],
+///                      phit: None, p: None };
+/// let (mut fx, mut fy) = ([0.0; 2], [0.0; 2]);
+/// let mut out = Outputs { fx: Some(&mut fx), fy: Some(&mut fy), ..Outputs::default() };
+/// mf::eval_batch::<f64, Libm>(&p, &cols, &opts, &mut out).unwrap();
+/// let i = Input { fz: 3000.0, kappa: -0.05, alpha: 0.02, vx: 20.0, ..Default::default() };
+/// assert_eq!(fy[1], mf::eval::<f64, Libm>(&p, &i, &opts).unwrap().fy);
+/// ```
+pub fn eval_batch<F: Float, M: Backend<F>>(
+    p: &Params<F>,
+    inputs: &Columns<'_, F>,
+    opts: &Options,
+    out: &mut Outputs<'_, F>,
+) -> Result<(), BatchError> {
+    let n = inputs.len();
+    let ins: [(&'static str, Option<usize>); 6] = [
+        ("kappa", Some(inputs.kappa.len())),
+        ("alpha", Some(inputs.alpha.len())),
+        ("gamma", Some(inputs.gamma.len())),
+        ("vx", Some(inputs.vx.len())),
+        ("phit", inputs.phit.map(<[F]>::len)),
+        ("p", inputs.p.map(<[F]>::len)),
+    ];
+    for (column, len) in ins {
+        check(column, len, n)?;
+    }
+    let len = |c: &Option<&mut [F]>| c.as_deref().map(<[F]>::len);
+    let outs: [(&'static str, Option<usize>); 16] = [
+        ("fx", len(&out.fx)),
+        ("fy", len(&out.fy)),
+        ("fz", len(&out.fz)),
+        ("mx", len(&out.mx)),
+        ("my", len(&out.my)),
+        ("mz", len(&out.mz)),
+        ("mu_x", len(&out.mu_x)),
+        ("mu_y", len(&out.mu_y)),
+        ("k_xk", len(&out.k_xk)),
+        ("k_ya", len(&out.k_ya)),
+        ("t", len(&out.t)),
+        ("m_zr", len(&out.m_zr)),
+        ("sigma_x", len(&out.sigma_x)),
+        ("sigma_y", len(&out.sigma_y)),
+        ("kappa", len(&out.kappa)),
+        ("flags", out.flags.as_deref().map(<[Flags]>::len)),
+    ];
+    for (column, len) in outs {
+        check(column, len, n)?;
+    }
+    // What no column asks for is not computed (hoisted out of the loop).
+    let opts = Options {
+        moments: opts.moments && (out.mx.is_some() || out.my.is_some()),
+        ..*opts
+    };
+    let at = |c: &[F], i: usize| c.get(i).copied().unwrap_or(F::ZERO);
+    for i in 0..n {
+        let input = Input {
+            fz: at(inputs.fz, i),
+            kappa: at(inputs.kappa, i),
+            alpha: at(inputs.alpha, i),
+            gamma: at(inputs.gamma, i),
+            phit: inputs.phit.map_or(F::ZERO, |c| at(c, i)),
+            vx: at(inputs.vx, i),
+            p: inputs.p.and_then(|c| c.get(i).copied()),
+        };
+        let o = eval::<F, M>(p, &input, &opts)
+            .map_err(|error| BatchError::Point { index: i, error })?;
+        put(&mut out.fx, i, o.fx);
+        put(&mut out.fy, i, o.fy);
+        put(&mut out.fz, i, o.fz);
+        put(&mut out.mx, i, o.mx);
+        put(&mut out.my, i, o.my);
+        put(&mut out.mz, i, o.mz);
+        put(&mut out.mu_x, i, o.mu_x);
+        put(&mut out.mu_y, i, o.mu_y);
+        put(&mut out.k_xk, i, o.k_xk);
+        put(&mut out.k_ya, i, o.k_ya);
+        put(&mut out.t, i, o.t);
+        put(&mut out.m_zr, i, o.m_zr);
+        put(&mut out.sigma_x, i, o.sigma_x);
+        put(&mut out.sigma_y, i, o.sigma_y);
+        put(&mut out.kappa, i, o.kappa);
+        put(&mut out.flags, i, o.flags);
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::math::Libm;
+    use crate::mf::{eval, Output, Version};
+
+    fn tyre() -> Params<f64> {
+        crate::tir::parse(include_str!(
+            "../../host-tests/data/tyres/MagicFormula61_Parameters.tir"
+        ))
+        .map(|t| t.params)
+        .unwrap()
+    }
+
+    #[test]
+    fn lengths_are_checked_before_anything_is_written() {
+        let p = tyre();
+        let z = [0.0; 3];
+        let cols = Columns {
+            fz: &[4000.0; 3],
+            kappa: &z,
+            alpha: &z[..2],
+            gamma: &z,
+            vx: &[20.0; 3],
+            phit: None,
+            p: None,
+        };
+        let mut fx = [7.0; 3];
+        let mut out = Outputs {
+            fx: Some(&mut fx),
+            ..Outputs::default()
+        };
+        let e = eval_batch::<f64, Libm>(&p, &cols, &Options::default(), &mut out);
+        assert_eq!(
+            e,
+            Err(BatchError::Length {
+                column: "alpha",
+                len: 2,
+                expected: 3
+            })
+        );
+        assert_eq!(fx, [7.0; 3]);
+        let cols = Columns { alpha: &z, ..cols };
+        let mut short = [0.0; 2];
+        let mut out = Outputs {
+            mz: Some(&mut short),
+            ..Outputs::default()
+        };
+        assert!(matches!(
+            eval_batch::<f64, Libm>(&p, &cols, &Options::default(), &mut out),
+            Err(BatchError::Length { column: "mz", .. })
+        ));
+    }
+
+    #[test]
+    fn a_rejected_point_stops_the_batch() {
+        let p = tyre();
+        let cols = Columns {
+            fz: &[4000.0, f64::NAN, 4000.0],
+            kappa: &[0.01; 3],
+            alpha: &[0.02; 3],
+            gamma: &[0.0; 3],
+            vx: &[20.0; 3],
+            phit: None,
+            p: None,
+        };
+        let mut fy = [0.0; 3];
+        let mut out = Outputs {
+            fy: Some(&mut fy),
+            ..Outputs::default()
+        };
+        let e = eval_batch::<f64, Libm>(&p, &cols, &Options::default(), &mut out);
+        assert_eq!(
+            e,
+            Err(BatchError::Point {
+                index: 1,
+                error: EvalError::NonFinite(crate::mf::InputField::Fz)
+            })
+        );
+        assert!(fy[0] < 0.0 && fy[2] == 0.0);
+    }
+
+    /// Every column equals `mf::eval`'s field, to the bit, f64 and f32, with and without the
+    /// moments and σ asked for (the oracle-wide check is `host-tests/tests/batch.rs`).
+    #[test]
+    fn columns_equal_eval() {
+        let p = tyre();
+        assert_eq!(p.version, Version::Mf61);
+        let n = 50;
+        let f = |i: usize| i as f64 / (n - 1) as f64;
+        let fz: std::vec::Vec<f64> = (0..n).map(|i| p.fnomin * (0.2 + 1.6 * f(i))).collect();
+        let kappa: std::vec::Vec<f64> = (0..n).map(|i| -0.4 + 0.7 * f(i)).collect();
+        let alpha: std::vec::Vec<f64> =
+            (0..n).map(|i| 0.3 * (2.0 * f((i * 7) % n) - 1.0)).collect();
+        let gamma: std::vec::Vec<f64> = (0..n).map(|i| 0.05 * f((i * 3) % n)).collect();
+        let vx: std::vec::Vec<f64> = (0..n).map(|i| 30.0 * f((i * 11) % n) - 1.0).collect();
+        let cols = Columns {
+            fz: &fz,
+            kappa: &kappa,
+            alpha: &alpha,
+            gamma: &gamma,
+            vx: &vx,
+            phit: None,
+            p: None,
+        };
+        let opts = Options::default();
+        let mut c = [[0.0f64; 50]; 15];
+        let mut flags = [Flags::default(); 50];
+        {
+            let [fx, fy, fzo, mx, my, mz, mux, muy, kxk, kya, t, mzr, sx, sy, k] = &mut c;
+            let mut out = Outputs {
+                fx: Some(fx),
+                fy: Some(fy),
+                fz: Some(fzo),
+                mx: Some(mx),
+                my: Some(my),
+                mz: Some(mz),
+                mu_x: Some(mux),
+                mu_y: Some(muy),
+                k_xk: Some(kxk),
+                k_ya: Some(kya),
+                t: Some(t),
+                m_zr: Some(mzr),
+                sigma_x: Some(sx),
+                sigma_y: Some(sy),
+                kappa: Some(k),
+                flags: Some(&mut flags),
+            };
+            eval_batch::<f64, Libm>(&p, &cols, &opts, &mut out).unwrap();
+        }
+        for i in 0..n {
+            let o: Output<f64> = eval::<f64, Libm>(
+                &p,
+                &Input {
+                    fz: fz[i],
+                    kappa: kappa[i],
+                    alpha: alpha[i],
+                    gamma: gamma[i],
+                    phit: 0.0,
+                    vx: vx[i],
+                    p: None,
+                },
+                &opts,
+            )
+            .unwrap();
+            let want = [
+                o.fx, o.fy, o.fz, o.mx, o.my, o.mz, o.mu_x, o.mu_y, o.k_xk, o.k_ya, o.t, o.m_zr,
+                o.sigma_x, o.sigma_y, o.kappa,
+            ];
+            for (k, w) in want.iter().enumerate() {
+                assert_eq!(c[k][i].to_bits(), w.to_bits(), "point {i} column {k}");
+            }
+            assert_eq!(flags[i], o.flags);
+        }
+        // Only Fx, Fy, Mz asked for: the same values (Mx, My and σ skipped).
+        let (mut fx, mut fy, mut mz) = ([0.0f64; 50], [0.0f64; 50], [0.0f64; 50]);
+        let mut out = Outputs {
+            fx: Some(&mut fx),
+            fy: Some(&mut fy),
+            mz: Some(&mut mz),
+            ..Outputs::default()
+        };
+        eval_batch::<f64, Libm>(&p, &cols, &opts, &mut out).unwrap();
+        assert_eq!((fx, fy, mz), (c[0], c[1], c[5]));
+        // f32.
+        let p32 = p.cast::<f32>();
+        let to32 = |v: &[f64]| v.iter().map(|&x| x as f32).collect::<std::vec::Vec<f32>>();
+        let (fz32, k32, a32, g32, v32) = (
+            to32(&fz),
+            to32(&kappa),
+            to32(&alpha),
+            to32(&gamma),
+            to32(&vx),
+        );
+        let cols32 = Columns {
+            fz: &fz32,
+            kappa: &k32,
+            alpha: &a32,
+            gamma: &g32,
+            vx: &v32,
+            phit: None,
+            p: None,
+        };
+        let mut mz32 = [0.0f32; 50];
+        let mut out = Outputs {
+            mz: Some(&mut mz32),
+            ..Outputs::default()
+        };
+        eval_batch::<f32, Libm>(&p32, &cols32, &opts, &mut out).unwrap();
+        for i in 0..n {
+            let o = eval::<f32, Libm>(
+                &p32,
+                &Input {
+                    fz: fz32[i],
+                    kappa: k32[i],
+                    alpha: a32[i],
+                    gamma: g32[i],
+                    phit: 0.0,
+                    vx: v32[i],
+                    p: None,
+                },
+                &opts,
+            )
+            .unwrap();
+            assert_eq!(mz32[i].to_bits(), o.mz.to_bits(), "f32 point {i}");
+        }
+    }
+}
