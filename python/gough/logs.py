@@ -137,7 +137,7 @@ def load_map(map: str | os.PathLike | Mapping[str, Any]) -> Map:
     def err(msg, column=None):
         return LogError(file, msg, column=column)
 
-    known = {"dbc", "convention", "time", "channels", "wheels"}
+    known = {"dbc", "convention", "time", "channels", "wheels", "wheel_signal"}
     for k in raw:
         if k not in known:
             raise err(f"unknown key '{k}' (expected one of {', '.join(sorted(known))})")
@@ -156,6 +156,11 @@ def load_map(map: str | os.PathLike | Mapping[str, Any]) -> Map:
             raise err("wheels: expected 1 to 4 different names, in the order FL, FR, RL, RR "
                       "(the position is the wheel's index)")
         wheels = list(wheels)
+    wsig = raw.get("wheel_signal")
+    if wsig is not None:
+        if not isinstance(wsig, str) or wsig.count(".") < 1 or dbc is None or wheels is None:
+            raise err(f"wheel_signal {wsig!r}: expected \"Message.Signal\" of a bus log (with dbc "
+                      "and wheels = [...]) whose value is the wheel's index in wheels")
     time = raw.get("time", {})
     if not isinstance(time, Mapping):
         raise err("[time]: expected a table")
@@ -219,8 +224,8 @@ def load_map(map: str | os.PathLike | Mapping[str, Any]) -> Map:
         if master not in out:
             raise err(f"[time] master '{master}': not a column of the map's [channels] (or give "
                       "rate = ...)", column=master)
-    return Map(file=str(file), dbc=dbc, convention=conv, wheels=wheels, master=master, rate=rate,
-               time_unit=tunit, channels=out)
+    return Map(file=str(file), dbc=dbc, convention=conv, wheels=wheels, wheel_signal=wsig,
+               master=master, rate=rate, time_unit=tunit, channels=out)
 
 
 def _unit_msg(unit, col):
@@ -281,7 +286,8 @@ class _MdfSource(_Source):
 class _BusSource(_Source):
     """Frames (python-can's readers) decoded with a DBC (cantools), kept per `Message.Signal`."""
 
-    def __init__(self, path: Path, dbc: Path, wanted: list[str], map_file: str):
+    def __init__(self, path: Path, dbc: Path, wanted: list[str], map_file: str,
+                 wheel_signal: str | None = None, n_wheels: int = 0):
         try:
             import can
             import cantools
@@ -298,6 +304,13 @@ class _BusSource(_Source):
         self.sig: dict[str, _Signal] = {}
         self._names = [f"{m.name}.{s.name}" for m in self.db.messages for s in m.signals]
         want: dict[str, set] = {}
+        wmsg, wsig = wheel_signal.split(".", 1) if wheel_signal else (None, None)
+        if wmsg is not None:
+            try:
+                if wsig not in {s.name for s in self.db.get_message_by_name(wmsg).signals}:
+                    raise KeyError(wsig)
+            except KeyError:
+                raise LogError(map_file, "wheel_signal: not in the DBC", channel=wheel_signal) from None
         for full in wanted:
             if "." not in full:
                 continue  # reported as missing, with a hint, by read()
@@ -313,6 +326,9 @@ class _BusSource(_Source):
         rows: dict[str, tuple[list, list]] = {}
         counts = {"read": 0, "used": 0, "not in the map's messages": 0, "error or remote": 0,
                   "not decodable with the DBC": 0}
+        if wmsg is not None:
+            counts["not the wheel signal's kind"] = 0
+            counts["wheel not in the map's wheels"] = 0
         try:
             reader = can.LogReader(os.fspath(path))
         except Exception as e:
@@ -334,10 +350,20 @@ class _BusSource(_Source):
                     except Exception:
                         counts["not decodable with the DBC"] += 1
                         continue
+                    suffix = ""
+                    if msg.name == wmsg:
+                        if wsig not in vals:  # a multiplexed message: another of its kinds
+                            counts["not the wheel signal's kind"] += 1
+                            continue
+                        wv = int(vals[wsig])
+                        if not 0 <= wv < n_wheels:
+                            counts["wheel not in the map's wheels"] += 1
+                            continue
+                        suffix = f"@{wv}"
                     counts["used"] += 1
                     for s in sigs:
                         if s in vals:  # a multiplexed signal is in some frames only
-                            ts, vs = rows.setdefault(f"{msg.name}.{s}", ([], []))
+                            ts, vs = rows.setdefault(f"{msg.name}.{s}{suffix}", ([], []))
                             ts.append(fr.timestamp)
                             vs.append(float(vals[s]))
         except LogError:
@@ -349,7 +375,7 @@ class _BusSource(_Source):
         units = {f"{m.name}.{s.name}": (s.unit or None) for m in self.db.messages for s in m.signals}
         for k, (ts, vs) in rows.items():
             self.sig[k] = _Signal(np.asarray(ts, dtype=np.float64), np.asarray(vs, dtype=np.float64),
-                                  units.get(k))
+                                  units.get(k.split("@", 1)[0]))
 
     def names(self):
         return self._names
@@ -377,8 +403,6 @@ def read(path: str | os.PathLike, map: str | os.PathLike | Mapping[str, Any]):
     channel, wheel, rows, reason}), ``rows_in`` (master rows before dropping), ``frames`` (bus
     logs: frames read, used, and not used with why), ``source``, ``map``. Raises LogError (a
     ValueError) with one line naming the file and the channel."""
-    import pandas as pd
-
     m = load_map(map)
     path = Path(path)
     if not path.exists():
@@ -393,8 +417,12 @@ def read(path: str | os.PathLike, map: str | os.PathLike | Mapping[str, Any]):
         if m["dbc"] is None:
             raise LogError(path, f"a bus log ({suffix}): the map needs dbc = \"...\" to decode "
                            "its frames")
-        src: _Source = _BusSource(path, m["dbc"], sorted(set(names.values())), m["file"])
+        src: _Source = _BusSource(path, m["dbc"], sorted(set(names.values())), m["file"],
+                                  m.get("wheel_signal"), len(m["wheels"] or []))
     elif suffix in _MDF:
+        if m.get("wheel_signal"):
+            raise LogError(path, "wheel_signal is for bus logs: an MDF of signals names each wheel's "
+                           "channel ({wheel} in the name)")
         src = _MdfSource(path)
     else:
         raise LogError(path, f"unknown log format '{suffix}' (MDF: {', '.join(_MDF)}; bus logs: "
@@ -414,11 +442,16 @@ def _read(path, m, src, names):
     frames = []
     dropped = []
     rows_in = 0
+    wmsg = m["wheel_signal"].split(".", 1)[0] if m.get("wheel_signal") else None
     for wi, w in enumerate(wheels):
         sigs = {}
         for col, spec in m["channels"].items():
             name = names[(w, col)]
-            s = src.get(name)
+            routed = wmsg is not None and name.split(".", 1)[0] == wmsg
+            s = src.get(f"{name}@{wi}" if routed else name)
+            if s is None and routed and name in src.names():
+                raise LogError(path, f"no frame of it for wheel {w} ({m['wheel_signal']} = {wi})",
+                               channel=name, column=col)
             if s is None:
                 cands = src.names()
                 close = difflib.get_close_matches(name, cands, n=1)

@@ -5,7 +5,6 @@ same estimates and the same gap verdict as from the CSV; the SAE conversion chec
 Magic Formula; every error path one line naming the file and the channel."""
 import json
 import math
-import os
 import subprocess
 import sys
 import tomllib
@@ -390,6 +389,7 @@ def test_error_map_problems(small, tmp_path):
         ({"time": {"rate": -1}, "channels": BASE}, ["rate -1"]),
         ({"channels": {**BASE, "fx": {"name": "Fx", "sign": 2}}}, ["column fx", "sign 2"]),
         ({"chanels": BASE}, ["unknown key 'chanels'"]),
+        ({"wheels": ["FL"], "wheel_signal": "M.wheel", "channels": BASE}, ["wheel_signal 'M.wheel'"]),
     ]:
         with pytest.raises(logs.LogError) as e:
             logs.read(small, m)
@@ -414,6 +414,13 @@ def test_error_bus_log_without_dbc_and_bad_dbc(demo, tmp_path):
     with pytest.raises(logs.LogError) as e:
         logs.read(d / "bus.blf", m)
     expect(e, "missing.dbc", "no such file")
+    m.update(dbc=str(d / "vehicle.dbc"), wheels=["FL"], wheel_signal="FL_Forces1.wheel")
+    with pytest.raises(logs.LogError) as e:
+        logs.read(d / "bus.blf", m)
+    expect(e, "<map>", "channel 'FL_Forces1.wheel'", "wheel_signal: not in the DBC")
+    with pytest.raises(logs.LogError) as e:
+        logs.read(d / "signals.mf4", m)
+    expect(e, "signals.mf4", "wheel_signal is for bus logs")
 
 
 def test_error_frames_not_decodable_are_counted(demo, tmp_path):
@@ -454,3 +461,45 @@ def test_console_script_error_is_one_line(small, tmp_path):
 def test_map_needs_a_path_log(tyre):
     with pytest.raises(TypeError, match="path"):
         gough.estimate_mu(tyre, {"t": [0.0]}, map={"channels": BASE})
+
+
+@pytest.mark.parametrize("suffix", [".blf", ".log"])
+def test_the_devices_own_frames_with_the_dbc_of_gough_proto_dbc(gough_cli, tmp_path, suffix):
+    """The device's CompactMeasurement frames (CAN FD, 0x302; `gough proto frames --fd
+    --compact` of the replay example, with the device's answers on 0x310) logged by python-can,
+    read with the DBC of `gough proto dbc --fd` and wheel_signal: each wheel's rows are the
+    example's within half a step of the message's scaling."""
+    import can
+
+    (tmp_path / "gough_fd.dbc").write_text(gough_cli("proto", "dbc", "--fd").stdout)
+    src = EXAMPLES / "replay_log.csv"
+    lines = gough_cli("proto", "frames", "--tir", TIR61, "--log", src, "--fd", "--compact").stdout
+    n, t = 0, 0.0
+    with can.Logger(str(tmp_path / f"dev{suffix}")) as log:
+        for line in lines.splitlines():
+            rec = json.loads(line)
+            t = rec["msg"].get("t_us", t * 1e6) * 1e-6  # (an Ack or Status: at the last time)
+            for fr in rec["frames"]:
+                log.on_message_received(can.Message(timestamp=t, arbitration_id=rec["id"], is_extended_id=False,
+                                                    is_fd=True, data=bytes.fromhex(fr), channel=0))
+                n += 1
+    m = {"dbc": str(tmp_path / "gough_fd.dbc"), "wheels": ["FL", "FR"],
+         "wheel_signal": "GOUGH_COMPACT.wheel",
+         "channels": {"fz": "GOUGH_COMPACT.Fz", "fy": "GOUGH_COMPACT.Fy", "mz": "GOUGH_COMPACT.Mz",
+                      "fx": "GOUGH_COMPACT.Fx", "vx": "GOUGH_COMPACT.vx", "alpha": "GOUGH_COMPACT.alpha",
+                      "kappa": {"name": "GOUGH_COMPACT.kappa", "unit": "1"}, "gamma": "GOUGH_COMPACT.gamma"}}
+    got = logs.read(tmp_path / f"dev{suffix}", m)
+    want = pd.read_csv(src, comment="#")
+    assert got.attrs["frames"]["read"] == n and got.attrs["frames"]["used"] == len(want)
+    assert got.attrs["frames"]["not in the map's messages"] == n - len(want)  # the answers
+    assert got.attrs["dropped"] == []
+    for w in (0, 1):
+        a, b = got[got.wheel == w], want[want.wheel == w]
+        assert len(a) == len(b)
+        np.testing.assert_allclose(a.t, b.t, atol=1e-6)
+        for c, half in (("fz", 0.25), ("fy", 0.5), ("mz", 0.05), ("fx", 0.5), ("vx", 0.005),
+                        ("alpha", 5e-5), ("kappa", 5e-5), ("gamma", 5e-5)):
+            err = np.abs(a[c].to_numpy() - b[c].to_numpy()).max()
+            # The example's own rounding (0.1 N, 0.01 N·m, 1e-6 rad) adds to the half step.
+            assert err <= half * 1.0001 + 0.05, (w, c, err)
+        assert (a.fy.abs() > 1000).any()
