@@ -16,7 +16,7 @@ import gough
 
 root = Path(sys.argv[1])
 here = Path(gough.__file__).resolve()
-assert root.resolve() not in here.parents, f"gough imported from the source tree: {here}"
+assert (root / "python").resolve() not in here.parents, f"gough imported from the source tree: {here}"
 assert shutil.which("cargo") is None and shutil.which("rustc") is None, "cargo is on PATH"
 tir = root / "host-tests/data/tyres/MagicFormula61_Parameters.tir"
 sweep = root / "host-tests/data/oracle/MagicFormula61_Parameters_mfeval40__combined__mode111.csv"

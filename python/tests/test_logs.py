@@ -116,8 +116,9 @@ def test_the_same_gap_verdict_as_from_the_csv(demo, tyre, gap_ref, fmt):
     got = gough.diagnose_gap(tyre, d / fmt, map=map_of(d, fmt))
     assert verdict(got) == verdict(gap_ref)
     assert got["verdict"]["effect"]
-    # The held-out shrink moves with the recording's half steps and the speed's interpolation.
-    assert abs(got["verdict"]["shrink"] - gap_ref["verdict"]["shrink"]) <= 1e-3
+    # The held-out shrink moves with the recording's half steps and the speed's interpolation
+    # (measured: by at most 1.9e-5 of 0.756).
+    assert abs(got["verdict"]["shrink"] - gap_ref["verdict"]["shrink"]) <= 1e-4
 
 
 def test_fleet_diagnose_takes_a_map(demo, gap_ref):
