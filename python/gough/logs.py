@@ -121,7 +121,7 @@ class Map(dict):
 
 def load_map(map: str | os.PathLike | Mapping[str, Any]) -> Map:
     """The map as a checked dict: ``file`` (the map's path or ``'<map>'``), ``dbc`` (an absolute
-    path or None), ``convention``, ``wheels``, ``master``, ``rate``, ``time_unit`` and
+    path or None), ``convention``, ``wheels``, ``wheel_signal``, ``master``, ``rate``, ``time_unit`` and
     ``channels`` {column: {name, unit, sign}}. Raises LogError naming the map and the column."""
     if isinstance(map, Map):
         return map
