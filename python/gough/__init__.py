@@ -15,9 +15,10 @@ from typing import Any, Mapping
 import numpy as np
 
 from . import _gough
+from . import logs  # gough.logs.read; its readers (asammdf, python-can, cantools) load on use
 
 __all__ = ["Tyre", "TirError", "estimate_mu", "diagnose_gap", "simulate", "read_log",
-           "OUTPUT_COLUMNS"]
+           "OUTPUT_COLUMNS", "logs"]
 
 #: The columns `Tyre.eval` returns: those of `gough mf eval` after its inputs.
 OUTPUT_COLUMNS = tuple(_gough.OUTPUT_COLUMNS)
@@ -131,8 +132,6 @@ def read_log(path: str | os.PathLike, map=None):
     import pandas as pd
 
     if map is not None:
-        from . import logs
-
         return logs.read(path, map)
     path = os.fspath(path)
     if path.endswith(".parquet") or path.endswith(".pq"):

@@ -52,9 +52,9 @@ def diagnose(paths: Sequence[str | os.PathLike], tir: str | os.PathLike, client=
     paths = [os.fspath(p) for p in paths]
     tir = os.fspath(tir)
     if map is not None:
-        from . import logs
+        from .logs import load_map
 
-        map = logs.load_map(map)
+        map = load_map(map)
     if client is None:
         rows: Iterable[dict] = [diagnose_one(p, tir, fit_rows, map) for p in paths]
     else:

@@ -291,6 +291,7 @@ def test_units_table():
     want = {"N": 1, "kN": 1e3, "Nm": 1, "N*m": 1, "N.m": 1, "kNm": 1e3, "rad": 1,
             "deg": math.pi / 180, "mrad": 1e-3, "m/s": 1, "km/h": 1 / 3.6, "1": 1, "%": 0.01,
             "Pa": 1, "kPa": 1e3, "bar": 1e5, "s": 1, "ms": 1e-3, "us": 1e-6}
+    assert gough.logs is logs  # `import gough` is enough for gough.logs.read
     flat = {u: k for table in logs.UNITS.values() for u, k in table.items()}
     for u, k in want.items():
         assert flat[u] == pytest.approx(k, rel=1e-15), u
