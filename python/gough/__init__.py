@@ -15,9 +15,10 @@ from typing import Any, Mapping
 import numpy as np
 
 from . import _gough
+from . import logs  # gough.logs.read; its readers (asammdf, python-can, cantools) load on use
 
 __all__ = ["Tyre", "TirError", "estimate_mu", "diagnose_gap", "simulate", "read_log",
-           "OUTPUT_COLUMNS"]
+           "OUTPUT_COLUMNS", "logs"]
 
 #: The columns `Tyre.eval` returns: those of `gough mf eval` after its inputs.
 OUTPUT_COLUMNS = tuple(_gough.OUTPUT_COLUMNS)
@@ -147,8 +148,13 @@ class Tyre:
             int(mode), precision == "f32")
 
 
-def _columns(log) -> Mapping[str, Any]:
-    """A DataFrame, a dict of arrays, or a path to a CSV or Parquet file, as columns."""
+def _columns(log, map=None) -> Mapping[str, Any]:
+    """A DataFrame, a dict of arrays, or a path to a CSV or Parquet file, as columns; with
+    `map`, a path to a log as cars record it, read through the map (`gough.logs.read`)."""
+    if map is not None:
+        if not isinstance(log, (str, os.PathLike)):
+            raise TypeError("log: with map=, expected the path of a log (MDF4, BLF, ASC, candump)")
+        return read_log(log, map)
     if isinstance(log, (str, os.PathLike)):
         return read_log(log)
     if hasattr(log, "columns") and hasattr(log, "__getitem__"):
@@ -158,10 +164,14 @@ def _columns(log) -> Mapping[str, Any]:
     raise TypeError("log: expected a pandas DataFrame, a dict of arrays or a path")
 
 
-def read_log(path: str | os.PathLike):
-    """A CSV (with '#' comment lines, as gough writes them) or Parquet log as a DataFrame."""
+def read_log(path: str | os.PathLike, map=None):
+    """A CSV (with '#' comment lines, as gough writes them) or Parquet log as a DataFrame; with
+    `map` (a TOML file or a dict), a log as cars record it (MDF4, BLF, ASC, candump, MDF4 bus
+    logging) read through the map by `gough.logs.read`."""
     import pandas as pd
 
+    if map is not None:
+        return logs.read(path, map)
     path = os.fspath(path)
     if path.endswith(".parquet") or path.endswith(".pq"):
         return pd.read_parquet(path)
@@ -180,7 +190,7 @@ def _col(cols: Mapping[str, Any], name: str, n: int | None = None, required=True
 
 
 def estimate_mu(tyre: Tyre, log, method: str = "bank", precision: str = "f64",
-                wheelbase: float | None = None, calibration_in=None, calibration_out=None):
+                wheelbase: float | None = None, calibration_in=None, calibration_out=None, map=None):
     """The friction estimator of `gough mu estimate` over a log (a DataFrame, a dict of arrays
     or a CSV/Parquet path) with its columns: t [s], fz, fy [N], mz [N·m] required; fx [N],
     vx [m/s], kappa, alpha, gamma [rad] optional. Returns a DataFrame t, mu, sigma, state
@@ -193,10 +203,11 @@ def estimate_mu(tyre: Tyre, log, method: str = "bank", precision: str = "f64",
     `calibration_in`: a calibration file (as `gough mu estimate --calibration-in`) each wheel's
     bank starts from (a warm start; a file of another form or values the bank refuses raise
     ValueError); `calibration_out`: where to write each wheel's calibration after the log (as
-    `--calibration-out`). The bank's only."""
+    `--calibration-out`). The bank's only. `map`: the log is a path to a log as cars record it
+    (MDF4, BLF, ASC, candump), read through this map (a TOML file or a dict; `gough.logs`)."""
     import pandas as pd
 
-    cols = _columns(log)
+    cols = _columns(log, map)
     t = _col(cols, "t")
     n = len(t)
     req = [_col(cols, c) for c in ("fz", "fy", "mz")]
@@ -217,13 +228,14 @@ _GAP_REQUIRED = ("t", "vx", "alpha", "kappa", "gamma", "fz", "fx", "fy", "mz")
 
 
 def diagnose_gap(tyre: Tyre, log, tir_name: str = "<tyre>", log_name: str | None = None,
-                 fit_rows: int | None = None) -> dict:
+                 fit_rows: int | None = None, map=None) -> dict:
     """The sim-to-real gap diagnosis of `gough gap diagnose`: the report as a dict (the JSON
     the CLI writes). The log has the columns t, vx, alpha, kappa, gamma, fz, fx, fy, mz and
-    optionally p, phit, mu. `tir_name` and `log_name` name the inputs in the report."""
+    optionally p, phit, mu. `tir_name` and `log_name` name the inputs in the report. `map`: the
+    log is a path to a log as cars record it, read through this map (`gough.logs`)."""
     if log_name is None:
         log_name = os.fspath(log) if isinstance(log, (str, os.PathLike)) else "<log>"
-    cols = _columns(log)
+    cols = _columns(log, map)
     req = [_col(cols, c) for c in _GAP_REQUIRED]
     opt = [_col(cols, c, required=False) for c in ("p", "phit", "mu")]
     text = _gough._diagnose_gap(tyre._inner, req, *opt, tir_name, log_name, fit_rows)

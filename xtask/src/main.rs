@@ -11,6 +11,8 @@
 //!   the host C test, the C example firmware under QEMU against the Rust firmware (installing
 //!   `gcc-arm-none-eabi` and `libnewlib-arm-none-eabi` the same way).
 //! - `qemu-check`: only ensures QEMU is present.
+//! - `python`: only the Python package's steps of `test-all` (the abi3 wheel built, installed
+//!   into `.venv` and into a fresh venv without cargo, the pytest suite `python/tests`).
 //! - `capi`: only the C API's steps of `test-all` (builds the firmware's `capi_ref` first).
 //! - `firmware [--m0]`: only the firmware steps of `test-all` (the M4F firmware: build, selftest
 //!   against its golden output, panic/HardFault, the SLCAN replay and garbage tests, the
@@ -51,10 +53,16 @@ fn main() -> ExitCode {
             println!("\nfirmware: {passed} passed");
             Ok(())
         }),
+        "python" => {
+            let (mut passed, mut failed) = (0, 0);
+            python_package(&mut passed)
+                .and_then(|()| pytest(&["python/tests"], &mut passed, &mut failed))
+                .map(|()| println!("\npython: {passed} passed, {failed} failed"))
+        }
         "snapshot" => ensure_qemu()
             .and_then(|()| firmware::snapshot(std::env::args().any(|a| a == "--overwrite"))),
         _ => Err(format!(
-            "unknown task '{task}'; tasks: test-all, qemu-check, snapshot [--overwrite], header [--check], capi, firmware [--m0]"
+            "unknown task '{task}'; tasks: test-all, qemu-check, snapshot [--overwrite], header [--check], capi, firmware [--m0], python"
         )),
     };
     match result {
@@ -205,31 +213,110 @@ pub fn venv() -> Result<std::path::PathBuf, String> {
     Ok(py)
 }
 
-/// Builds the Python package (python/) into the venv with `maturin develop` (the dev profile:
-/// a quick build; docs/python.md measures the release build that `pip install ./python` makes).
-fn python_package() -> Result<(), String> {
+/// The cargo target directory (`CARGO_TARGET_DIR`, else `target/`).
+fn target_dir() -> std::path::PathBuf {
+    std::env::var_os("CARGO_TARGET_DIR")
+        .map(std::path::PathBuf::from)
+        .unwrap_or_else(|| root().join("target"))
+}
+
+/// Builds the Python package (python/) once, as the wheel users install: `maturin build
+/// --release`, abi3 (one wheel for CPython ≥ 3.9). Installs that wheel into `.venv` for the
+/// Python tests, and into a fresh venv with no cargo on PATH, where `python/wheel_check.py`
+/// runs `Tyre.eval` (counted as one test). docs/python.md has the build times measured against
+/// the `maturin develop` dev build this replaces.
+fn python_package(passed: &mut u64) -> Result<(), String> {
     let py = venv()?;
-    run(Command::new(&py)
-        .args([
+    let pip = |py: &std::path::Path| {
+        let mut c = Command::new(py);
+        c.args([
             "-m",
             "pip",
             "install",
             "--quiet",
             "--disable-pip-version-check",
-            "-r",
-        ])
+        ]);
+        c
+    };
+    run(pip(&py)
+        .arg("-r")
         .arg(root().join("python/requirements-test.txt")))?;
     let venv = root().join(".venv");
+    let wheels = target_dir().join("wheels");
+    if wheels.exists() {
+        std::fs::remove_dir_all(&wheels).map_err(|e| format!("{}: {e}", wheels.display()))?;
+    }
     run(Command::new(venv.join("bin/maturin"))
         .current_dir(root().join("python"))
-        .args(["develop", "--quiet"])
+        .args(["build", "--release", "--quiet", "--out"])
+        .arg(&wheels)
         .env("VIRTUAL_ENV", &venv)
         .env("PATH", {
             let mut p = std::ffi::OsString::from(venv.join("bin"));
             p.push(":");
             p.push(std::env::var_os("PATH").unwrap_or_default());
             p
-        }))
+        }))?;
+    let found: Vec<std::path::PathBuf> = std::fs::read_dir(&wheels)
+        .map_err(|e| format!("{}: {e}", wheels.display()))?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|x| x == "whl"))
+        .collect();
+    let wheel = match found.as_slice() {
+        [w] if w.to_string_lossy().contains("-abi3-") => w.clone(),
+        _ => {
+            return Err(format!(
+                "{}: expected one abi3 wheel, found {found:?}",
+                wheels.display()
+            ))
+        }
+    };
+    println!("wheel: {}", wheel.display());
+    run(pip(&py)
+        .args(["--force-reinstall", "--no-deps"])
+        .arg(&wheel))?;
+    // A fresh venv, and no cargo or rustc on PATH: the wheel installs and runs without Rust.
+    let fresh = target_dir().join("wheel-venv");
+    if fresh.exists() {
+        std::fs::remove_dir_all(&fresh).map_err(|e| format!("{}: {e}", fresh.display()))?;
+    }
+    let path = std::env::join_paths(
+        std::env::split_paths(&std::env::var_os("PATH").unwrap_or_default())
+            .filter(|d| !d.join("cargo").exists() && !d.join("rustc").exists()),
+    )
+    .map_err(|e| e.to_string())?;
+    let no_rust = |c: &mut Command| {
+        c.env("PATH", &path);
+        for v in [
+            "CARGO",
+            "RUSTC",
+            "RUSTDOC",
+            "RUSTUP_TOOLCHAIN",
+            "CARGO_TARGET_DIR",
+        ] {
+            c.env_remove(v);
+        }
+    };
+    // GOUGH_WHEEL_PYTHON: the interpreter of the fresh venv (default python3), e.g. a CPython
+    // 3.9 to check the abi3 wheel's oldest version.
+    let base = std::env::var_os("GOUGH_WHEEL_PYTHON").unwrap_or_else(|| "python3".into());
+    let mut c = Command::new(&base);
+    no_rust(&mut c);
+    run(c.arg("-m").arg("venv").arg(&fresh))?;
+    let fpy = fresh.join("bin/python");
+    let mut c = pip(&fpy);
+    no_rust(&mut c);
+    run(c.arg(&wheel))?;
+    let mut c = Command::new(&fpy);
+    no_rust(&mut c);
+    // -I: not the script's directory on sys.path (python/ holds the source package).
+    run(c
+        .current_dir(&fresh)
+        .arg("-I")
+        .arg(root().join("python/wheel_check.py"))
+        .arg(root()))?;
+    *passed += 1;
+    Ok(())
 }
 
 /// Runs pytest on `tests` in the venv with `GOUGH` = the debug `gough` binary, echoing its
@@ -237,9 +324,7 @@ fn python_package() -> Result<(), String> {
 fn pytest(tests: &[&str], passed: &mut u64, failed: &mut u64) -> Result<(), String> {
     let py = venv()?;
     run(cargo().args(["build", "-p", "gough-host", "--bin", "gough"]))?;
-    let target = std::env::var_os("CARGO_TARGET_DIR")
-        .map(std::path::PathBuf::from)
-        .unwrap_or_else(|| root().join("target"));
+    let target = target_dir();
     let mut c = Command::new(&py);
     c.current_dir(root())
         .args(["-m", "pytest", "-q", "-p", "no:cacheprovider"])
@@ -319,8 +404,8 @@ fn test_all() -> Result<(), String> {
     cargo_test(&["--workspace"], &mut passed, &mut failed)?;
     step("DBC files decoded by cantools (strict) against the host's frames (pytest in .venv)");
     pytest(&["host-tests/python/test_dbc.py"], &mut passed, &mut failed)?;
-    step("Python package python/ (maturin develop, dev profile, into .venv): oracle sweeps, CLI equality, fleet on a dask LocalCluster");
-    python_package()?;
+    step("Python package python/ (one abi3 wheel, maturin build --release; into .venv, and into a fresh venv without cargo: Tyre.eval): oracle sweeps, CLI equality, fleet on a dask LocalCluster, logs (MDF4, BLF, ASC, candump)");
+    python_package(&mut passed)?;
     pytest(&["python/tests"], &mut passed, &mut failed)?;
     ensure_qemu()?;
     firmware::test_all(&mut passed)?;
