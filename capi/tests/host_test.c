@@ -74,6 +74,12 @@ static double ours32(const gough_mf_output_t *o, int k) {
 }
 
 static long rows_total = 0, nan_total = 0, files_total = 0;
+/* MF 5.2 out_Mz with camber and κ: DIFFERS FROM MFeval 4.0 (this oracle), which takes SVyκ at
+ * μy(γ = 0); the core follows the MF-Tyre 5.2 manual and MFeval 4.3.1 (the point's own SVyκ;
+ * docs/magic-formula.md, difference 6). The C API wraps the same core: those values are
+ * compared in Rust, against the oracle shifted by the documented term
+ * (host-tests/tests/oracle.rs, `mf52_mz_40_to_431`), and counted, not compared, here. */
+static long differs_total = 0;
 
 /* One oracle file: `stem__sweep__modeNNN.csv`. */
 static void sweep(const char *root, const char *fname) {
@@ -154,6 +160,11 @@ static void sweep(const char *root, const char *fname) {
             double want = v[col_idx[k]];
             if (!isfinite(want)) {
                 nan_total++;
+                continue;
+            }
+            if (!strncmp(fname, "MagicFormula52_", 15) && !strcmp(COLUMNS[k].name, "out_Mz") &&
+                in64.gamma != 0.0 && in64.kappa != 0.0) {
+                differs_total++;
                 continue;
             }
             double g64 = ours64(&o64, (int)k), g32 = ours32(&o32, (int)k);
@@ -672,7 +683,8 @@ int main(int argc, char **argv) {
     CHECK(files_total >= 70, "oracle files: %ld", files_total);
     errors(root);
     printf("c host test: %ld oracle files, %ld rows through gough_mf_eval_f64 and gough_mf_eval "
-           "(%ld NaN oracle values not compared); %d failures\n",
-           files_total, rows_total, nan_total, failures);
+           "(%ld NaN oracle values not compared; %ld MF 5.2 Mz values with camber and slip "
+           "compared in Rust, where we differ from MFeval 4.0); %d failures\n",
+           files_total, rows_total, nan_total, differs_total, failures);
     return failures ? 1 : 0;
 }
