@@ -11,6 +11,20 @@ pub fn root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
 }
 
+/// The MFeval oracle's sweep files (`host-tests/data/oracle/*.csv`), sorted by name; at least
+/// the 70 the repository bundles (a test stops when some are missing).
+pub fn oracle_files() -> Vec<PathBuf> {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("data/oracle");
+    let mut files: Vec<PathBuf> = std::fs::read_dir(&dir)
+        .unwrap_or_else(|e| panic!("{}: {e}", dir.display()))
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|e| e == "csv"))
+        .collect();
+    files.sort();
+    assert!(files.len() >= 70, "oracle files missing: {}", files.len());
+    files
+}
+
 /// The `gough` binary of package `gough-host`, built (once per test process) in the profile of
 /// the tests that ask for it, where `cargo build -p gough-host --bin gough` puts it
 /// (`target/debug/gough`): the steps of `cargo xtask test-all` after the host tests that run

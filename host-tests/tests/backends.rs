@@ -205,13 +205,7 @@ fn check_file(path: &Path, worst: &mut [Worst; 4]) {
 
 #[test]
 fn backends_against_f64() {
-    let mut files: Vec<PathBuf> = std::fs::read_dir(data().join("oracle"))
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .filter(|p| p.extension().is_some_and(|e| e == "csv"))
-        .collect();
-    files.sort();
-    assert!(files.len() >= 70, "oracle files missing: {}", files.len());
+    let files = gough_host_tests::oracle_files();
     let mut worst: [Worst; 4] = Default::default();
     for f in &files {
         check_file(f, &mut worst);

@@ -21,13 +21,7 @@ type OracleFile = (String, Options, Params<f64>, Vec<Input<f64>>);
 
 /// Every oracle file.
 fn oracle() -> Vec<OracleFile> {
-    let mut files: Vec<PathBuf> = std::fs::read_dir(data().join("oracle"))
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .filter(|p| p.extension().is_some_and(|e| e == "csv"))
-        .collect();
-    files.sort();
-    assert!(files.len() >= 70, "oracle files missing: {}", files.len());
+    let files = gough_host_tests::oracle_files();
     files
         .iter()
         .map(|f| {

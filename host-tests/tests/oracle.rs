@@ -222,13 +222,7 @@ fn check_file(path: &Path, prec: Precision, report: &mut Vec<String>) -> Vec<Fai
 }
 
 fn run(prec: Precision) {
-    let mut files: Vec<PathBuf> = std::fs::read_dir(data().join("oracle"))
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .filter(|p| p.extension().is_some_and(|e| e == "csv"))
-        .collect();
-    files.sort();
-    assert!(files.len() >= 70, "oracle files missing: {}", files.len());
+    let files = gough_host_tests::oracle_files();
     let mut report = Vec::new();
     let mut failures = Vec::new();
     for f in &files {

@@ -24,13 +24,7 @@ fn data() -> PathBuf {
 }
 
 fn sweeps() -> Vec<(PathBuf, String, Options)> {
-    let mut files: Vec<PathBuf> = std::fs::read_dir(data().join("oracle"))
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .filter(|p| p.extension().is_some_and(|e| e == "csv"))
-        .collect();
-    files.sort();
-    assert!(files.len() >= 70, "oracle files missing: {}", files.len());
+    let files = gough_host_tests::oracle_files();
     files
         .into_iter()
         .map(|f| {
