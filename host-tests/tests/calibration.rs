@@ -131,21 +131,10 @@ fn log_of(
     let mut t0 = 0.0;
     for sc in parts {
         let tr = scenario::simulate(truth, sc, 200.0, &Noise::default(), 1).unwrap();
-        for i in 0..tr.t.len() {
-            out.push((
-                gough::proto::Wheel::FrontLeft,
-                gough_host::mu::Sample {
-                    t: t0 + tr.t[i],
-                    fz: tr.fz[i],
-                    fy: tr.fy[i],
-                    mz: tr.mz[i],
-                    fx: Some(tr.fx[i]),
-                    vx: Some(tr.vx[i]),
-                    kappa: Some(tr.kappa[i]),
-                    alpha: None,
-                    gamma: Some(tr.gamma[i]),
-                },
-            ));
+        // The wheel cases' samples of the trace (no slip angle), on one clock.
+        for mut r in gough_host::mu::bench::wheel::wheel_trace(&tr).rows {
+            r.t += t0;
+            out.push((gough::proto::Wheel::FrontLeft, r));
         }
         t0 += sc.duration + 0.005;
     }
