@@ -198,66 +198,9 @@ impl Surfaces {
 /// eliminated; sensor noise as in `sens` (σ of Fz, Fx, Fy: `sigma_rel`·Fz; of Mz: `sigma_mz`).
 /// 0 where the model fails or the row carries no load.
 pub fn row_information(m: &Model, s: &Surfaces, r: &RowState, sens: &Sensors) -> f64 {
-    if r.fz.is_nan() || r.fz <= 0.0 {
-        return 0.0;
-    }
-    let sf = (sens.sigma_rel * r.fz).max(1e-9);
-    let sd = [sf, sf, sens.sigma_mz.max(1e-9)]; // Fx, Fy, Mz
-                                                // Columns of J for the force channels: ∂(Fx, Fy, Mz)/∂(μ, α', κ', Fz).
-    let diff = |a: Option<[f64; 3]>, b: Option<[f64; 3]>, h: f64| -> Option<[f64; 3]> {
-        let (a, b) = (a?, b?);
-        Some([
-            (a[0] - b[0]) / (2.0 * h),
-            (a[1] - b[1]) / (2.0 * h),
-            (a[2] - b[2]) / (2.0 * h),
-        ])
-    };
-    let with = |f: &dyn Fn(&mut RowState)| {
-        let mut q = *r;
-        f(&mut q);
-        q
-    };
-    let hz = (1e-4 * r.fz).max(1e-3);
-    // The centre surface for the slip and load columns: the mean of lo and hi is not a surface,
-    // so those columns are taken on both and averaged (second order in H_MU).
-    let col = |q1: RowState, q0: RowState, h: f64| -> Option<[f64; 3]> {
-        let a = diff(m.forces(&s.lo, &q1), m.forces(&s.lo, &q0), h)?;
-        let b = diff(m.forces(&s.hi, &q1), m.forces(&s.hi, &q0), h)?;
-        Some([
-            0.5 * (a[0] + b[0]),
-            0.5 * (a[1] + b[1]),
-            0.5 * (a[2] + b[2]),
-        ])
-    };
-    let cols = (|| {
-        Some([
-            diff(m.forces(&s.hi, r), m.forces(&s.lo, r), H_MU)?,
-            col(
-                with(&|q| q.alpha += H_ALPHA),
-                with(&|q| q.alpha -= H_ALPHA),
-                H_ALPHA,
-            )?,
-            col(
-                with(&|q| q.kappa += H_KAPPA),
-                with(&|q| q.kappa -= H_KAPPA),
-                H_KAPPA,
-            )?,
-            col(with(&|q| q.fz += hz), with(&|q| q.fz -= hz), hz)?,
-        ])
-    })();
-    let Some(cols) = cols else { return 0.0 };
-    // I = JᵀΣ⁻¹J over (μ, α', κ', Fz); the measured Fz adds 1/σ² to the Fz diagonal.
-    let mut info = [[0.0f64; 4]; 4];
-    for (i, ci) in cols.iter().enumerate() {
-        for (j, cj) in cols.iter().enumerate() {
-            info[i][j] = (0..3).map(|k| ci[k] * cj[k] / (sd[k] * sd[k])).sum();
-        }
-    }
-    info[3][3] += 1.0 / (sf * sf);
-    if m.kappa_measured {
-        info[2][2] += 1.0 / sens.sigma_kappa.max(1e-9).powi(2);
-    }
-    schur_first(&info)
+    // The (μ, μ) entry of the information on (μ, θ): the row's nuisances are eliminated the
+    // same way, and θ not at all (known).
+    row_information_cal(m, s, r, sens)[0][0]
 }
 
 /// Fisher information of one row on (μ, θ) — the surface and the four calibrated properties
@@ -315,8 +258,9 @@ pub fn row_information_cal(
         return zero;
     }
     let dot = |a: &[f64; 3], b: &[f64; 3]| (0..3).map(|k| a[k] * b[k] / (sd[k] * sd[k])).sum();
-    // The nuisance block (α', κ', Fz; the measured Fz on its diagonal) with a vanishing ridge,
-    // as in `schur_first`.
+    // The nuisance block (α', κ', Fz; the measured Fz on its diagonal) with a vanishing ridge:
+    // a nuisance the measurements do not see (a zero column, e.g. κ' of a wheel at a limit) is
+    // eliminated without inventing information.
     let mut nn = [[0.0f64; 3]; 3];
     for (a, row) in nn.iter_mut().enumerate() {
         for (b, x) in row.iter_mut().enumerate() {
@@ -370,23 +314,6 @@ pub fn sigma_with_calibration(
         Some(x) if x[0] > 0.0 && x[0].is_finite() => x[0].sqrt(),
         _ => f64::INFINITY,
     }
-}
-
-/// I₀₀ − I₀ₙ·Iₙₙ⁻¹·Iₙ₀ of a symmetric positive semi-definite 4×4 matrix: the information on
-/// the first unknown with the other three eliminated. A nuisance the measurements do not see
-/// (a zero column, e.g. κ' of a wheel at a limit) gets a vanishing ridge, which eliminates it
-/// without inventing information.
-pub fn schur_first(i: &[[f64; 4]; 4]) -> f64 {
-    let scale = (1..4).map(|k| i[k][k]).fold(0.0, f64::max).max(1e-300);
-    let mut nn = [[0.0f64; 3]; 3];
-    for (r, row) in nn.iter_mut().enumerate() {
-        row.copy_from_slice(&i[r + 1][1..]);
-        row[r] += 1e-12 * scale;
-    }
-    let n0 = [i[1][0], i[2][0], i[3][0]];
-    solve(nn, n0).map_or(0.0, |x| {
-        (i[0][0] - (0..3).map(|k| n0[k] * x[k]).sum::<f64>()).max(0.0)
-    })
 }
 
 /// Length of the maximum-likelihood reference's window \[s\] unless `--ml-window` says otherwise.
@@ -645,8 +572,8 @@ pub struct Gathered {
 impl Gathered {
     /// Adds row `r`'s information.
     pub fn add(&mut self, m: &Model, surf: &Surfaces, r: &RowState, sens: &Sensors) {
-        self.exact += row_information(m, surf, r, sens);
         let ic = row_information_cal(m, surf, r, sens);
+        self.exact += ic[0][0];
         for (s, x) in self.cal.iter_mut().zip(ic.iter()) {
             for (s, x) in s.iter_mut().zip(x.iter()) {
                 *s += x;
@@ -1082,26 +1009,6 @@ mod tests {
         .params
     }
 
-    /// The Schur complement against a direct inverse: info on the first unknown is
-    /// 1 / (I⁻¹)₀₀.
-    #[test]
-    fn schur_is_the_inverse_s_corner() {
-        let a = [
-            [4.0, 1.0, 0.5, 0.2],
-            [1.0, 3.0, 0.3, 0.1],
-            [0.5, 0.3, 2.0, 0.4],
-            [0.2, 0.1, 0.4, 1.5],
-        ];
-        // (A⁻¹)₀₀: the first entry of the solution of A·x = e₀.
-        let inv00 = solve(a, [1.0, 0.0, 0.0, 0.0]).unwrap()[0];
-        let s = schur_first(&a);
-        assert!((s - 1.0 / inv00).abs() < 1e-9 * s, "{s} vs {}", 1.0 / inv00);
-    }
-
-    /// With the calibration unknown the bound can only widen; with it known exactly (a
-    /// vanishing prior σ) it is the exact model's bound; at one operating point a trail known to
-    /// ±10 % leaves μ far less decided than the exact trail, and a sweep of slip angles tells
-    /// much of it back.
     #[test]
     fn the_calibration_unknown_widens_the_bound_and_a_sweep_narrows_it() {
         let p = tyre();
