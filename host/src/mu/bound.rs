@@ -28,7 +28,7 @@
 //! (run as `gough mu bench` runs it), wheel by wheel, and (`--ml`) beside [`WindowMl`], a maximum-likelihood
 //! reference with the same exact model that shows whether the bound can be reached.
 
-use super::bench::{self, Sensors, WheelTrace};
+use super::bench::{self, metrics::TARGET_STEP, Sensors, WheelTrace};
 use super::{Method, Setup};
 use crate::sim::Log;
 use gough::math::Libm;
@@ -664,13 +664,26 @@ pub fn wheel_bounds(
     out
 }
 
+/// The bounds of one wheel of a wheel case ([`trace_bounds`]): μ and σ_CRB with the tyre exact
+/// and with its calibration unknown, per surface and per step of the surface.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct TraceBounds {
+    /// One per surface on which the utilisation reaches 0.5: `[μ, σ, σ_cal]` at the
+    /// [`DEADLINE`] after it first does (∞ where the surface ends before it).
+    pub surfaces: Vec<[f64; 3]>,
+    /// One per step of the surface (every surface but the first): `[μ, σ, σ_cal]` from the rows
+    /// of the new surface up to [`TARGET_STEP`] after its first row (∞ where it ends before),
+    /// whatever the utilisation — what the step target asks of the bank.
+    pub steps: Vec<[f64; 3]>,
+}
+
 /// The bounds of one wheel of a wheel case (`super::scenario`: its trace with the transient
-/// slips), one per surface on which the utilisation reaches 0.5: μ, and σ_CRB at the
-/// deadline with the tyre exact and with the calibration unknown (∞ where the surface ends
-/// before it) — the calibration learnt from every row before the deadline, the earlier
-/// surfaces' included (their μ eliminated). The sensors are the scenario's (`Noise`, no delay; κ as the model says).
-pub fn trace_bounds(m: &Model, tr: &super::scenario::Trace, sens: &Sensors) -> Vec<[f64; 3]> {
-    let mut out = Vec::new();
+/// slips), per surface on which the utilisation reaches 0.5 and per step of the surface: μ,
+/// and σ_CRB at the deadline with the tyre exact and with the calibration unknown — the
+/// calibration learnt from every row before the deadline, the earlier surfaces' included (their
+/// μ eliminated). The sensors are the scenario's (`Noise`, no delay; κ as the model says).
+pub fn trace_bounds(m: &Model, tr: &super::scenario::Trace, sens: &Sensors) -> TraceBounds {
+    let mut out = TraceBounds::default();
     // What the earlier surfaces' rows told of the tyre (their μ eliminated): the calibration is
     // the tyre's, carried across a change of road.
     let mut before = [[0.0; PROPERTIES]; PROPERTIES];
@@ -692,24 +705,32 @@ pub fn trace_bounds(m: &Model, tr: &super::scenario::Trace, sens: &Sensors) -> V
                 g.cal[1 + i][1 + j] += x;
             }
         }
-        let mut at_dead: Option<Gathered> = None;
+        // A step's deadline: TARGET_STEP after the new surface's first row.
+        let t_step = (a > 0).then(|| tr.t[a] + TARGET_STEP);
+        let (mut at_dead, mut at_step): (Option<Gathered>, Option<Gathered>) = (None, None);
         for i in a..b {
-            if let Some(td) = t_dead {
-                if at_dead.is_none() && tr.t[i] > td + 1e-9 {
-                    at_dead = Some(g);
+            for (t, at) in [(t_dead, &mut at_dead), (t_step, &mut at_step)] {
+                if t.is_some_and(|td| at.is_none() && tr.t[i] > td + 1e-9) {
+                    *at = Some(g);
                 }
             }
             g.add(m, &surf, &row(i), sens);
         }
-        if let Some(td) = t_dead {
-            // The surface ends before the deadline: nothing decided by it.
-            let reached = at_dead.is_some() || tr.t[b - 1] + 1e-9 >= td;
-            let d = at_dead.unwrap_or(g);
-            out.push(if reached {
+        // A surface that ends before the deadline decides nothing by it.
+        let bound = |td: f64, at: Option<Gathered>| {
+            let reached = at.is_some() || tr.t[b - 1] + 1e-9 >= td;
+            let d = at.unwrap_or(g);
+            if reached {
                 [tr.mu[a], d.sigma(), d.sigma_cal()]
             } else {
                 [tr.mu[a], f64::INFINITY, f64::INFINITY]
-            });
+            }
+        };
+        if let Some(td) = t_dead {
+            out.surfaces.push(bound(td, at_dead));
+        }
+        if let Some(td) = t_step {
+            out.steps.push(bound(td, at_step));
         }
         // The whole surface's information on θ, its μ eliminated, for the surfaces after it.
         let c = &g.cal;
@@ -773,16 +794,21 @@ pub fn run_wheel_cases(
     let (tyres, _) = wheel::tyres(tyres)?;
     let scenarios = wheel::scenarios();
     std::fs::create_dir_all(out).map_err(|e| format!("{}: {e}", out.display()))?;
-    let mut md = String::from(
-        "| tyre | level | wheel-surfaces | ±0.1 decidable in 150 ms, tyre exact | the same, calibration unknown | the bank within ±0.1 in 150 ms |\n|---|---|---|---|---|---|\n",
-    );
+    const COLUMNS: &str = "| wheel-surfaces | ±0.1 decidable in 150 ms, tyre exact | the same, calibration unknown | the bank within ±0.1 in 150 ms | steps | decidable in 200 ms, tyre exact | calibration unknown | the bank in 200 ms |\n";
+    let line = |name: &str, level: &str, n: &[usize; 8]| {
+        let cells: Vec<String> = n.iter().map(|x| x.to_string()).collect();
+        format!("| {name} | {level} | {} |\n", cells.join(" | "))
+    };
+    let mut md = format!("| tyre | level {COLUMNS}|---|---|---|---|---|---|---|---|---|---|\n");
     let levels = [Level::Exact, Level::Envelope];
-    let mut total = [[0usize; 4]; 2];
+    // Per level: wheel-surfaces, decidable exact, decidable with the calibration unknown, the
+    // bank's; steps, decidable in 200 ms exact, the same with the calibration unknown, the bank's.
+    let mut total = [[0usize; 8]; 2];
     // By scenario and level, over the tyres.
-    let mut by_sc = vec![[[0usize; 4]; 2]; scenarios.len()];
+    let mut by_sc = vec![[[0usize; 8]; 2]; scenarios.len()];
     for (ti, tyre) in tyres.iter().enumerate() {
         for (li, &level) in levels.iter().enumerate() {
-            let mut n = [0usize; 4];
+            let mut n = [0usize; 8];
             for (si, sc) in scenarios.iter().enumerate() {
                 let d = wheel::perturbation(seed, tyre, sc.name, level);
                 let truth = wheel::truth(tyre, &d, level);
@@ -795,13 +821,16 @@ pub fn run_wheel_cases(
                     delay: 0.0,
                     sigma_kappa: noise.kappa,
                 };
-                let mut k = [0usize; 4];
+                let mut k = [0usize; 8];
                 for s in &sc.wheels {
                     let tr = scenario::simulate(&truth, s, wheel::RATE, &noise, seed)?;
-                    for [_, sg, sc] in trace_bounds(&model, &tr, &sens) {
-                        k[0] += 1;
-                        k[1] += usize::from(1.96 * sg <= 0.1);
-                        k[2] += usize::from(1.96 * sc <= 0.1);
+                    let tb = trace_bounds(&model, &tr, &sens);
+                    for (o, list) in [(0, &tb.surfaces), (4, &tb.steps)] {
+                        for [_, sg, sc] in list {
+                            k[o] += 1;
+                            k[o + 1] += usize::from(1.96 * sg <= 0.1);
+                            k[o + 2] += usize::from(1.96 * sc <= 0.1);
+                        }
                     }
                 }
                 let case = wheel::WheelCase {
@@ -812,6 +841,7 @@ pub fn run_wheel_cases(
                 };
                 let r = wheel::run_case(&case, &tyres, &scenarios, seed, false, &wheel::estimator)?;
                 k[3] = r.cold.metrics.ws_within;
+                k[7] = r.cold.steps.iter().filter(|s| s.in_time()).count();
                 for ((n, b), k) in n.iter_mut().zip(by_sc[si][li].iter_mut()).zip(k) {
                     *n += k;
                     *b += k;
@@ -820,47 +850,25 @@ pub fn run_wheel_cases(
             for (t, x) in total[li].iter_mut().zip(n) {
                 *t += x;
             }
-            md += &format!(
-                "| {} | {} | {} | {} | {} | {} |\n",
-                tyre.file,
-                level.name(),
-                n[0],
-                n[1],
-                n[2],
-                n[3]
-            );
+            md += &line(&tyre.file, level.name(), &n);
             eprintln!("{} {}: done", tyre.file, level.name());
         }
     }
     for (li, level) in levels.iter().enumerate() {
-        let t = total[li];
-        md += &format!(
-            "| all {} tyres | {} | {} | {} | {} | {} |\n",
-            tyres.len(),
+        md += &line(
+            &format!("all {} tyres", tyres.len()),
             level.name(),
-            t[0],
-            t[1],
-            t[2],
-            t[3]
+            &total[li],
         );
     }
-    md += "\n| scenario | level | wheel-surfaces | decidable, tyre exact | calibration unknown | the bank |\n|---|---|---|---|---|---|\n";
+    md += &format!("\n| scenario | level {COLUMNS}|---|---|---|---|---|---|---|---|---|---|\n");
     for (sc, b) in scenarios.iter().zip(&by_sc) {
         for (li, level) in levels.iter().enumerate() {
-            let t = b[li];
-            md += &format!(
-                "| {} | {} | {} | {} | {} | {} |\n",
-                sc.name,
-                level.name(),
-                t[0],
-                t[1],
-                t[2],
-                t[3]
-            );
+            md += &line(sc.name, level.name(), &b[li]);
         }
     }
     md += &format!(
-        "\nσ_CRB of μ from each wheel-surface's rows up to 150 ms after its utilisation first reaches 0.5 (decidable: 1.96·σ ≤ 0.1), the tyre's model the simulated tyre's own; \"calibration unknown\": its trail, trail shape, trail shift and Kxκ unknown too, each with the bank's prior σ, learnt from every row before the deadline, the earlier surfaces' included (a cold start). Seed {seed}, 200 Hz, the scenarios' noise (κ measured, taken as κ′ plus its noise).\n"
+        "\nσ_CRB of μ from each wheel-surface's rows up to 150 ms after its utilisation first reaches 0.5 (decidable: 1.96·σ ≤ 0.1), the tyre's model the simulated tyre's own; \"calibration unknown\": its trail, trail shape, trail shift and Kxκ unknown too, each with the bank's prior σ, learnt from every row before the deadline, the earlier surfaces' included (a cold start). A step: σ_CRB from the new surface's rows up to 200 ms after its first, whatever the utilisation; the bank's step read in time as `gough mu bench` counts it (identifiable within ±0.1 by then and staying). Seed {seed}, 200 Hz, the scenarios' noise (κ measured, taken as κ′ plus its noise).\n"
     );
     std::fs::write(out.join("bound_wheel.md"), &md).map_err(|e| e.to_string())?;
     print!("{md}");
@@ -1089,6 +1097,8 @@ mod tests {
             None,
             3.0,
         );
+        assert!(slalom.steps.is_empty());
+        let slalom = slalom.surfaces;
         assert_eq!(slalom.len(), 1);
         let [mu, s, sc] = slalom[0];
         assert_eq!(mu, 0.6);
@@ -1099,6 +1109,12 @@ mod tests {
             Some(2.0),
             4.0,
         );
+        // The step's own bound, 200 ms after it: near the new road's limit, decided either way.
+        assert_eq!(steady.steps.len(), 1, "{steady:?}");
+        let [mu, s, sc] = steady.steps[0];
+        assert_eq!(mu, 0.3);
+        assert!(sc >= s && 1.96 * sc <= 0.1, "{s} {sc}");
+        let steady = steady.surfaces;
         assert_eq!(steady.len(), 2, "{steady:?}");
         let [mu, s, sc] = steady[0];
         assert_eq!(mu, 1.0);
