@@ -268,3 +268,94 @@ fn combined_slip_is_found_from_a_file_without_its_block() {
     );
     assert!(got >= 0.8 * achievable, "{got} of {achievable}");
 }
+
+/// Issue 56: a log without an effect, the truth (the sim of the file) run at 2 kHz between the
+/// rows and taken at the rows as a logger samples it — 20, 50, 100, 200 and 1,000 Hz, the
+/// timestamps jittered by ±10 % of the step, 2 % of the rows dropped, the bench's load bursts
+/// (Fz ±30 % at 2, 4, 8 Hz) — and the sim at the log rate: its miss of the noise-free truth,
+/// RMS over the noise's, per channel, on the rows the diagnosis scores, two tyres. From 50 Hz
+/// on below 0.2 of the noise. At 20 Hz an 8 Hz burst has 2.5 rows a period (and 1.25 across a
+/// dropped row): no interpolant of the rows has it, and the miss is printed, not bounded (the
+/// diagnosis's verdict on such logs: `a_none_log_at_20_hz_gets_no_verdict`). Figures print
+/// with `--nocapture`.
+#[test]
+fn a_none_log_at_any_rate_with_jitter_and_dropped_rows_is_matched_by_the_sim() {
+    use gough_host::gap::bench::{self, GenConfig, Sampling};
+    let mut worst = 0.0f64;
+    for file in ["MagicFormula61_Parameters.tir", "reference_tire_tvd3.tir"] {
+        let p = tyre(file);
+        for rate in [20.0, 50.0, 100.0, 200.0, 1000.0] {
+            let cfg = GenConfig {
+                // 15 s of log at any rate: a burst at each of 2, 4, 8 Hz.
+                rows: (15.0 * rate) as usize,
+                rate,
+                seed: 3,
+                noise: 0.01,
+                load_oscillation: true,
+                sampling: Sampling {
+                    truth_rate: Some(2000.0),
+                    jitter: 0.1,
+                    drop: 0.02,
+                },
+                ..GenConfig::default()
+            };
+            let g = bench::generate(&p, &cfg).unwrap();
+            let lg = &g.log;
+            let sim = Sim::new(p.clone(), lg);
+            let ctx = gap::effects::Ctx::new(lg, &sim).unwrap();
+            let run = &ctx.base;
+            let sd: [f64; 3] =
+                [0, 1, 2].map(|c| stats::rms((0..lg.len()).map(|i| lg.meas[i][c] - g.clean[i][c])));
+            // The rows the diagnosis scores (not those settling after a restart: the filter
+            // starts in steady state there, the truth did not stop), after the first second.
+            let rows: Vec<usize> = (0..lg.len())
+                .filter(|&i| lg.t[i] >= 1.0 && ctx.settled[i])
+                .collect();
+            let r = [0, 1, 2]
+                .map(|c| stats::rms(rows.iter().map(|&i| g.clean[i][c] - run.out[i][c])) / sd[c]);
+            println!(
+                "{file} at {rate} Hz ({} rows, {} restarts): sim miss of the truth / noise = Fx {:.3}, Fy {:.3}, Mz {:.3}",
+                lg.len(),
+                lg.gaps(),
+                r[0],
+                r[1],
+                r[2]
+            );
+            if rate >= 50.0 {
+                worst = worst.max(r[0]).max(r[1]).max(r[2]);
+            }
+        }
+    }
+    assert!(worst < 0.2, "worst from 50 Hz on: {worst}");
+}
+
+/// Issue 56: at 20 Hz (2,000 rows, 100 s, bursts, jitter ±10 %, 2 % dropped), where the sim
+/// cannot follow an 8 Hz burst, the diagnosis still names nothing on a log without an effect,
+/// on two tyres (the linear hold before issue 56 named `relaxation_length` on the second, shrink
+/// 0.013). Slow (two diagnoses): `cargo test --release -p gough-host-tests --test gap_rate
+/// a_none_log_at_20 -- --ignored --nocapture`.
+#[test]
+#[ignore]
+fn a_none_log_at_20_hz_gets_no_verdict() {
+    use gough_host::gap::bench::{self, GenConfig, Sampling};
+    for file in ["MagicFormula61_Parameters.tir", "reference_tire_tvd3.tir"] {
+        let p = tyre(file);
+        let cfg = GenConfig {
+            rows: 2000,
+            rate: 20.0,
+            seed: 5,
+            noise: 0.01,
+            load_oscillation: true,
+            sampling: Sampling {
+                truth_rate: Some(5000.0),
+                jitter: 0.1,
+                drop: 0.02,
+            },
+            ..GenConfig::default()
+        };
+        let g = bench::generate(&p, &cfg).unwrap();
+        let d = gap::diagnose(p, &g.log, file, "none_20hz", &gap::Options::default()).unwrap();
+        println!("{file} at 20 Hz: verdict {:?}", d.verdict);
+        assert_eq!(d.verdict, None, "{file}: {:?}", d.report.verdict);
+    }
+}

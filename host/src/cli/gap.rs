@@ -46,6 +46,11 @@ pub enum GapCmd {
         /// Also write one CSV row per log (truth, verdict, shrinks, time) to this file.
         #[arg(long, value_name = "FILE")]
         cases: Option<PathBuf>,
+        /// Log rates \[Hz\], comma-separated, taken in turn over the cases (default 100,200).
+        #[arg(long, value_name = "HZ,...", value_delimiter = ',')]
+        rates: Vec<f64>,
+        #[command(flatten)]
+        sampling: SamplingArgs,
     },
     /// Generate a log from the benchmark's truth model (SIM.tir with one effect switched on).
     Generate {
@@ -87,7 +92,37 @@ pub enum GapCmd {
         /// Load oscillation bursts: Fz ±30 % at 2, 4, 8 Hz in the second half of every 5 s.
         #[arg(long)]
         load_oscillation: bool,
+        #[command(flatten)]
+        sampling: SamplingArgs,
     },
+}
+
+/// How a generated log samples its truth (`gap::bench::Sampling`).
+#[derive(clap::Args, Debug, Clone, Copy)]
+pub struct SamplingArgs {
+    /// Run the truth at this rate \[Hz\] between the log's rows and take it at the rows (the
+    /// continuous model as a logger samples it); default: the truth at the rows themselves.
+    #[arg(long, value_name = "HZ")]
+    truth_rate: Option<f64>,
+    /// Jitter each row's time by up to ± this fraction of the step (uniform, < 0.5).
+    #[arg(long, value_name = "FRACTION", default_value_t = 0.0)]
+    jitter: f64,
+    /// Drop this fraction of the rows at random (≤ 0.5).
+    #[arg(long, value_name = "FRACTION", default_value_t = 0.0)]
+    drop: f64,
+}
+
+impl SamplingArgs {
+    fn sampling(&self) -> Result<bench::Sampling, String> {
+        let s = bench::Sampling {
+            truth_rate: self.truth_rate,
+            jitter: self.jitter,
+            drop: self.drop,
+        };
+        s.check()
+            .map_err(|e| format!("--{e}").replace("--truth rate", "--truth-rate"))?;
+        Ok(s)
+    }
 }
 
 fn write_atomic(path: &Path, text: &str) -> Result<(), String> {
@@ -182,6 +217,8 @@ pub fn run(cmd: GapCmd) -> Result<(), String> {
             tyres,
             markdown,
             cases,
+            rates,
+            sampling,
         } => {
             let dir = tyres.unwrap_or_else(|| {
                 Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -190,6 +227,13 @@ pub fn run(cmd: GapCmd) -> Result<(), String> {
             });
             let mut cfg = bench::default_config(&dir, quick);
             cfg.jobs = jobs.max(1);
+            cfg.sampling = sampling.sampling()?;
+            if let Some(r) = rates.iter().find(|r| !(r.is_finite() && **r > 0.0)) {
+                return Err(format!("--rates: {r} is not a rate (> 0 Hz)"));
+            }
+            if !rates.is_empty() {
+                cfg.rates = rates;
+            }
             let start = std::time::Instant::now();
             let res = bench::run(&cfg)?;
             let mut text = bench::table(&cfg, &res);
@@ -222,6 +266,7 @@ pub fn run(cmd: GapCmd) -> Result<(), String> {
             no_p,
             no_phit,
             load_oscillation,
+            sampling,
         } => {
             let truth = effect_arg(&effect)?;
             if truth.len() > 2 {
@@ -254,6 +299,7 @@ pub fn run(cmd: GapCmd) -> Result<(), String> {
                     p: !no_p,
                     phit: !no_phit,
                     load_oscillation,
+                    sampling: sampling.sampling()?,
                 },
             )?;
             crate::gap::log::write(&out, &g.log)

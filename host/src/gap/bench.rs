@@ -66,6 +66,44 @@ pub struct GenConfig {
     /// Load oscillation bursts (the situation of the paper's Figs. 13–14): in the second half
     /// of every 5 s, Fz × (1 + 0.3·w·sin 2πft) with w a sin² window and f = 2, 4, 8 Hz in turn.
     pub load_oscillation: bool,
+    /// How the log samples the truth ([`Sampling`]).
+    pub sampling: Sampling,
+}
+
+/// How a generated log samples the truth: as a logger does, or (the default) the truth run at
+/// the log's own rows.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Sampling {
+    /// Rate \[Hz\] at which the truth runs between the log's rows (each step between two rows
+    /// cut into equal sub-steps no longer than 1/`truth_rate`); the log takes the truth at its
+    /// rows: the continuous model as a logger samples it. `None`: the truth runs at the rows.
+    pub truth_rate: Option<f64>,
+    /// Timestamp jitter: each row's time lies off its nominal i/rate by a uniform draw within
+    /// ± this fraction of the step (below 0.5, so that time still increases).
+    pub jitter: f64,
+    /// Fraction of the rows dropped at random (the truth runs on through them).
+    pub drop: f64,
+}
+
+impl Sampling {
+    /// Whether anything differs from the truth at the log's own rows.
+    pub fn is_default(&self) -> bool {
+        self.truth_rate.is_none() && self.jitter == 0.0 && self.drop == 0.0
+    }
+
+    /// Checks the values: a positive finite truth rate, jitter in [0, 0.5), drop in [0, 0.5].
+    pub fn check(&self) -> Result<(), String> {
+        if let Some(r) = self.truth_rate.filter(|r| !(r.is_finite() && *r > 0.0)) {
+            return Err(format!("truth rate {r}: must be > 0"));
+        }
+        if !(0.0..0.5).contains(&self.jitter) {
+            return Err(format!("jitter {}: expected 0 ≤ jitter < 0.5", self.jitter));
+        }
+        if !(0.0..=0.5).contains(&self.drop) {
+            return Err(format!("drop {}: expected 0 ≤ drop ≤ 0.5", self.drop));
+        }
+        Ok(())
+    }
 }
 
 impl Default for GenConfig {
@@ -82,6 +120,7 @@ impl Default for GenConfig {
             p: true,
             phit: true,
             load_oscillation: false,
+            sampling: Sampling::default(),
         }
     }
 }
@@ -112,11 +151,16 @@ fn multisine(rng: &mut Rng, t: &[f64], f_lo: f64, f_hi: f64, n: usize) -> Vec<f6
         .collect()
 }
 
-/// The input programme: a log with inputs and zero outputs.
+/// The input programme at the log's nominal rows (i/rate): a log with inputs and zero outputs.
 pub fn inputs(p: &Params<f64>, cfg: &GenConfig) -> Log {
+    inputs_at(p, cfg, (0..cfg.rows).map(|i| i as f64 / cfg.rate).collect())
+}
+
+/// The input programme at times `t` (the same programme whatever the times: its multisines are
+/// drawn from the seed alone).
+pub fn inputs_at(p: &Params<f64>, cfg: &GenConfig, t: Vec<f64>) -> Log {
     let mut rng = Rng::new(cfg.seed);
-    let n = cfg.rows;
-    let t: Vec<f64> = (0..n).map(|i| i as f64 / cfg.rate).collect();
+    let n = t.len();
     let mut ms = |lo, hi, k| multisine(&mut rng, &t, lo, hi, k);
     let (a1, a2) = (ms(0.05, 0.5, 4), ms(0.5, 4.0, 4));
     let alpha = (0..n)
@@ -499,11 +543,53 @@ pub fn decoys(effects: &[Effect], seed: u64) -> Vec<Block> {
     cand
 }
 
-/// Generates a log: inputs, the truth's outputs, noise.
+/// The fine time grid of a sampled log and the indices of the log's rows in it: the row times
+/// (i + jitter·u)/rate, u uniform in [−1, 1], each kept with probability 1 − drop (the first
+/// always), and between two kept rows equal sub-steps no longer than 1/truth_rate.
+pub fn sampled(cfg: &GenConfig) -> (Vec<f64>, Vec<usize>) {
+    let s = cfg.sampling;
+    let mut rng = Rng::new(cfg.seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ 0x0071_AE55);
+    let mut rows_t = Vec::with_capacity(cfg.rows);
+    for i in 0..cfg.rows {
+        let t = (i as f64 + s.jitter * rng.range(-1.0, 1.0)) / cfg.rate;
+        let keep = rng.uniform() >= s.drop;
+        if i == 0 || keep {
+            rows_t.push(t);
+        }
+    }
+    let fine = s.truth_rate.unwrap_or(cfg.rate);
+    let mut t = Vec::with_capacity(rows_t.len());
+    let mut rows = Vec::with_capacity(rows_t.len());
+    for (k, &tk) in rows_t.iter().enumerate() {
+        if k > 0 {
+            let t0 = rows_t[k - 1];
+            let m = ((tk - t0) * fine).ceil().max(1.0) as usize;
+            for j in 1..m {
+                t.push(t0 + (tk - t0) * j as f64 / m as f64);
+            }
+        }
+        rows.push(t.len());
+        t.push(tk);
+    }
+    (t, rows)
+}
+
+/// Generates a log: inputs, the truth's outputs, noise. With a [`Sampling`] other than the
+/// default, the truth runs on a fine grid through the log's (jittered, thinned) row times and
+/// the log takes it at those rows ([`sampled`]).
 pub fn generate(p: &Params<f64>, cfg: &GenConfig) -> Result<Generated, String> {
-    let mut log = inputs(p, cfg);
     let effects: Vec<Effect> = cfg.truth.into_iter().chain(cfg.truth2).collect();
-    let clean = truth(p, &log, &effects, cfg.magnitude, cfg.seed)?;
+    let (mut log, clean) = if cfg.sampling.is_default() {
+        let log = inputs(p, cfg);
+        let clean = truth(p, &log, &effects, cfg.magnitude, cfg.seed)?;
+        (log, clean)
+    } else {
+        cfg.sampling.check()?;
+        let (t, rows) = sampled(cfg);
+        let fine = inputs_at(p, cfg, t);
+        let clean = truth(p, &fine, &effects, cfg.magnitude, cfg.seed)?;
+        (fine.select(&rows), rows.iter().map(|&i| clean[i]).collect())
+    };
     let mut rng = Rng::new(cfg.seed.wrapping_mul(0x2545_F491_4F6C_DD1D) ^ 0x5EED);
     let sd: Vec<f64> = (0..3)
         .map(|c| cfg.noise * stats::rms(clean.iter().map(|o| o[c])))
@@ -555,6 +641,8 @@ pub struct BenchConfig {
     pub rows: usize,
     /// Sample rates \[Hz\], taken in turn over tyres, noise levels, magnitudes and seeds.
     pub rates: Vec<f64>,
+    /// How every log samples its truth ([`Sampling`]).
+    pub sampling: Sampling,
     /// Load oscillation bursts in every log ([`GenConfig::load_oscillation`]).
     pub load_oscillation: bool,
     /// Take 2–3 decoy blocks out of every case's sim file ([`decoys`]).
@@ -747,6 +835,7 @@ pub fn run(cfg: &BenchConfig) -> Result<Vec<CaseResult>, String> {
                         magnitude: 0.0,
                         noise,
                         load_oscillation: cfg.load_oscillation,
+                        sampling: cfg.sampling,
                         ..GenConfig::default()
                     },
                 ));
@@ -764,6 +853,7 @@ pub fn run(cfg: &BenchConfig) -> Result<Vec<CaseResult>, String> {
                                 magnitude: m,
                                 noise,
                                 load_oscillation: cfg.load_oscillation,
+                                sampling: cfg.sampling,
                                 ..GenConfig::default()
                             },
                         ));
@@ -783,6 +873,7 @@ pub fn run(cfg: &BenchConfig) -> Result<Vec<CaseResult>, String> {
                             magnitude: cfg.pair_magnitude,
                             noise,
                             load_oscillation: cfg.load_oscillation,
+                            sampling: cfg.sampling,
                             ..GenConfig::default()
                         },
                     ));
@@ -974,11 +1065,24 @@ pub fn table(cfg: &BenchConfig, res: &[CaseResult]) -> String {
     let secs: Vec<f64> = res.iter().map(|r| r.seconds).collect();
     let _ = writeln!(
         s,
-        "{} logs of {} rows at {:?} Hz (in turn){}{}: tyres {}; magnitudes {:?}; noise {:?} of each channel's RMS; \
+        "{} logs of {} rows at {:?} Hz (in turn){}{}{}: tyres {}; magnitudes {:?}; noise {:?} of each channel's RMS; \
          {} seed(s) per effect case, {} per none case; pairs {} at m = {}, {} seed(s) each. Diagnosis time per log: median {:.2} s, max {:.2} s.\n",
         res.len(),
         cfg.rows,
         cfg.rates,
+        if cfg.sampling.is_default() {
+            String::new()
+        } else {
+            format!(
+                ", the truth run at {} between the rows, timestamps jittered by ±{} of the step, {} of the rows dropped",
+                cfg.sampling
+                    .truth_rate
+                    .map(|r| format!("{r} Hz"))
+                    .unwrap_or_else(|| "the log's rate".into()),
+                cfg.sampling.jitter,
+                cfg.sampling.drop
+            )
+        },
         if cfg.load_oscillation {
             ", load oscillation bursts of ±30 % at 2, 4, 8 Hz"
         } else {
@@ -1199,6 +1303,7 @@ pub fn default_config(data: &Path, quick: bool) -> BenchConfig {
             none_seeds: 1,
             rows: 1500,
             rates: vec![100.0, 200.0],
+            sampling: Sampling::default(),
             load_oscillation: true,
             decoys: true,
             pairs: PAIRS[..2].to_vec(),
@@ -1216,6 +1321,7 @@ pub fn default_config(data: &Path, quick: bool) -> BenchConfig {
             none_seeds: 3,
             rows: 4000,
             rates: vec![100.0, 200.0],
+            sampling: Sampling::default(),
             load_oscillation: true,
             decoys: true,
             pairs: PAIRS.to_vec(),

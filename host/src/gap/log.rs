@@ -41,7 +41,33 @@ pub struct Log {
     pub lines: Vec<usize>,
 }
 
+/// The longest step between two rows that the sim bridges, in median steps: one dropped row
+/// with the timestamps jittered by up to ±20 % of the step (2 × 1.2 = 2.4).
+pub const BRIDGED_STEPS: f64 = 2.5;
+
 impl Log {
+    /// The log of rows `rows` (indices into this one, in order).
+    pub fn select(&self, rows: &[usize]) -> Log {
+        let pick = |v: &[f64]| rows.iter().map(|&i| v[i]).collect::<Vec<f64>>();
+        Log {
+            t: pick(&self.t),
+            vx: pick(&self.vx),
+            alpha: pick(&self.alpha),
+            kappa: pick(&self.kappa),
+            gamma: pick(&self.gamma),
+            fz: pick(&self.fz),
+            meas: rows.iter().map(|&i| self.meas[i]).collect(),
+            p: self.p.as_deref().map(pick),
+            phit: self.phit.as_deref().map(pick),
+            mu: self.mu.as_deref().map(pick),
+            lines: if self.lines.is_empty() {
+                Vec::new()
+            } else {
+                rows.iter().map(|&i| self.lines[i]).collect()
+            },
+        }
+    }
+
     /// Number of rows.
     pub fn len(&self) -> usize {
         self.t.len()
@@ -94,10 +120,11 @@ impl Log {
     }
 
     /// Rows where the relaxation filters (re)start: row 0, and every row after a gap in time —
-    /// a step longer than 1.5 × the median step (at least one dropped row) or than
+    /// a step longer than [`BRIDGED_STEPS`] × the median step (two rows or more dropped in a
+    /// row; one dropped row, jittered, is bridged by the sim's interpolant) or than
     /// `gough::relax::MAX_DT`.
     pub fn restarts(&self) -> Vec<bool> {
-        let gap = 1.5 * self.median_step();
+        let gap = BRIDGED_STEPS * self.median_step();
         let mut r = Vec::with_capacity(self.len());
         for i in 0..self.len() {
             r.push(
