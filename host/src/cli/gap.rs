@@ -231,16 +231,37 @@ pub fn run(cmd: GapCmd) -> Result<(), String> {
             if let Some(r) = rates.iter().find(|r| !(r.is_finite() && **r > 0.0)) {
                 return Err(format!("--rates: {r} is not a rate (> 0 Hz)"));
             }
-            if !rates.is_empty() {
+            let rates_given = !rates.is_empty();
+            if rates_given {
                 cfg.rates = rates;
             }
             let start = std::time::Instant::now();
             let res = bench::run(&cfg)?;
             let mut text = bench::table(&cfg, &res);
+            let mut flags = String::new();
+            if quick {
+                flags += " --quick";
+            }
+            if jobs > 1 {
+                flags += &format!(" --jobs {jobs}");
+            }
+            if rates_given {
+                let r: Vec<String> = cfg.rates.iter().map(|r| r.to_string()).collect();
+                flags += &format!(" --rates {}", r.join(","));
+            }
+            let smp = cfg.sampling;
+            if let Some(r) = smp.truth_rate {
+                flags += &format!(" --truth-rate {r}");
+            }
+            if smp.jitter > 0.0 {
+                flags += &format!(" --jitter {}", smp.jitter);
+            }
+            if smp.drop > 0.0 {
+                flags += &format!(" --drop {}", smp.drop);
+            }
             text += &format!(
-                "\nCommand: `cargo run --release --bin gough -- gap bench{}{}` ({:.0} s wall with {} job(s)).\n",
-                if quick { " --quick" } else { "" },
-                if jobs > 1 { format!(" --jobs {jobs}") } else { String::new() },
+                "\nCommand: `cargo run --release --bin gough -- gap bench{}` ({:.0} s wall with {} job(s)).\n",
+                flags,
                 start.elapsed().as_secs_f64(),
                 cfg.jobs
             );
