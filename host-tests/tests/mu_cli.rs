@@ -929,7 +929,7 @@ fn a_four_wheel_log_runs_each_wheel_and_the_preview() {
 #[test]
 fn calibrate_puts_a_shifted_file_right() {
     use gough_host::mu::bench::{measure, simulate_case, suite, Sensors};
-    use gough_host::mu::calibrate::set_in_tir;
+    use gough_host::tyre::set_in_tir;
     let dir = tmp("calibrate");
     std::fs::create_dir_all(&dir).unwrap();
     let text = std::fs::read_to_string(tyre()).unwrap();

@@ -29,6 +29,8 @@ create_exception!(
 #[pyclass(module = "gough._gough", frozen)]
 pub struct Tyre {
     params: Params<f64>,
+    /// The `.tir` text it was read from (the corrected file of `diagnose_gap` is written into it).
+    text: String,
     /// The reader's warnings (`line N: ...`).
     #[pyo3(get)]
     warnings: Vec<String>,
@@ -50,6 +52,7 @@ fn parse(text: &str, name: &str) -> PyResult<Tyre> {
     }
     Ok(Tyre {
         params: t.params,
+        text: text.to_string(),
         warnings,
     })
 }
@@ -520,7 +523,7 @@ fn _estimate_mu<'py>(
 /// a dict). `opt` holds the optional columns p, phit, mu (None when not logged).
 #[pyfunction]
 #[allow(clippy::too_many_arguments)]
-#[pyo3(signature = (tyre, cols, p, phit, mu, tir_name, log_name, fit_rows=None))]
+#[pyo3(signature = (tyre, cols, p, phit, mu, tir_name, log_name, fit_rows=None, write_tir=None))]
 fn _diagnose_gap(
     py: Python<'_>,
     tyre: &Tyre,
@@ -531,6 +534,7 @@ fn _diagnose_gap(
     tir_name: &str,
     log_name: &str,
     fit_rows: Option<usize>,
+    write_tir: Option<std::path::PathBuf>,
 ) -> PyResult<String> {
     let v = |a: &PyReadonlyArray1<'_, f64>| -> PyResult<Vec<f64>> {
         Ok(a.as_slice()
@@ -577,6 +581,10 @@ fn _diagnose_gap(
             )
         })
         .map_err(PyValueError::new_err)?;
+    if let Some(out) = &write_tir {
+        gough_host::cli::gap::write_corrected(&tyre.text, out, d.corrected.as_ref())
+            .map_err(PyValueError::new_err)?;
+    }
     serde_json::to_string(&d.report).map_err(|e| PyValueError::new_err(e.to_string()))
 }
 

@@ -35,13 +35,20 @@ def test_estimate_mu_equals_cli(log, gough_cli, tmp_path):
 def test_diagnose_gap_equals_cli(log, gough_cli, tmp_path):
     rep = tmp_path / "r.json"
     # The CLI runs beside the Python side (each takes about 16 s in the debug build).
-    proc = gough_cli.start("gap", "diagnose", "--tir", TIR61, "--log", log, "--report", rep)
+    proc = gough_cli.start("gap", "diagnose", "--tir", TIR61, "--log", log, "--report", rep,
+                           "--write-tir", tmp_path / "cli.tir")
     tyre = gough.Tyre.from_tir(TIR61)
-    got = gough.diagnose_gap(tyre, pd.read_csv(log, comment="#"), tir_name=str(TIR61), log_name=str(log))
+    got = gough.diagnose_gap(tyre, pd.read_csv(log, comment="#"), tir_name=str(TIR61), log_name=str(log),
+                             write_tir=tmp_path / "py.tir")
     gough_cli.finish(proc)
     cli = json.loads(rep.read_text())
     assert got == cli
     assert got["verdict"]["effect"]
+    # The corrected file: the same text from both, read back with the coefficients the report gives.
+    text = (tmp_path / "py.tir").read_text()
+    assert text == (tmp_path / "cli.tir").read_text()
+    assert got["corrected_tir"]["coefficients"]
+    gough.Tyre.from_text(text)
 
 
 def test_bad_logs_raise():

@@ -25,6 +25,11 @@ pub enum GapCmd {
         /// Directory for PNG residual maps (created).
         #[arg(long, value_name = "DIR")]
         plots: Option<PathBuf>,
+        /// Write the corrected tyre file: SIM.tir with the verdict's fitted effect(s) put into
+        /// its coefficients (what the file format cannot hold is named; without a verdict,
+        /// SIM.tir unchanged).
+        #[arg(long, value_name = "FILE.tir")]
+        write_tir: Option<PathBuf>,
     },
     /// Withheld-effect benchmark: generate logs with one effect, a pair or none on (2–3 decoy
     /// blocks out of every sim file), diagnose them from SIM.tir and the log only, print the
@@ -94,6 +99,10 @@ pub enum GapCmd {
         load_oscillation: bool,
         #[command(flatten)]
         sampling: SamplingArgs,
+        /// Also write the truth as a tyre file (SIM.tir with the effect's coefficient changes;
+        /// for effects that are coefficient changes only): the tyre the log was measured on.
+        #[arg(long, value_name = "FILE.tir")]
+        truth_tir: Option<PathBuf>,
     },
 }
 
@@ -152,6 +161,49 @@ fn effect_arg(s: &str) -> Result<Vec<Effect>, String> {
         .collect()
 }
 
+/// Writes the corrected file of a diagnosis to `out` (SIM.tir's `text` unchanged without a
+/// verdict); the line that says what went in and what is left out.
+pub fn write_corrected(
+    text: &str,
+    out: &Path,
+    c: Option<&crate::gap::tirfile::Corrected>,
+) -> Result<String, String> {
+    let Some(c) = c else {
+        write_atomic(out, text)?;
+        return Ok(format!(
+            "corrected file: {} (no verdict: SIM.tir unchanged)",
+            out.display()
+        ));
+    };
+    write_atomic(out, &crate::gap::tirfile::write(text, c)?)?;
+    let r = &c.report;
+    let parts: Vec<String> = r
+        .effects
+        .iter()
+        .map(|p| {
+            let how = match p.how {
+                crate::gap::tirfile::How::Exact => "exact",
+                crate::gap::tirfile::How::Approximate => "approximate",
+                crate::gap::tirfile::How::LeftOut => "left out",
+            };
+            format!("{} {how}", p.effect)
+        })
+        .collect();
+    let mut line = format!(
+        "corrected file: {} ({}; {} coefficients; shrink of the written file {:.3}, of the effect fitted on the whole log {:.3}, held-out {:.3})",
+        out.display(),
+        parts.join(", "),
+        r.coefficients.len(),
+        r.shrink_written,
+        r.shrink_fit,
+        r.shrink_heldout
+    );
+    if !r.left_out.is_empty() {
+        line += &format!("; left out: {}", r.left_out.join("; "));
+    }
+    Ok(line)
+}
+
 /// Runs a `gap` subcommand.
 pub fn run(cmd: GapCmd) -> Result<(), String> {
     match cmd {
@@ -160,6 +212,7 @@ pub fn run(cmd: GapCmd) -> Result<(), String> {
             log,
             report,
             plots,
+            write_tir,
         } => {
             let tyre = crate::tyre::load(&tir)?;
             let lg = crate::gap::log::read(&log)?;
@@ -203,6 +256,11 @@ pub fn run(cmd: GapCmd) -> Result<(), String> {
                 line += ")";
             }
             println!("{line}");
+            if let Some(out) = &write_tir {
+                let text = std::fs::read_to_string(&tir)
+                    .map_err(|e| format!("{}: cannot read: {e}", tir.display()))?;
+                println!("{}", write_corrected(&text, out, d.corrected.as_ref())?);
+            }
             eprintln!(
                 "{} rows diagnosed in {:.1} s -> {}",
                 lg.len(),
@@ -288,6 +346,7 @@ pub fn run(cmd: GapCmd) -> Result<(), String> {
             no_phit,
             load_oscillation,
             sampling,
+            truth_tir,
         } => {
             let truth = effect_arg(&effect)?;
             if truth.len() > 2 {
@@ -325,6 +384,13 @@ pub fn run(cmd: GapCmd) -> Result<(), String> {
             )?;
             crate::gap::log::write(&out, &g.log)
                 .map_err(|e| format!("{}: cannot write: {e}", out.display()))?;
+            if let Some(path) = &truth_tir {
+                let text = std::fs::read_to_string(&tir)
+                    .map_err(|e| format!("{}: cannot read: {e}", tir.display()))?;
+                let t = bench::truth_tir(&text, &tyre.params, &g.log, &truth, magnitude)?;
+                write_atomic(path, &t)?;
+                eprintln!("the truth's tyre -> {}", path.display());
+            }
             eprintln!(
                 "{rows} rows ({} on, magnitude {magnitude}) -> {}",
                 effect,

@@ -238,6 +238,100 @@ fn bump(q: &mut Params<f64>, key: &str, f: impl Fn(f64) -> f64) {
     }
 }
 
+/// The coefficient part of the truth `effects` at `m` (module doc): SIM.tir's parameters
+/// with the changes of the effects that are coefficient changes (camber, MF 6.x pressure,
+/// turn slip where the sim evaluates it, combined slip, conicity/ply-steer); the others are
+/// applied by [`truth`] along the run. `turn_slip`: the sim evaluates turn slip.
+pub fn truth_params(p: &Params<f64>, effects: &[Effect], m: f64, turn_slip: bool) -> Params<f64> {
+    let mut q = p.clone();
+    for &effect in effects {
+        match effect {
+            Effect::Camber => {
+                if p.version.is_mf6() {
+                    bump(&mut q, "PKY6", |v| v * (1.0 + 0.6 * m));
+                    bump(&mut q, "PKY7", |v| v + 0.3 * m);
+                    bump(&mut q, "PVY3", |v| v + 0.3 * m * v.abs().max(0.1));
+                    bump(&mut q, "QDZ8", |v| v + 0.5 * m * v.abs().max(0.1));
+                } else {
+                    bump(&mut q, "PVY3", |v| v * (1.0 + 0.6 * m));
+                    bump(&mut q, "PVY4", |v| v + 0.3 * m * v.abs().max(0.1));
+                    bump(&mut q, "PHY3", |v| v + 0.05 * m);
+                    bump(&mut q, "QDZ8", |v| v + 0.5 * m * v.abs().max(0.1));
+                }
+            }
+            Effect::InflationPressure if p.version.is_mf6() => {
+                bump(&mut q, "PPY1", |v| v + 0.8 * m);
+                bump(&mut q, "PPY2", |v| v + 0.5 * m);
+                bump(&mut q, "PPY3", |v| v + 0.3 * m);
+                bump(&mut q, "PPX3", |v| v + 0.3 * m);
+                bump(&mut q, "PPZ1", |v| v + 0.5 * m);
+            }
+            Effect::TurnSlip if turn_slip => {
+                bump(&mut q, "PKYP1", |v| v * (1.0 + 3.0 * m));
+                bump(&mut q, "PDYP1", |v| v * (1.0 + 1.0 * m));
+                bump(&mut q, "QDTP1", |v| v * (1.0 + 1.0 * m));
+                bump(&mut q, "QCRP1", |v| v * (1.0 + 1.0 * m));
+                bump(&mut q, "QDRP1", |v| v * (1.0 + 1.0 * m));
+            }
+            Effect::CombinedSlip => {
+                bump(&mut q, "RBX1", |v| v * (1.0 - 0.35 * m));
+                bump(&mut q, "RBY1", |v| v * (1.0 - 0.35 * m));
+                bump(&mut q, "RBX2", |v| v * (1.0 + 0.3 * m));
+                bump(&mut q, "RCY1", |v| v * (1.0 + 0.05 * m));
+                bump(&mut q, "SSZ1", |v| v + 0.03 * m);
+            }
+            Effect::ConicityPlysteer => {
+                bump(&mut q, "PHY1", |v| v + 0.004 * m);
+                bump(&mut q, "PVY1", |v| v + 0.02 * m);
+                bump(&mut q, "QHZ1", |v| v + 0.004 * m);
+            }
+            _ => {}
+        }
+    }
+    q
+}
+
+/// The truth of `effects` at `m` as a tyre file: SIM.tir's `text` with [`truth_params`]'s
+/// changes written in (`gough gap generate --truth-tir`: the car's tyre of docs/gap.md's loop
+/// with the estimator). An error for an effect that is not a coefficient change (the sim of
+/// `log` decides whether turn slip is one).
+pub fn truth_tir(
+    text: &str,
+    p: &Params<f64>,
+    log: &Log,
+    effects: &[Effect],
+    m: f64,
+) -> Result<String, String> {
+    let turn_slip = Sim::new(p.clone(), log).turn_slip;
+    for &e in effects {
+        let coefficients = match e {
+            Effect::Camber | Effect::CombinedSlip | Effect::ConicityPlysteer => true,
+            Effect::InflationPressure => p.version.is_mf6(),
+            Effect::TurnSlip => turn_slip,
+            _ => false,
+        };
+        if !coefficients {
+            return Err(format!(
+                "{}: the truth is not a change of the file's coefficients here; no tyre file",
+                e.name()
+            ));
+        }
+    }
+    let q = truth_params(p, effects, m, turn_slip);
+    let mut out = text.to_string();
+    for &k in Key::ALL {
+        if q.get(k) != p.get(k) {
+            out = crate::tyre::set_or_add_in_tir(
+                &out,
+                k,
+                q.get(k),
+                "gough gap generate --truth-tir",
+            )?;
+        }
+    }
+    Ok(out)
+}
+
 /// The truth's outputs (before noise) for the log's inputs: SIM.tir's sim with `effects` on at
 /// `m` (module doc; none: the sim itself). Several effects compose: their coefficient changes
 /// together, their λ multipliers multiplied, additions summed, then lag, then bias.
@@ -248,7 +342,6 @@ pub fn truth(
     m: f64,
     seed: u64,
 ) -> Result<Vec<Out>, String> {
-    let mut q = p.clone();
     let n = log.len();
     let mut lambda: Option<Vec<Lambda>> = None;
     let mut add: Option<Vec<Out>> = None;
@@ -274,29 +367,12 @@ pub fn truth(
     let err = |(i, e): (usize, String)| format!("truth model, row {i}: {e}");
     let base = probe.run(log, p, &Mods::default()).map_err(err)?;
     let rms_c = |c: usize| stats::rms(base.out.iter().map(|o| o[c]));
+    let q = truth_params(p, effects, m, probe.turn_slip);
     for &effect in effects {
         match effect {
-            Effect::Camber => {
-                if p.version.is_mf6() {
-                    bump(&mut q, "PKY6", |v| v * (1.0 + 0.6 * m));
-                    bump(&mut q, "PKY7", |v| v + 0.3 * m);
-                    bump(&mut q, "PVY3", |v| v + 0.3 * m * v.abs().max(0.1));
-                    bump(&mut q, "QDZ8", |v| v + 0.5 * m * v.abs().max(0.1));
-                } else {
-                    bump(&mut q, "PVY3", |v| v * (1.0 + 0.6 * m));
-                    bump(&mut q, "PVY4", |v| v + 0.3 * m * v.abs().max(0.1));
-                    bump(&mut q, "PHY3", |v| v + 0.05 * m);
-                    bump(&mut q, "QDZ8", |v| v + 0.5 * m * v.abs().max(0.1));
-                }
-            }
+            Effect::Camber | Effect::CombinedSlip | Effect::ConicityPlysteer => {}
             Effect::InflationPressure => {
-                if p.version.is_mf6() {
-                    bump(&mut q, "PPY1", |v| v + 0.8 * m);
-                    bump(&mut q, "PPY2", |v| v + 0.5 * m);
-                    bump(&mut q, "PPY3", |v| v + 0.3 * m);
-                    bump(&mut q, "PPX3", |v| v + 0.3 * m);
-                    bump(&mut q, "PPZ1", |v| v + 0.5 * m);
-                } else {
+                if !p.version.is_mf6() {
                     // MF 5.x files carry no nominal pressure: the tyre is taken as measured at the
                     // log's median pressure (as the extension assumes), with a stiffness that also
                     // grows with dpi² (which the extension does not fit).
@@ -319,13 +395,7 @@ pub fn truth(
                 }
             }
             Effect::TurnSlip => {
-                if probe.turn_slip {
-                    bump(&mut q, "PKYP1", |v| v * (1.0 + 3.0 * m));
-                    bump(&mut q, "PDYP1", |v| v * (1.0 + 1.0 * m));
-                    bump(&mut q, "QDTP1", |v| v * (1.0 + 1.0 * m));
-                    bump(&mut q, "QCRP1", |v| v * (1.0 + 1.0 * m));
-                    bump(&mut q, "QDRP1", |v| v * (1.0 + 1.0 * m));
-                } else {
+                if !probe.turn_slip {
                     let r0 = p.unloaded_radius;
                     let a: Vec<Out> = (0..n)
                         .map(|i| {
@@ -343,13 +413,6 @@ pub fn truth(
                             .collect(),
                     });
                 }
-            }
-            Effect::CombinedSlip => {
-                bump(&mut q, "RBX1", |v| v * (1.0 - 0.35 * m));
-                bump(&mut q, "RBY1", |v| v * (1.0 - 0.35 * m));
-                bump(&mut q, "RBX2", |v| v * (1.0 + 0.3 * m));
-                bump(&mut q, "RCY1", |v| v * (1.0 + 0.05 * m));
-                bump(&mut q, "SSZ1", |v| v + 0.03 * m);
             }
             Effect::RelaxationLength => {
                 sigma = Some(
@@ -399,11 +462,6 @@ pub fn truth(
                     let s = if rng.uniform() < 0.5 { -1.0 } else { 1.0 };
                     *b = s * 0.05 * m * rms_c(c);
                 }
-            }
-            Effect::ConicityPlysteer => {
-                bump(&mut q, "PHY1", |v| v + 0.004 * m);
-                bump(&mut q, "PVY1", |v| v + 0.02 * m);
-                bump(&mut q, "QHZ1", |v| v + 0.004 * m);
             }
         }
     }

@@ -286,6 +286,10 @@ const KEY_SCALES: &[(&str, f64, Option<f64>)] = &[
     ("PHY1", 0.003, None),
     ("PVY1", 0.01, None),
     ("QHZ1", 0.003, None),
+    ("LMUX", 0.3, Some(0.05)),
+    ("LMUY", 0.3, Some(0.05)),
+    ("LKX", 0.3, Some(0.05)),
+    ("LKY", 0.3, Some(0.05)),
 ];
 
 fn keys_spec(effect: Effect, p: &Params<f64>, names: &[&str]) -> Spec {
@@ -521,6 +525,22 @@ pub fn spec(effect: Effect, ctx: &Ctx) -> Result<Spec, String> {
 }
 
 impl Spec {
+    /// The `.tir` keys this effect re-fits, in the order of its parameters (`None`: an effect
+    /// whose parameters are not Magic Formula coefficients).
+    pub fn keys(&self) -> Option<&[Key]> {
+        match &self.variant {
+            Variant::Keys(k) => Some(k),
+            _ => None,
+        }
+    }
+
+    /// A spec re-fitting the `.tir` keys `names` of `p` (starting at `p`'s values, bounds at
+    /// ±5 scales as the effects' own), labelled `effect`: what the corrected file's
+    /// projection of an effect onto constant coefficients fits (`super::tirfile`).
+    pub fn of_keys(effect: Effect, p: &Params<f64>, names: &[&str]) -> Spec {
+        keys_spec(effect, p, names)
+    }
+
     /// The reported value of parameter `j` (τ of `thermal` in seconds, not its logarithm).
     pub fn reported(&self, theta: &[f64]) -> Vec<(String, f64)> {
         self.names
@@ -597,7 +617,7 @@ impl Spec {
     }
 
     /// Relaxation lengths per row for the relaxation extension.
-    fn sigmas(&self, ctx: &Ctx, theta: &[f64]) -> Vec<[f64; 2]> {
+    pub fn sigmas(&self, ctx: &Ctx, theta: &[f64]) -> Vec<[f64; 2]> {
         let p = &ctx.sim.params;
         (0..ctx.log.len())
             .map(|i| {

@@ -41,6 +41,7 @@ pub mod regions;
 pub mod report;
 pub mod sim;
 pub mod stats;
+pub mod tirfile;
 
 use effects::{Ctx, Effect};
 use gough::mf::Params;
@@ -109,6 +110,8 @@ pub struct Diagnosis {
     pub indistinguishable: Vec<Effect>,
     /// Held-out shrink and its significance z per effect (0 for those not applicable).
     pub shrinks: Vec<(Effect, f64, f64)>,
+    /// The corrected tyre file's coefficients (with a verdict): [`tirfile`].
+    pub corrected: Option<tirfile::Corrected>,
 }
 
 fn method() -> Method {
@@ -424,6 +427,24 @@ pub fn diagnose(
         _ => None,
     };
 
+    // The corrected file: the named effects at their whole-log fits.
+    let corrected = match (winner, second, &pair_theta) {
+        (Some(w), Some(p2), Some((ta, tb))) => match (&w.spec, &p2.score.spec) {
+            (Some(sa), Some(sb)) => Some(tirfile::correct(
+                &ctx,
+                &[(sa, ta.as_slice()), (sb, tb.as_slice())],
+                p2.score.shrink,
+                fit_rows,
+            )),
+            _ => None,
+        },
+        (Some(w), None, _) => w
+            .spec
+            .as_ref()
+            .map(|sa| tirfile::correct(&ctx, &[(sa, w.theta.as_slice())], w.shrink, fit_rows)),
+        _ => None,
+    };
+
     let after = match (second, winner) {
         (Some(p2), _) => Some(p2.score.heldout_resid.as_slice()),
         (None, w) => w.map(|w| w.heldout_resid.as_slice()),
@@ -519,6 +540,7 @@ pub fn diagnose(
         },
         method: method(),
         mu,
+        corrected_tir: corrected.as_ref().map(|c| c.report.clone()),
     };
     Ok(Diagnosis {
         report,
@@ -536,5 +558,6 @@ pub fn diagnose(
             .collect(),
         indistinguishable: indist,
         shrinks: scores.iter().map(|s| (s.effect, s.shrink, s.z)).collect(),
+        corrected,
     })
 }

@@ -37,6 +37,10 @@ pub struct Report {
     /// The friction estimator against the log's `mu` column (when there is one).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub mu: Option<super::mu::MuReport>,
+    /// The corrected tyre file (with a verdict): the named effects in SIM.tir's coefficients,
+    /// what is left out, and the written file's shrink beside the effect's ([`super::tirfile`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub corrected_tir: Option<super::tirfile::TirReport>,
 }
 
 /// What the sim is.

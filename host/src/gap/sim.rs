@@ -210,7 +210,7 @@ impl Sim {
     /// The relaxation lengths `[σκ, σα]` of row `i` under `q` (λ of the row set) and `mods`:
     /// σ does not depend on the slips, so the Magic Formula runs once at the log's slips,
     /// without moments, for them (or not at all when they are given).
-    fn sigma_at(
+    pub fn sigma_at(
         &self,
         log: &Log,
         q: &Params<f64>,

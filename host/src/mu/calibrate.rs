@@ -14,6 +14,7 @@
 //! evaluates as the calibrated tyre does.
 use super::banks::Banks;
 use super::estimator::{Estimator, Precision, Sample, Setup};
+use crate::tyre::set_or_add_in_tir;
 use gough::mf::{Key, Params, Side};
 use gough::mu::calibration::{Exported, Property, PROPERTIES};
 use gough::mu::Config;
@@ -189,110 +190,14 @@ pub fn write_tir(text: &str, p: &Params<f64>, c: &Exported) -> Result<String, St
     ];
     let mut out = text.to_string();
     for (key, value) in sets {
-        out = set_or_add_in_tir(&out, key, value)?;
+        out = set_or_add_in_tir(&out, key, value, "gough mu calibrate")?;
     }
     Ok(out)
-}
-
-/// [`set_in_tir`], or for a key the text lacks, the key added at the start of its section
-/// (scaling factors `L…` to `[SCALING_COEFFICIENTS]`, `Q…` to `[ALIGNING_COEFFICIENTS]`);
-/// nothing added when `value` is what the reader takes for the missing key (1 for a scaling
-/// factor, 0 otherwise).
-fn set_or_add_in_tir(text: &str, key: Key, value: f64) -> Result<String, String> {
-    if let Ok(out) = set_in_tir(text, key, value) {
-        return Ok(out);
-    }
-    let name = key.name();
-    let (section, default) = if name.starts_with('L') {
-        ("[SCALING_COEFFICIENTS]", 1.0)
-    } else {
-        ("[ALIGNING_COEFFICIENTS]", 0.0)
-    };
-    if value == default {
-        return Ok(text.to_string());
-    }
-    let mut out = String::with_capacity(text.len() + 40);
-    let mut added = false;
-    for line in text.split_inclusive('\n') {
-        out.push_str(line);
-        if !added && line.trim().eq_ignore_ascii_case(section) {
-            if !line.ends_with('\n') {
-                out.push('\n');
-            }
-            out.push_str(&format!(
-                "{name:<26}= {value:<15}\t $added by gough mu calibrate\n"
-            ));
-            added = true;
-        }
-    }
-    if added {
-        Ok(out)
-    } else {
-        Err(format!(
-            "{name} is not in the file and it has no {section} section"
-        ))
-    }
-}
-
-/// The `.tir` text `text` with the value of `key` set to `value` (the rest of the line — its
-/// alignment, a `$` comment — kept). Errors when the key is not in the text.
-pub fn set_in_tir(text: &str, key: Key, value: f64) -> Result<String, String> {
-    let mut found = false;
-    let mut out = String::with_capacity(text.len() + 16);
-    for line in text.split_inclusive('\n') {
-        let body = line.trim_end_matches(['\n', '\r']);
-        let end = &line[body.len()..];
-        let hit = body
-            .split_once('=')
-            .filter(|(k, _)| k.trim().eq_ignore_ascii_case(key.name()));
-        match hit {
-            Some((k, v)) if !found => {
-                let comment = v.find('$').map_or("", |i| &v[i..]);
-                out.push_str(&format!("{k}= {value:<15}\t {comment}"));
-                out.push_str(end);
-                found = true;
-            }
-            _ => out.push_str(line),
-        }
-    }
-    if found {
-        Ok(out)
-    } else {
-        Err(format!("{} is not in the file", key.name()))
-    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    fn file() -> (String, Params<f64>) {
-        let path = concat!(
-            env!("CARGO_MANIFEST_DIR"),
-            "/../host-tests/data/tyres/MagicFormula61_Parameters.tir"
-        );
-        let text = std::fs::read_to_string(path).unwrap();
-        let p = crate::tyre::load(std::path::Path::new(path))
-            .unwrap()
-            .params;
-        (text, p)
-    }
-
-    /// The value is replaced on its own line, the comment kept, and the file reads back with
-    /// it and nothing else changed; a key the text lacks is an error.
-    #[test]
-    fn a_value_is_set_in_the_file_text() {
-        let (text, p) = file();
-        let out = set_in_tir(&text, Key::PHY1, -0.000811411).unwrap();
-        let q = gough::tir::parse(&out).unwrap().params;
-        let mut back = q.clone();
-        assert_eq!(q.phy1, -0.000811411);
-        back.phy1 = p.phy1;
-        assert_eq!(back, p);
-        assert!(out.contains("$Horizontal shift Shy at Fznom"));
-        assert_eq!(out.lines().count(), text.lines().count());
-        assert!(set_in_tir("[MODEL]\nFITTYP = 61\n", Key::PHY1, 0.0).is_err());
-    }
 
     /// The written file evaluates as the calibrated tyre does: `mf::eval` on it equals the
     /// file's load stage adjusted by the calibration (`Prepared::adjusted`, what the estimator
@@ -303,7 +208,7 @@ mod tests {
         use gough::math::Libm;
         use gough::mf::prepared::{Adjust, Prepared};
         use gough::mf::{Input, Options};
-        let (text, p) = file();
+        let (text, p) = crate::tyre::bundled_text();
         let c = Exported {
             value: [1.07, 0.94, 0.0012, 0.91],
             sigma: [0.01; 4],
@@ -353,7 +258,10 @@ mod tests {
                 }
             }
         }
-        assert!(write_tir("[MODEL]\nFITTYP = 61\n", &p, &c).is_err());
+        // A file without the sections gets them (appended, each with its key).
+        let bare = write_tir("[MODEL]\nFITTYP = 61\n", &p, &c).unwrap();
+        assert!(bare.contains("[SCALING_COEFFICIENTS]\n"), "{bare}");
+        assert!(bare.contains("\nLTR "), "{bare}");
     }
 
     /// Two wheels that each learnt as much as the prior knew: the combination knows three

@@ -81,6 +81,12 @@ pub struct BenchArgs {
         allow_hyphen_values = true
     )]
     pub model_error: Vec<String>,
+    /// Give the estimators this tyre file instead of the simulated tyre's (`--tir`'s in the
+    /// vehicle suite; in the wheel cases every tyre's of `--tyres`, on the exact level only):
+    /// the car's tyre is simulated, the estimator has this file of it (docs/gap.md's loop: the
+    /// file and the corrected file of `gough gap diagnose --write-tir`).
+    #[arg(long, value_name = "FILE.tir")]
+    pub estimator_tir: Option<PathBuf>,
 }
 
 impl BenchArgs {
@@ -140,6 +146,7 @@ impl BenchArgs {
             } else {
                 self.jobs
             },
+            estimator_tir: self.estimator_tir.clone(),
         })
     }
 

@@ -88,6 +88,11 @@ pub struct Config {
     pub warm: bool,
     /// Threads running the wheel cases (the results do not depend on it).
     pub jobs: usize,
+    /// The estimators are given this tyre file instead of the simulated tyre's: the vehicle
+    /// suite's (with [`Config::model_error`] on top), and in the wheel cases every tyre's, which
+    /// then run on the exact level only (the simulated tyre is the file of `tyres`: the car's
+    /// tyre; this the file the estimator has of it). `None`: each tyre's own file.
+    pub estimator_tir: Option<PathBuf>,
 }
 
 /// One group of the bench's cases: the vehicle suite ([`suite`]) or the wheel cases
@@ -119,6 +124,7 @@ impl Default for Config {
             quick: false,
             warm: false,
             jobs: 2,
+            estimator_tir: None,
         }
     }
 }
@@ -239,7 +245,15 @@ fn wheel_cases(
         ));
     }
     let scenarios = wheel::scenarios();
-    let cases = wheel::plan(&tyres, &scenarios, cfg.quick);
+    let mut cases = wheel::plan(&tyres, &scenarios, cfg.quick);
+    let given = match &cfg.estimator_tir {
+        Some(f) => {
+            cases.retain(|c| c.level == wheel::Level::Exact);
+            Some(crate::tyre::load(f)?.params)
+        }
+        None => None,
+    };
+    let make = |p: &gough::mf::Params<f64>| wheel::estimator(given.as_ref().unwrap_or(p));
     let bar = indicatif::ProgressBar::new(cases.len() as u64);
     bar.set_message("wheel cases");
     let results = wheel::run_all(
@@ -249,7 +263,7 @@ fn wheel_cases(
         cfg.seed,
         cfg.warm,
         cfg.jobs,
-        &wheel::estimator,
+        &make,
         &|| bar.inc(1),
     );
     bar.finish_and_clear();
@@ -290,7 +304,10 @@ fn vehicle(cfg: &Config) -> Result<(String, (Totals, usize, usize)), String> {
     // `sim`: the tyre the simulation runs; `p`: the estimators' model of it (the same file
     // unless `--model-error`).
     let sim = t.params;
-    let p = model_with_error(&sim, &cfg.model_error)?;
+    let p = match &cfg.estimator_tir {
+        Some(f) => model_with_error(&crate::tyre::load(f)?.params, &cfg.model_error)?,
+        None => model_with_error(&sim, &cfg.model_error)?,
+    };
     if !(cfg.mu_shift.is_finite() && cfg.mu_shift.abs() <= 0.05) {
         return Err(format!(
             "--mu-shift {}: expected a value from -0.05 to 0.05",
@@ -313,6 +330,14 @@ fn vehicle(cfg: &Config) -> Result<(String, (Totals, usize, usize)), String> {
             "Model error (`--model-error`): the estimators' tyre is {} with {}; the simulation's is the file.\n",
             cfg.tir.display(),
             errors.join(", ")
+        );
+    }
+    if let Some(f) = &cfg.estimator_tir {
+        let _ = writeln!(
+            md,
+            "The estimators are given {} (`--estimator-tir`); the simulation runs {}.\n",
+            f.display(),
+            cfg.tir.display()
         );
     }
     md.push_str(tables::MD_HEADER);
