@@ -51,6 +51,10 @@ pub enum GapCmd {
         /// Also write one CSV row per log (truth, verdict, shrinks, time) to this file.
         #[arg(long, value_name = "FILE")]
         cases: Option<PathBuf>,
+        /// Only these effects' logs (comma-separated; the none logs always, pairs with one of
+        /// them); default every effect.
+        #[arg(long, value_name = "LIST")]
+        effects: Option<String>,
     },
     /// Generate a log from the benchmark's truth model (SIM.tir with one effect switched on).
     Generate {
@@ -240,6 +244,7 @@ pub fn run(cmd: GapCmd) -> Result<(), String> {
             tyres,
             markdown,
             cases,
+            effects,
         } => {
             let dir = tyres.unwrap_or_else(|| {
                 Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -248,13 +253,17 @@ pub fn run(cmd: GapCmd) -> Result<(), String> {
             });
             let mut cfg = bench::default_config(&dir, quick);
             cfg.jobs = jobs.max(1);
+            if let Some(list) = &effects {
+                cfg.effects = effect_arg(list)?;
+            }
             let start = std::time::Instant::now();
             let res = bench::run(&cfg)?;
             let mut text = bench::table(&cfg, &res);
             text += &format!(
-                "\nCommand: `cargo run --release --bin gough -- gap bench{}{}` ({:.0} s wall with {} job(s)).\n",
+                "\nCommand: `cargo run --release --bin gough -- gap bench{}{}{}` ({:.0} s wall with {} job(s)).\n",
                 if quick { " --quick" } else { "" },
                 if jobs > 1 { format!(" --jobs {jobs}") } else { String::new() },
+                effects.as_ref().map(|l| format!(" --effects {l}")).unwrap_or_default(),
                 start.elapsed().as_secs_f64(),
                 cfg.jobs
             );

@@ -461,7 +461,13 @@ pub fn diagnose(
                         .collect::<BTreeMap<_, _>>(),
                     sp.reported(&sp.starts[0])
                         .into_iter()
-                        .map(|(k, v)| if k == "tau" { (k, 0.0) } else { (k, v) })
+                        .map(|(k, v)| {
+                            if k.starts_with("tau") {
+                                (k, 0.0)
+                            } else {
+                                (k, v)
+                            }
+                        })
                         .collect::<BTreeMap<_, _>>(),
                 ),
                 None => (BTreeMap::new(), BTreeMap::new()),
