@@ -29,11 +29,18 @@ fn truth_theta(e: Effect, sp: &effects::Spec) -> Vec<f64> {
     let b = &sp.bounds;
     match e {
         Effect::RelaxationLength => vec![1.4, 1.6, 0.3],
+        // Grip 0.92 cold, at its optimum (1.02) at the mean temperature; stiffness softening.
+        // τ on one of the fit's starts (τ is multi-started, not scanned: 8 parameters in 12
+        // LM iterations from a flat start do not find a τ between the starts exactly).
         Effect::Thermal => vec![
-            0.8 * b.scale[0] * 10.0,
-            3f64.ln(),
-            0.3 * b.scale[0] * 10.0,
+            -0.08,
+            2.0 * b.scale[1],
+            -b.scale[2],
+            -b.scale[3],
+            2f64.ln(),
+            0.5,
             0.0,
+            20f64.ln(),
         ],
         Effect::SensorLag => vec![0.01, 0.02, 0.03],
         Effect::SensorBias => vec![-60.0, 90.0, 4.0],
@@ -385,14 +392,17 @@ fn the_report_has_the_interface_shape_and_diagnoses_mu() {
 }
 
 #[test]
-fn the_mu_error_of_a_hot_tyre_is_put_down_to_the_thermal_effect() {
-    // A tyre that heats up loses friction: the estimator reads that as a lower road μ. The μ
-    // part must say so, with the thermal effect fitted on the forces (never on μ).
+fn the_mu_error_of_a_cold_tyre_is_put_down_to_the_thermal_effect() {
+    // A tyre away from its temperature optimum has less friction: the estimator reads that as
+    // a lower road μ. The bench's thermal truth starts cold (issue 56: grip around an optimum
+    // the tyre reaches at its usual power), so the error is at the start of the log. The μ
+    // part must say so, with the thermal effect fitted on the forces (never on μ). 15 s of log:
+    // the warm-up must not be confined to one cross-validation block.
     let p = tyre("MagicFormula52_Parameters.tir");
     let g = bench::generate(
         &p,
         &GenConfig {
-            rows: 800,
+            rows: 1500,
             rate: 100.0,
             seed: 3,
             truth: Some(Effect::Thermal),
@@ -407,22 +417,19 @@ fn the_mu_error_of_a_hot_tyre_is_put_down_to_the_thermal_effect() {
     let d = diagnose(p, &g.log);
     assert_eq!(d.verdict, Some(Effect::Thermal), "{:?}", d.report.verdict);
     let mu = d.report.mu.as_ref().unwrap();
-    // The estimator reads from the start, while the tyre is still cool and it is right (the
-    // bank estimates 97 % of the rows; the table estimator it replaced, 11 %, when hot): the
-    // error is where the tyre is hot, in the second half of the 8 s run, and reads low there.
     assert!(
         mu.bias < 0.0,
-        "hot tyre reads as a lower μ: bias {}",
+        "a cold tyre reads as a lower μ: bias {}",
         mu.bias
     );
-    let hot = mu
+    let cold = mu
         .where_
         .iter()
         .find(|r| r.variable == "time")
         .unwrap_or_else(|| panic!("no time region: {:?}", mu.where_));
     assert!(
-        hot.lo > 4.0 && hot.share_of_error > 0.5 && hot.bias < -0.02,
-        "hot tyre reads as a lower μ where it is hot: {hot:?}"
+        cold.lo < 1.0 && cold.share_of_error > 0.3 && cold.bias < -0.02,
+        "a cold tyre reads as a lower μ at the start: {cold:?}"
     );
     assert_eq!(mu.verdict.effect, "thermal", "{:?}", mu.verdict);
     assert!(mu.verdict.shrink.unwrap() > 0.2);

@@ -56,6 +56,10 @@ pub enum GapCmd {
         rates: Vec<f64>,
         #[command(flatten)]
         sampling: SamplingArgs,
+        /// Only these effects' logs (comma-separated; the none logs always, pairs with one of
+        /// them); default every effect.
+        #[arg(long, value_name = "LIST")]
+        effects: Option<String>,
     },
     /// Generate a log from the benchmark's truth model (SIM.tir with one effect switched on).
     Generate {
@@ -134,17 +138,6 @@ impl SamplingArgs {
     }
 }
 
-fn write_atomic(path: &Path, text: &str) -> Result<(), String> {
-    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir)
-            .map_err(|e| format!("{}: cannot create: {e}", dir.display()))?;
-    }
-    let tmp = path.with_extension("tmp");
-    std::fs::write(&tmp, text)
-        .and_then(|_| std::fs::rename(&tmp, path))
-        .map_err(|e| format!("{}: cannot write: {e}", path.display()))
-}
-
 fn effect_arg(s: &str) -> Result<Vec<Effect>, String> {
     if s == "none" {
         return Ok(vec![]);
@@ -159,49 +152,6 @@ fn effect_arg(s: &str) -> Result<Vec<Effect>, String> {
             })
         })
         .collect()
-}
-
-/// Writes the corrected file of a diagnosis to `out` (SIM.tir's `text` unchanged without a
-/// verdict); the line that says what went in and what is left out.
-pub fn write_corrected(
-    text: &str,
-    out: &Path,
-    c: Option<&crate::gap::tirfile::Corrected>,
-) -> Result<String, String> {
-    let Some(c) = c else {
-        write_atomic(out, text)?;
-        return Ok(format!(
-            "corrected file: {} (no verdict: SIM.tir unchanged)",
-            out.display()
-        ));
-    };
-    write_atomic(out, &crate::gap::tirfile::write(text, c)?)?;
-    let r = &c.report;
-    let parts: Vec<String> = r
-        .effects
-        .iter()
-        .map(|p| {
-            let how = match p.how {
-                crate::gap::tirfile::How::Exact => "exact",
-                crate::gap::tirfile::How::Approximate => "approximate",
-                crate::gap::tirfile::How::LeftOut => "left out",
-            };
-            format!("{} {how}", p.effect)
-        })
-        .collect();
-    let mut line = format!(
-        "corrected file: {} ({}; {} coefficients; shrink of the written file {:.3}, of the effect fitted on the whole log {:.3}, held-out {:.3})",
-        out.display(),
-        parts.join(", "),
-        r.coefficients.len(),
-        r.shrink_written,
-        r.shrink_fit,
-        r.shrink_heldout
-    );
-    if !r.left_out.is_empty() {
-        line += &format!("; left out: {}", r.left_out.join("; "));
-    }
-    Ok(line)
 }
 
 /// Runs a `gap` subcommand.
@@ -230,7 +180,7 @@ pub fn run(cmd: GapCmd) -> Result<(), String> {
             )?;
             let json = serde_json::to_string_pretty(&d.report)
                 .map_err(|e| format!("cannot encode the report: {e}"))?;
-            write_atomic(&report, &(json + "\n"))?;
+            crate::gap::write_atomic(&report, &(json + "\n"))?;
             let v = &d.report.verdict;
             let mut line = format!("verdict: {}", v.effect);
             if let (Some(s), Some(c)) = (v.shrink, &v.channel) {
@@ -259,7 +209,10 @@ pub fn run(cmd: GapCmd) -> Result<(), String> {
             if let Some(out) = &write_tir {
                 let text = std::fs::read_to_string(&tir)
                     .map_err(|e| format!("{}: cannot read: {e}", tir.display()))?;
-                println!("{}", write_corrected(&text, out, d.corrected.as_ref())?);
+                println!(
+                    "{}",
+                    crate::gap::tirfile::write_corrected(&text, out, d.corrected.as_ref())?
+                );
             }
             eprintln!(
                 "{} rows diagnosed in {:.1} s -> {}",
@@ -277,6 +230,7 @@ pub fn run(cmd: GapCmd) -> Result<(), String> {
             cases,
             rates,
             sampling,
+            effects,
         } => {
             let dir = tyres.unwrap_or_else(|| {
                 Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -292,6 +246,9 @@ pub fn run(cmd: GapCmd) -> Result<(), String> {
             let rates_given = !rates.is_empty();
             if rates_given {
                 cfg.rates = rates;
+            }
+            if let Some(list) = &effects {
+                cfg.effects = effect_arg(list)?;
             }
             let start = std::time::Instant::now();
             let res = bench::run(&cfg)?;
@@ -317,6 +274,9 @@ pub fn run(cmd: GapCmd) -> Result<(), String> {
             if smp.drop > 0.0 {
                 flags += &format!(" --drop {}", smp.drop);
             }
+            if let Some(l) = &effects {
+                flags += &format!(" --effects {l}");
+            }
             text += &format!(
                 "\nCommand: `cargo run --release --bin gough -- gap bench{}` ({:.0} s wall with {} job(s)).\n",
                 flags,
@@ -325,10 +285,10 @@ pub fn run(cmd: GapCmd) -> Result<(), String> {
             );
             print!("{text}");
             if let Some(m) = markdown {
-                write_atomic(&m, &text)?;
+                crate::gap::write_atomic(&m, &text)?;
             }
             if let Some(c) = cases {
-                write_atomic(&c, &bench::cases_csv(&res))?;
+                crate::gap::write_atomic(&c, &bench::cases_csv(&res))?;
             }
             Ok(())
         }
@@ -388,7 +348,7 @@ pub fn run(cmd: GapCmd) -> Result<(), String> {
                 let text = std::fs::read_to_string(&tir)
                     .map_err(|e| format!("{}: cannot read: {e}", tir.display()))?;
                 let t = bench::truth_tir(&text, &tyre.params, &g.log, &truth, magnitude)?;
-                write_atomic(path, &t)?;
+                crate::gap::write_atomic(path, &t)?;
                 eprintln!("the truth's tyre -> {}", path.display());
             }
             eprintln!(

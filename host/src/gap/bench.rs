@@ -17,8 +17,10 @@
 //! pressure, the only reference such a file allows); combined slip also RBX2 and RCY1; the relaxation truth scales σα with
 //! (Fz/Fz0)^(0.4·m), the extension with (1 + c·dfz); the friction truth decays as
 //! 1 − d·(1 − e^(−Vs/2 m/s)) (a saturating Stribeck form), the extension as 1/(1 + a·Vs/V0);
-//! the thermal truth softens the cornering stiffness too and is driven by the sim's slip power,
-//! the extension by the measured one; the bias truth drifts by 20 % over the log; the turn-slip
+//! the thermal truth has two temperature nodes (tread surface and carcass, [`thermal_truth`]),
+//! a Gaussian grip law of their mix around an optimum and an exponential softening of both slip
+//! stiffnesses with the carcass, driven by the sim's slip power from a cold start, against the
+//! extension's one node, quadratic grip law, linear softening and the measured slip power; the bias truth drifts by 20 % over the log; the turn-slip
 //! truth of an MF 5.x tyre grows with √(Fz/Fz0).
 //!
 //! ## Scoring ([`run`], [`targets`])
@@ -33,7 +35,7 @@
 
 use super::effects::{Effect, ALL};
 use super::log::Log;
-use super::sim::{lag, lowpass_from, Lambda, Mods, Out, SigmaMode, Sim};
+use super::sim::{lag, Lambda, Mods, Out, SigmaMode, Sim};
 use super::stats;
 use crate::rng::Rng;
 use gough::mf::{Key, Params};
@@ -238,6 +240,81 @@ fn bump(q: &mut Params<f64>, key: &str, f: impl Fn(f64) -> f64) {
     }
 }
 
+/// The thermal truth's constants (module doc): a tread surface node and a carcass node, K above
+/// ambient, heated by the slip power relative to the log's mean (a tyre run at its usual power
+/// settles near its optimum), the surface cooled by convection growing with speed.
+pub mod thermal {
+    /// Surface and carcass time constants \[s\].
+    pub const TAU_SURFACE: f64 = 2.5;
+    /// See [`TAU_SURFACE`].
+    pub const TAU_CARCASS: f64 = 20.0;
+    /// Surface heating at the log's mean slip power \[K\] (per unit of the cooling rate).
+    pub const GAIN: f64 = 50.0;
+    /// Surface–carcass conduction and carcass cooling, per unit of the surface's convection at
+    /// V0.
+    pub const CONDUCTION: f64 = 0.5;
+    /// See [`CONDUCTION`].
+    pub const CARCASS_COOLING: f64 = 0.3;
+    /// Grip's optimum temperature and width \[K\], and its largest loss (× m).
+    pub const OPTIMUM: f64 = 40.0;
+    /// See [`OPTIMUM`].
+    pub const WIDTH: f64 = 35.0;
+    /// See [`OPTIMUM`].
+    pub const GRIP_LOSS: f64 = 0.25;
+    /// Carcass softening of the slip stiffnesses \[1/K\] (× m).
+    pub const SOFTENING: f64 = 0.004;
+}
+
+/// The thermal truth per row (module doc): two nodes, Ts (surface) and Tc (carcass), from
+/// ambient (a cold start): τs·dTs/dt = G·u/ū − hs(V)·Ts − c·(Ts − Tc), τc·dTc/dt = c·(Ts − Tc) −
+/// hc·Tc, with u the slip power |Fx·Vsx| + |Fy·Vsy| of the sim's forces `out` over Fz0·V0, ū
+/// its mean over the log, hs(V) = 0.4 + 0.6·(|Vx|/V0)^0.8 (convection); grip around an
+/// optimum, a Gaussian (exponential) law of the grip temperature 0.75·Ts + 0.25·Tc:
+/// λμ = 1 − 0.25·m·(1 − exp(−((T − 40)/35)²)); the slip stiffnesses softening exponentially
+/// with the carcass: λK = exp(−0.004·m·Tc). Integrated in sub-steps of at most 10 ms, the
+/// inputs linear between rows.
+pub fn thermal_truth(p: &Params<f64>, log: &Log, out: &[Out], m: f64) -> Vec<Lambda> {
+    use thermal::*;
+    let v0 = p.longvl.abs().max(1.0);
+    let n = log.len();
+    let u: Vec<f64> = (0..n)
+        .map(|i| {
+            let (vsx, vsy) = log.slip_velocity(i);
+            ((out[i][0] * vsx).abs() + (out[i][1] * vsy).abs()) / (p.fnomin * v0)
+        })
+        .collect();
+    let ubar = stats::mean(&u).max(1e-12);
+    let (mut ts, mut tc) = (0.0f64, 0.0f64);
+    let lam = |ts: f64, tc: f64| {
+        let tg = 0.75 * ts + 0.25 * tc;
+        let d = (tg - OPTIMUM) / WIDTH;
+        Lambda {
+            kx: (-SOFTENING * m * tc).exp(),
+            ky: (-SOFTENING * m * tc).exp(),
+            ..Lambda::mu((1.0 - GRIP_LOSS * m * (1.0 - (-d * d).exp())).max(0.05))
+        }
+    };
+    let mut res = Vec::with_capacity(n);
+    res.push(lam(ts, tc));
+    for i in 1..n {
+        let dt = (log.t[i] - log.t[i - 1]).max(0.0);
+        let k = (dt / 0.01).ceil().max(1.0) as usize;
+        let h = dt / k as f64;
+        for j in 0..k {
+            let w = (j as f64 + 0.5) / k as f64;
+            let ui = u[i - 1] + w * (u[i] - u[i - 1]);
+            let vi = log.vx[i - 1].abs() + w * (log.vx[i].abs() - log.vx[i - 1].abs());
+            let hs = 0.4 + 0.6 * (vi / v0).powf(0.8);
+            let dts = (GAIN * ui / ubar - hs * ts - CONDUCTION * (ts - tc)) / TAU_SURFACE;
+            let dtc = (CONDUCTION * (ts - tc) - CARCASS_COOLING * tc) / TAU_CARCASS;
+            ts += h * dts;
+            tc += h * dtc;
+        }
+        res.push(lam(ts, tc));
+    }
+    res
+}
+
 /// The coefficient part of the truth `effects` at `m` (module doc): SIM.tir's parameters
 /// with the changes of the effects that are coefficient changes (camber, MF 6.x pressure,
 /// turn slip where the sim evaluates it, combined slip, conicity/ply-steer); the others are
@@ -434,27 +511,7 @@ pub fn truth(
                     &mut lambda,
                 );
             }
-            Effect::Thermal => {
-                let v0 = p.longvl.abs().max(1.0);
-                let pw: Vec<f64> = (0..n)
-                    .map(|i| {
-                        let (vsx, vsy) = log.slip_velocity(i);
-                        ((base.out[i][0] * vsx).abs() + (base.out[i][1] * vsy).abs())
-                            / (p.fnomin * v0)
-                    })
-                    .collect();
-                let temp = lowpass_from(&pw, &log.t, 6.0, 0.0);
-                let k = 0.08 * m / stats::mean(&temp).max(1e-9);
-                lambda_of(
-                    temp.iter()
-                        .map(|&tk| Lambda {
-                            ky: (1.0 - 0.4 * k * tk).max(0.2),
-                            ..Lambda::mu((1.0 - k * tk).max(0.2))
-                        })
-                        .collect(),
-                    &mut lambda,
-                );
-            }
+            Effect::Thermal => lambda_of(thermal_truth(p, log, &base.out, m), &mut lambda),
             Effect::SensorLag => lags = [0.008 * m, 0.015 * m, 0.025 * m],
             Effect::SensorBias => {
                 let mut rng = Rng::new(seed ^ 0xB1A5);
@@ -715,6 +772,9 @@ pub struct BenchConfig {
     pub jobs: usize,
     /// Show a progress bar.
     pub progress: bool,
+    /// The effects of the single-effect logs (every one by default); pairs only where one of
+    /// theirs is among them. The none logs always run.
+    pub effects: Vec<Effect>,
 }
 
 /// One benchmark case and its outcome.
@@ -898,7 +958,7 @@ pub fn run(cfg: &BenchConfig) -> Result<Vec<CaseResult>, String> {
                     },
                 ));
             }
-            for e in ALL {
+            for &e in &cfg.effects {
                 for (mi, &m) in cfg.magnitudes.iter().enumerate() {
                     for s in 0..cfg.seeds {
                         cases.push((
@@ -919,6 +979,9 @@ pub fn run(cfg: &BenchConfig) -> Result<Vec<CaseResult>, String> {
                 }
             }
             for (pi, &(a, b)) in cfg.pairs.iter().enumerate() {
+                if !cfg.effects.contains(&a) && !cfg.effects.contains(&b) {
+                    continue;
+                }
                 for s in 0..cfg.pair_seeds {
                     cases.push((
                         ti,
@@ -1369,6 +1432,7 @@ pub fn default_config(data: &Path, quick: bool) -> BenchConfig {
             pair_magnitude: 1.0,
             jobs: 1,
             progress: true,
+            effects: ALL.to_vec(),
         }
     } else {
         BenchConfig {
@@ -1387,6 +1451,7 @@ pub fn default_config(data: &Path, quick: bool) -> BenchConfig {
             pair_magnitude: 1.0,
             jobs: 1,
             progress: true,
+            effects: ALL.to_vec(),
         }
     }
 }

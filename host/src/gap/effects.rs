@@ -11,7 +11,7 @@
 //! | `combined_slip` | the weighting-function slopes Bxα (4.E54), Byκ (4.E62) and the Fx moment arm s (4.E76) re-fitted | `rbx1 rby1 ssz1` |
 //! | `relaxation_length` | σκ, σα times s·(1 + c·dfz) (a σ(Fz) relaxation); without filters in SIM.tir, σα = s_alpha·R0·Fz/Fz0, σκ = s_kappa·R0·Fz/(2·Fz0) | `s_kappa s_alpha c_fz` |
 //! | `speed_dependent_friction` | λμx = λμy = (1 + b·(|Vx| − V0)/V0)/(1 + a·Vs/V0), Vs the slip speed (TNO's λμV form plus a forward-speed trend), V0 = LONGVL | `a_vs b_vx` |
-//! | `thermal` | a first-order tread temperature T, τ·dT/dt + T = Ps/(Fz0·V0), driven by the slip power Ps = |Fx·Vsx| + |Fy·Vsy| of the *measured* forces, from a fitted T = t0 at the log's start (a log need not start with a cold tyre); λμx = λμy = exp(−k·T), and the tread softening with it, λKy = exp(−k_ky·T); τ from 0.05 s (a surface temperature) to 200 s | `k tau k_ky t0` |
+//! | `thermal` | one tread temperature node T (in units of the slip power over Fz0·V0) heated by the slip power Ps = |Fx·Vsx| + |Fy·Vsy| of the *measured* forces and cooled towards ambient (T = 0) at a speed-dependent rate: τ·dT/dt = Ps/(Fz0·V0) − h(V)·T, h = 1 + c_v·(|Vx|/V0 − 1) (floored at 0.05), from a fitted start temperature t0 (a log need not start with a cold tyre); τ from 0.05 s to 200 s; grip around an optimum, λμx = λμy = 1 + mu0 + mu1·T + mu2·T² (the optimum at −mu1/(2·mu2) when mu2 < 0; mu0: the file's temperature is not ambient), the slip stiffnesses λKx = λKy = 1 + k1·T | `mu0 mu1 mu2 k1 tau c_v t0` |
 //! | `sensor_lag` | a first-order lag per channel (exact for a first-order hold) | `tau_fx tau_fy tau_mz` \[s\] |
 //! | `sensor_bias` | a constant offset per channel | `b_fx b_fy b_mz` \[N, N, N·m\] |
 //! | `conicity_plysteer` | the zero-slip offsets re-fitted: Fy horizontal and vertical shifts (4.E27, 4.E29), the trail's shift (4.E35) | `phy1 pvy1 qhz1` |
@@ -24,7 +24,7 @@
 
 use super::fit::Bounds;
 use super::log::Log;
-use super::sim::{lag, lowpass_from, Lambda, Mods, Out, RowError, Run, SigmaMode, Sim};
+use super::sim::{lag, node_from, Lambda, Mods, Out, RowError, Run, SigmaMode, Sim};
 use gough::mf::{Key, Params};
 
 /// A candidate effect.
@@ -104,7 +104,8 @@ impl Effect {
             Effect::RelaxationLength => "σ times s·(1 + c·dfz)",
             Effect::SpeedDependentFriction => "λμ = (1 + b·(|Vx|−V0)/V0)/(1 + a·Vs/V0)",
             Effect::Thermal => {
-                "λμ = exp(−k·T), λKy = exp(−k_ky·T), τ·dT/dt + T = slip power/(Fz0·V0)"
+                "λμ = 1 + mu0 + mu1·T + mu2·T², λK = 1 + k1·T, τ·dT/dt = slip power/(Fz0·V0) \
+                 − (1 + c_v·(|Vx|/V0 − 1))·T, T(0) = t0"
             }
             Effect::SensorLag => "first-order lag per channel",
             Effect::SensorBias => "constant offset per channel",
@@ -476,19 +477,51 @@ pub fn spec(effect: Effect, ctx: &Ctx) -> Result<Spec, String> {
             if m <= 0.0 {
                 return Err("no slip power in the log".into());
             }
+            // Scales: a λ change of 0.1 at the log's mean temperature (T ≈ mean power).
             let ks = 0.1 / m;
             let pmax = ctx.power.iter().fold(0.0f64, |a, &b| a.max(b));
             Ok(simple(
                 effect,
-                &["k", "tau", "k_ky", "t0"],
-                [0.1f64, 1.0, 5.0, 25.0]
+                &["mu0", "mu1", "mu2", "k1", "tau", "c_v", "t0", "tau_k"],
+                // τ multi-started (the fit is flat in it at the sim); the carcass started ten
+                // times slower than the tread (bounded by the log's longest τ).
+                [0.3f64, 2.0, 10.0, 40.0]
                     .iter()
-                    .map(|&tau| vec![0.0, tau.ln(), 0.0, 0.0])
+                    .map(|&tau| {
+                        vec![
+                            0.0,
+                            0.0,
+                            0.0,
+                            0.0,
+                            tau.ln(),
+                            0.0,
+                            0.0,
+                            (10.0 * tau).min(500.0).ln(),
+                        ]
+                    })
                     .collect(),
                 [
-                    &[-10.0 * ks, 0.05f64.ln(), -10.0 * ks, 0.0],
-                    &[10.0 * ks, 200f64.ln(), 10.0 * ks, 2.0 * pmax],
-                    &[ks, 0.5, ks, m],
+                    &[
+                        -0.5,
+                        -10.0 * ks,
+                        -10.0 * ks / m,
+                        -10.0 * ks,
+                        0.05f64.ln(),
+                        -0.9,
+                        0.0,
+                        0.05f64.ln(),
+                    ],
+                    &[
+                        0.5,
+                        10.0 * ks,
+                        10.0 * ks / m,
+                        10.0 * ks,
+                        200f64.ln(),
+                        3.0,
+                        2.0 * pmax,
+                        1000f64.ln(),
+                    ],
+                    &[0.05, ks, ks / m, ks, 0.5, 0.3, m, 0.5],
                 ],
                 Variant::Thermal,
             ))
@@ -547,7 +580,7 @@ impl Spec {
             .iter()
             .zip(theta)
             .map(|(n, &v)| {
-                if self.variant == Variant::Thermal && n == "tau" {
+                if self.variant == Variant::Thermal && (n == "tau" || n == "tau_k") {
                     (n.clone(), v.exp())
                 } else {
                     (n.clone(), v)
@@ -602,12 +635,28 @@ impl Spec {
                 )
             }
             Variant::Thermal => {
-                let temp = lowpass_from(&ctx.power, &log.t, theta[1].exp(), theta[3]);
+                let v0 = ctx.sim.params.longvl.abs().max(1.0);
+                let h: Vec<f64> = log
+                    .vx
+                    .iter()
+                    .map(|v| (1.0 + theta[5] * (v.abs() / v0 - 1.0)).max(0.05))
+                    .collect();
+                let temp = node_from(&ctx.power, &log.t, theta[4].exp(), Some(&h), theta[6]);
+                // The carcass: heated by the tread, to the tread's temperature in steady state.
+                let tks = node_from(&temp, &log.t, theta[7].exp(), None, theta[6]);
                 Some(
                     temp.iter()
-                        .map(|&tk| Lambda {
-                            ky: (-theta[2] * tk).exp().clamp(0.05, 5.0),
-                            ..Lambda::mu((-theta[0] * tk).exp().clamp(0.05, 5.0))
+                        .zip(&tks)
+                        .map(|(&tk, &tks)| {
+                            let k = (1.0 + theta[3] * tks).clamp(0.05, 5.0);
+                            Lambda {
+                                kx: k,
+                                ky: k,
+                                ..Lambda::mu(
+                                    (1.0 + theta[0] + theta[1] * tk + theta[2] * tk * tk)
+                                        .clamp(0.05, 5.0),
+                                )
+                            }
                         })
                         .collect(),
                 )

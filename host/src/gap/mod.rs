@@ -461,7 +461,13 @@ pub fn diagnose(
                         .collect::<BTreeMap<_, _>>(),
                     sp.reported(&sp.starts[0])
                         .into_iter()
-                        .map(|(k, v)| if k == "tau" { (k, 0.0) } else { (k, v) })
+                        .map(|(k, v)| {
+                            if k.starts_with("tau") {
+                                (k, 0.0)
+                            } else {
+                                (k, v)
+                            }
+                        })
                         .collect::<BTreeMap<_, _>>(),
                 ),
                 None => (BTreeMap::new(), BTreeMap::new()),
@@ -560,4 +566,17 @@ pub fn diagnose(
         shrinks: scores.iter().map(|s| (s.effect, s.shrink, s.z)).collect(),
         corrected,
     })
+}
+
+/// Writes `text` to `path` through a temporary file beside it (no half-written file), the
+/// directory created when missing.
+pub fn write_atomic(path: &std::path::Path, text: &str) -> Result<(), String> {
+    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir)
+            .map_err(|e| format!("{}: cannot create: {e}", dir.display()))?;
+    }
+    let tmp = path.with_extension("tmp");
+    std::fs::write(&tmp, text)
+        .and_then(|_| std::fs::rename(&tmp, path))
+        .map_err(|e| format!("{}: cannot write: {e}", path.display()))
 }

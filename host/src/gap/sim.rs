@@ -573,6 +573,14 @@ pub fn lag(u: &[f64], t: &[f64], tau: f64) -> Vec<f64> {
 
 /// The first-order low-pass of a signal, as [`lag`], but starting from `y0`.
 pub fn lowpass_from(u: &[f64], t: &[f64], tau: f64, y0: f64) -> Vec<f64> {
+    node_from(u, t, tau, None, y0)
+}
+
+/// A first-order node τ·dy/dt + h·y = u with a loss rate h per row (`None`: 1, [`lowpass_from`]),
+/// from y0: over a step, h held at the mean of the step's two rows, x = h·dt/τ, the input
+/// linear in time (exact for a first-order hold when h is constant):
+/// `y1 = y0·e^(−x) + (u0/h)·(1 − e^(−x)) + ((u1 − u0)/h)·(1 − φ1(x))`. h is floored at 1e-6.
+pub fn node_from(u: &[f64], t: &[f64], tau: f64, h: Option<&[f64]>, y0: f64) -> Vec<f64> {
     if u.is_empty() {
         return Vec::new();
     }
@@ -580,9 +588,10 @@ pub fn lowpass_from(u: &[f64], t: &[f64], tau: f64, y0: f64) -> Vec<f64> {
     let mut yi = y0;
     y.push(yi);
     for i in 1..u.len().min(t.len()) {
-        let x = (t[i] - t[i - 1]) / tau.max(1e-9);
+        let hi = h.map_or(1.0, |h| 0.5 * (h[i - 1] + h[i])).max(1e-6);
+        let x = hi * (t[i] - t[i - 1]) / tau.max(1e-9);
         let e = (-x).exp();
-        yi = yi * e + u[i - 1] * (1.0 - e) + (u[i] - u[i - 1]) * (1.0 - phi1(x));
+        yi = yi * e + u[i - 1] * (1.0 - e) / hi + (u[i] - u[i - 1]) * (1.0 - phi1(x)) / hi;
         y.push(yi);
     }
     y
