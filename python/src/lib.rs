@@ -582,7 +582,7 @@ fn _diagnose_gap(
         })
         .map_err(PyValueError::new_err)?;
     if let Some(out) = &write_tir {
-        gough_host::cli::gap::write_corrected(&tyre.text, out, d.corrected.as_ref())
+        gap::tirfile::write_corrected(&tyre.text, out, d.corrected.as_ref())
             .map_err(PyValueError::new_err)?;
     }
     serde_json::to_string(&d.report).map_err(|e| PyValueError::new_err(e.to_string()))

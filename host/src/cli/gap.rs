@@ -3,6 +3,7 @@
 
 use crate::gap::bench::{self, GenConfig};
 use crate::gap::effects::Effect;
+use crate::gap::tirfile::{write_atomic, write_corrected};
 use std::path::{Path, PathBuf};
 
 /// The `gap` subcommands.
@@ -103,17 +104,6 @@ pub enum GapCmd {
     },
 }
 
-fn write_atomic(path: &Path, text: &str) -> Result<(), String> {
-    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir)
-            .map_err(|e| format!("{}: cannot create: {e}", dir.display()))?;
-    }
-    let tmp = path.with_extension("tmp");
-    std::fs::write(&tmp, text)
-        .and_then(|_| std::fs::rename(&tmp, path))
-        .map_err(|e| format!("{}: cannot write: {e}", path.display()))
-}
-
 fn effect_arg(s: &str) -> Result<Vec<Effect>, String> {
     if s == "none" {
         return Ok(vec![]);
@@ -128,49 +118,6 @@ fn effect_arg(s: &str) -> Result<Vec<Effect>, String> {
             })
         })
         .collect()
-}
-
-/// Writes the corrected file of a diagnosis to `out` (SIM.tir's `text` unchanged without a
-/// verdict); the line that says what went in and what is left out.
-pub fn write_corrected(
-    text: &str,
-    out: &Path,
-    c: Option<&crate::gap::tirfile::Corrected>,
-) -> Result<String, String> {
-    let Some(c) = c else {
-        write_atomic(out, text)?;
-        return Ok(format!(
-            "corrected file: {} (no verdict: SIM.tir unchanged)",
-            out.display()
-        ));
-    };
-    write_atomic(out, &crate::gap::tirfile::write(text, c)?)?;
-    let r = &c.report;
-    let parts: Vec<String> = r
-        .effects
-        .iter()
-        .map(|p| {
-            let how = match p.how {
-                crate::gap::tirfile::How::Exact => "exact",
-                crate::gap::tirfile::How::Approximate => "approximate",
-                crate::gap::tirfile::How::LeftOut => "left out",
-            };
-            format!("{} {how}", p.effect)
-        })
-        .collect();
-    let mut line = format!(
-        "corrected file: {} ({}; {} coefficients; shrink of the written file {:.3}, of the effect fitted on the whole log {:.3}, held-out {:.3})",
-        out.display(),
-        parts.join(", "),
-        r.coefficients.len(),
-        r.shrink_written,
-        r.shrink_fit,
-        r.shrink_heldout
-    );
-    if !r.left_out.is_empty() {
-        line += &format!("; left out: {}", r.left_out.join("; "));
-    }
-    Ok(line)
 }
 
 /// Runs a `gap` subcommand.

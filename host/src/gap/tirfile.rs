@@ -36,6 +36,7 @@ use super::sim::{Mods, Out, Sim};
 use gough::mf::{Key, Params};
 use serde::Serialize;
 use std::collections::BTreeMap;
+use std::path::Path;
 
 /// How an effect went into the file.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
@@ -434,4 +435,56 @@ pub fn write(text: &str, c: &Corrected) -> Result<String, String> {
         }
     }
     Ok(out)
+}
+
+/// Writes `text` to `path` atomically (a temporary file beside it, renamed), creating the
+/// folder; the error names the path.
+pub fn write_atomic(path: &Path, text: &str) -> Result<(), String> {
+    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir)
+            .map_err(|e| format!("{}: cannot create: {e}", dir.display()))?;
+    }
+    let tmp = path.with_extension("tmp");
+    std::fs::write(&tmp, text)
+        .and_then(|_| std::fs::rename(&tmp, path))
+        .map_err(|e| format!("{}: cannot write: {e}", path.display()))
+}
+
+/// Writes the corrected file of a diagnosis to `out` (SIM.tir's `text` unchanged without a
+/// verdict); the line that says what went in and what is left out.
+pub fn write_corrected(text: &str, out: &Path, c: Option<&Corrected>) -> Result<String, String> {
+    let Some(c) = c else {
+        write_atomic(out, text)?;
+        return Ok(format!(
+            "corrected file: {} (no verdict: SIM.tir unchanged)",
+            out.display()
+        ));
+    };
+    write_atomic(out, &write(text, c)?)?;
+    let r = &c.report;
+    let parts: Vec<String> = r
+        .effects
+        .iter()
+        .map(|p| {
+            let how = match p.how {
+                How::Exact => "exact",
+                How::Approximate => "approximate",
+                How::LeftOut => "left out",
+            };
+            format!("{} {how}", p.effect)
+        })
+        .collect();
+    let mut line = format!(
+        "corrected file: {} ({}; {} coefficients; shrink of the written file {:.3}, of the effect fitted on the whole log {:.3}, held-out {:.3})",
+        out.display(),
+        parts.join(", "),
+        r.coefficients.len(),
+        r.shrink_written,
+        r.shrink_fit,
+        r.shrink_heldout
+    );
+    if !r.left_out.is_empty() {
+        line += &format!("; left out: {}", r.left_out.join("; "));
+    }
+    Ok(line)
 }
