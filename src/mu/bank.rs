@@ -962,7 +962,14 @@ impl<F: Float> Bank<F> {
             self.surface.start(mu_lin, s0 * s0);
         }
         self.cal_wait += b.dt;
-        if !(b.excited(&c) && chi2 <= c.chi2_identifiable) || self.cal_wait < c.cal_period {
+        self.joint_step(b.excited(&c) && chi2 <= c.chi2_identifiable, k)
+    }
+
+    /// A step with the road the calibration's state, when `due` and `cal_period` has passed
+    /// since the last: the batch's slips free within ten of cell `k`'s slip units, the residuals
+    /// linearised at its surface.
+    fn joint_step(&mut self, due: bool, k: usize) -> Option<CalStep<F>> {
+        if !due || self.cal_wait < self.cfg.cal_period {
             return None;
         }
         self.cal_wait = F::ZERO;
@@ -970,7 +977,7 @@ impl<F: Float> Bank<F> {
         let ten = F::from_f64(10.0);
         Some(CalStep::Joint {
             slips: [(ten * ua).sq(), (ten * uk).sq()],
-            mu_lin,
+            mu_lin: self.fit.mu_c(k),
         })
     }
 
@@ -987,16 +994,7 @@ impl<F: Float> Bank<F> {
             e.saturating_add(u32::from(excited)),
             x.saturating_add(u32::from(explained)),
         );
-        if !explained || self.cal_wait < c.cal_period {
-            return None;
-        }
-        self.cal_wait = F::ZERO;
-        let (ua, uk) = self.fit.slip_units_of(k);
-        let ten = F::from_f64(10.0);
-        Some(CalStep::Joint {
-            slips: [(ten * ua).sq(), (ten * uk).sq()],
-            mu_lin: self.fit.mu_c(k),
-        })
+        self.joint_step(explained, k)
     }
 
     /// Mixes in the reading from ahead that waits, if any ([`Reading::mix_into`]); a held value
