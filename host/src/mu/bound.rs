@@ -815,12 +815,7 @@ pub fn run_wheel_cases(
                 let mu0 = scenario::mu_y0(&truth)?;
                 let model = Model::unmounted(&truth, mu0);
                 let noise = Noise::default();
-                let sens = Sensors {
-                    sigma_mz: noise.mz_sigma(&truth),
-                    sigma_rel: noise.f_rel,
-                    delay: 0.0,
-                    sigma_kappa: noise.kappa,
-                };
+                let sens = noise.sensors(&truth);
                 let mut k = [0usize; 8];
                 for s in &sc.wheels {
                     let tr = scenario::simulate(&truth, s, wheel::RATE, &noise, seed)?;
@@ -1072,12 +1067,7 @@ mod tests {
         let mu0 = scenario::mu_y0(&p).unwrap();
         let m = Model::unmounted(&p, mu0);
         let noise = Noise::default();
-        let sens = Sensors {
-            sigma_mz: noise.mz_sigma(&p),
-            sigma_rel: noise.f_rel,
-            delay: 0.0,
-            sigma_kappa: noise.kappa,
-        };
+        let sens = noise.sensors(&p);
         let run = |manoeuvre, mu: [f64; 2], step, duration| {
             let sc = Scenario {
                 manoeuvre,
@@ -1122,6 +1112,80 @@ mod tests {
         let [mu, s, sc] = steady[1];
         assert_eq!(mu, 0.3);
         assert!(sc >= s && 1.96 * sc <= 0.1, "{s} {sc}");
+    }
+
+    /// Where a step down in steady cornering is decided (docs/mu_bound.md, "Steps"): MF 6.2, the
+    /// wheel cases' cornering 1.0 → 0.3 on the file (seed 1, 200 Hz). With the calibration
+    /// unknown the rows of the 200 ms after the step decide the new μ, the new steady point
+    /// alone (40 rows like the one 100 ms after the step) does not: the information is in the
+    /// transient, the tyre sliding at the new road's limit. Figures print with `--nocapture`.
+    #[test]
+    fn a_step_down_is_decided_by_the_transient_after_it() {
+        use crate::mu::bench::wheel;
+        use crate::mu::scenario::{self, Noise};
+        let p = crate::tyre::load(std::path::Path::new(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../host-tests/data/tyres/MagicFormula62_Parameters.tir"
+        )))
+        .unwrap()
+        .params;
+        let sc = wheel::scenarios()
+            .into_iter()
+            .find(|s| s.name == "cornering 1.0→0.3")
+            .unwrap();
+        let noise = Noise::default();
+        let sens = noise.sensors(&p);
+        let m = Model::unmounted(&p, scenario::mu_y0(&p).unwrap());
+        let tr = scenario::simulate(&p, &sc.wheels[0], wheel::RATE, &noise, 1).unwrap();
+        let a = (1..tr.mu.len())
+            .find(|&i| tr.mu[i] != tr.mu[i - 1])
+            .unwrap();
+        let t0 = tr.t[a];
+        let surf = Surfaces::new(&m, tr.mu[a]);
+        let row = |i: usize| RowState {
+            alpha: tr.alpha_t[i],
+            kappa: tr.kappa_t[i],
+            fz: tr.fz_true[i],
+            gamma: tr.gamma[i],
+            vx: tr.vx[i],
+        };
+        let window = |from: f64| {
+            let mut g = Gathered::default();
+            for i in (a..tr.t.len()).filter(|&i| tr.t[i] >= t0 + from - 1e-9) {
+                if tr.t[i] > t0 + TARGET_STEP + 1e-9 {
+                    break;
+                }
+                g.add(&m, &surf, &row(i), &sens);
+            }
+            g
+        };
+        let mut last = 0.0;
+        for from in [0.0, 0.03, 0.05, 0.07, 0.1] {
+            let g = window(from);
+            println!(
+                "rows from {:.0} ms to 200 ms after the step: σ {:.4}, calibration unknown {:.4}",
+                from * 1e3,
+                g.sigma(),
+                g.sigma_cal()
+            );
+            assert!(g.sigma_cal() >= last, "fewer rows, no smaller σ");
+            last = g.sigma_cal();
+        }
+        let full = window(0.0);
+        let i1 = (a..tr.t.len())
+            .find(|&i| tr.t[i] >= t0 + 0.1 - 1e-9)
+            .unwrap();
+        let mut steady = Gathered::default();
+        for _ in 0..40 {
+            steady.add(&m, &surf, &row(i1), &sens);
+        }
+        println!(
+            "40 rows of the steady point: σ {:.4}, calibration unknown {:.4}",
+            steady.sigma(),
+            steady.sigma_cal()
+        );
+        assert!(1.96 * full.sigma_cal() <= 0.1, "{}", full.sigma_cal());
+        assert!(1.96 * steady.sigma_cal() > 0.1, "{}", steady.sigma_cal());
     }
 
     /// The bound is what it claims: at one operating point, the spread of the exact

@@ -170,6 +170,17 @@ impl Noise {
     pub fn mz_sigma(&self, p: &Params<f64>) -> f64 {
         self.mz_rel * p.fnomin * p.unloaded_radius
     }
+
+    /// These sensors on tyre `p` as the bench's [`Sensors`](super::bench::Sensors) (no delay;
+    /// κ with its noise): what `mu::bound` takes for a scenario's trace.
+    pub fn sensors(&self, p: &Params<f64>) -> super::bench::Sensors {
+        super::bench::Sensors {
+            sigma_mz: self.mz_sigma(p),
+            sigma_rel: self.f_rel,
+            delay: 0.0,
+            sigma_kappa: self.kappa,
+        }
+    }
 }
 
 impl Default for Noise {
