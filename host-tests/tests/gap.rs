@@ -434,3 +434,78 @@ fn the_mu_error_of_a_cold_tyre_is_put_down_to_the_thermal_effect() {
     assert_eq!(mu.verdict.effect, "thermal", "{:?}", mu.verdict);
     assert!(mu.verdict.shrink.unwrap() > 0.2);
 }
+
+/// A log's sampling out of range (`gap::bench::Sampling`: truth rate, jitter, drop; and a bench
+/// rate) is a one-line error naming the flag, from the library and from the CLI (exit code ≠ 0,
+/// nothing written); NaN is out of range.
+#[test]
+fn bad_sampling_gives_one_line_errors_naming_the_flag() {
+    use gough_host::gap::bench::Sampling;
+    let ok = Sampling {
+        truth_rate: Some(2000.0),
+        jitter: 0.1,
+        drop: 0.02,
+    };
+    assert_eq!(ok.check(), Ok(()));
+    let cases: [(Sampling, &str); 6] = [
+        (
+            Sampling {
+                truth_rate: Some(0.0),
+                ..ok
+            },
+            "truth-rate",
+        ),
+        (
+            Sampling {
+                truth_rate: Some(f64::NAN),
+                ..ok
+            },
+            "truth-rate",
+        ),
+        (Sampling { jitter: 0.5, ..ok }, "jitter"),
+        (
+            Sampling {
+                jitter: f64::NAN,
+                ..ok
+            },
+            "jitter",
+        ),
+        (Sampling { drop: 0.6, ..ok }, "drop"),
+        (Sampling { drop: -0.1, ..ok }, "drop"),
+    ];
+    for (s, flag) in cases {
+        let e = s.check().unwrap_err();
+        assert!(e.starts_with(flag) && !e.contains('\n'), "{e}");
+    }
+    let tir =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("data/tyres/MagicFormula61_Parameters.tir");
+    let out = tmp("bad_sampling.csv");
+    let _ = std::fs::remove_file(&out);
+    for (args, flag) in [
+        (&["--truth-rate", "0"][..], "--truth-rate"),
+        (&["--jitter", "0.7"][..], "--jitter"),
+        (&["--drop", "NaN"][..], "--drop"),
+    ] {
+        let o = Command::new(gough_host_tests::gough_bin())
+            .args(["gap", "generate", "--rows", "200", "--tir"])
+            .arg(&tir)
+            .arg("--out")
+            .arg(&out)
+            .args(args)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success(), "{args:?}");
+        assert!(
+            err.contains(flag) && err.trim().lines().count() == 1,
+            "{err}"
+        );
+        assert!(!out.exists(), "{args:?} wrote {}", out.display());
+    }
+    let o = Command::new(gough_host_tests::gough_bin())
+        .args(["gap", "bench", "--quick", "--rates", "50,0"])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && err.contains("--rates"), "{err}");
+}

@@ -132,8 +132,7 @@ impl SamplingArgs {
             jitter: self.jitter,
             drop: self.drop,
         };
-        s.check()
-            .map_err(|e| format!("--{e}").replace("--truth rate", "--truth-rate"))?;
+        s.check().map_err(|e| format!("--{e}"))?;
         Ok(s)
     }
 }

@@ -94,9 +94,11 @@ impl Sampling {
     }
 
     /// Checks the values: a positive finite truth rate, jitter in [0, 0.5), drop in [0, 0.5].
+    /// Each error names the value as the CLI's flag does, without its dashes (`truth-rate`,
+    /// `jitter`, `drop`).
     pub fn check(&self) -> Result<(), String> {
         if let Some(r) = self.truth_rate.filter(|r| !(r.is_finite() && *r > 0.0)) {
-            return Err(format!("truth rate {r}: must be > 0"));
+            return Err(format!("truth-rate {r}: must be > 0 Hz"));
         }
         if !(0.0..0.5).contains(&self.jitter) {
             return Err(format!("jitter {}: expected 0 ≤ jitter < 0.5", self.jitter));
