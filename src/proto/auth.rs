@@ -94,18 +94,15 @@ impl Key {
         Some(Key(k))
     }
 
-    /// The CMAC of `id ‖ data ‖ epoch` under this key, not finalised.
-    fn cmac(&self, id: u16, data: &[u8], epoch: u32) -> Cmac<Aes128> {
-        let mut m = <Cmac<Aes128> as KeyInit>::new(&GenericArray::from(self.0));
-        m.update(&id.to_le_bytes());
-        m.update(data);
-        m.update(&epoch.to_le_bytes());
-        m
+    /// AES-128-CMAC keyed with this key: the AES key schedule and the CMAC subkeys computed
+    /// once, cloned for each message ([`tag`]).
+    fn keyed(&self) -> Cmac<Aes128> {
+        <Cmac<Aes128> as KeyInit>::new(&GenericArray::from(self.0))
     }
 
     /// The full (16-byte) AES-128-CMAC of `data` (NIST SP 800-38B), for the test vectors.
     pub fn cmac_raw(&self, data: &[u8]) -> [u8; 16] {
-        let mut m = <Cmac<Aes128> as KeyInit>::new(&GenericArray::from(self.0));
+        let mut m = self.keyed();
         m.update(data);
         m.finalize().into_bytes().into()
     }
@@ -209,10 +206,21 @@ pub struct Refused {
 }
 
 /// The receiving end (the device): checks secured messages against its key and freshness.
-#[derive(Debug, Clone)]
+/// Keeps the keyed CMAC (the AES round keys and CMAC subkeys: 400 bytes on the M4F, computed
+/// once in [`Verifier::new`]); its `Debug` does not show them.
+#[derive(Clone)]
 pub struct Verifier {
-    key: Option<(Key, MacLen)>,
+    key: Option<(Cmac<Aes128>, MacLen)>,
     status: AuthStatus,
+}
+
+impl fmt::Debug for Verifier {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("Verifier")
+            .field("key", &self.key.as_ref().map(|_| "..."))
+            .field("status", &self.status)
+            .finish()
+    }
 }
 
 impl Default for Verifier {
@@ -241,9 +249,9 @@ impl Verifier {
 
     /// A device with `key`, expecting MACs of `mac_len` bytes, in `epoch` (this boot's value of
     /// the non-volatile boot counter: never one an earlier boot used), no counter accepted yet.
-    pub const fn new(key: Key, mac_len: MacLen, epoch: u32) -> Verifier {
+    pub fn new(key: Key, mac_len: MacLen, epoch: u32) -> Verifier {
         let mut v = Verifier::without_key();
-        v.key = Some((key, mac_len));
+        v.key = Some((key.keyed(), mac_len));
         v.status.mac_len = mac_len.0;
         v.status.epoch = epoch;
         v
@@ -312,7 +320,7 @@ impl Verifier {
             })
         });
         let Some(t) = trailer.filter(|t| {
-            key.cmac(id, t.data, s.epoch)
+            tag(key, id, t.data, s.epoch)
                 .verify_truncated_left(t.mac)
                 .is_ok()
         }) else {
@@ -341,21 +349,32 @@ impl Verifier {
     }
 }
 
-/// The sending end (the owner's tool): secures messages with the next freshness value.
-#[derive(Debug, Clone)]
+/// The sending end (the owner's tool): secures messages with the next freshness value. Its
+/// `Debug` does not show the key.
+#[derive(Clone)]
 pub struct Signer {
-    key: Key,
+    key: Cmac<Aes128>,
     mac_len: MacLen,
     epoch: u32,
     counter: u32,
 }
 
+impl fmt::Debug for Signer {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("Signer")
+            .field("mac_len", &self.mac_len)
+            .field("epoch", &self.epoch)
+            .field("counter", &self.counter)
+            .finish()
+    }
+}
+
 impl Signer {
     /// Signs with `key` and MACs of `mac_len` bytes for a device in `epoch` whose last accepted
     /// counter is `counter` (both from its `Status::auth`).
-    pub const fn new(key: Key, mac_len: MacLen, epoch: u32, counter: u32) -> Signer {
+    pub fn new(key: Key, mac_len: MacLen, epoch: u32, counter: u32) -> Signer {
         Signer {
-            key,
+            key: key.keyed(),
             mac_len,
             epoch,
             counter,
@@ -386,8 +405,8 @@ impl Signer {
         }
         put(out, body_end, &counter.to_le_bytes())?;
         let data = out.get(..data_end).ok_or(Error::Overflow)?;
-        let tag = self.key.cmac(id, data, self.epoch).finalize().into_bytes();
-        put(out, data_end, tag.get(..self.mac_len.get()).unwrap_or(&[]))?;
+        let t = tag(&self.key, id, data, self.epoch).finalize().into_bytes();
+        put(out, data_end, t.get(..self.mac_len.get()).unwrap_or(&[]))?;
         let crc = super::crc32(out.get(..mac_end).ok_or(Error::Overflow)?);
         put(out, mac_end, &crc.to_le_bytes())?;
         if counter == u32::MAX {
@@ -398,6 +417,15 @@ impl Signer {
         }
         Ok(total)
     }
+}
+
+/// The CMAC of `id ‖ data ‖ epoch` under a keyed CMAC, not finalised.
+fn tag(keyed: &Cmac<Aes128>, id: u16, data: &[u8], epoch: u32) -> Cmac<Aes128> {
+    let mut m = keyed.clone();
+    m.update(&id.to_le_bytes());
+    m.update(data);
+    m.update(&epoch.to_le_bytes());
+    m
 }
 
 fn put(out: &mut [u8], at: usize, bytes: &[u8]) -> Result<(), Error> {

@@ -65,6 +65,10 @@ pub enum ProtoCmd {
         /// Print the table as Markdown (docs/protocol.md).
         #[arg(long)]
         markdown: bool,
+        /// Every message secured with MACs of this many bytes (4..=8): the cost of
+        /// authenticating measurements and answers too (docs/protocol.md, "Security").
+        #[arg(long, value_name = "BYTES", value_parser = clap::value_parser!(u8).range(4..=8))]
+        auth_mac_len: Option<u8>,
     },
 }
 
@@ -161,7 +165,13 @@ pub fn run(cmd: ProtoCmd) -> Result<(), String> {
             }
             emit(&s, out)
         }
-        ProtoCmd::Load { markdown } => emit(&crate::busload::table(markdown), None),
+        ProtoCmd::Load {
+            markdown,
+            auth_mac_len,
+        } => emit(
+            &crate::busload::table_with(markdown, auth_mac_len.and_then(MacLen::new)),
+            None,
+        ),
     }
 }
 
