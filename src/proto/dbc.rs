@@ -348,7 +348,7 @@ fn muxed_bytes<W: Write>(
 
 /// Writes the DBC text for classic CAN ([`Mtu::Classic`]) or CAN FD ([`Mtu::Fd`]), for secured
 /// messages with MACs of `mac_len` bytes: on CAN FD their freshness counter and MAC are signals
-/// of their own (on the configuration identifier, [`config_fd`]); on classic CAN they are bytes
+/// of their own (on the configuration identifier, multiplexed on `msg_type`); on classic CAN they are bytes
 /// of the message, as every body is.
 pub fn write_with<W: Write>(w: &mut W, mtu: Mtu, mac_len: MacLen) -> fmt::Result {
     let fd = mtu == Mtu::Fd;
