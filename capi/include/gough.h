@@ -98,7 +98,7 @@
 /**
  * Bytes of a `gough_rx_t` (a reassembler of one CAN identifier's messages).
  */
-#define GOUGH_RX_SIZE 256
+#define GOUGH_RX_SIZE 320
 
 /**
  * Bytes of a `gough_preview_t` (one side's front-to-rear preview, `gough::mu::preview`).
@@ -852,7 +852,8 @@ typedef struct gough_msg_t {
   /**
    * `GOUGH_MSG_ACK`: 0 ok, 1 bad hash, 2 bad length, 3 bad offset, 4 not in upload, 5 .tir
    * error (`ack_line`), 6 no params, 7 no slip, 8 evaluation error, 9 not supported,
-   * 10 bad settings, 11 bad calibration.
+   * 10 bad settings, 11 bad calibration; v5 (authentication): 12 no key, 13 MAC missing,
+   * 14 bad MAC, 15 stale freshness.
    */
   uint32_t ack_code;
   /**
@@ -879,6 +880,32 @@ typedef struct gough_frame_t {
    */
   uint8_t data[8];
 } gough_frame_t;
+
+/**
+ * The device owner's signing state for secured messages (docs/protocol.md, "Security"): the
+ * device key, the device's MAC length, its epoch and the last counter used. Fill it from the
+ * device's `Status` (`auth`: MAC length, epoch, last accepted counter; with `gough replay
+ * --key-file` or python-can) and keep it: [`gough_msg_encode_secured`] advances it.
+ */
+typedef struct gough_signer_t {
+  /**
+   * The 16-byte device key (a key file's 32 hexadecimal digits).
+   */
+  uint8_t key[16];
+  /**
+   * MAC length \[bytes\], 4..=8: the device's.
+   */
+  uint32_t mac_len;
+  /**
+   * The device's epoch (its boot counter).
+   */
+  uint32_t epoch;
+  /**
+   * The last counter used: the device's last accepted counter at the start. After counter
+   * 0xFFFFFFFF the signer moves to epoch + 1, counter 0, as the device does.
+   */
+  uint32_t counter;
+} gough_signer_t;
 
 /**
  * A reassembler of the messages of one CAN identifier (`gough_rx_init`). Opaque.
@@ -1058,6 +1085,20 @@ int32_t gough_msg_encode(const struct gough_msg_t *msg,
                          struct gough_frame_t *frames,
                          size_t cap,
                          size_t *n);
+
+/**
+ * As [`gough_msg_encode`], a state-changing message (`GOUGH_MSG_PARAM_BEGIN`, `_CHUNK`,
+ * `_COMMIT`, `GOUGH_MSG_SETTINGS`, `GOUGH_MSG_SET_CALIBRATION`, a reset or stop command)
+ * secured with `*signer`'s key and next counter (AES-128-CMAC truncated to `mac_len` bytes);
+ * every other message unsecured. `GOUGH_E_ARG` also for a `mac_len` outside 4..=8. The signer
+ * advances only when frames were written.
+ */
+int32_t gough_msg_encode_secured(struct gough_signer_t *signer,
+                                 const struct gough_msg_t *msg,
+                                 uint8_t seq,
+                                 struct gough_frame_t *frames,
+                                 size_t cap,
+                                 size_t *n);
 
 /**
  * Starts a reassembler (one per CAN identifier received).

@@ -93,7 +93,8 @@ pub struct gough_msg_t {
     pub ack_seq: u32,
     /// `GOUGH_MSG_ACK`: 0 ok, 1 bad hash, 2 bad length, 3 bad offset, 4 not in upload, 5 .tir
     /// error (`ack_line`), 6 no params, 7 no slip, 8 evaluation error, 9 not supported,
-    /// 10 bad settings, 11 bad calibration.
+    /// 10 bad settings, 11 bad calibration; v5 (authentication): 12 no key, 13 MAC missing,
+    /// 14 bad MAC, 15 stale freshness.
     pub ack_code: u32,
     /// `GOUGH_MSG_ACK` with code 5: 1-based line of the first error (0: the whole file).
     pub ack_line: u32,
@@ -112,7 +113,7 @@ pub struct gough_frame_t {
     pub data: [u8; 8],
 }
 
-const ZERO_MSG: gough_msg_t = gough_msg_t {
+pub(crate) const ZERO_MSG: gough_msg_t = gough_msg_t {
     kind: GOUGH_MSG_NONE,
     measurement: gough_measurement_t {
         wheel: 0,
@@ -216,6 +217,10 @@ fn ack_code(c: proto::AckCode) -> (u32, u32) {
         A::NotSupported => (9, 0),
         A::BadSettings => (10, 0),
         A::BadCalibration => (11, 0),
+        A::NoKey => (12, 0),
+        A::MacMissing => (13, 0),
+        A::BadMac => (14, 0),
+        A::StaleFreshness => (15, 0),
     }
 }
 
@@ -234,6 +239,10 @@ fn ack_from(code: u32, line: u32) -> Option<proto::AckCode> {
         9 => A::NotSupported,
         10 => A::BadSettings,
         11 => A::BadCalibration,
+        12 => A::NoKey,
+        13 => A::MacMissing,
+        14 => A::BadMac,
+        15 => A::StaleFreshness,
         _ => return None,
     })
 }
@@ -441,33 +450,109 @@ pub unsafe extern "C" fn gough_msg_encode(
         }
         // SAFETY: non-null, the caller's message.
         let m = from_c(unsafe { &*msg })?;
-        let mut seg = Segmenter::new(&m, seq, Mtu::Classic).map_err(|_| GOUGH_E_ARG)?;
-        let need = seg.frame_count();
-        // SAFETY: non-null, the caller's count.
-        unsafe { n.write(need) };
-        if need > cap {
+        let seg = Segmenter::new(&m, seq, Mtu::Classic).map_err(|_| GOUGH_E_ARG)?;
+        // SAFETY: the caller's non-null frames (`cap` of them) and count.
+        unsafe { write_frames(seg, u32::from(proto::id::of(m.msg_type())), frames, cap, n) }
+    })
+}
+
+/// Writes the classic CAN frames of `seg` on identifier `id` into `frames[0..*n]`.
+///
+/// # Safety
+/// `frames` points to `cap` writable frames, `n` to a writable count (both non-null).
+unsafe fn write_frames(
+    mut seg: Segmenter,
+    id: u32,
+    frames: *mut gough_frame_t,
+    cap: usize,
+    n: *mut usize,
+) -> Result<(), i32> {
+    let need = seg.frame_count();
+    // SAFETY: non-null, the caller's count.
+    unsafe { n.write(need) };
+    if need > cap {
+        return Err(GOUGH_E_BUFFER);
+    }
+    let mut buf = [0u8; 64];
+    let mut k = 0;
+    while let Some(f) = seg.next_frame(&mut buf) {
+        let mut data = [0u8; 8];
+        for (d, b) in data.iter_mut().zip(f) {
+            *d = *b;
+        }
+        if k >= cap {
             return Err(GOUGH_E_BUFFER);
         }
-        let id = u32::from(proto::id::of(m.msg_type()));
-        let mut buf = [0u8; 64];
-        let mut k = 0;
-        while let Some(f) = seg.next_frame(&mut buf) {
-            let mut data = [0u8; 8];
-            for (d, b) in data.iter_mut().zip(f) {
-                *d = *b;
-            }
-            if k >= cap {
-                return Err(GOUGH_E_BUFFER);
-            }
-            // SAFETY: k < cap frames of the caller's array.
-            unsafe {
-                frames.add(k).write(gough_frame_t {
-                    id,
-                    len: f.len() as u32,
-                    data,
-                })
-            };
-            k += 1;
+        // SAFETY: k < cap frames of the caller's array.
+        unsafe {
+            frames.add(k).write(gough_frame_t {
+                id,
+                len: f.len() as u32,
+                data,
+            })
+        };
+        k += 1;
+    }
+    Ok(())
+}
+
+/// The device owner's signing state for secured messages (docs/protocol.md, "Security"): the
+/// device key, the device's MAC length, its epoch and the last counter used. Fill it from the
+/// device's `Status` (`auth`: MAC length, epoch, last accepted counter; with `gough replay
+/// --key-file` or python-can) and keep it: [`gough_msg_encode_secured`] advances it.
+#[repr(C)]
+#[derive(Clone, Copy)]
+pub struct gough_signer_t {
+    /// The 16-byte device key (a key file's 32 hexadecimal digits).
+    pub key: [u8; 16],
+    /// MAC length \[bytes\], 4..=8: the device's.
+    pub mac_len: u32,
+    /// The device's epoch (its boot counter).
+    pub epoch: u32,
+    /// The last counter used: the device's last accepted counter at the start. After counter
+    /// 0xFFFFFFFF the signer moves to epoch + 1, counter 0, as the device does.
+    pub counter: u32,
+}
+
+/// As [`gough_msg_encode`], a state-changing message (`GOUGH_MSG_PARAM_BEGIN`, `_CHUNK`,
+/// `_COMMIT`, `GOUGH_MSG_SETTINGS`, `GOUGH_MSG_SET_CALIBRATION`, a reset or stop command)
+/// secured with `*signer`'s key and next counter (AES-128-CMAC truncated to `mac_len` bytes);
+/// every other message unsecured. `GOUGH_E_ARG` also for a `mac_len` outside 4..=8. The signer
+/// advances only when frames were written.
+#[no_mangle]
+pub unsafe extern "C" fn gough_msg_encode_secured(
+    signer: *mut gough_signer_t,
+    msg: *const gough_msg_t,
+    seq: u8,
+    frames: *mut gough_frame_t,
+    cap: usize,
+    n: *mut usize,
+) -> i32 {
+    ret(|| {
+        if signer.is_null() || msg.is_null() || frames.is_null() || n.is_null() {
+            return Err(GOUGH_E_NULL);
+        }
+        // SAFETY: non-null, the caller's message and signer.
+        let (m, st) = (from_c(unsafe { &*msg })?, unsafe { *signer });
+        let mac_len = u8::try_from(st.mac_len)
+            .ok()
+            .and_then(proto::MacLen::new)
+            .ok_or(GOUGH_E_ARG)?;
+        let id = proto::id::of(m.msg_type());
+        let mut s = proto::Signer::new(proto::Key::new(st.key), mac_len, st.epoch, st.counter);
+        let seg = if proto::auth::is_state_changing(&m) {
+            Segmenter::sealed(&m, seq, Mtu::Classic, &mut s)
+        } else {
+            Segmenter::new(&m, seq, Mtu::Classic)
+        }
+        .map_err(|_| GOUGH_E_ARG)?;
+        // SAFETY: the caller's non-null frames (`cap` of them) and count.
+        unsafe { write_frames(seg, u32::from(id), frames, cap, n) }?;
+        let (epoch, counter) = s.freshness();
+        // SAFETY: non-null, the caller's signer.
+        unsafe {
+            (*signer).epoch = epoch;
+            (*signer).counter = counter;
         }
         Ok(())
     })

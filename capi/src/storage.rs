@@ -11,7 +11,7 @@ pub const GOUGH_WHEEL_SIZE: usize = 2560;
 /// Bytes of a `gough_estimator_t` (one wheel's bank estimator, `gough::mu::bank::Bank`).
 pub const GOUGH_ESTIMATOR_SIZE: usize = 2496;
 /// Bytes of a `gough_rx_t` (a reassembler of one CAN identifier's messages).
-pub const GOUGH_RX_SIZE: usize = 256;
+pub const GOUGH_RX_SIZE: usize = 320;
 /// Bytes of a `gough_preview_t` (one side's front-to-rear preview, `gough::mu::preview`).
 pub const GOUGH_PREVIEW_SIZE: usize = 512;
 

@@ -178,3 +178,84 @@ fn gough_params_t_zeroed() -> gough_params_t {
     // SAFETY: an opaque array of u64: all-zero bits are a valid (unmarked) storage.
     unsafe { std::mem::zeroed() }
 }
+
+#[test]
+fn a_secured_message_from_c_is_accepted_by_the_device_check_once() {
+    let key = [0x7eu8; 16];
+    let mut signer = gough_signer_t {
+        key,
+        mac_len: 8,
+        epoch: 4,
+        counter: 10,
+    };
+    let mut msg = ZERO_MSG;
+    msg.kind = GOUGH_MSG_SETTINGS;
+    msg.settings.limits = 1;
+    msg.settings.fallback_mu = 0.3;
+    msg.settings.wheelbase = 2.9;
+    let mut v = proto::Verifier::new(proto::Key::new(key), proto::MacLen::DEFAULT, 4);
+    v.set_counter(10);
+    let mut frames = [gough_frame_t {
+        id: 0,
+        len: 0,
+        data: [0; 8],
+    }; GOUGH_MAX_FRAMES];
+    let mut sent = Vec::new();
+    for round in 0..2 {
+        let mut n = 0usize;
+        // SAFETY: valid pointers, GOUGH_MAX_FRAMES frames.
+        let r = unsafe {
+            gough_msg_encode_secured(
+                &mut signer,
+                &msg,
+                round,
+                frames.as_mut_ptr(),
+                GOUGH_MAX_FRAMES,
+                &mut n,
+            )
+        };
+        assert_eq!(r, GOUGH_OK);
+        assert_eq!((signer.epoch, signer.counter), (4, 11 + u32::from(round)));
+        let mut rx = Reassembler::<MSG_BUF>::new();
+        let mut bytes = Vec::new();
+        for f in &frames[..n] {
+            assert_eq!(f.id, 0x301);
+            if let Feed::Done(_) = rx.feed(&f.data[..f.len as usize], 0) {
+                bytes = rx.last().to_vec();
+            }
+        }
+        assert!(matches!(v.open(0x301, &bytes), Ok(Msg::Settings(s)) if s.wheelbase == 2.9));
+        sent.push(bytes);
+    }
+    // Replayed: stale. A measurement goes unsecured; a MAC length of 9 is refused.
+    assert_eq!(
+        v.open(0x301, &sent[0]).unwrap_err().unwrap().code,
+        proto::AckCode::StaleFreshness
+    );
+    let mut n = 0usize;
+    signer.mac_len = 9;
+    // SAFETY: valid pointers.
+    let r = unsafe {
+        gough_msg_encode_secured(
+            &mut signer,
+            &msg,
+            0,
+            frames.as_mut_ptr(),
+            GOUGH_MAX_FRAMES,
+            &mut n,
+        )
+    };
+    assert_eq!((r, signer.counter), (GOUGH_E_ARG, 12));
+    // SAFETY: null signer.
+    let r = unsafe {
+        gough_msg_encode_secured(
+            ptr::null_mut(),
+            &msg,
+            0,
+            frames.as_mut_ptr(),
+            GOUGH_MAX_FRAMES,
+            &mut n,
+        )
+    };
+    assert_eq!(r, GOUGH_E_NULL);
+}

@@ -635,8 +635,14 @@ static void errors(const char *root) {
     for (size_t i = 0; i < nf; i++) gough_rx_feed(&rx, &frames[i], 0, &got);
     CHECK(got.kind == GOUGH_MSG_ACK && got.ack_code == 11 && got.ack_of == 0x09,
           "bad-calibration ack: kind %u code %u", got.kind, got.ack_code);
-    am.ack_code = 12;
-    CHECK(gough_msg_encode(&am, 16, frames, GOUGH_MAX_FRAMES, &nf) == GOUGH_E_ARG,
+    am.ack_of = GOUGH_MSG_SETTINGS;
+    am.ack_code = 15; /* v5: stale freshness (a replayed message) */
+    CHECK(gough_msg_encode(&am, 16, frames, GOUGH_MAX_FRAMES, &nf) == GOUGH_OK, "ack");
+    for (size_t i = 0; i < nf; i++) gough_rx_feed(&rx, &frames[i], 0, &got);
+    CHECK(got.kind == GOUGH_MSG_ACK && got.ack_code == 15 && got.ack_of == GOUGH_MSG_SETTINGS,
+          "stale-freshness ack: kind %u code %u", got.kind, got.ack_code);
+    am.ack_code = 16;
+    CHECK(gough_msg_encode(&am, 17, frames, GOUGH_MAX_FRAMES, &nf) == GOUGH_E_ARG,
           "unknown ack code");
     CHECK(gough_rx_feed(&rx0, &frames[0], 0, &got) == GOUGH_E_UNINIT, "uninitialised rx");
     CHECK(gough_rx_feed(&rx, NULL, 0, &got) == GOUGH_E_NULL, "null frame");

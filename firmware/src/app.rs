@@ -18,6 +18,15 @@
 //! about 1.5 KB per wheel, lives in the App. A tyre the estimator cannot use (no friction at
 //! FNOMIN) gets forces and no `Estimate`.
 //!
+//! ## Who may reconfigure it
+//! Every state-changing message (upload, settings, calibration, reset, stop) must be secured
+//! with the device key ([`gough::proto::auth`]): [`App::poll`] hands each complete message to
+//! the [`Verifier`] first; a refused one is answered with its `Ack` code (`NoKey`,
+//! `MacMissing`, `BadMac`, `StaleFreshness`), counted in `Status::auth`, and nothing it carried
+//! takes effect (an upload in progress goes on). The board provisions the key and this boot's
+//! epoch ([`App::provision`]); without them (`App::new`) the device refuses every
+//! state-changing message.
+//!
 //! ## The calibration
 //! Each running estimator's calibration of the tyre (`gough::mu::calibration`) is reported as a
 //! `Calibration` message once a second per wheel: one wheel every [`CAL_PERIOD_MS`] / 4, in
@@ -30,7 +39,7 @@ use gough::mf::Params;
 use gough::proto::{
     self, crc32, id, link, Ack, AckCode, CalibrationState, Command, CompactBatch, CompactResults,
     CompactWheelResult, Estimate, Feed, Forces, Measurement, Msg, MsgType, ParamSource,
-    Reassembler, Settings, Status, Wheel, MAX_TIR_LEN, MSG_BUF,
+    Reassembler, Settings, Status, Verifier, Wheel, MAX_TIR_LEN, MSG_BUF,
 };
 use gough::wheel::{self, Car};
 
@@ -110,6 +119,10 @@ pub struct App {
     /// stack painting); `None`: reported as 0.
     pub stack_probe: Option<fn() -> u32>,
     now_ms: u32,
+    auth: Verifier,
+    /// Stores the epoch in the board's non-volatile memory when the verifier moves to the next
+    /// one (after counter `u32::MAX`); `false`: not stored, and the device drops its key.
+    pub epoch_store: Option<fn(u32) -> bool>,
     /// The wheel whose calibration is reported next, and when the last report went out \[ms\].
     cal_next: usize,
     cal_sent_ms: u32,
@@ -149,9 +162,17 @@ impl App {
             can_stop: false,
             stack_probe: None,
             now_ms: 0,
+            auth: Verifier::without_key(),
+            epoch_store: None,
             cal_next: 0,
             cal_sent_ms: 0,
         }
+    }
+
+    /// Provisions the key check: a [`Verifier`] with the device key, its MAC length and this
+    /// boot's epoch (the board's non-volatile boot counter, raised at each boot).
+    pub fn provision(&mut self, v: Verifier) {
+        self.auth = v;
     }
 
     /// Loads a `.tir` text as the parameter set; on success the previous one is replaced.
@@ -231,6 +252,7 @@ impl App {
             eval_errors: self.eval_errors,
             tx_messages: self.tx_messages,
             stack_peak: self.stack_probe.map_or(0, |f| f()),
+            auth: *self.auth.status(),
         }
     }
 
@@ -282,17 +304,31 @@ impl App {
             use embedded_can::Frame as _;
             let data = frame.data();
             let seq = data.get(1).copied().unwrap_or(0);
-            let fed = match link::standard_id(&frame) {
-                Some(id::MEASUREMENT) => self.rx_meas.feed(data, now_ms),
-                Some(id::CONFIG) => self.rx_cfg.feed(data, now_ms),
-                Some(id::COMPACT) => self.rx_compact.feed(data, now_ms),
-                Some(id::BATCH) => self.rx_batch.feed(data, now_ms),
+            let cid = link::standard_id(&frame);
+            let rx = match cid {
+                Some(id::MEASUREMENT) => &mut self.rx_meas,
+                Some(id::CONFIG) => &mut self.rx_cfg,
+                Some(id::COMPACT) => &mut self.rx_compact,
+                Some(id::BATCH) => &mut self.rx_batch,
                 _ => continue, // other traffic on the bus
             };
-            match fed {
+            match rx.feed(data, now_ms) {
                 Feed::Pending => {}
                 Feed::Dropped(e) => defmt::debug!("dropped: {}", e),
                 Feed::Done(msg) => {
+                    let epoch = self.auth.epoch();
+                    let checked = self.auth.check(cid.unwrap_or(0), &msg, rx.last());
+                    if self.auth.epoch() != epoch
+                        && !self.epoch_store.is_some_and(|f| f(self.auth.epoch()))
+                    {
+                        defmt::warn!("epoch not stored: the key is dropped");
+                        self.auth = Verifier::without_key();
+                    }
+                    if let Err(r) = checked {
+                        defmt::warn!("refused {}: {}", r.of, r.code);
+                        self.ack(can, r.of, seq, r.code);
+                        continue;
+                    }
                     if let Some(ev) = self.handle(can, msg, seq) {
                         return Some(ev);
                     }

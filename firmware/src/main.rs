@@ -2,7 +2,8 @@
 //!
 //! Boots with the bundled MF 6.1 tyre, answers each `Measurement` with `Forces` and an
 //! `Estimate` (the wheel's friction estimator) at the next tick, takes parameter uploads,
-//! settings and commands; `Command::Stop` sends the final `Status`, prints the counters and
+//! settings and commands secured with the key provisioned in `mps2::KEY_SLOT` (none: it refuses
+//! them; the epoch is the boot counter in `gough-nv.bin`, `mps2::next_epoch`); `Command::Stop` sends the final `Status`, prints the counters and
 //! exits QEMU with code 0. Run it with `gough firmware run` (bridges UART0 to TCP), or
 //! `cargo run --release` (UART0 on stdio).
 //!
@@ -18,7 +19,7 @@
 use core::ptr::addr_of_mut;
 use cortex_m_rt::{entry, exception};
 use cortex_m_semihosting::hprintln;
-use gough::proto::ParamSource;
+use gough::proto::{ParamSource, Verifier};
 use gough_firmware::app::{App, Event};
 use gough_firmware::mps2::{self, SlcanPort};
 use gough_firmware::{stack, BUNDLED_TIR};
@@ -43,9 +44,21 @@ fn main() -> ! {
             hprintln!("bundled tyre rejected at line {}", line);
             mps2::exit(false);
         }
+        // The key provisioned at flash time, and this boot's epoch (the non-volatile boot
+        // counter, raised now): without either, every state-changing message is refused.
+        let key = match (mps2::provisioned_key(), mps2::next_epoch()) {
+            (Some((key, mac_len)), Some(epoch)) => {
+                app.provision(Verifier::new(key, mac_len, epoch));
+                app.epoch_store = Some(mps2::store_epoch);
+                "provisioned"
+            }
+            (Some(_), None) => "provisioned, but no epoch could be stored: refused",
+            (None, _) => "none: state-changing messages refused",
+        };
         hprintln!(
-            "gough firmware ready: params {:08x}",
-            app.status().param_hash
+            "gough firmware ready: params {:08x}, key {}",
+            app.status().param_hash,
+            key
         );
     }
     let mut cp = cortex_m::Peripherals::take().unwrap_or_else(|| mps2::exit(false));

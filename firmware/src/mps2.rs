@@ -250,6 +250,69 @@ unsafe fn HardFault(frame: &cortex_m_rt::ExceptionFrame) -> ! {
     exit(false)
 }
 
+/// Where the device key is provisioned at flash time: the last 256 bytes of SSRAM1 (the
+/// "flash", outside the image: `memory.x`), a [`gough::proto::auth::slot`] (28 bytes).
+/// `gough firmware run --key-file KEY` writes it with QEMU's `-device loader`; without it the
+/// slot reads as zeros: no key, and the device refuses every state-changing message.
+pub const KEY_SLOT: usize = 0x003F_FF00;
+
+/// The key provisioned in [`KEY_SLOT`], if any, and its MAC length.
+pub fn provisioned_key() -> Option<(gough::proto::Key, gough::proto::MacLen)> {
+    // SAFETY: KEY_SLOT is mapped memory (SSRAM1, 4 MB) that nothing else writes.
+    let s =
+        unsafe { core::ptr::read_volatile(KEY_SLOT as *const [u8; gough::proto::auth::slot::LEN]) };
+    gough::proto::auth::slot::decode(&s)
+}
+
+/// The board's non-volatile boot counter (the epoch of `gough::proto::auth`), raised and stored
+/// by one call per boot: the host file `gough-nv.bin` in QEMU's working directory, through
+/// semihosting (this board's stand-in for a flash page; 8 bytes: the value and its CRC-32).
+/// Returns the new value, or `None` when it cannot be read back intact or stored (the device
+/// then runs without a key: freshness across resets could not be promised).
+pub fn next_epoch() -> Option<u32> {
+    use cortex_m_semihosting::{nr, syscall};
+    const NAME: &[u8] = b"gough-nv.bin\0";
+    let open = |mode: usize| {
+        // SAFETY: SYS_OPEN with a NUL-terminated name and its length without the NUL.
+        let fd = unsafe { syscall!(OPEN, NAME.as_ptr(), mode, NAME.len() - 1) };
+        (fd as isize >= 0).then_some(fd)
+    };
+    let mut rec = [0u8; 8];
+    let old = match open(nr::open::R_BINARY) {
+        // No file yet: the first boot.
+        None => 0,
+        Some(fd) => {
+            // SAFETY: SYS_READ into a live buffer from an open host file; returns the bytes not read.
+            let left = unsafe { syscall!(READ, fd, rec.as_mut_ptr(), rec.len()) };
+            // SAFETY: SYS_CLOSE of the handle opened above.
+            unsafe { syscall!(CLOSE, fd) };
+            let (v, c) = rec.split_at(4);
+            let v = u32::from_le_bytes(v.try_into().ok()?);
+            if left != 0 || gough::proto::crc32(&v.to_le_bytes()).to_le_bytes() != c {
+                return None;
+            }
+            v
+        }
+    };
+    let new = old.checked_add(1)?;
+    let (v, c) = rec.split_at_mut(4);
+    v.copy_from_slice(&new.to_le_bytes());
+    c.copy_from_slice(&gough::proto::crc32(&new.to_le_bytes()).to_le_bytes());
+    let fd = open(nr::open::W_TRUNC_BINARY)?;
+    // SAFETY: SYS_WRITE of a live buffer to an open host file; returns the bytes not written.
+    let left = unsafe { syscall!(WRITE, fd, rec.as_ptr(), rec.len()) };
+    // SAFETY: SYS_CLOSE of the handle opened above.
+    unsafe { syscall!(CLOSE, fd) };
+    (left == 0).then_some(new)
+}
+
+/// Stores the epoch after a counter wrap ([`gough::proto::Verifier`] moved to the next one):
+/// [`next_epoch`] stores the value above the stored one, which is this one when the stored one
+/// is one below. `false` if it could not be stored.
+pub fn store_epoch(epoch: u32) -> bool {
+    next_epoch() == Some(epoch)
+}
+
 mod logger {
     //! defmt global logger: frames to the semihosting host file `firmware.defmt`.
     use core::sync::atomic::{AtomicBool, AtomicIsize, Ordering};

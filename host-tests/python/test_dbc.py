@@ -18,6 +18,7 @@ ROOT = Path(__file__).resolve().parents[2]
 GOUGH = os.environ.get("GOUGH", str(ROOT / "target/debug/gough"))
 TIR = ROOT / "host-tests/data/tyres/MagicFormula61_Parameters.tir"
 LOG = ROOT / "examples/replay_log.csv"
+KEY = ROOT / "firmware/keys/test.key"  # the TEST KEY: the calibrations sent back secured
 
 
 def gough(*args):
@@ -29,8 +30,9 @@ def load(fd):
     return cantools.database.load_string(text, database_format="dbc", strict=True)
 
 
-def frames(fd, compact=False, batch=False):
+def frames(fd, compact=False, batch=False, secured=False):
     flags = (["--fd"] if fd else []) + (["--compact"] if compact else []) + (["--batch"] if batch else [])
+    flags += ["--key-file", str(KEY)] if secured else []
     out = gough("proto", "frames", "--tir", str(TIR), "--log", str(LOG), *flags)
     return [json.loads(line) for line in out.splitlines()]
 
@@ -59,14 +61,16 @@ COMPACT = [("Fz", "fz", 0.5), ("Fy", "fy", 1.0), ("Mz", "mz", 0.1), ("Fx", "fx",
            ("kappa", "kappa", 1e-4), ("gamma", "gamma", 1e-4)]
 
 
-@pytest.mark.parametrize("fd,compact,batch", [(False, False, False), (True, False, False),
-                                              (False, True, False), (True, True, False),
-                                              (False, False, True), (True, False, True)],
+@pytest.mark.parametrize("fd,compact,batch,secured",
+                         [(False, False, False, False), (True, False, False, False),
+                          (False, True, False, False), (True, True, False, False),
+                          (False, False, True, False), (True, False, True, False),
+                          (False, False, False, True), (True, False, False, True)],
                          ids=["classic", "fd", "classic-compact", "fd-compact", "classic-batch",
-                              "fd-batch"])
-def test_every_frame_decodes_to_the_hosts_values(fd, compact, batch):
+                              "fd-batch", "classic-secured", "fd-secured"])
+def test_every_frame_decodes_to_the_hosts_values(fd, compact, batch, secured):
     db = load(fd)
-    msgs = frames(fd, compact, batch)
+    msgs = frames(fd, compact, batch, secured)
     assert len(msgs) > (150 if batch else 500)
     seen = set()
     for m in msgs:
@@ -82,7 +86,7 @@ def test_every_frame_decodes_to_the_hosts_values(fd, compact, batch):
             assert sig["last_frame"] == (k == len(m["frames"]) - 1)
             if k == 0:
                 assert sig["msg_len"] == len(m["encoded"]) // 2
-                assert sig["proto_version"] == 4
+                assert sig["proto_version"] == 5
                 assert str(sig["msg_type"]) == m["type"]
                 if any(s.startswith("first_bytes") for s in sig):
                     raw = dbm.decode(data, decode_choices=False)
@@ -93,15 +97,29 @@ def test_every_frame_decodes_to_the_hosts_values(fd, compact, batch):
             else:
                 got += payload(sig, "next_bytes", dbm.length - 2)
             seen.add((m["type"], k > 0))
-        if m["type"] in ("Calibration", "SetCalibration"):
+        if m["type"] in ("Calibration", "SetCalibration", "SetCalibrationSecured"):
             # 37 body bytes at fixed offsets: wheel, 4 + 4 f32, batches u32 LE.
-            body = bytes.fromhex(m["encoded"])[2:-4]
+            body = bytes.fromhex(m["encoded"])[2:2 + 37]
             want = m["msg"]
             assert len(body) == 37
             assert WHEELS[body[0]] == want["wheel"]
             vals = struct.unpack("<8f", body[1:33])
             assert list(vals) == [f32(x) for x in want["value"] + want["sigma"]]
             assert int.from_bytes(body[33:37], "little") == want["batches"]
+        if m["type"].endswith("Secured"):
+            # Secured (type | 0x40): counter u32 LE and the 8-byte MAC after the body; on CAN FD
+            # signals of their own.
+            enc = bytes.fromhex(m["encoded"])
+            assert enc[1] & 0x40 and len(enc) == 2 + 37 + 4 + 8 + 4
+            assert int.from_bytes(enc[39:43], "little") == m["secured"]["counter"]
+            assert enc[43:51].hex() == m["secured"]["mac"]
+            if fd:
+                sig = dbm.decode(bytes.fromhex(m["frames"][0]))
+                pre = m["type"]
+                assert sig[f"{pre}_freshness"] == m["secured"]["counter"]
+                assert sig[f"{pre}_mac"] == int.from_bytes(enc[43:51], "little")
+                assert sig[f"{pre}_crc"] == int.from_bytes(enc[-4:], "little")
+                seen.add(("SecuredPhysical", False))
         # The byte signals carry the message exactly (what the host encoded and decoded).
         assert got[: len(m["encoded"]) // 2] == bytes.fromhex(m["encoded"])
         if fd and m["type"] in ("Forces", "Estimate"):
@@ -169,7 +187,10 @@ def test_every_frame_decodes_to_the_hosts_values(fd, compact, batch):
             assert len(states) >= 2, states
         return
     meas = "CompactMeasurement" if compact else "Measurement"
-    assert {meas, "Forces", "Estimate", "Calibration", "SetCalibration"} <= kinds
+    set_cal = "SetCalibrationSecured" if secured else "SetCalibration"
+    assert {meas, "Forces", "Estimate", "Calibration", set_cal} <= kinds
+    if secured and fd:
+        assert ("SecuredPhysical", False) in seen
     if not fd:
         assert (meas, True) in seen and ("Estimate", True) in seen
     if fd and compact:

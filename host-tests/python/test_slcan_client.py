@@ -16,6 +16,14 @@ difference between the two backends; a misplaced byte is off by far more), decod
 that follows each; sends the four wheels as one CompactBatch and decodes the CompactResults
 against the same samples sent as single-wheel CompactMeasurements; sends a message with a broken CRC and checks the device counted it; then stops
 the firmware. Exit code 0 = pass.
+
+Authentication (protocol v5, docs/protocol.md "Security"): every state-changing message
+(settings, calibration, stop) is secured with the device key (--key-file, the TEST KEY) by
+Python's own AES-CMAC (the `cryptography` package: an implementation independent of the
+firmware's RustCrypto one): type | 0x40, then the counter (u32 LE) and the MAC truncated to the
+device's length after the body, MAC = CMAC(K, id LE || version || type || body || counter ||
+epoch LE). The device must accept those, and refuse an unsigned, a forged and a replayed one
+with their own Ack codes, counted in Status.
 """
 import argparse
 import csv
@@ -29,8 +37,10 @@ import time
 import zlib
 
 import can
+from cryptography.hazmat.primitives.cmac import CMAC
+from cryptography.hazmat.primitives.ciphers import algorithms
 
-PROTO_VERSION = 4
+PROTO_VERSION = 5
 ID_MEASUREMENT, ID_CONFIG, ID_RESULT, ID_STATUS = 0x300, 0x301, 0x310, 0x311
 ID_COMPACT, ID_BATCH, ID_BATCH_RESULT = 0x302, 0x303, 0x312
 T_MEASUREMENT, T_COMMAND, T_FORCES, T_ESTIMATE, T_STATUS, T_ACK = 0x01, 0x06, 0x81, 0x82, 0x83, 0x84
@@ -38,6 +48,8 @@ T_COMPACT, T_BATCH, T_BATCH_RESULTS = 0x07, 0x08, 0x85
 T_SETTINGS = 0x05
 T_SET_CALIBRATION, T_CALIBRATION = 0x09, 0x86
 ACK_OK, ACK_BAD_SETTINGS, ACK_BAD_CALIBRATION = 0, 10, 11
+ACK_NO_KEY, ACK_MAC_MISSING, ACK_BAD_MAC, ACK_STALE = 12, 13, 14, 15
+SECURED = 0x40  # type bit: a counter and a MAC follow the body
 ABSENT = -32768  # compact fields: an absent optional value
 CMD_STATUS_REQUEST, CMD_STOP = 1, 2
 
@@ -57,6 +69,31 @@ def varint(b, i):
 def message(mtype, body):
     data = bytes([PROTO_VERSION, mtype]) + body
     return data + struct.pack("<I", zlib.crc32(data))
+
+
+def read_key(path):
+    """A key file: 32 hex digits on one line, '#' comment lines skipped."""
+    lines = [l.strip() for l in open(path) if l.strip() and not l.strip().startswith("#")]
+    assert len(lines) == 1 and len(lines[0]) == 32, "key file: 32 hex digits"
+    return bytes.fromhex(lines[0])
+
+
+class Signer:
+    """The owner's end of the authentication: the device's epoch and last accepted counter
+    come from its Status; each secured message takes the next counter."""
+
+    def __init__(self, key, mac_len, epoch, counter):
+        self.key, self.mac_len, self.epoch, self.counter = key, mac_len, epoch, counter
+
+    def seal(self, cid, mtype, body):
+        self.counter += 1
+        data = bytes([PROTO_VERSION, mtype | SECURED]) + body + struct.pack("<I", self.counter)
+        c = CMAC(algorithms.AES(self.key))
+        c.update(struct.pack("<H", cid) + data + struct.pack("<I", self.epoch))
+        data += c.finalize()[:self.mac_len]
+        if self.counter == 0xFFFFFFFF:  # the device moves to the next epoch after this one
+            self.epoch, self.counter = self.epoch + 1, 0
+        return data + struct.pack("<I", zlib.crc32(data))
 
 
 def frames(msg, seq):
@@ -189,12 +226,20 @@ def decode_status(b):
     for _ in range(1 + 10 + 4):  # uptime, 10 counters, link, eval, tx, stack
         v, i = varint(b, i)
         vals.append(v)
+    # v5: auth: mac_len u8, epoch and counter u32 LE, then 5 counters
+    mac_len, epoch, counter = struct.unpack("<BII", b[i:i + 9])
+    i += 9
+    for _ in range(5):  # accepted, no_key, missing, bad_mac, stale
+        v, i = varint(b, i)
+        vals.append(v)
     assert i == len(b), "status body length"
     names = ["uptime_ms", "frames", "messages", "duplicates", "truncated", "bad_header",
              "bad_crc", "out_of_order", "overflow", "timeout", "decode",
-             "link_errors", "eval_errors", "tx_messages", "stack_peak"]
+             "link_errors", "eval_errors", "tx_messages", "stack_peak",
+             "auth_accepted", "auth_no_key", "auth_missing", "auth_bad_mac", "auth_stale"]
     s = dict(zip(names, vals))
-    s.update(firmware=fw, proto=proto, source=source, param_hash=param_hash)
+    s.update(firmware=fw, proto=proto, source=source, param_hash=param_hash,
+             mac_len=mac_len, epoch=epoch, counter=counter)
     return s
 
 
@@ -207,7 +252,9 @@ def main():
     ap.add_argument("--port", type=int, required=True)
     ap.add_argument("--gough", required=True, help="path of the gough binary (expected values)")
     ap.add_argument("--tir", required=True)
+    ap.add_argument("--key-file", required=True, help="the device key (the TEST KEY)")
     a = ap.parse_args()
+    key = read_key(a.key_file)
 
     cases = [  # wheel, fz, alpha, kappa, vx
         (0, 6752.0, 0.04, 0.05, 16.6),
@@ -280,6 +327,19 @@ def main():
             time.sleep(0.1)
         print(f"{'ok  ' if ready else 'FAIL'} the device's estimator is up")
         fails += not ready
+        st = decode_status(body)
+        signer = Signer(key, st["mac_len"], st["epoch"], st["counter"])
+        ok = 4 <= st["mac_len"] <= 8
+        print(f"{'ok  ' if ok else 'FAIL'} the device has a key: MAC {st['mac_len']} bytes, "
+              f"epoch {st['epoch']}, counter {st['counter']}")
+        fails += not ok
+
+        def ack(cid, msg):
+            send(cid, msg)
+            while True:
+                t, body = rx.recv()
+                if t == T_ACK:
+                    return body
 
         for k, (w, fz, al, ka, vx) in enumerate(cases):
             send(ID_MEASUREMENT, measurement(w, 1000 * (k + 1), fz, -1000.0, 10.0, vx, al, ka))
@@ -356,11 +416,8 @@ def main():
         # Settings (v3: limits bool, fallback_mu f32, wheelbase f32): a wheelbase starts the
         # front-to-rear preview; a negative one is refused; back to none.
         for wheelbase, want in ((2.9, ACK_OK), (-2.9, ACK_BAD_SETTINGS), (0.0, ACK_OK)):
-            send(ID_CONFIG, message(T_SETTINGS, bytes([1]) + struct.pack("<ff", 0.3, wheelbase)))
-            while True:
-                t, body = rx.recv()
-                if t == T_ACK:
-                    break
+            body = ack(ID_CONFIG, signer.seal(ID_CONFIG, T_SETTINGS,
+                                              bytes([1]) + struct.pack("<ff", 0.3, wheelbase)))
             of, _, code = body[0], body[1], body[2]
             ok = of == T_SETTINGS and code == want and len(body) == 3
             print(f"{'ok  ' if ok else 'FAIL'} settings with wheelbase {wheelbase} m: ack code {code} "
@@ -390,13 +447,25 @@ def main():
         good = bytes([1]) + struct.pack("<8fI", 1.02, 0.99, 0.0005, 1.05, 0.02, 0.05, 0.001, 0.03, 7)
         bad = bytes([1]) + struct.pack("<8fI", -1.0, 0.99, 0.0005, 1.05, 0.02, 0.05, 0.001, 0.03, 7)
         for body_, want in ((good, ACK_OK), (bad, ACK_BAD_CALIBRATION)):
-            send(ID_CONFIG, message(T_SET_CALIBRATION, body_))
-            while True:
-                t, body = rx.recv()
-                if t == T_ACK:
-                    break
+            body = ack(ID_CONFIG, signer.seal(ID_CONFIG, T_SET_CALIBRATION, body_))
             ok = body[0] == T_SET_CALIBRATION and body[2] == want and len(body) == 3
             print(f"{'ok  ' if ok else 'FAIL'} set calibration: ack code {body[2]} (expected {want})")
+            fails += not ok
+
+        # Unsigned, forged (a MAC byte flipped, the CRC made right), replayed: each refused with
+        # its own code, and nothing changes.
+        settings = bytes([1]) + struct.pack("<ff", 0.3, 2.5)
+        replayed = signer.seal(ID_CONFIG, T_SETTINGS, settings)
+        forged = bytearray(signer.seal(ID_CONFIG, T_SETTINGS, settings))
+        forged[-5] ^= 1
+        forged[-4:] = struct.pack("<I", zlib.crc32(bytes(forged[:-4])))
+        for what, msg, want in (("accepted", replayed, ACK_OK),
+                                ("unsigned", message(T_SETTINGS, settings), ACK_MAC_MISSING),
+                                ("forged", bytes(forged), ACK_BAD_MAC),
+                                ("replayed", replayed, ACK_STALE)):
+            body = ack(ID_CONFIG, msg)
+            ok = body[0] == T_SETTINGS and body[2] == want
+            print(f"{'ok  ' if ok else 'FAIL'} settings {what}: ack code {body[2]} (expected {want})")
             fails += not ok
 
         # A damaged message: the device must drop it and count it.
@@ -410,11 +479,15 @@ def main():
             if t == T_STATUS:
                 break
         s = decode_status(body)
-        ok = s["bad_crc"] == 1 and s["messages"] == sent and s["proto"] == PROTO_VERSION
+        ok = (s["bad_crc"] == 1 and s["messages"] == sent and s["proto"] == PROTO_VERSION
+              and (s["auth_accepted"], s["auth_missing"], s["auth_bad_mac"], s["auth_stale"],
+                   s["auth_no_key"]) == (6, 1, 1, 1, 0)
+              # the forged message took the signer's last counter; the device never accepted it
+              and (s["epoch"], s["counter"]) == (signer.epoch, signer.counter - 1))
         print(f"{'ok  ' if ok else 'FAIL'} status: {s}")
         fails += not ok
 
-        send(ID_CONFIG, message(T_COMMAND, bytes([CMD_STOP])))
+        send(ID_CONFIG, signer.seal(ID_CONFIG, T_COMMAND, bytes([CMD_STOP])))
         while True:
             t, body = rx.recv()
             if t == T_STATUS:

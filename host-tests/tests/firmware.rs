@@ -2,7 +2,10 @@
 //! firmware (`cargo build --release` in firmware/), so the tests are `#[ignore]`d in a plain
 //! `cargo test`; `cargo xtask test-all` builds the firmware and runs them with `--ignored`
 //! (and fails, never skips, when QEMU is missing).
-use gough::proto::{Command, CompactMeasurement, Measurement, Msg, Wheel};
+use gough::proto::{
+    AckCode, Command, CompactMeasurement, Key, MacLen, Measurement, Msg, MsgType, Settings, Signer,
+    Wheel,
+};
 use gough_host::device::{self, Device, Qemu, SlcanTcp};
 use std::path::Path;
 use std::process::Command as Proc;
@@ -12,7 +15,32 @@ fn root() -> &'static Path {
     Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/.."))
 }
 
-/// `gough replay --no-build ARGS --tir TIR --log LOG --out OUT --workdir target/WORKDIR`.
+/// The TEST KEY (`firmware/keys/test.key`).
+fn test_key_file() -> std::path::PathBuf {
+    root().join("firmware/keys/test.key")
+}
+
+fn test_key() -> Key {
+    device::read_key(&test_key_file()).unwrap()
+}
+
+/// The firmware under QEMU in `target/WORKDIR`, provisioned with the test key (8-byte MACs), and
+/// a client that signs with it.
+fn keyed(workdir: &str) -> (Qemu, Device) {
+    let q = Qemu::start_keyed(
+        &device::firmware_elf("gough-firmware"),
+        &root().join("target").join(workdir),
+        true,
+        None,
+        Some((&test_key(), MacLen::DEFAULT)),
+    )
+    .unwrap();
+    let mut dev = Device::new(SlcanTcp::connect(q.port, Duration::from_secs(20)).unwrap());
+    dev.authenticate(test_key()).unwrap();
+    (q, dev)
+}
+
+/// `gough replay --no-build --key-file TEST_KEY ARGS --tir TIR --log LOG --out OUT --workdir target/WORKDIR`.
 fn replay(
     args: &[&str],
     tir: &Path,
@@ -21,7 +49,8 @@ fn replay(
     workdir: &str,
 ) -> std::process::Output {
     Proc::new(gough_host_tests::gough_bin())
-        .args(["replay", "--no-build"])
+        .args(["replay", "--no-build", "--key-file"])
+        .arg(test_key_file())
         .args(args)
         .arg("--tir")
         .arg(tir)
@@ -89,7 +118,7 @@ fn replay_answers_equal_the_host_f32_run() {
 
 #[test]
 #[ignore = "needs QEMU and the release firmware; run by `cargo xtask test-all`"]
-fn garbage_on_the_uart_is_counted_and_harmless() {
+fn garbage_on_the_uart_is_counted_and_harmless_and_a_device_without_a_key_refuses_changes() {
     let mut q = Qemu::start(
         &device::firmware_elf("gough-firmware"),
         &root().join("target/qemu-garbage"),
@@ -152,21 +181,40 @@ fn garbage_on_the_uart_is_counted_and_harmless() {
         "bad frames are counted"
     );
     assert!(after.rx.frames >= before.rx.frames + 200);
-    dev.send(&Msg::Command(Command::Stop)).unwrap();
-    assert_eq!(q.wait(Duration::from_secs(20)), Some(0));
+    // This device was started without a key: it refuses every state-changing message, signed
+    // (with the test key) or not, and counts them; it keeps running (Stop refused too).
+    assert_eq!(after.auth.mac_len, 0);
+    assert!(dev.authenticate(test_key()).is_err(), "no key to sign for");
+    dev.signer = Some(Signer::new(
+        test_key(),
+        MacLen::DEFAULT,
+        after.auth.epoch,
+        0,
+    ));
+    let settings = Msg::Settings(Settings {
+        wheelbase: 2.9,
+        ..Settings::default()
+    });
+    for signed in [true, false] {
+        if !signed {
+            dev.signer = None;
+        }
+        dev.send(&settings).unwrap();
+        let a = dev.wait_ack(MsgType::Settings, Duration::from_secs(10));
+        assert_eq!(a.unwrap(), AckCode::NoKey, "signed {signed}");
+        dev.send(&Msg::Command(Command::Stop)).unwrap();
+        let a = dev.wait_ack(MsgType::Command, Duration::from_secs(10));
+        assert_eq!(a.unwrap(), AckCode::NoKey, "signed {signed}");
+    }
+    let st = dev.status(Duration::from_secs(10)).unwrap();
+    assert_eq!((st.auth.no_key, st.auth.accepted), (4, 0), "{:?}", st.auth);
+    assert_eq!(q.wait(Duration::from_millis(200)), None, "still running");
 }
 
 #[test]
 #[ignore = "needs QEMU and the release firmware; run by `cargo xtask test-all`"]
 fn compact_measurement_is_answered_like_the_measurement_it_stands_for() {
-    let mut q = Qemu::start(
-        &device::firmware_elf("gough-firmware"),
-        &root().join("target/qemu-compact"),
-        true,
-        None,
-    )
-    .unwrap();
-    let mut dev = Device::new(SlcanTcp::connect(q.port, Duration::from_secs(20)).unwrap());
+    let (mut q, mut dev) = keyed("qemu-compact");
     let m = Measurement {
         wheel: Wheel::FrontRight,
         t_us: 7,
@@ -322,17 +370,9 @@ fn the_device_runs_the_front_to_rear_preview_the_settings_ask_for_as_the_host_do
 
 #[test]
 #[ignore = "needs QEMU and the release firmware; run by `cargo xtask test-all`"]
-fn a_wheelbase_out_of_range_is_refused() {
-    use gough::proto::{AckCode, MsgType, Settings};
-    let mut q = Qemu::start(
-        &device::firmware_elf("gough-firmware"),
-        &root().join("target/qemu-settings"),
-        true,
-        None,
-    )
-    .unwrap();
-    let mut dev = Device::new(SlcanTcp::connect(q.port, Duration::from_secs(20)).unwrap());
-    let mut ack = |s: Settings| {
+fn a_wheelbase_out_of_range_is_refused_and_unsigned_forged_or_replayed_changes_too() {
+    let (mut q, mut dev) = keyed("qemu-settings");
+    let ack = |dev: &mut Device, s: Settings| {
         dev.send(&Msg::Settings(s)).unwrap();
         dev.wait_ack(MsgType::Settings, Duration::from_secs(10))
             .unwrap()
@@ -349,10 +389,81 @@ fn a_wheelbase_out_of_range_is_refused() {
             wheelbase,
             ..Settings::default()
         };
-        assert_eq!(ack(s), want, "wheelbase {wheelbase}");
+        assert_eq!(ack(&mut dev, s), want, "wheelbase {wheelbase}");
     }
     let st = dev.status(Duration::from_secs(10)).unwrap();
     assert_eq!(st.rx.dropped(), 0);
+    assert_eq!(
+        (st.auth.mac_len, st.auth.accepted, st.auth.counter),
+        (8, 6, 6)
+    );
+    let s = Settings::default();
+    // Unsigned.
+    let signer = dev.signer.take().unwrap();
+    assert_eq!(ack(&mut dev, s), AckCode::MacMissing);
+    // Forged: another key (the freshness right).
+    let (epoch, counter) = signer.freshness();
+    dev.signer = Some(Signer::new(
+        Key::new([0x5a; 16]),
+        MacLen::DEFAULT,
+        epoch,
+        counter,
+    ));
+    assert_eq!(ack(&mut dev, s), AckCode::BadMac);
+    // A 4-byte MAC where the device expects 8.
+    dev.signer = Some(Signer::new(
+        test_key(),
+        MacLen::new(4).unwrap(),
+        epoch,
+        counter,
+    ));
+    assert_eq!(ack(&mut dev, s), AckCode::BadMac);
+    // Replayed: the same secured message (same counter, same MAC) twice.
+    dev.signer = Some(signer.clone());
+    assert_eq!(ack(&mut dev, s), AckCode::Ok);
+    dev.signer = Some(signer.clone());
+    assert_eq!(ack(&mut dev, s), AckCode::StaleFreshness);
+    // A replayed upload (a short text, refused by the parser at its commit, so every message
+    // of it was accepted): refused at its first message; the parameters in use stay.
+    let text = b"[MODEL]\nFITTYP = 61\nFNOMIN = oops\n";
+    let hash = st.param_hash;
+    let before = dev.signer.clone().unwrap();
+    let e = dev.upload_tir(text).unwrap_err();
+    assert!(e.contains("line 3"), "{e}");
+    let after = dev.signer.clone().unwrap();
+    dev.signer = Some(before);
+    let e = dev.upload_tir(text).unwrap_err();
+    assert!(e.contains("StaleFreshness"), "{e}");
+    dev.signer = Some(after);
+    let st = dev.status(Duration::from_secs(10)).unwrap();
+    assert_eq!(st.param_hash, hash);
+    assert_eq!(
+        (st.auth.missing, st.auth.bad_mac, st.auth.stale),
+        (1, 2, 2),
+        "{:?}",
+        st.auth
+    );
+    // A replayed command: Reset accepted (the device restarts: its next epoch, from the
+    // non-volatile boot counter), then the same Reset again: its MAC belongs to the old epoch.
+    let pre_reset = dev.signer.clone().unwrap();
+    dev.send(&Msg::Command(Command::Reset)).unwrap();
+    assert_eq!(
+        dev.wait_ack(MsgType::Command, Duration::from_secs(10))
+            .unwrap(),
+        AckCode::Ok
+    );
+    std::thread::sleep(Duration::from_millis(300));
+    dev.authenticate(test_key()).unwrap();
+    let st = dev.status(Duration::from_secs(10)).unwrap();
+    assert_eq!(st.auth.epoch, epoch + 1, "{:?}", st.auth);
+    dev.signer = Some(pre_reset);
+    dev.send(&Msg::Command(Command::Reset)).unwrap();
+    assert_eq!(
+        dev.wait_ack(MsgType::Command, Duration::from_secs(10))
+            .unwrap(),
+        AckCode::BadMac
+    );
+    dev.authenticate(test_key()).unwrap();
     dev.send(&Msg::Command(Command::Stop)).unwrap();
     assert_eq!(q.wait(Duration::from_secs(20)), Some(0));
 }

@@ -62,7 +62,7 @@ fn reassembler_seeds_deliver_their_message() {
 
 /// Re-seals the seed corpora for this protocol version after a version change (run by hand:
 /// `cargo test -p gough-host-tests --test fuzz_seeds -- --ignored`): the version byte, a
-/// body that grew at its end (v4: `Estimate`'s `mismatch`, false), the CRC; the reassembler's
+/// body that grew at its end (v5: `Status`'s `auth`, all zero), the CRC; the reassembler's
 /// seeds reassembled, patched the same way and segmented again (their time steps dropped).
 #[test]
 #[ignore]
@@ -75,8 +75,9 @@ fn reseal_seeds_for_this_version() {
         }
         assert_eq!(data[0], PROTO_VERSION - 1, "one version at a time");
         data[0] = PROTO_VERSION;
-        if data[1] == gough::proto::MsgType::Estimate as u8 {
-            data.push(0); // mismatch: false
+        if data[1] == gough::proto::MsgType::Status as u8 {
+            // auth: mac_len u8, epoch and counter u32, five varint counters: all zero.
+            data.extend_from_slice(&[0; 14]);
         }
         let c = crc32(&data).to_le_bytes();
         data.extend_from_slice(&c);

@@ -17,8 +17,8 @@
 //! other traffic of a vehicle bus and for retransmissions after errors).
 
 use gough::proto::{
-    CompactBatch, CompactMeasurement, CompactResults, CompactWheelResult, Estimate, Forces,
-    Measurement, Msg, Mtu, Segmenter, Wheel,
+    CompactBatch, CompactMeasurement, CompactResults, CompactWheelResult, Estimate, Forces, Key,
+    MacLen, Measurement, Msg, Mtu, Segmenter, Signer, Wheel,
 };
 use std::fmt::Write as _;
 
@@ -91,7 +91,17 @@ pub fn frame_time(bus: &Bus, n: usize) -> f64 {
 
 /// The data lengths of the frames that carry `m` on a bus of `mtu` (the segmenter's frames).
 pub fn frame_lengths(m: &Msg, mtu: Mtu) -> Vec<usize> {
-    let Ok(mut s) = Segmenter::new(m, 0, mtu) else {
+    frame_lengths_with(m, mtu, None)
+}
+
+/// As [`frame_lengths`], the message secured with MACs of `auth` bytes when given
+/// (`proto::auth`: 4 counter bytes and the MAC more).
+pub fn frame_lengths_with(m: &Msg, mtu: Mtu, auth: Option<MacLen>) -> Vec<usize> {
+    let seg = match auth {
+        Some(n) => Segmenter::sealed(m, 0, mtu, &mut Signer::new(Key::new([0; 16]), n, 1, 0)),
+        None => Segmenter::new(m, 0, mtu),
+    };
+    let Ok(mut s) = seg else {
         return Vec::new();
     };
     let mut buf = [0u8; 64];
@@ -147,8 +157,13 @@ pub fn results() -> [Msg; 2] {
 
 /// Frames and bus time \[s\] per wheel-sample of a set of messages.
 pub fn per_sample(msgs: &[Msg], bus: &Bus) -> (usize, f64) {
+    per_sample_with(msgs, bus, None)
+}
+
+/// As [`per_sample`], every message secured with MACs of `auth` bytes when given.
+pub fn per_sample_with(msgs: &[Msg], bus: &Bus, auth: Option<MacLen>) -> (usize, f64) {
     msgs.iter().fold((0, 0.0), |(n, t), m| {
-        let l = frame_lengths(m, bus.mtu);
+        let l = frame_lengths_with(m, bus.mtu, auth);
         (
             n + l.len(),
             t + l.iter().map(|&b| frame_time(bus, b)).sum::<f64>(),
@@ -235,6 +250,12 @@ pub fn traffics() -> [(&'static str, Vec<Msg>, f64); 10] {
 
 /// The table: frames/s and load per bus, rate and traffic.
 pub fn table(markdown: bool) -> String {
+    table_with(markdown, None)
+}
+
+/// As [`table`], every message secured with MACs of `auth` bytes when given (the cost of
+/// authenticating measurements and answers too).
+pub fn table_with(markdown: bool, auth: Option<MacLen>) -> String {
     let tr = traffics();
     let mut s = String::new();
     let _ = write!(s, "| bus | rate/wheel |");
@@ -249,7 +270,7 @@ pub fn table(markdown: bool) -> String {
         for rate in RATES {
             let _ = write!(s, "| {} | {rate} Hz |", bus.name);
             for (_, msgs, per) in &tr {
-                let (n, t) = per_sample(msgs, bus);
+                let (n, t) = per_sample_with(msgs, bus, auth);
                 let fps = n as f64 * rate * per;
                 let load = t * rate * per;
                 let mark = if load <= FITS { "" } else { " ✗" };
@@ -286,5 +307,30 @@ mod tests {
         assert!((frame_time(b, 64) * 1e6 - (68.0 + 679.0 / 2.0)).abs() < 1e-9);
         // 8 bytes: 5 + 64 + 18 + 4 + 17 + 6 = 114 data bits.
         assert!((frame_time(b, 8) * 1e6 - (68.0 + 114.0 / 2.0)).abs() < 1e-9);
+    }
+
+    #[test]
+    fn a_secured_message_is_4_plus_mac_bytes_longer() {
+        let m = measurement(true);
+        let len = |auth| {
+            frame_lengths_with(&m, Mtu::Classic, auth)
+                .iter()
+                .sum::<usize>()
+        };
+        // 58 bytes: 10 classic frames (5 + 9 × 6 bytes); secured with 8-byte MACs 70 bytes: 12;
+        // with 4-byte MACs 66 bytes: 12 too (5 + 10 × 6 = 65).
+        assert_eq!(frame_lengths(&m, Mtu::Classic).len(), 10);
+        assert_eq!(
+            frame_lengths_with(&m, Mtu::Classic, MacLen::new(8)).len(),
+            12
+        );
+        assert_eq!(
+            frame_lengths_with(&m, Mtu::Classic, MacLen::new(4)).len(),
+            12
+        );
+        assert_eq!(len(MacLen::new(8)), 12 * 8);
+        // CAN FD (64-byte frames on the measurement identifier): 1 frame, 2 secured.
+        assert_eq!(frame_lengths(&m, Mtu::Fd).len(), 1);
+        assert_eq!(frame_lengths_with(&m, Mtu::Fd, MacLen::new(8)).len(), 2);
     }
 }

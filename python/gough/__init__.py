@@ -18,7 +18,7 @@ from . import _gough
 from . import logs  # gough.logs.read; its readers (asammdf, python-can, cantools) load on use
 
 __all__ = ["Tyre", "TirError", "estimate_mu", "diagnose_gap", "simulate", "read_log",
-           "OUTPUT_COLUMNS", "logs"]
+           "OUTPUT_COLUMNS", "logs", "Signer", "read_key"]
 
 #: The columns `Tyre.eval` returns: those of `gough mf eval` after its inputs.
 OUTPUT_COLUMNS = tuple(_gough.OUTPUT_COLUMNS)
@@ -267,3 +267,35 @@ def simulate(tyre: Tyre, manoeuvre: str, road: str | None = None, speed: float |
         tyre._inner, manoeuvre, road, num(speed), num(duration), num(dt), num(steer),
         num(radius), num(decel), bool(abs), None if log_every is None else int(log_every))
     return pd.DataFrame(data, columns=cols)
+
+
+def read_key(path) -> bytes:
+    """The 16-byte device key of a key file: 32 hexadecimal digits on one line, blank lines and
+    `#` comment lines skipped (`firmware/keys/test.key` is the published TEST KEY)."""
+    with open(path) as f:
+        lines = [l.strip() for l in f if l.strip() and not l.strip().startswith("#")]
+    if len(lines) != 1 or len(lines[0]) != 32:
+        raise ValueError(f"{path}: not a key file (32 hexadecimal digits on one line)")
+    return bytes.fromhex(lines[0])
+
+
+class Signer:
+    """The device owner's end of the protocol's authentication (docs/protocol.md, "Security"):
+    secures state-changing messages with the device key by the core's own `auth::Signer`.
+
+    `epoch` and `counter` are the device's (its `Status.auth`: the epoch and the last counter it
+    accepted); each `seal` takes the next counter, and after counter 2**32 - 1 the next epoch, as
+    the device does. `mac_len`: the device's MAC length (4..8 bytes)."""
+
+    def __init__(self, key: bytes, epoch: int, counter: int = 0, mac_len: int = 8):
+        if len(key) != 16:
+            raise ValueError("key: 16 bytes")
+        self.key, self.epoch, self.counter, self.mac_len = bytes(key), epoch, counter, mac_len
+
+    def seal(self, can_id: int, message: bytes) -> bytes:
+        """The secured encoding of an encoded message (`[version][type][body][CRC-32]`, as sent
+        unsecured) to be sent on CAN identifier `can_id`: type | 0x40, the counter and the MAC
+        after the body, a new CRC. ValueError when `message` is not a message of this protocol."""
+        out, self.epoch, self.counter = _gough._seal(self.key, self.mac_len, self.epoch,
+                                                     self.counter, can_id, bytes(message))
+        return bytes(out)

@@ -631,6 +631,35 @@ fn _simulate<'py>(
     Ok((gough_host::sim::columns(), a))
 }
 
+/// `gough.Signer.seal`: the secured encoding (the core's `proto::auth::Signer`) of the encoded
+/// message `message` for CAN identifier `can_id`, with the device key, MAC length and the
+/// signer's freshness (`epoch`, last `counter`); returns it and the new (epoch, counter).
+#[pyfunction]
+fn _seal(
+    key: &[u8],
+    mac_len: u8,
+    epoch: u32,
+    counter: u32,
+    can_id: u16,
+    message: &[u8],
+) -> PyResult<(Vec<u8>, u32, u32)> {
+    use gough::proto::{Key, MacLen, Msg, Signer, MAX_MSG_LEN};
+    let key: [u8; 16] = key
+        .try_into()
+        .map_err(|_| PyValueError::new_err("key: 16 bytes"))?;
+    let mac_len =
+        MacLen::new(mac_len).ok_or_else(|| PyValueError::new_err("mac_len: 4..8 bytes"))?;
+    let msg = Msg::decode(message)
+        .map_err(|e| PyValueError::new_err(format!("not a message of this protocol: {e}")))?;
+    let mut s = Signer::new(Key::new(key), mac_len, epoch, counter);
+    let mut out = [0u8; MAX_MSG_LEN];
+    let n = s
+        .seal(can_id, &msg, &mut out)
+        .map_err(|e| PyValueError::new_err(e.to_string()))?;
+    let (e, c) = s.freshness();
+    Ok((out.get(..n).unwrap_or(&[]).to_vec(), e, c))
+}
+
 /// The extension module.
 #[pymodule]
 fn _gough(m: &Bound<'_, PyModule>) -> PyResult<()> {
@@ -638,6 +667,7 @@ fn _gough(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(_estimate_mu, m)?)?;
     m.add_function(wrap_pyfunction!(_diagnose_gap, m)?)?;
     m.add_function(wrap_pyfunction!(_simulate, m)?)?;
+    m.add_function(wrap_pyfunction!(_seal, m)?)?;
     m.add("TirError", m.py().get_type::<TirError>())?;
     m.add("OUTPUT_COLUMNS", mfrun::OUTPUT_COLUMNS.to_vec())?;
     Ok(())

@@ -25,6 +25,7 @@
 //! A bus log then shows μ per wheel without gough. On classic CAN
 //! these messages span several frames, and only their bytes are signals.
 
+use super::auth::{MacLen, SECURED, STATE_CHANGING_TYPES};
 use super::segmenter::Mtu;
 use super::{id, MsgType, PROTO_VERSION};
 use core::fmt::{self, Write};
@@ -250,9 +251,108 @@ fn has_bodies(mtu: Mtu, cid: u16) -> bool {
     mtu == Mtu::Fd && BODIES.iter().any(|b| b.0 == cid)
 }
 
-/// Writes the DBC text for classic CAN ([`Mtu::Classic`]) or CAN FD ([`Mtu::Fd`]).
+/// Writes the DBC text for classic CAN ([`Mtu::Classic`]) or CAN FD ([`Mtu::Fd`]), secured
+/// messages with 8-byte MACs ([`write_with`]).
 pub fn write<W: Write>(w: &mut W, mtu: Mtu) -> fmt::Result {
+    write_with(w, mtu, MacLen::DEFAULT)
+}
+
+/// The body length of a secured single-frame message on CAN FD (fixed; `ParamChunk`'s varies),
+/// where its freshness counter starts.
+const fn fixed_body(t: MsgType) -> Option<usize> {
+    match t {
+        MsgType::ParamBegin => Some(8),
+        MsgType::ParamCommit => Some(4),
+        MsgType::Settings => Some(9),
+        MsgType::Command => Some(1),
+        MsgType::SetCalibration => Some(37),
+        _ => None,
+    }
+}
+
+/// The configuration identifier's first frames on CAN FD, multiplexed on `msg_type`: each
+/// plain type's message bytes as `<Type>_bytes*`; each secured type (`<Type>Secured`, type |
+/// 0x40) with a fixed body: `<Type>Secured_body*`, then `<Type>Secured_freshness` (the counter),
+/// `<Type>Secured_mac` (`mac_len` bytes) and `<Type>Secured_crc`; a secured `ParamChunk` (its
+/// body's length varies, so do the trailer's offsets) as bytes.
+fn config_fd<W: Write>(
+    w: &mut W,
+    len: usize,
+    mac_len: MacLen,
+    rx: &str,
+    muxes: &mut Muxes,
+) -> fmt::Result {
+    for t in MsgType::ALL.iter().filter(|t| id::of(**t) == id::CONFIG) {
+        let mut name = Name::new();
+        let _ = write!(name, "{}_bytes", t.name());
+        muxed_bytes(w, &name, *t as u8, (BODY, len), rx, muxes)?;
+    }
+    for t in STATE_CHANGING_TYPES {
+        let st = t as u8 | SECURED;
+        let mut name = Name::new();
+        let Some(b) = fixed_body(t) else {
+            let _ = write!(name, "{}Secured_bytes", t.name());
+            muxed_bytes(w, &name, st, (BODY, len), rx, muxes)?;
+            continue;
+        };
+        let _ = write!(name, "{}Secured_body", t.name());
+        muxed_bytes(w, &name, st, (BODY, BODY + b), rx, muxes)?;
+        let m = mac_len.get();
+        for (what, off, n) in [
+            ("freshness", BODY + b, 4),
+            ("mac", BODY + b + 4, m),
+            ("crc", BODY + b + 4 + m, 4),
+        ] {
+            name.clear();
+            let _ = write!(name, "{}Secured_{what}", t.name());
+            let max = u64::MAX >> (64 - 8 * n);
+            writeln!(
+                w,
+                " SG_ {name} m{st} : {}|{}@1+ (1,0) [0|{max}] \"\" {rx}",
+                off * 8,
+                n * 8
+            )?;
+            let _ = muxes.push((name.clone(), st));
+        }
+    }
+    Ok(())
+}
+
+/// A signal's name.
+type Name = heapless::String<40>;
+/// Signals multiplexed on `msg_type`, with its value.
+type Muxes = heapless::Vec<(Name, u8), 128>;
+
+/// [`byte_signals`] multiplexed on `msg_type` = `t`; records their names in `muxes`.
+fn muxed_bytes<W: Write>(
+    w: &mut W,
+    name: &str,
+    t: u8,
+    (from, to): (usize, usize),
+    rx: &str,
+    muxes: &mut Muxes,
+) -> fmt::Result {
+    let mut mux = heapless::String::<8>::new();
+    let _ = write!(mux, "m{t}");
+    byte_signals(w, name, &mux, (from, to), rx)?;
+    for k in 0..(to - from).div_ceil(8) {
+        let mut n = Name::new();
+        let _ = n.push_str(name);
+        if to - from > 8 {
+            let _ = write!(n, "_{k}");
+        }
+        let _ = muxes.push((n, t));
+    }
+    Ok(())
+}
+
+/// Writes the DBC text for classic CAN ([`Mtu::Classic`]) or CAN FD ([`Mtu::Fd`]), for secured
+/// messages with MACs of `mac_len` bytes: on CAN FD their freshness counter and MAC are signals
+/// of their own (on the configuration identifier, multiplexed on `msg_type`); on classic CAN they are bytes
+/// of the message, as every body is.
+pub fn write_with<W: Write>(w: &mut W, mtu: Mtu, mac_len: MacLen) -> fmt::Result {
     let fd = mtu == Mtu::Fd;
+    let mut muxes = Muxes::new();
     writeln!(w, "VERSION \"gough-proto-{PROTO_VERSION}\"")?;
     writeln!(w)?;
     writeln!(w, "NS_ :")?;
@@ -271,7 +371,7 @@ pub fn write<W: Write>(w: &mut W, mtu: Mtu) -> fmt::Result {
             ("GOUGH", "HOST")
         };
         let len = mtu.frame_len(cid);
-        let signals = has_bodies(mtu, cid);
+        let signals = has_bodies(mtu, cid) || (fd && cid == id::CONFIG);
         writeln!(w)?;
         writeln!(w, "BO_ {cid} {name}: {len} {tx}")?;
         writeln!(w, " SG_ frame_index M : 0|6@1+ (1,0) [0|63] \"\" {rx}")?;
@@ -282,6 +382,9 @@ pub fn write<W: Write>(w: &mut W, mtu: Mtu) -> fmt::Result {
         writeln!(w, " SG_ proto_version m0 : 24|8@1+ (1,0) [0|255] \"\" {rx}")?;
         if signals {
             writeln!(w, " SG_ msg_type m0M : 32|8@1+ (1,0) [0|255] \"\" {rx}")?;
+            if cid == id::CONFIG {
+                config_fd(w, len, mac_len, rx, &mut muxes)?;
+            }
             for (_, t, fields) in BODIES.iter().filter(|b| b.0 == cid) {
                 for (name, off, n, kind, scale, unit, _) in fields.iter() {
                     let sign = if matches!(kind, Kind::I | Kind::F) {
@@ -315,6 +418,13 @@ pub fn write<W: Write>(w: &mut W, mtu: Mtu) -> fmt::Result {
         for t in MsgType::ALL.iter().filter(|t| id::of(**t) == cid) {
             write!(w, " {}", t.name())?;
         }
+        if cid == id::CONFIG {
+            write!(
+                w,
+                ". Secured (type | 0x40: upload, settings, calibration, reset, stop): counter (u32 LE) and AES-128-CMAC truncated to {} bytes after the body, before the CRC-32",
+                mac_len.get()
+            )?;
+        }
         writeln!(w, "\";")?;
     }
     if fd {
@@ -334,6 +444,11 @@ pub fn write<W: Write>(w: &mut W, mtu: Mtu) -> fmt::Result {
         write!(w, "VAL_ {cid} msg_type")?;
         for t in MsgType::ALL.iter().filter(|t| id::of(**t) == cid) {
             write!(w, " {} \"{}\"", *t as u8, t.name())?;
+        }
+        if cid == id::CONFIG {
+            for t in STATE_CHANGING_TYPES {
+                write!(w, " {} \"{}Secured\"", t as u8 | SECURED, t.name())?;
+            }
         }
         writeln!(w, " ;")?;
     }
@@ -363,7 +478,7 @@ pub fn write<W: Write>(w: &mut W, mtu: Mtu) -> fmt::Result {
             }
             writeln!(w, " frame_index 1-63;")?;
         }
-        if has_bodies(mtu, cid) {
+        if has_bodies(mtu, cid) || (fd && cid == id::CONFIG) {
             // Two multiplexers: every multiplexed signal names its multiplexer here.
             for name in ["msg_len", "proto_version", "msg_type"] {
                 writeln!(w, "SG_MUL_VAL_ {cid} {name} frame_index 0-0;")?;
@@ -371,6 +486,11 @@ pub fn write<W: Write>(w: &mut W, mtu: Mtu) -> fmt::Result {
             for (_, t, fields) in BODIES.iter().filter(|b| b.0 == cid) {
                 for (name, ..) in fields.iter() {
                     writeln!(w, "SG_MUL_VAL_ {cid} {name} msg_type {0}-{0};", *t as u8)?;
+                }
+            }
+            if cid == id::CONFIG {
+                for (name, t) in muxes.iter() {
+                    writeln!(w, "SG_MUL_VAL_ {cid} {name} msg_type {t}-{t};")?;
                 }
             }
         }

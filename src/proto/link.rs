@@ -36,8 +36,18 @@ pub fn send_blocking<C: embedded_can::blocking::Can>(
     seq: u8,
     msg: &Msg,
 ) -> Result<(), SendError<C::Error>> {
+    let seg = Segmenter::new(msg, seq, Mtu::Classic).map_err(SendError::Encode)?;
+    send_segments_blocking(can, id, seg)
+}
+
+/// Sends the frames of a [`Segmenter`] (e.g. a secured message, [`Segmenter::sealed`]) on the
+/// standard identifier `id`, through a blocking driver.
+pub fn send_segments_blocking<C: embedded_can::blocking::Can>(
+    can: &mut C,
+    id: u16,
+    mut seg: Segmenter,
+) -> Result<(), SendError<C::Error>> {
     let sid = StandardId::new(id).ok_or(SendError::Frame)?;
-    let mut seg = Segmenter::new(msg, seq, Mtu::Classic).map_err(SendError::Encode)?;
     let mut buf = [0u8; 64];
     while let Some(data) = seg.next_frame(&mut buf) {
         let f = C::Frame::new(sid, data).ok_or(SendError::Frame)?;

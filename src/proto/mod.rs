@@ -33,6 +33,7 @@
 //! and status requests are the recovery path) and CAN FD on the SLCAN transport (Lawicel
 //! SLCAN has no FD frames; FD segmentation is exercised by the unit tests and fuzzers).
 
+pub mod auth;
 pub mod calibration;
 pub mod crc;
 pub mod dbc;
@@ -47,6 +48,7 @@ pub mod segmenter;
 pub mod slcan;
 pub mod status;
 
+pub use auth::{AuthStatus, Key, MacLen, Signer, Verifier};
 pub use calibration::CalibrationState;
 pub use crc::crc32;
 pub use frame::{Frame, FrameRepr, Position};
@@ -63,16 +65,18 @@ use postcard::experimental::max_size::MaxSize;
 
 /// Protocol version, the first byte of every encoded message. A receiver drops messages of
 /// another version ([`Error::Version`]).
-pub const PROTO_VERSION: u8 = 4;
+pub const PROTO_VERSION: u8 = 5;
 
-/// Longest encoded message \[bytes\]: header (2) + the largest postcard body + CRC (4). It fits
-/// the one-byte length field of the first frame.
-pub const MAX_MSG_LEN: usize = 2 + Msg::POSTCARD_MAX_SIZE + 4;
+/// Longest encoded message \[bytes\]: header (2) + the largest postcard body + the longest
+/// trailer of a secured message ([`auth::TRAILER_MAX`]) + CRC (4). It fits the one-byte length
+/// field of the first frame.
+pub const MAX_MSG_LEN: usize = 2 + Msg::POSTCARD_MAX_SIZE + auth::TRAILER_MAX + 4;
 const _: () = assert!(MAX_MSG_LEN <= u8::MAX as usize);
 
 /// Receive buffer that holds any message: `Reassembler<MSG_BUF>`.
 pub const MSG_BUF: usize = MAX_MSG_LEN;
-const _: () = assert!(Msg::POSTCARD_MAX_SIZE + 6 <= Reassembler::<MSG_BUF>::CAPACITY);
+const _: () =
+    assert!(Msg::POSTCARD_MAX_SIZE + 6 + auth::TRAILER_MAX <= Reassembler::<MSG_BUF>::CAPACITY);
 
 /// A partially received message is dropped when its next frame is this late \[ms\].
 pub const FRAME_TIMEOUT_MS: u32 = 50;

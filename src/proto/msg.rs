@@ -9,6 +9,7 @@
 //! they sit at fixed offsets. Floats are IEEE-754 `f32`, 4 bytes little endian; `Option<f32>`
 //! is a tag byte (0 none, 1 some) followed by the value when present.
 
+use super::auth::{Trailer, COUNTER_LEN, MAC_LEN_MAX, MAC_LEN_MIN, SECURED};
 use super::crc::crc32;
 use super::{
     Ack, CalibrationState, Command, CompactBatch, CompactMeasurement, CompactResults, Estimate,
@@ -137,11 +138,11 @@ pub enum Msg {
     Calibration(CalibrationState),
 }
 
-fn body<T: DeserializeOwned>(b: &[u8]) -> Result<T, Error> {
-    match postcard::take_from_bytes::<T>(b) {
-        Ok((v, [])) => Ok(v),
-        _ => Err(Error::Decode),
-    }
+/// Decodes a postcard body at the start of `b`: the value and the bytes left after it.
+fn body<T: DeserializeOwned>(b: &[u8], wrap: fn(T) -> Msg) -> Result<(Msg, &[u8]), Error> {
+    postcard::take_from_bytes::<T>(b)
+        .map(|(v, rest)| (wrap(v), rest))
+        .map_err(|_| Error::Decode)
 }
 
 impl Msg {
@@ -200,8 +201,17 @@ impl Msg {
     }
 
     /// Decodes one whole encoded message (exactly; no bytes over). Checks, in order: length,
-    /// CRC (skipped when fuzzing, so the fuzzer reaches the body), version, type, body.
+    /// CRC (skipped when fuzzing, so the fuzzer reaches the body), version, type, body. A secured
+    /// message ([`super::auth`]) decodes to its message; its MAC is not checked here
+    /// ([`super::auth::Verifier::open`] does).
     pub fn decode(bytes: &[u8]) -> Result<Msg, Error> {
+        Msg::decode_secured(bytes).map(|(m, _)| m)
+    }
+
+    /// As [`Msg::decode`], and the trailer (counter and MAC) when the message is secured (the
+    /// type byte's bit [`SECURED`]): after the body exactly 4 counter bytes and a MAC of
+    /// [`MAC_LEN_MIN`]`..=`[`MAC_LEN_MAX`] bytes, else [`Error::Decode`].
+    pub fn decode_secured(bytes: &[u8]) -> Result<(Msg, Option<Trailer<'_>>), Error> {
         let split = bytes.len().checked_sub(4).ok_or(Error::Truncated)?;
         let (data, crc) = bytes.split_at_checked(split).ok_or(Error::Truncated)?;
         let (head, b) = data.split_at_checked(2).ok_or(Error::Truncated)?;
@@ -216,22 +226,40 @@ impl Msg {
         if version != PROTO_VERSION {
             return Err(Error::Version);
         }
-        Ok(match MsgType::from_u8(t).ok_or(Error::UnknownType)? {
-            MsgType::Measurement => Msg::Measurement(body(b)?),
-            MsgType::ParamBegin => Msg::ParamBegin(body(b)?),
-            MsgType::ParamChunk => Msg::ParamChunk(body(b)?),
-            MsgType::ParamCommit => Msg::ParamCommit(body(b)?),
-            MsgType::Settings => Msg::Settings(body(b)?),
-            MsgType::Command => Msg::Command(body(b)?),
-            MsgType::CompactMeasurement => Msg::CompactMeasurement(body(b)?),
-            MsgType::CompactBatch => Msg::CompactBatch(body(b)?),
-            MsgType::CompactResults => Msg::CompactResults(body(b)?),
-            MsgType::SetCalibration => Msg::SetCalibration(body(b)?),
-            MsgType::Calibration => Msg::Calibration(body(b)?),
-            MsgType::Forces => Msg::Forces(body(b)?),
-            MsgType::Estimate => Msg::Estimate(body(b)?),
-            MsgType::Status => Msg::Status(body(b)?),
-            MsgType::Ack => Msg::Ack(body(b)?),
-        })
+        let (msg, rest) = match MsgType::from_u8(t & !SECURED).ok_or(Error::UnknownType)? {
+            MsgType::Measurement => body(b, Msg::Measurement),
+            MsgType::ParamBegin => body(b, Msg::ParamBegin),
+            MsgType::ParamChunk => body(b, Msg::ParamChunk),
+            MsgType::ParamCommit => body(b, Msg::ParamCommit),
+            MsgType::Settings => body(b, Msg::Settings),
+            MsgType::Command => body(b, Msg::Command),
+            MsgType::CompactMeasurement => body(b, Msg::CompactMeasurement),
+            MsgType::CompactBatch => body(b, Msg::CompactBatch),
+            MsgType::CompactResults => body(b, Msg::CompactResults),
+            MsgType::SetCalibration => body(b, Msg::SetCalibration),
+            MsgType::Calibration => body(b, Msg::Calibration),
+            MsgType::Forces => body(b, Msg::Forces),
+            MsgType::Estimate => body(b, Msg::Estimate),
+            MsgType::Status => body(b, Msg::Status),
+            MsgType::Ack => body(b, Msg::Ack),
+        }?;
+        if t & SECURED == 0 {
+            return if rest.is_empty() {
+                Ok((msg, None))
+            } else {
+                Err(Error::Decode)
+            };
+        }
+        let (counter, mac) = rest.split_at_checked(COUNTER_LEN).ok_or(Error::Decode)?;
+        if !(usize::from(MAC_LEN_MIN)..=usize::from(MAC_LEN_MAX)).contains(&mac.len()) {
+            return Err(Error::Decode);
+        }
+        let data_len = data.len().saturating_sub(mac.len());
+        let trailer = Trailer {
+            data: data.get(..data_len).ok_or(Error::Decode)?,
+            counter: u32::from_le_bytes(counter.try_into().map_err(|_| Error::Decode)?),
+            mac,
+        };
+        Ok((msg, Some(trailer)))
     }
 }

@@ -114,6 +114,7 @@ pub struct Reassembler<const N: usize> {
     pending: Option<Partial>,
     prev: [u8; 64],
     prev_len: usize,
+    done_len: usize,
     counters: Counters,
 }
 
@@ -134,6 +135,7 @@ impl<const N: usize> Reassembler<N> {
             pending: None,
             prev: [0; 64],
             prev_len: 0,
+            done_len: 0,
             counters: Counters {
                 frames: 0,
                 messages: 0,
@@ -152,6 +154,12 @@ impl<const N: usize> Reassembler<N> {
     /// What it has seen.
     pub const fn counters(&self) -> &Counters {
         &self.counters
+    }
+
+    /// The encoded bytes of the message the last [`Feed::Done`] delivered (for
+    /// [`Verifier::open`](super::Verifier::open)); empty after any other result.
+    pub fn last(&self) -> &[u8] {
+        self.buf.get(..self.done_len).unwrap_or(&[])
     }
 
     /// `true` while a message is partly received.
@@ -184,6 +192,7 @@ impl<const N: usize> Reassembler<N> {
     /// Feeds one frame's payload (`data`: 2..=64 bytes) received at `now_ms`.
     pub fn feed(&mut self, data: &[u8], now_ms: u32) -> Feed {
         self.counters.frames = self.counters.frames.wrapping_add(1);
+        self.done_len = 0;
         let _ = self.poll(now_ms);
         let frame = Frame::new_unchecked(data);
         let repr = match FrameRepr::parse(&frame) {
@@ -256,6 +265,7 @@ impl<const N: usize> Reassembler<N> {
         match Msg::decode(self.buf.get(..p.total).unwrap_or(&[])) {
             Ok(m) => {
                 self.counters.messages = self.counters.messages.wrapping_add(1);
+                self.done_len = p.total;
                 Feed::Done(m)
             }
             Err(e) => self.reject(e),

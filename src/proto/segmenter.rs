@@ -5,7 +5,7 @@
 //! length, and strict decoders (cantools) reject frames of another length.
 
 use super::frame::{Frame, FrameRepr, Position};
-use super::{id, Error, Msg, MAX_MSG_LEN};
+use super::{id, Error, Msg, Signer, MAX_MSG_LEN};
 use postcard::experimental::max_size::MaxSize;
 
 /// Largest frame of the bus.
@@ -97,14 +97,27 @@ impl Segmenter {
     pub fn new(msg: &Msg, seq: u8, mtu: Mtu) -> Result<Segmenter, Error> {
         let mut buf = [0u8; MAX_MSG_LEN];
         let len = msg.encode(&mut buf)?;
-        Ok(Segmenter {
+        Ok(Segmenter::of(buf, len, seq, mtu, id::of(msg.msg_type())))
+    }
+
+    /// Encodes `msg` secured by `signer` with its next freshness value ([`super::auth`]), with
+    /// sequence number `seq`.
+    pub fn sealed(msg: &Msg, seq: u8, mtu: Mtu, signer: &mut Signer) -> Result<Segmenter, Error> {
+        let cid = id::of(msg.msg_type());
+        let mut buf = [0u8; MAX_MSG_LEN];
+        let len = signer.seal(cid, msg, &mut buf)?;
+        Ok(Segmenter::of(buf, len, seq, mtu, cid))
+    }
+
+    fn of(buf: [u8; MAX_MSG_LEN], len: usize, seq: u8, mtu: Mtu, cid: u16) -> Segmenter {
+        Segmenter {
             buf,
             len,
             pos: 0,
             index: 0,
             seq,
-            frame_len: mtu.frame_len(id::of(msg.msg_type())),
-        })
+            frame_len: mtu.frame_len(cid),
+        }
     }
 
     /// The encoded message.

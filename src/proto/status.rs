@@ -42,6 +42,9 @@ pub struct Status {
     pub tx_messages: u32,
     /// Deepest stack use since boot \[bytes\] (stack painting; 0 if not measured).
     pub stack_peak: u32,
+    /// Authentication (v5): the MAC length (0: no key), epoch and last accepted counter, and
+    /// the secured messages accepted and refused, by reason.
+    pub auth: super::AuthStatus,
 }
 
 /// Result of a host → device request.
@@ -78,6 +81,17 @@ pub enum AckCode {
     /// or σ not a valid number, or a value beyond its bound:
     /// [`CalibrationError`](crate::mu::calibration::CalibrationError)); its calibration stays.
     BadCalibration,
+    /// (v5) The device has no key: it refuses every state-changing message
+    /// ([`auth`](super::auth)); nothing changed.
+    NoKey,
+    /// (v5) A state-changing message that was not secured (no MAC); nothing changed.
+    MacMissing,
+    /// (v5) The MAC is wrong (another key, a forged or damaged message, another MAC length);
+    /// nothing changed.
+    BadMac,
+    /// (v5) The freshness counter is not above the last accepted one (a replayed or reordered
+    /// message), or too far above it; nothing changed.
+    StaleFreshness,
 }
 
 impl From<wheel::Error> for AckCode {

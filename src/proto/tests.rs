@@ -122,6 +122,16 @@ pub(crate) fn largest() -> Vec<Msg> {
             eval_errors: u32::MAX,
             tx_messages: u32::MAX,
             stack_peak: u32::MAX,
+            auth: AuthStatus {
+                mac_len: u8::MAX,
+                epoch: u32::MAX,
+                counter: u32::MAX,
+                accepted: u32::MAX,
+                no_key: u32::MAX,
+                missing: u32::MAX,
+                bad_mac: u32::MAX,
+                stale: u32::MAX,
+            },
         }),
         Msg::Ack(Ack {
             of: 255,
@@ -161,7 +171,7 @@ fn measurement_bytes() {
     let mut buf = [0xa5u8; MAX_MSG_LEN];
     let n = m.encode(&mut buf).unwrap();
     let body: &[u8] = &[
-        0x04, 0x01, // version 4, type Measurement
+        0x05, 0x01, // version 5, type Measurement
         0x01, // wheel FrontRight
         0xe8, 0x03, 0x00, 0x00, // t_us 1000
         0x00, 0x00, 0x80, 0x3f, // fz 1.0
@@ -187,7 +197,7 @@ fn settings_bytes() {
     let mut buf = [0u8; MAX_MSG_LEN];
     let n = m.encode(&mut buf).unwrap();
     let body: &[u8] = &[
-        0x04, 0x05, // version 4, type Settings
+        0x05, 0x05, // version 5, type Settings
         0x01, // limits
         0x00, 0x00, 0x00, 0x3f, // fallback_mu 0.5
         0x00, 0x00, 0x20, 0x40, // wheelbase 2.5
@@ -535,15 +545,15 @@ fn new_types_need_no_version_bump() {
 
 #[test]
 fn known_frames() {
-    // Command::StatusRequest, seq 5, classic: two frames 80 05 07 | 04 06 01 | crc.
+    // Command::StatusRequest, seq 5, classic: two frames 80 05 07 | 05 06 01 | crc.
     let m = Msg::Command(Command::StatusRequest);
     let fs = frames(&m, 5, Mtu::Classic);
-    let crc = crc32(&[4, 6, 1]).to_le_bytes();
+    let crc = crc32(&[5, 6, 1]).to_le_bytes();
     assert_eq!(fs.len(), 2);
-    assert_eq!(fs[0], [0x80, 5, 7, 4, 6, 1, crc[0], crc[1]]);
+    assert_eq!(fs[0], [0x80, 5, 7, 5, 6, 1, crc[0], crc[1]]);
     assert_eq!(fs[1], [0x41, 5, crc[2], crc[3], 0, 0, 0, 0]);
     let fd = frames(&m, 5, Mtu::Fd);
-    let mut one = vec![0xc0, 5, 7, 4, 6, 1, crc[0], crc[1], crc[2], crc[3]];
+    let mut one = vec![0xc0, 5, 7, 5, 6, 1, crc[0], crc[1], crc[2], crc[3]];
     one.resize(64, 0);
     assert_eq!(fd, [one]);
     // An estimate on CAN FD: one 32-byte frame on RESULT.
@@ -560,8 +570,8 @@ fn known_frames() {
     let fd = frames(&e, 1, Mtu::Fd);
     assert_eq!(fd.len(), 1);
     assert_eq!(fd[0].len(), 32);
-    // header c0 01 len 26 | version 4, Estimate | wheel 2, t_us 7 ..
-    assert_eq!(fd[0][..7], [0xc0, 1, 26, 4, 0x82, 2, 7]);
+    // header c0 01 len 26 | version 5, Estimate | wheel 2, t_us 7 ..
+    assert_eq!(fd[0][..7], [0xc0, 1, 26, 5, 0x82, 2, 7]);
     assert_eq!(fd[0][10..14], 0.5f32.to_le_bytes());
     assert_eq!(fd[0][14..18], 0.25f32.to_le_bytes());
     assert_eq!(fd[0][18], 0, "state Identifiable");
@@ -583,7 +593,7 @@ fn calibration_bytes_both_ways() {
     };
     let c = CalibrationState::new(Wheel::FrontRight, &e);
     assert_eq!(c.exported(), e);
-    let mut want = vec![4u8, 0x86, 1];
+    let mut want = vec![5u8, 0x86, 1];
     for x in e.value.iter().chain(e.sigma.iter()) {
         want.extend_from_slice(&x.to_le_bytes());
     }

@@ -154,6 +154,11 @@ fn report_size(what: &str, path: &Path) -> Result<(), String> {
     Ok(())
 }
 
+/// The TEST KEY the firmware tests provision and sign with.
+fn test_key() -> PathBuf {
+    root().join("firmware/keys/test.key")
+}
+
 fn python_client() -> Result<(), String> {
     step("python-can client (independent protocol implementation) against the firmware");
     let py = crate::venv()?;
@@ -168,6 +173,8 @@ fn python_client() -> Result<(), String> {
     run(cargo().args(["build", "-p", "gough-host", "--bin", "gough"]))?;
     let mut fw = Command::new(&gough)
         .args(["firmware", "run", "--no-build", "--port", &port.to_string()])
+        .arg("--key-file")
+        .arg(test_key())
         .arg("--elf")
         .arg(elf("gough-firmware"))
         .arg("--workdir")
@@ -180,7 +187,9 @@ fn python_client() -> Result<(), String> {
         .arg("--gough")
         .arg(&gough)
         .arg("--tir")
-        .arg(root().join("host-tests/data/tyres/MagicFormula61_Parameters.tir")));
+        .arg(root().join("host-tests/data/tyres/MagicFormula61_Parameters.tir"))
+        .arg("--key-file")
+        .arg(test_key()));
     let t0 = Instant::now();
     let fw_status = loop {
         if let Ok(Some(st)) = fw.try_wait() {

@@ -365,7 +365,8 @@ fn bank_figures<M: Backend<f32>>(
             let Some(est) = est.as_mut() else {
                 return State::Fallback;
             };
-            est.update::<M>(p, &wheel::sample::<f32, M>(p, &m.into())).state
+            est.update::<M>(p, &wheel::sample::<f32, M>(p, &m.into()))
+                .state
         },
     );
     hprintln!(
@@ -385,7 +386,11 @@ fn bank_figures<M: Backend<f32>>(
         id + 1,
         clock,
         stream,
-        || Bank::new::<M>(p, None, mu::Config::default()).ok().map(|b| (b, 0u32)),
+        || {
+            Bank::new::<M>(p, None, mu::Config::default())
+                .ok()
+                .map(|b| (b, 0u32))
+        },
         |st, m| {
             let Some((est, i)) = st.as_mut() else {
                 return State::Fallback;
@@ -396,7 +401,8 @@ fn bank_figures<M: Backend<f32>>(
                     est.preview::<M>(r);
                 }
             }
-            est.update::<M>(p, &wheel::sample::<f32, M>(p, &m.into())).state
+            est.update::<M>(p, &wheel::sample::<f32, M>(p, &m.into()))
+                .state
         },
     );
     hprintln!(
@@ -531,7 +537,93 @@ fn main() -> ! {
         }
     }
     preview_figures::<app::Math>(app::MATH_NAME, 80, clock, &p32, stream);
+    auth_figures(90, clock);
     mps2::exit(true)
+}
+
+/// The key check of every message the device receives (`gough::proto::auth::Verifier::check`,
+/// what `App::poll` adds per message): per secured message of each kind (AES-128-CMAC over its
+/// identifier, body, counter and epoch, constant-time compare of the 8-byte MAC, the freshness),
+/// and per unsecured measurement (the check that lets it through). `bench: auth_<kind>
+/// mean=<n> worst=<n> ram=<Verifier bytes>` lines.
+fn auth_figures(id: u32, clock: Clock) {
+    use gough::proto::auth::{Signer, Verifier};
+    use gough::proto::{
+        id as cid, Bytes, CalibrationState, Command, Key, MacLen, Msg, ParamChunk, Wheel,
+        MAX_MSG_LEN,
+    };
+    const K: usize = 32;
+    let key = Key::new([0x7e; 16]);
+    let chunk = Msg::ParamChunk(ParamChunk {
+        offset: 480,
+        data: Bytes::new(&[b'x'; 48]).unwrap_or_else(|| mps2::exit(false)),
+    });
+    let cal = Msg::SetCalibration(CalibrationState {
+        wheel: Wheel::RearLeft,
+        value: [1.0; 4],
+        sigma: [0.1; 4],
+        batches: 7,
+    });
+    let settings = Msg::Settings(Settings::default());
+    let meas = Msg::Measurement(Measurement {
+        fz: 4000.0,
+        alpha: Some(0.02),
+        ..Measurement::default()
+    });
+    let kinds: [(&str, Msg, bool); 5] = [
+        ("settings", settings, true),
+        ("command", Msg::Command(Command::Reset), true),
+        ("calibration", cal, true),
+        ("param_chunk", chunk, true),
+        ("measurement_unsecured", meas, false),
+    ];
+    for (k, (name, msg, secured)) in kinds.iter().enumerate() {
+        let mut signer = Signer::new(key, MacLen::DEFAULT, 3, 0);
+        let mut bufs = [[0u8; MAX_MSG_LEN]; K];
+        let mut lens = [0usize; K];
+        for (b, n) in bufs.iter_mut().zip(lens.iter_mut()) {
+            let r = if *secured {
+                signer.seal(cid::of(msg.msg_type()), msg, b)
+            } else {
+                msg.encode(b)
+            };
+            *n = r.unwrap_or_else(|_| mps2::exit(false));
+        }
+        let c = cid::of(msg.msg_type());
+        let pass = |v: &mut Verifier, i: usize| {
+            let b = bufs[i].get(..lens[i]).unwrap_or(&[]);
+            v.check(c, msg, core::hint::black_box(b)).is_ok()
+        };
+        let mut v = Verifier::new(key, MacLen::DEFAULT, 3);
+        bench_start(id + k as u32);
+        let t0 = now();
+        let mut ok = 0;
+        for i in 0..K {
+            ok += usize::from(pass(&mut v, i));
+        }
+        let t1 = now();
+        bench_stop(id + k as u32);
+        let mean = (t1 - t0) as f64 * clock.per_count / K as f64;
+        let mut v = Verifier::new(key, MacLen::DEFAULT, 3);
+        let mut worst = 0f64;
+        for i in 0..K {
+            let t0 = now();
+            ok += usize::from(pass(&mut v, i));
+            let t1 = now();
+            worst = worst.max(((t1 - t0) as f64 - clock.overhead).max(0.0) * clock.per_count);
+        }
+        if ok != 2 * K {
+            hprintln!("auth: {} refused", name);
+            mps2::exit(false);
+        }
+        hprintln!(
+            "bench: auth_{} mean={} worst={} ram={}",
+            name,
+            mean as u32,
+            worst as u32,
+            size_of::<Verifier>()
+        );
+    }
 }
 
 /// The front-to-rear preview (`gough::mu::preview`) with backend `M`: a reading handed to a

@@ -6,15 +6,20 @@
 //!    still gets through afterwards;
 //! 4. the application over a loopback driver: parameter upload (good, bad hash, bad text),
 //!    a measurement answered with forces and an estimate, a status report;
-//! 5. the friction estimator on the device: a slip-angle ramp, then held, on the bundled tyre's
+//! 5. authentication (`gough::proto::auth`): without a key every state-changing message is
+//!    refused; with the test key (`firmware/keys/test.key`) unsigned, forged and replayed
+//!    messages are refused and counted, and a replayed chunk inside an upload loses nothing;
+//! 6. the friction estimator on the device: a slip-angle ramp, then held, on the bundled tyre's
 //!    own surface is read as that surface's μ, within ±0.1, and said to be identifiable.
 #![no_std]
 #![no_main]
 
+use core::sync::atomic::{AtomicU32, Ordering};
 use cortex_m_rt::entry;
 use cortex_m_semihosting::hprintln;
 use embedded_can::Frame as _;
 use gough::mu::State;
+use gough::proto::auth;
 use gough::proto::slcan::{self, CanFrame, Decoder, Line};
 use gough::proto::*;
 use gough_firmware::app::App;
@@ -83,6 +88,8 @@ struct Loopback {
     rx: heapless::Deque<CanFrame, 64>,
     tx: Reassembler<MSG_BUF>,
     got: heapless::Vec<Msg, 8>,
+    /// Secures the state-changing messages `send` sends, when set.
+    signer: Option<Signer>,
 }
 
 impl embedded_can::nb::Can for Loopback {
@@ -102,10 +109,22 @@ impl embedded_can::nb::Can for Loopback {
 impl Loopback {
     /// Queues the frames of `m` and lets the application take them.
     fn send(&mut self, app: &mut App, m: &Msg, seq: u8) {
-        let mut seg = Segmenter::new(m, seq, Mtu::Classic).unwrap_or_else(|_| mps2::exit(false));
+        let seg = match self.signer.as_mut() {
+            Some(s) if auth::is_state_changing(m) => Segmenter::sealed(m, seq, Mtu::Classic, s),
+            _ => Segmenter::new(m, seq, Mtu::Classic),
+        };
+        self.send_seg(
+            app,
+            seg.unwrap_or_else(|_| mps2::exit(false)),
+            id::of(m.msg_type()),
+        );
+    }
+    /// Queues the frames of an encoded message on identifier `cid` and lets the application
+    /// take them.
+    fn send_seg(&mut self, app: &mut App, mut seg: Segmenter, cid: u16) {
         let mut buf = [0u8; 64];
         while let Some(f) = seg.next_frame(&mut buf) {
-            if let Some(cf) = CanFrame::standard(id::of(m.msg_type()), f) {
+            if let Some(cf) = CanFrame::standard(cid, f) {
                 let _ = self.rx.push_back(cf);
             }
         }
@@ -230,6 +249,7 @@ fn main() -> ! {
         rx: heapless::Deque::new(),
         tx: Reassembler::new(),
         got: heapless::Vec::new(),
+        signer: None,
     };
     let ok = app
         .load_tir(gough_firmware::BUNDLED_TIR, ParamSource::Bundled)
@@ -322,7 +342,24 @@ fn main() -> ! {
         &mut fails,
     );
 
-    // 4. the application over a loopback driver
+    // 4. the application over a loopback driver; first without a key (refused), then with the
+    // test key, epoch 1.
+    let key =
+        Key::from_hex(include_str!("../../keys/test.key")).unwrap_or_else(|| mps2::exit(false));
+    let settings = Msg::Settings(Settings::default());
+    lb.signer = Some(Signer::new(key, MacLen::DEFAULT, 1, 0));
+    lb.send(app, &settings, 1);
+    lb.signer = None;
+    lb.send(app, &settings, 2);
+    lb.send(app, &Msg::Command(Command::Reset), 3);
+    let a = acks(&lb.finish(app));
+    check(
+        a.as_slice() == [AckCode::NoKey; 3] && app.status().auth.no_key == 3,
+        "auth: a device without a key refuses settings and reset, secured or not (NoKey, counted)",
+        &mut fails,
+    );
+    app.provision(Verifier::new(key, MacLen::DEFAULT, 1));
+    lb.signer = Some(Signer::new(key, MacLen::DEFAULT, 1, 0));
     let text = gough_firmware::BUNDLED_TIR.as_bytes();
     let hash = crc32(text);
     let mut seq = 0u8;
@@ -344,6 +381,90 @@ fn main() -> ! {
     check(
         matches!(a.as_slice(), [AckCode::Ok, AckCode::TirError { line: l }] if *l > 0),
         "upload of a bad .tir: rejected with its line",
+        &mut fails,
+    );
+    // Unsigned, forged (another key), replayed: each refused with its code, and counted.
+    let mut forger = Signer::new(Key::new([0x5a; 16]), MacLen::DEFAULT, 1, 0);
+    let replay = lb
+        .signer
+        .as_mut()
+        .and_then(|s| Segmenter::sealed(&settings, 7, Mtu::Classic, s).ok())
+        .unwrap_or_else(|| mps2::exit(false));
+    lb.send_seg(app, replay.clone(), id::CONFIG);
+    let signer = lb.signer.take();
+    lb.send(app, &settings, 8);
+    lb.signer = Some(forger.clone());
+    lb.send(app, &settings, 9);
+    lb.signer = signer;
+    lb.send_seg(app, replay.clone(), id::CONFIG);
+    let a = acks(&lb.finish(app));
+    hprintln!("unsigned, forged, replayed: {:?}", a.as_slice());
+    check(
+        a.as_slice()
+            == [
+                AckCode::Ok,
+                AckCode::MacMissing,
+                AckCode::BadMac,
+                AckCode::StaleFreshness,
+            ],
+        "auth: unsigned, forged and replayed settings refused with their own codes",
+        &mut fails,
+    );
+    // An upload with a replayed and a forged chunk in the middle: both refused, the upload goes on.
+    let mut next = || {
+        seq = seq.wrapping_add(1);
+        seq
+    };
+    lb.send(
+        app,
+        &Msg::ParamBegin(ParamBegin {
+            len: text.len() as u32,
+            hash,
+        }),
+        next(),
+    );
+    let mut last = None;
+    for (i, c) in text.chunks(CHUNK_LEN).enumerate() {
+        let data = Bytes::new(c).unwrap_or_else(|| mps2::exit(false));
+        let chunk = Msg::ParamChunk(ParamChunk {
+            offset: (i * CHUNK_LEN) as u32,
+            data,
+        });
+        let sq = next();
+        let seg = lb
+            .signer
+            .as_mut()
+            .and_then(|s| Segmenter::sealed(&chunk, sq, Mtu::Classic, s).ok())
+            .unwrap_or_else(|| mps2::exit(false));
+        lb.send_seg(app, seg.clone(), id::CONFIG);
+        if i == 10 {
+            if let Some(old) = last.take() {
+                lb.send_seg(app, old, id::CONFIG);
+            }
+            if let Ok(f) = Segmenter::sealed(&chunk, next(), Mtu::Classic, &mut forger) {
+                lb.send_seg(app, f, id::CONFIG);
+            }
+        }
+        last = Some(seg);
+    }
+    lb.send(app, &Msg::ParamCommit(ParamCommit { hash }), next());
+    let a = acks(&lb.finish(app));
+    let au = app.status().auth;
+    hprintln!(
+        "upload with a replayed and a forged chunk: {:?}; auth: epoch {} counter {} accepted {} no key {} missing {} bad mac {} stale {}",
+        a.as_slice(),
+        au.epoch,
+        au.counter,
+        au.accepted,
+        au.no_key,
+        au.missing,
+        au.bad_mac,
+        au.stale
+    );
+    check(
+        a.as_slice() == [AckCode::Ok, AckCode::StaleFreshness, AckCode::BadMac, AckCode::Ok]
+            && (au.missing, au.bad_mac, au.stale) == (1, 2, 2),
+        "auth: a replayed and a forged chunk refused, the upload still commits; all counted in Status",
         &mut fails,
     );
     lb.send(app, &Msg::Measurement(meas()), 1);
@@ -370,7 +491,39 @@ fn main() -> ! {
         &mut fails,
     );
 
-    // 5. the estimator: a slip-angle ramp at 1 kHz on the tyre's own surface (λμ = 1) to
+    // Counter wrap: the device at counter u32::MAX - 2; three secured settings go through, the
+    // third in the next epoch, which the device stores (the board's epoch_store).
+    static STORED: AtomicU32 = AtomicU32::new(0);
+    fn store(e: u32) -> bool {
+        STORED.store(e, Ordering::Relaxed);
+        true
+    }
+    let mut v = Verifier::new(key, MacLen::DEFAULT, 1);
+    v.set_counter(u32::MAX - 2);
+    app.provision(v);
+    app.epoch_store = Some(store);
+    lb.signer = Some(Signer::new(key, MacLen::DEFAULT, 1, u32::MAX - 2));
+    for i in 0..3 {
+        lb.send(app, &settings, 20 + i);
+    }
+    let a = acks(&lb.finish(app));
+    let au = app.status().auth;
+    hprintln!(
+        "counter wrap: {:?}; epoch {} counter {}, stored epoch {}",
+        a.as_slice(),
+        au.epoch,
+        au.counter,
+        STORED.load(Ordering::Relaxed)
+    );
+    check(
+        a.as_slice() == [AckCode::Ok; 3]
+            && (au.epoch, au.counter, au.accepted) == (2, 1, 3)
+            && STORED.load(Ordering::Relaxed) == 2,
+        "auth: counter wrap: the device moves to the next epoch and stores it",
+        &mut fails,
+    );
+
+    // 6. the estimator: a slip-angle ramp at 1 kHz on the tyre's own surface (λμ = 1) to
     // 0.1 rad in 0.3 s, held 0.2 s, the "measured" forces (Fy, Mz only) from the Magic Formula
     // itself; the estimate must find μy0. (Lateral force alone, the bank's σ reaches its
     // identifiable bound about 20 ms into the hold: the stream holds ten times that.)

@@ -1,6 +1,7 @@
 //! `gough firmware ...`: the firmware under QEMU, its UART bridged to TCP.
 use crate::device::{self, Qemu};
 use clap::{Args, Subcommand};
+use gough::proto::MacLen;
 use std::path::PathBuf;
 use std::time::Duration;
 
@@ -27,9 +28,19 @@ pub struct RunArgs {
     /// TCP port for UART0 (default: a free one, printed).
     #[arg(long)]
     pub port: Option<u16>,
-    /// Working directory of QEMU (the defmt log `firmware.defmt` lands there).
+    /// Working directory of QEMU (the defmt log `firmware.defmt` and the device's
+    /// non-volatile boot counter `gough-nv.bin` land there).
     #[arg(long, default_value = "target/qemu")]
     pub workdir: PathBuf,
+    /// Device key file (32 hexadecimal digits; `firmware/keys/test.key` is the TEST KEY): the
+    /// firmware is started with it provisioned (at "flash time", never on the bus), and
+    /// `gough replay` signs its state-changing messages with it. Without it the device has no
+    /// key and refuses every upload, settings, calibration, reset and stop.
+    #[arg(long, value_name = "KEY")]
+    pub key_file: Option<PathBuf>,
+    /// MAC length the device is provisioned with \[bytes, 4..=8\] (with `--key-file`).
+    #[arg(long, default_value_t = 8, value_parser = clap::value_parser!(u8).range(4..=8))]
+    pub mac_len: u8,
 }
 
 /// Starts the firmware of `args` under QEMU (building it first unless told not to).
@@ -43,7 +54,15 @@ pub fn start(args: &RunArgs) -> Result<Qemu, String> {
             device::firmware_elf("gough-firmware")
         }
     };
-    Qemu::start(&elf, &args.workdir, false, args.port)
+    let key = args.key_file.as_deref().map(device::read_key).transpose()?;
+    let mac_len = MacLen::new(args.mac_len).ok_or("--mac-len: 4..=8")?;
+    Qemu::start_keyed(
+        &elf,
+        &args.workdir,
+        false,
+        args.port,
+        key.as_ref().map(|k| (k, mac_len)),
+    )
 }
 
 /// `gough firmware run`

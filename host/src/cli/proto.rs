@@ -3,8 +3,8 @@ use crate::replay::{self, Answer, Backend32};
 use crate::tyre;
 use clap::Subcommand;
 use gough::proto::{
-    id, Ack, CompactBatch, CompactMeasurement, CompactResults, CompactWheelResult, Feed, Msg,
-    MsgType, Mtu, Reassembler, Segmenter, Settings, MSG_BUF,
+    auth, id, Ack, CompactBatch, CompactMeasurement, CompactResults, CompactWheelResult, Feed,
+    MacLen, Msg, MsgType, Mtu, Reassembler, Segmenter, Settings, Signer, MSG_BUF,
 };
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -18,6 +18,9 @@ pub enum ProtoCmd {
         /// signals) instead of classic CAN.
         #[arg(long)]
         fd: bool,
+        /// MAC length of the secured messages \[bytes, 4..=8\] (as provisioned on the device).
+        #[arg(long, default_value_t = 8, value_parser = clap::value_parser!(u8).range(4..=8))]
+        mac_len: u8,
         /// Write to this file instead of stdout.
         #[arg(long)]
         out: Option<PathBuf>,
@@ -47,6 +50,10 @@ pub enum ProtoCmd {
         /// wheel) as one four-wheel `CompactBatch`, answered by one `CompactResults`.
         #[arg(long, conflicts_with = "compact")]
         batch: bool,
+        /// Secure the state-changing messages (the `SetCalibration`s) with this key file, as
+        /// the device's owner sends them (8-byte MACs, epoch 1 from counter 1).
+        #[arg(long, value_name = "KEY")]
+        key_file: Option<PathBuf>,
         /// Write to this file instead of stdout.
         #[arg(long)]
         out: Option<PathBuf>,
@@ -58,6 +65,10 @@ pub enum ProtoCmd {
         /// Print the table as Markdown (docs/protocol.md).
         #[arg(long)]
         markdown: bool,
+        /// Every message secured with MACs of this many bytes (4..=8): the cost of
+        /// authenticating measurements and answers too (docs/protocol.md, "Security").
+        #[arg(long, value_name = "BYTES", value_parser = clap::value_parser!(u8).range(4..=8))]
+        auth_mac_len: Option<u8>,
     },
 }
 
@@ -74,10 +85,11 @@ fn emit(s: &str, out: Option<PathBuf>) -> Result<(), String> {
 /// `gough proto ...`
 pub fn run(cmd: ProtoCmd) -> Result<(), String> {
     match cmd {
-        ProtoCmd::Dbc { fd, out } => {
+        ProtoCmd::Dbc { fd, mac_len, out } => {
             let mtu = if fd { Mtu::Fd } else { Mtu::Classic };
+            let mac_len = MacLen::new(mac_len).ok_or("--mac-len: 4..=8")?;
             let mut s = String::new();
-            gough::proto::dbc::write(&mut s, mtu).map_err(|e| e.to_string())?;
+            gough::proto::dbc::write_with(&mut s, mtu, mac_len).map_err(|e| e.to_string())?;
             emit(&s, out)
         }
         ProtoCmd::Frames {
@@ -86,8 +98,14 @@ pub fn run(cmd: ProtoCmd) -> Result<(), String> {
             fd,
             compact,
             batch,
+            key_file,
             out,
         } => {
+            let mut signer = key_file
+                .as_deref()
+                .map(crate::device::read_key)
+                .transpose()?
+                .map(|k| Signer::new(k, MacLen::DEFAULT, 1, 0));
             let t = tyre::load(&tir)?;
             let mut rows = replay::read_log(&log).map_err(|e| e.to_string())?;
             let mut sent: Vec<Msg> = rows.iter().map(|m| Msg::Measurement(*m)).collect();
@@ -141,13 +159,19 @@ pub fn run(cmd: ProtoCmd) -> Result<(), String> {
             for m in &msgs {
                 let cid = id::of(m.msg_type());
                 let k = id::ALL.iter().position(|x| x.0 == cid).unwrap_or(0);
-                let line = frames_json(m, cid, seq[k], mtu, &mut rx[k])?;
+                let line = frames_json(m, cid, seq[k], mtu, &mut rx[k], signer.as_mut())?;
                 seq[k] = seq[k].wrapping_add(1);
                 writeln!(s, "{line}").map_err(|e| e.to_string())?;
             }
             emit(&s, out)
         }
-        ProtoCmd::Load { markdown } => emit(&crate::busload::table(markdown), None),
+        ProtoCmd::Load {
+            markdown,
+            auth_mac_len,
+        } => emit(
+            &crate::busload::table_with(markdown, auth_mac_len.and_then(MacLen::new)),
+            None,
+        ),
     }
 }
 
@@ -218,16 +242,27 @@ fn frames_json(
     seq: u8,
     mtu: Mtu,
     rx: &mut Reassembler<MSG_BUF>,
+    signer: Option<&mut Signer>,
 ) -> Result<String, String> {
-    let mut seg = Segmenter::new(m, seq, mtu).map_err(|e| e.to_string())?;
+    let mut seg = match signer {
+        Some(s) if auth::is_state_changing(m) => Segmenter::sealed(m, seq, mtu, s),
+        _ => Segmenter::new(m, seq, mtu),
+    }
+    .map_err(|e| e.to_string())?;
     let encoded = hex(seg.encoded());
     let mut buf = [0u8; 64];
     let mut frames = Vec::new();
     let mut decoded = None;
+    let mut secured = None;
     while let Some(f) = seg.next_frame(&mut buf) {
         frames.push(serde_json::Value::String(hex(f)));
         match rx.feed(f, 0) {
-            Feed::Done(d) => decoded = Some(d),
+            Feed::Done(d) => {
+                decoded = Some(d);
+                if let Ok((_, Some(t))) = Msg::decode_secured(rx.last()) {
+                    secured = Some(serde_json::json!({"counter": t.counter, "mac": hex(t.mac)}));
+                }
+            }
             Feed::Pending => {}
             Feed::Dropped(e) => return Err(format!("the host's reassembler dropped a frame: {e}")),
         }
@@ -298,9 +333,14 @@ fn frames_json(
             o.insert("flags".into(), f.into());
         }
     }
+    let kind = match secured {
+        Some(_) => format!("{kind}Secured"),
+        None => kind.to_string(),
+    };
     let v = serde_json::json!({
         "id": cid,
         "type": kind,
+        "secured": secured,
         "frames": frames,
         "encoded": encoded,
         "msg": body,

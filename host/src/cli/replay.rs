@@ -79,6 +79,23 @@ pub fn run(a: ReplayArgs) -> Result<(), String> {
         "device: firmware {}.{}.{}, protocol v{}, parameters {:?} {:08x}",
         s.firmware[0], s.firmware[1], s.firmware[2], s.proto, s.source, s.param_hash
     );
+    match a.run.key_file.as_deref() {
+        Some(k) => {
+            dev.authenticate(crate::device::read_key(k)?)?;
+            let s = dev
+                .signer
+                .as_ref()
+                .map(|s| s.freshness())
+                .unwrap_or_default();
+            eprintln!(
+                "signing with {} (device epoch {}, counter {})",
+                k.display(),
+                s.0,
+                s.1
+            );
+        }
+        None => eprintln!("no --key-file: the upload goes unsigned (a device refuses it)"),
+    }
     let hash = dev.upload_tir(&text)?;
     eprintln!(
         "uploaded {} ({} bytes, crc32 {hash:08x}) in {:.2} s",

@@ -9,8 +9,9 @@ use embedded_can::blocking::Can;
 use embedded_can::Frame as _;
 use gough::proto::slcan::{self, CanFrame, Decoder, Line};
 use gough::proto::{
-    crc32, id, link, AckCode, Bytes, Command, Feed, Msg, MsgType, ParamBegin, ParamChunk,
-    ParamCommit, Reassembler, Status, CHUNK_LEN, MSG_BUF,
+    auth, crc32, id, link, AckCode, Bytes, Command, Feed, Key, MacLen, Msg, MsgType, Mtu,
+    ParamBegin, ParamChunk, ParamCommit, Reassembler, Segmenter, Signer, Status, CHUNK_LEN,
+    MSG_BUF,
 };
 use std::io::{Read, Write};
 use std::net::TcpStream;
@@ -154,6 +155,19 @@ pub struct Device {
     rx_status: Reassembler<MSG_BUF>,
     seq: [u8; 2],
     t0: Instant,
+    /// Secures the state-changing messages [`Device::send`] sends ([`Device::authenticate`]).
+    pub signer: Option<Signer>,
+}
+
+/// The key of a key file (32 hexadecimal digits; `#` comment lines allowed).
+pub fn read_key(path: &std::path::Path) -> Result<Key, String> {
+    let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    Key::from_hex(&text).ok_or_else(|| {
+        format!(
+            "{}: not a key file (32 hexadecimal digits on one line)",
+            path.display()
+        )
+    })
 }
 
 impl Device {
@@ -165,16 +179,33 @@ impl Device {
             rx_status: Reassembler::new(),
             seq: [0; 2],
             t0: Instant::now(),
+            signer: None,
         }
     }
 
-    /// Sends one message on its identifier; returns the sequence number used.
+    /// Signs from now on with `key`: reads the device's status for its MAC length, epoch and
+    /// last accepted counter (`Status::auth`). Fails when the device has no key.
+    pub fn authenticate(&mut self, key: Key) -> Result<(), String> {
+        let s = self.status(Duration::from_secs(20))?.auth;
+        let mac_len = MacLen::new(s.mac_len)
+            .ok_or("the device has no key: it refuses every state-changing message")?;
+        self.signer = Some(Signer::new(key, mac_len, s.epoch, s.counter));
+        Ok(())
+    }
+
+    /// Sends one message on its identifier, secured when it changes the device's state and a
+    /// signer is set ([`Device::authenticate`]); returns the sequence number used.
     pub fn send(&mut self, msg: &Msg) -> Result<u8, String> {
         let cid = id::of(msg.msg_type());
         let k = usize::from(cid == id::CONFIG);
         let seq = self.seq[k];
         self.seq[k] = seq.wrapping_add(1);
-        link::send_blocking(&mut self.link, cid, seq, msg).map_err(|e| e.to_string())?;
+        let seg = match self.signer.as_mut() {
+            Some(s) if auth::is_state_changing(msg) => Segmenter::sealed(msg, seq, Mtu::Classic, s),
+            _ => Segmenter::new(msg, seq, Mtu::Classic),
+        }
+        .map_err(|e| e.to_string())?;
+        link::send_segments_blocking(&mut self.link, cid, seg).map_err(|e| e.to_string())?;
         Ok(seq)
     }
 

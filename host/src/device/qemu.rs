@@ -2,11 +2,17 @@
 //! protocol firmware with its UART0 bridged to TCP; [`run`] runs a bench or test image to its
 //! exit and returns what it printed. `gough firmware`, `gough replay`, the firmware tests and
 //! `cargo xtask` all start QEMU here.
+use gough::proto::auth::slot;
+use gough::proto::{Key, MacLen};
 use std::io::Read;
 use std::net::TcpListener;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command as Proc, Stdio};
 use std::time::{Duration, Instant};
+
+/// Where the firmware reads its key slot (`firmware/src/mps2.rs` `KEY_SLOT`; outside the image,
+/// `memory.x`).
+pub const KEY_SLOT: u32 = 0x003F_FF00;
 
 /// A QEMU board: its `-cpu` and `-machine`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -147,6 +153,20 @@ impl Qemu {
         quiet: bool,
         port: Option<u16>,
     ) -> Result<Qemu, String> {
+        Qemu::start_keyed(elf, workdir, quiet, port, None)
+    }
+
+    /// As [`Qemu::start`], the device provisioned at "flash time" with `key` and MACs of its
+    /// length: the key slot (`gough::proto::auth::slot`) written to `workdir/key-slot.bin` and
+    /// loaded by QEMU's `-device loader` at the firmware's `KEY_SLOT` (0x003F_FF00), never sent
+    /// on the bus. `None`: no key (the device refuses every state-changing message).
+    pub fn start_keyed(
+        elf: &Path,
+        workdir: &Path,
+        quiet: bool,
+        port: Option<u16>,
+        key: Option<(&Key, MacLen)>,
+    ) -> Result<Qemu, String> {
         if !elf.exists() {
             return Err(format!(
                 "{}: no such firmware binary (build it: cargo build --release in firmware/)",
@@ -166,6 +186,19 @@ impl Qemu {
         cmd.args(["-display", "none", "-monitor", "none"])
             .arg("-serial")
             .arg(format!("tcp:127.0.0.1:{port},server=on,wait=on"));
+        let slot_file = workdir.join("key-slot.bin");
+        let _ = std::fs::remove_file(&slot_file);
+        if let Some((k, n)) = key {
+            std::fs::write(&slot_file, slot::encode(k, n))
+                .map_err(|e| format!("{}: {e}", slot_file.display()))?;
+            let slot_file = slot_file
+                .canonicalize()
+                .map_err(|e| format!("{}: {e}", slot_file.display()))?;
+            cmd.arg("-device").arg(format!(
+                "loader,file={},addr={KEY_SLOT:#x},force-raw=on",
+                slot_file.display()
+            ));
+        }
         if quiet {
             cmd.stdout(Stdio::null());
         }
