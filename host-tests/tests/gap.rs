@@ -436,7 +436,7 @@ fn the_mu_error_of_a_cold_tyre_is_put_down_to_the_thermal_effect() {
 }
 
 /// A log's sampling out of range (`gap::bench::Sampling`: truth rate, jitter, drop; and a bench
-/// rate) is a one-line error naming the flag, from the library and from the CLI (exit code ≠ 0,
+/// rate or magnitude) is a one-line error naming the flag, from the library and from the CLI (exit code ≠ 0,
 /// nothing written); NaN is out of range.
 #[test]
 fn bad_sampling_gives_one_line_errors_naming_the_flag() {
@@ -502,10 +502,17 @@ fn bad_sampling_gives_one_line_errors_naming_the_flag() {
         );
         assert!(!out.exists(), "{args:?} wrote {}", out.display());
     }
-    let o = Command::new(gough_host_tests::gough_bin())
-        .args(["gap", "bench", "--quick", "--rates", "50,0"])
-        .output()
-        .unwrap();
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert!(!o.status.success() && err.contains("--rates"), "{err}");
+    for (args, flag) in [
+        (&["--rates", "50,0"][..], "--rates"),
+        (&["--magnitudes", "1,-0.3"][..], "--magnitudes"),
+        (&["--magnitudes", "NaN"][..], "--magnitudes"),
+    ] {
+        let o = Command::new(gough_host_tests::gough_bin())
+            .args(["gap", "bench", "--quick"])
+            .args(args)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success() && err.contains(flag), "{args:?}: {err}");
+    }
 }

@@ -60,6 +60,10 @@ pub enum GapCmd {
         /// them); default every effect.
         #[arg(long, value_name = "LIST")]
         effects: Option<String>,
+        /// Effect magnitudes, comma-separated (default 1,0.3,0.1; `--quick` 1): e.g. `1,0.3`
+        /// for the logs the targets are stated on.
+        #[arg(long, value_name = "M,...", value_delimiter = ',')]
+        magnitudes: Vec<f64>,
     },
     /// Generate a log from the benchmark's truth model (SIM.tir with one effect switched on).
     Generate {
@@ -230,6 +234,7 @@ pub fn run(cmd: GapCmd) -> Result<(), String> {
             rates,
             sampling,
             effects,
+            magnitudes,
         } => {
             let dir = tyres.unwrap_or_else(|| {
                 Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -248,6 +253,13 @@ pub fn run(cmd: GapCmd) -> Result<(), String> {
             }
             if let Some(list) = &effects {
                 cfg.effects = effect_arg(list)?;
+            }
+            if let Some(m) = magnitudes.iter().find(|m| !(m.is_finite() && **m > 0.0)) {
+                return Err(format!("--magnitudes: {m} is not a magnitude (> 0)"));
+            }
+            let magnitudes_given = !magnitudes.is_empty();
+            if magnitudes_given {
+                cfg.magnitudes = magnitudes;
             }
             let start = std::time::Instant::now();
             let res = bench::run(&cfg)?;
@@ -275,6 +287,10 @@ pub fn run(cmd: GapCmd) -> Result<(), String> {
             }
             if let Some(l) = &effects {
                 flags += &format!(" --effects {l}");
+            }
+            if magnitudes_given {
+                let m: Vec<String> = cfg.magnitudes.iter().map(|m| m.to_string()).collect();
+                flags += &format!(" --magnitudes {}", m.join(","));
             }
             text += &format!(
                 "\nCommand: `cargo run --release --bin gough -- gap bench{}` ({:.0} s wall with {} job(s)).\n",
