@@ -35,6 +35,7 @@ const TARGETS: [&str; 3] = [
 ];
 
 fn main() -> ExitCode {
+    START.get_or_init(std::time::Instant::now);
     let task = std::env::args().nth(1).unwrap_or_default();
     let result = match task.as_str() {
         "test-all" => test_all(),
@@ -78,8 +79,18 @@ fn root() -> std::path::PathBuf {
     std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
 }
 
+/// When the task started: every step's header and the summary give the time since then (which
+/// step costs what, from the log of one run).
+static START: std::sync::OnceLock<std::time::Instant> = std::sync::OnceLock::new();
+
+/// mm:ss since the task started.
+fn elapsed() -> String {
+    let s = START.get_or_init(std::time::Instant::now).elapsed().as_secs();
+    format!("{:02}:{:02}", s / 60, s % 60)
+}
+
 fn step(name: &str) {
-    eprintln!("\n==> {name}");
+    eprintln!("\n==> [{}] {name}", elapsed());
 }
 
 fn run(cmd: &mut Command) -> Result<(), String> {
@@ -410,6 +421,9 @@ fn test_all() -> Result<(), String> {
     ensure_qemu()?;
     firmware::test_all(&mut passed)?;
     capi::test_all(&firmware::elf("capi_ref"), &mut passed)?;
-    println!("\ntest-all: {passed} passed, {failed} failed");
+    println!(
+        "\ntest-all: {passed} passed, {failed} failed in {} (mm:ss)",
+        elapsed()
+    );
     Ok(())
 }
