@@ -85,7 +85,10 @@ static START: std::sync::OnceLock<std::time::Instant> = std::sync::OnceLock::new
 
 /// mm:ss since the task started.
 fn elapsed() -> String {
-    let s = START.get_or_init(std::time::Instant::now).elapsed().as_secs();
+    let s = START
+        .get_or_init(std::time::Instant::now)
+        .elapsed()
+        .as_secs();
     format!("{:02}:{:02}", s / 60, s % 60)
 }
 
