@@ -232,17 +232,9 @@ pub fn test_m4f(passed: &mut u64) -> Result<(), String> {
     must_fail("hardfault", "HardFault")?;
     *passed += 2;
     step("firmware <-> host over SLCAN/TCP: replay equals the host's f32 run, garbage is counted");
-    crate::cargo_test(
-        &[
-            "-p",
-            "gough-host-tests",
-            "--test",
-            "firmware",
-            "--",
-            "--ignored",
-            "--test-threads",
-            "1",
-        ],
+    crate::workspace_test(
+        "firmware",
+        &["--ignored", "--test-threads", "1"],
         passed,
         &mut 0,
     )?;

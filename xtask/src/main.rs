@@ -115,7 +115,56 @@ fn cargo() -> Command {
 /// Runs `cargo test ...`, echoing its output, and adds up the "test result" lines.
 fn cargo_test(args: &[&str], passed: &mut u64, failed: &mut u64) -> Result<(), String> {
     let mut c = cargo();
-    c.arg("test").args(args).stdout(Stdio::piped());
+    c.arg("test").args(args);
+    count_tests(c, passed, failed)
+}
+
+/// Runs the test target `name` as `cargo test --workspace` built it (`args` to the test
+/// binary), from its package's directory as cargo runs it, adding up its results. Not `cargo
+/// test -p PKG --test NAME`: that resolves the features of that package alone, and rebuilt the
+/// core, the host and the tests (74 s of the fresh-clone run) for one test binary.
+fn workspace_test(
+    name: &str,
+    args: &[&str],
+    passed: &mut u64,
+    failed: &mut u64,
+) -> Result<(), String> {
+    let mut c = cargo();
+    c.args(["test", "--workspace", "--no-run", "--message-format=json"])
+        .stdout(Stdio::piped());
+    let out = c.output().map_err(|e| format!("{c:?}: {e}"))?;
+    if !out.status.success() {
+        return Err(format!("{c:?} exited with {}", out.status));
+    }
+    let text = String::from_utf8_lossy(&out.stdout);
+    let found = text.lines().find_map(|line| {
+        let v: serde_json::Value = serde_json::from_str(line).ok()?;
+        let target = v.get("target")?;
+        let is_test = target
+            .get("kind")?
+            .as_array()?
+            .iter()
+            .any(|k| k.as_str() == Some("test"));
+        if v.get("reason")?.as_str()? != "compiler-artifact"
+            || target.get("name")?.as_str()? != name
+            || !is_test
+        {
+            return None;
+        }
+        let exe = v.get("executable")?.as_str()?;
+        let manifest = v.get("manifest_path")?.as_str()?;
+        let dir = std::path::Path::new(manifest).parent()?.to_path_buf();
+        Some((std::path::PathBuf::from(exe), dir))
+    });
+    let (exe, dir) = found.ok_or_else(|| format!("no test target '{name}' in the workspace"))?;
+    let mut t = Command::new(exe);
+    t.args(args).current_dir(dir);
+    count_tests(t, passed, failed)
+}
+
+/// Runs a test command, echoing its output, and adds up the "test result" lines.
+fn count_tests(mut c: Command, passed: &mut u64, failed: &mut u64) -> Result<(), String> {
+    c.stdout(Stdio::piped());
     let shown = format!("{c:?}");
     let mut child = c.spawn().map_err(|e| format!("{shown}: {e}"))?;
     if let Some(out) = child.stdout.take() {
