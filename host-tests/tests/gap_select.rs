@@ -80,15 +80,27 @@ const SPEED: Effect = Effect::SpeedDependentFriction;
 #[test]
 fn thermal_and_speed_friction_are_told_apart_where_the_programme_varies_them_independently() {
     // The test-trailer programme: Vx, α, κ, Fz each their own multisine, so the slip speed and
-    // the (low-passed) slip power move independently of each other.
-    for (file, seed) in [
-        ("MagicFormula61_Parameters.tir", 2),
-        ("reference_tire_tvd3.tir", 3),
-    ] {
-        let p = tyre(file);
-        for (truth, other) in [(THERMAL, SPEED), (SPEED, THERMAL)] {
-            let lg = with_truth(&p, bench::inputs(&p, &cfg(1500, seed)), &[truth], seed);
-            let d = diagnose(p.clone(), &lg, 300);
+    // the (low-passed) slip power move independently of each other. The four diagnoses in
+    // parallel (the CI machine's cores).
+    let cases = [
+        ("MagicFormula61_Parameters.tir", 2, THERMAL, SPEED),
+        ("MagicFormula61_Parameters.tir", 2, SPEED, THERMAL),
+        ("reference_tire_tvd3.tir", 3, THERMAL, SPEED),
+        ("reference_tire_tvd3.tir", 3, SPEED, THERMAL),
+    ];
+    std::thread::scope(|s| {
+        let handles: Vec<_> = cases
+            .iter()
+            .map(|&(file, seed, truth, other)| {
+                s.spawn(move || {
+                    let p = tyre(file);
+                    let lg = with_truth(&p, bench::inputs(&p, &cfg(1500, seed)), &[truth], seed);
+                    (file, truth, other, diagnose(p, &lg, 300))
+                })
+            })
+            .collect();
+        for h in handles {
+            let (file, truth, other, d) = h.join().unwrap();
             assert_eq!(
                 d.verdict,
                 Some(truth),
@@ -101,7 +113,7 @@ fn thermal_and_speed_friction_are_told_apart_where_the_programme_varies_them_ind
                 d.report.verdict
             );
         }
-    }
+    });
 }
 
 #[test]
