@@ -47,8 +47,8 @@
 use gough::mf::Params;
 use gough::proto::{
     self, crc32, id, link, Ack, AckCode, CalibrationState, Command, CompactBatch, CompactResults,
-    CompactWheelResult, Estimate, Feed, Forces, Measurement, Msg, MsgType, ParamSource,
-    Mtu, Reassembler, Segmenter, Settings, Status, Verifier, Wheel, MAX_TIR_LEN, MSG_BUF,
+    CompactWheelResult, Estimate, Feed, Forces, Measurement, Msg, MsgType, Mtu, ParamSource,
+    Reassembler, Segmenter, Settings, Status, Verifier, Wheel, MAX_TIR_LEN, MSG_BUF,
 };
 use gough::wheel::{self, Car};
 

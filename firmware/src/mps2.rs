@@ -257,8 +257,11 @@ unsafe fn HardFault(frame: &cortex_m_rt::ExceptionFrame) -> ! {
 pub const KEY_SLOT: usize = 0x003F_FF00;
 
 /// The key provisioned in [`KEY_SLOT`], if any, its MAC length and what it authenticates.
-pub fn provisioned_key() -> Option<(gough::proto::Key, gough::proto::MacLen, gough::proto::Policy)>
-{
+pub fn provisioned_key() -> Option<(
+    gough::proto::Key,
+    gough::proto::MacLen,
+    gough::proto::Policy,
+)> {
     // SAFETY: KEY_SLOT is mapped memory (SSRAM1, 4 MB) that nothing else writes.
     let s =
         unsafe { core::ptr::read_volatile(KEY_SLOT as *const [u8; gough::proto::auth::slot::LEN]) };

@@ -18,9 +18,10 @@
 //! **Freshness.** The device's *epoch* is a boot counter kept in its non-volatile memory, raised
 //! once per boot (so a message of an earlier boot never verifies again) and once per counter
 //! wrap; within an epoch the device accepts a counter only if it is above the last one it
-//! accepted and at most [`WINDOW`] above it (a replayed, reordered or duplicated message is
-//! stale). Having accepted counter `u32::MAX` the device moves to epoch + 1 and counter 0, and so
-//! does the [`Signer`]: the counter never wraps within an epoch. The epoch and the last accepted
+//! accepted on the message's identifier and at most [`WINDOW`] above the highest it accepted
+//! (a replayed, reordered or duplicated message is stale; below, "Freshness per identifier").
+//! Having accepted counter `u32::MAX` the device moves to epoch + 1 and counter 0, and so does
+//! the [`Signer`]: the counter never wraps within an epoch. The epoch and the highest accepted
 //! counter are public (`Status::auth`): a sender that starts reads them and continues.
 //!
 //! Checked in order by [`Verifier::open`]: a device without a key refuses every
