@@ -580,6 +580,10 @@ fn with_every_message_authenticated_bad_measurements_are_refused_unanswered_and_
     let a = *dev.answers.as_ref().unwrap().status();
     assert_eq!((a.missing, a.bad_mac, a.stale), (0, 0, 0), "{a:?}");
     assert!(a.accepted >= 6, "{a:?}");
+    // A tool that would sign the state-changing messages only is told what the device wants.
+    let e = dev.authenticate(test_key()).unwrap_err();
+    assert!(e.contains("--secure-all"), "{e}");
+    dev.authenticate_all(test_key()).unwrap();
     dev.send(&Msg::Command(Command::Stop)).unwrap();
     assert_eq!(q.wait(Duration::from_secs(20)), Some(0));
 }

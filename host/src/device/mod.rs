@@ -190,9 +190,25 @@ impl Device {
     }
 
     /// Signs from now on with `key`: reads the device's status for its MAC length, epoch and
-    /// last accepted counter (`Status::auth`). Fails when the device has no key.
+    /// highest accepted counter (`Status::auth`). Fails when the device has no key, or signs
+    /// its answers (then every message must be signed: [`Device::authenticate_all`]).
     pub fn authenticate(&mut self, key: Key) -> Result<(), String> {
-        let s = self.status(Duration::from_secs(20))?.auth;
+        self.answers = None;
+        self.send(&Msg::Command(Command::StatusRequest))?;
+        let deadline = Instant::now() + Duration::from_secs(20);
+        let (s, bytes) = loop {
+            let left = deadline.saturating_duration_since(Instant::now());
+            if let (Msg::Status(s), bytes) = self.recv_raw(left)? {
+                break (s.auth, bytes);
+            }
+        };
+        if matches!(Msg::decode_secured(&bytes), Ok((_, Some(_)))) {
+            return Err(
+                "the device authenticates every message (provisioned with --secure-all): \
+                        sign with --secure-all"
+                    .into(),
+            );
+        }
         let mac_len = MacLen::new(s.mac_len)
             .ok_or("the device has no key: it refuses every state-changing message")?;
         self.signer = Some(Signer::new(key, mac_len, s.epoch, s.counter));
