@@ -33,9 +33,9 @@
 //!
 //! **Policy.** What must be secured is provisioned with the key ([`Policy`], in the key
 //! [`slot`]), never set from the bus: [`Policy::StateChanging`] (the default) or [`Policy::All`],
-//! under which every message the device receives (measurements and status requests too) must be
-//! secured (but the status request, which synchronises a sender's freshness: [`Policy::All`])
-//! and the device secures every message it sends ([`Verifier::seal`], its own transmit counter
+//! under which every message the device receives must be secured, measurements too (but the
+//! status request, which synchronises a sender's freshness: [`Policy::All`]), and the device
+//! secures every message it sends ([`Verifier::seal`], its own transmit counter
 //! in the same epoch; the CAN identifier in the MAC keeps the directions apart).
 //!
 //! **Freshness per identifier.** Messages on different identifiers are reassembled
