@@ -281,7 +281,9 @@ def read_key(path) -> bytes:
 
 class Signer:
     """The device owner's end of the protocol's authentication (docs/protocol.md, "Security"):
-    secures state-changing messages with the device key by the core's own `auth::Signer`.
+    secures state-changing messages with the device key by the core's own `auth::Signer` (and,
+    for a device that authenticates every message, `--secure-all`, measurements too: any message
+    seals; check that device's answers with `Verifier`).
 
     `epoch` and `counter` are the device's (its `Status.auth`: the epoch and the last counter it
     accepted); each `seal` takes the next counter, and after counter 2**32 - 1 the next epoch, as
