@@ -597,10 +597,13 @@ def secure_all(a, key, mac_len=8):
         rx = Receiver(bus, v)
 
         def forces_t():
+            """The next Forces' t_us; only Estimates may come before it (no Ack: a refused
+            measurement is not answered)."""
             while True:
                 t, body = rx.recv()
                 if t == T_FORCES:
                     return decode_forces(body)[1]
+                assert t == T_ESTIMATE, f"unexpected answer type {t:#x}"
 
         meas = lambda t_us: measurement(1, t_us, 4000.0, -1000.0, 10.0, 20.0, 0.02, 0.01)
         sealed = lambda t_us: signer.seal(ID_MEASUREMENT, T_MEASUREMENT, meas(t_us)[2:-4])

@@ -512,10 +512,13 @@ fn with_every_message_authenticated_bad_measurements_are_refused_unanswered_and_
             ..Measurement::default()
         })
     };
+    // The next Forces' sample time; anything else before it must be an Estimate or a
+    // Calibration report (no Ack, no Forces of a refused measurement).
     let forces_t = |dev: &mut Device| loop {
         match dev.recv(Duration::from_secs(10)).unwrap() {
             Msg::Forces(f) => break f.t_us,
-            _ => continue,
+            Msg::Estimate(_) | Msg::Calibration(_) => continue,
+            other => panic!("unexpected answer {other:?}"),
         }
     };
     dev.send(&m(1)).unwrap();
