@@ -81,6 +81,13 @@
 #define GOUGH_E_CAL_BOUNDS -11
 
 /**
+ * A message was refused by its verifier (`gough_rx_feed_secured`): not secured, a MAC that does
+ * not verify (forged, altered, another key or epoch) or a stale counter; counted in the
+ * verifier (`gough_verifier_counts`). Nothing of it is returned.
+ */
+#define GOUGH_E_AUTH -12
+
+/**
  * Bytes of a `gough_params_t` (a parsed `.tir` file: f64 and f32 parameters).
  */
 #define GOUGH_PARAMS_SIZE 2624
@@ -106,6 +113,12 @@
 #define GOUGH_PREVIEW_SIZE 512
 
 /**
+ * Bytes of a `gough_verifier_t` (the checking of a device's secured answers,
+ * `gough::proto::auth::Verifier`: the keyed AES-CMAC and the counters).
+ */
+#define GOUGH_VERIFIER_SIZE 896
+
+/**
  * 64-bit words of a `gough_params_t`.
  */
 #define GOUGH_PARAMS_WORDS (GOUGH_PARAMS_SIZE / 8)
@@ -129,6 +142,11 @@
  * 64-bit words of a `gough_preview_t`.
  */
 #define GOUGH_PREVIEW_WORDS (GOUGH_PREVIEW_SIZE / 8)
+
+/**
+ * 64-bit words of a `gough_verifier_t`.
+ */
+#define GOUGH_VERIFIER_WORDS (GOUGH_VERIFIER_SIZE / 8)
 
 /**
  * `gough_measurement_t::present`: Fx is measured.
@@ -905,6 +923,13 @@ typedef struct gough_signer_t {
    * 0xFFFFFFFF the signer moves to epoch + 1, counter 0, as the device does.
    */
   uint32_t counter;
+  /**
+   * Nonzero: secure every message (measurements, status requests too), for a device
+   * provisioned to authenticate every message (`gough firmware run --secure-all`); its
+   * answers are checked by a `gough_verifier_t` ([`gough_rx_feed_secured`]). 0: the
+   * state-changing messages only.
+   */
+  uint32_t all;
 } gough_signer_t;
 
 /**
@@ -913,6 +938,44 @@ typedef struct gough_signer_t {
 typedef struct gough_rx_t {
   uint64_t _opaque[GOUGH_RX_WORDS];
 } gough_rx_t;
+
+/**
+ * The checking of a device's secured answers (`gough_verifier_init`). Opaque; holds the
+ * keyed AES-CMAC (the key's round keys), never read it.
+ */
+typedef struct gough_verifier_t {
+  uint64_t _opaque[GOUGH_VERIFIER_WORDS];
+} gough_verifier_t;
+
+/**
+ * What a `gough_verifier_t` counted (`gough_verifier_counts`).
+ */
+typedef struct gough_auth_counts_t {
+  /**
+   * Messages accepted.
+   */
+  uint32_t accepted;
+  /**
+   * Refused: not secured.
+   */
+  uint32_t missing;
+  /**
+   * Refused: a MAC of the wrong length or value.
+   */
+  uint32_t bad_mac;
+  /**
+   * Refused: a counter not above the last accepted on its identifier, or too far above.
+   */
+  uint32_t stale;
+  /**
+   * The epoch, and the highest counter accepted in it.
+   */
+  uint32_t epoch;
+  /**
+   * The highest counter accepted in the epoch.
+   */
+  uint32_t counter;
+} gough_auth_counts_t;
 
 #ifdef __cplusplus
 extern "C" {
@@ -1090,7 +1153,7 @@ int32_t gough_msg_encode(const struct gough_msg_t *msg,
  * As [`gough_msg_encode`], a state-changing message (`GOUGH_MSG_PARAM_BEGIN`, `_CHUNK`,
  * `_COMMIT`, `GOUGH_MSG_SETTINGS`, `GOUGH_MSG_SET_CALIBRATION`, a reset or stop command)
  * secured with `*signer`'s key and next counter (AES-128-CMAC truncated to `mac_len` bytes);
- * every other message unsecured. `GOUGH_E_ARG` also for a `mac_len` outside 4..=8. The signer
+ * every other message unsecured, unless `signer->all` is set (then every message is secured). `GOUGH_E_ARG` also for a `mac_len` outside 4..=8. The signer
  * advances only when frames were written.
  */
 int32_t gough_msg_encode_secured(struct gough_signer_t *signer,
@@ -1114,6 +1177,38 @@ int32_t gough_rx_feed(struct gough_rx_t *rx,
                       const struct gough_frame_t *frame,
                       uint32_t now_ms,
                       struct gough_msg_t *out);
+
+/**
+ * Starts checking (in `*v`, which must not be copied or moved afterwards: initialise a new
+ * one instead) the secured answers of a device that authenticates every message
+ * (`gough firmware run --secure-all`; docs/protocol.md, "Security"): its 16-byte `key` (a
+ * key file's 32 hexadecimal digits), MAC length (4..=8, its `Status`), its `epoch`, and the
+ * device's transmit counter to continue above (the counter of a `Status` it sent, less one).
+ * Each answer must then be secured, its MAC verify, and its counter be above the last one
+ * accepted on its CAN identifier (at most 65,536 above the highest). `GOUGH_E_ARG`: `mac_len`
+ * outside 4..=8.
+ */
+int32_t gough_verifier_init(struct gough_verifier_t *v,
+                            const uint8_t *key,
+                            uint32_t mac_len,
+                            uint32_t epoch,
+                            uint32_t counter);
+
+/**
+ * As [`gough_rx_feed`], and a message it completes is checked by `*v` (its MAC over the
+ * frame's identifier, its freshness): `GOUGH_E_AUTH` (and `kind = GOUGH_MSG_NONE`) when it is
+ * refused — not secured, forged or altered, another key or epoch, stale — counted in `*v`.
+ */
+int32_t gough_rx_feed_secured(struct gough_rx_t *rx,
+                              struct gough_verifier_t *v,
+                              const struct gough_frame_t *frame,
+                              uint32_t now_ms,
+                              struct gough_msg_t *out);
+
+/**
+ * The counts of `*v` into `*out`.
+ */
+int32_t gough_verifier_counts(const struct gough_verifier_t *v, struct gough_auth_counts_t *out);
 
 #ifdef __cplusplus
 }  // extern "C"

@@ -31,3 +31,7 @@ pub const GOUGH_E_CAL_INVALID: i32 = -10;
 /// A calibration was refused: a value lies beyond the bound the estimator keeps it in (4 prior
 /// σ: `CalibrationError::OutOfBounds`). The calibration in use stays.
 pub const GOUGH_E_CAL_BOUNDS: i32 = -11;
+/// A message was refused by its verifier (`gough_rx_feed_secured`): not secured, a MAC that does
+/// not verify (forged, altered, another key or epoch) or a stale counter; counted in the
+/// verifier (`gough_verifier_counts`). Nothing of it is returned.
+pub const GOUGH_E_AUTH: i32 = -12;

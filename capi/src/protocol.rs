@@ -512,12 +512,17 @@ pub struct gough_signer_t {
     /// The last counter used: the device's last accepted counter at the start. After counter
     /// 0xFFFFFFFF the signer moves to epoch + 1, counter 0, as the device does.
     pub counter: u32,
+    /// Nonzero: secure every message (measurements, status requests too), for a device
+    /// provisioned to authenticate every message (`gough firmware run --secure-all`); its
+    /// answers are checked by a `gough_verifier_t` ([`gough_rx_feed_secured`]). 0: the
+    /// state-changing messages only.
+    pub all: u32,
 }
 
 /// As [`gough_msg_encode`], a state-changing message (`GOUGH_MSG_PARAM_BEGIN`, `_CHUNK`,
 /// `_COMMIT`, `GOUGH_MSG_SETTINGS`, `GOUGH_MSG_SET_CALIBRATION`, a reset or stop command)
 /// secured with `*signer`'s key and next counter (AES-128-CMAC truncated to `mac_len` bytes);
-/// every other message unsecured. `GOUGH_E_ARG` also for a `mac_len` outside 4..=8. The signer
+/// every other message unsecured, unless `signer->all` is set (then every message is secured). `GOUGH_E_ARG` also for a `mac_len` outside 4..=8. The signer
 /// advances only when frames were written.
 #[no_mangle]
 pub unsafe extern "C" fn gough_msg_encode_secured(
@@ -540,7 +545,7 @@ pub unsafe extern "C" fn gough_msg_encode_secured(
             .ok_or(GOUGH_E_ARG)?;
         let id = proto::id::of(m.msg_type());
         let mut s = proto::Signer::new(proto::Key::new(st.key), mac_len, st.epoch, st.counter);
-        let seg = if proto::auth::is_state_changing(&m) {
+        let seg = if st.all != 0 || proto::auth::is_state_changing(&m) {
             Segmenter::sealed(&m, seq, Mtu::Classic, &mut s)
         } else {
             Segmenter::new(&m, seq, Mtu::Classic)
@@ -600,5 +605,127 @@ pub unsafe extern "C" fn gough_rx_feed(
         // SAFETY: non-null, the caller's output.
         unsafe { out.write(msg) };
         code
+    })
+}
+
+/// Starts checking (in `*v`, which must not be copied or moved afterwards: initialise a new
+/// one instead) the secured answers of a device that authenticates every message
+/// (`gough firmware run --secure-all`; docs/protocol.md, "Security"): its 16-byte `key` (a
+/// key file's 32 hexadecimal digits), MAC length (4..=8, its `Status`), its `epoch`, and the
+/// device's transmit counter to continue above (the counter of a `Status` it sent, less one).
+/// Each answer must then be secured, its MAC verify, and its counter be above the last one
+/// accepted on its CAN identifier (at most 65,536 above the highest). `GOUGH_E_ARG`: `mac_len`
+/// outside 4..=8.
+#[no_mangle]
+pub unsafe extern "C" fn gough_verifier_init(
+    v: *mut gough_verifier_t,
+    key: *const u8,
+    mac_len: u32,
+    epoch: u32,
+    counter: u32,
+) -> i32 {
+    ret(|| {
+        if v.is_null() || key.is_null() {
+            return Err(GOUGH_E_NULL);
+        }
+        // SAFETY: non-null, the caller's 16 key bytes.
+        let k: [u8; 16] = unsafe { key.cast::<[u8; 16]>().read_unaligned() };
+        let mac_len = u8::try_from(mac_len)
+            .ok()
+            .and_then(proto::MacLen::new)
+            .ok_or(GOUGH_E_ARG)?;
+        let mut ver = proto::Verifier::new(proto::Key::new(k), mac_len, epoch)
+            .with_policy(proto::Policy::All);
+        ver.set_counter(counter);
+        // SAFETY: non-null, GOUGH_VERIFIER_SIZE bytes aligned to 8.
+        unsafe { put(aligned(v), MAGIC_VERIFIER, ver) };
+        Ok(())
+    })
+}
+
+/// As [`gough_rx_feed`], and a message it completes is checked by `*v` (its MAC over the
+/// frame's identifier, its freshness): `GOUGH_E_AUTH` (and `kind = GOUGH_MSG_NONE`) when it is
+/// refused — not secured, forged or altered, another key or epoch, stale — counted in `*v`.
+#[no_mangle]
+pub unsafe extern "C" fn gough_rx_feed_secured(
+    rx: *mut gough_rx_t,
+    v: *mut gough_verifier_t,
+    frame: *const gough_frame_t,
+    now_ms: u32,
+    out: *mut gough_msg_t,
+) -> i32 {
+    ret(|| {
+        // SAFETY: a reassembler storage or null; exclusive for the call.
+        let r: &mut Reassembler<MSG_BUF> = unsafe { get_mut(rx, MAGIC_RX)? };
+        // SAFETY: a verifier storage or null; exclusive for the call.
+        let ver: &mut proto::Verifier = unsafe { get_mut(aligned(v), MAGIC_VERIFIER)? };
+        if frame.is_null() || out.is_null() {
+            return Err(GOUGH_E_NULL);
+        }
+        // SAFETY: non-null, the caller's frame.
+        let f = unsafe { &*frame };
+        let data = f
+            .data
+            .get(..f.len as usize)
+            .filter(|d| !d.is_empty())
+            .ok_or(GOUGH_E_ARG)?;
+        let cid = u16::try_from(f.id).map_err(|_| GOUGH_E_ARG)?;
+        let (msg, code) = match r.feed(data, now_ms) {
+            Feed::Pending => (ZERO_MSG, Ok(())),
+            Feed::Done(m) => match ver.check(cid, &m, r.last()) {
+                Ok(()) => (to_c(&m), Ok(())),
+                Err(_) => (ZERO_MSG, Err(GOUGH_E_AUTH)),
+            },
+            Feed::Dropped(_) => (ZERO_MSG, Err(GOUGH_E_PROTO)),
+        };
+        // SAFETY: non-null, the caller's output.
+        unsafe { out.write(msg) };
+        code
+    })
+}
+
+/// What a `gough_verifier_t` counted (`gough_verifier_counts`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct gough_auth_counts_t {
+    /// Messages accepted.
+    pub accepted: u32,
+    /// Refused: not secured.
+    pub missing: u32,
+    /// Refused: a MAC of the wrong length or value.
+    pub bad_mac: u32,
+    /// Refused: a counter not above the last accepted on its identifier, or too far above.
+    pub stale: u32,
+    /// The epoch, and the highest counter accepted in it.
+    pub epoch: u32,
+    /// The highest counter accepted in the epoch.
+    pub counter: u32,
+}
+
+/// The counts of `*v` into `*out`.
+#[no_mangle]
+pub unsafe extern "C" fn gough_verifier_counts(
+    v: *const gough_verifier_t,
+    out: *mut gough_auth_counts_t,
+) -> i32 {
+    ret(|| {
+        // SAFETY: a verifier storage or null.
+        let ver: &proto::Verifier = unsafe { get(aligned(v.cast_mut()), MAGIC_VERIFIER)? };
+        if out.is_null() {
+            return Err(GOUGH_E_NULL);
+        }
+        let s = ver.status();
+        // SAFETY: non-null, the caller's output.
+        unsafe {
+            out.write(gough_auth_counts_t {
+                accepted: s.accepted,
+                missing: s.missing,
+                bad_mac: s.bad_mac,
+                stale: s.stale,
+                epoch: s.epoch,
+                counter: s.counter,
+            })
+        };
+        Ok(())
     })
 }

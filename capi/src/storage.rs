@@ -14,6 +14,9 @@ pub const GOUGH_ESTIMATOR_SIZE: usize = 2496;
 pub const GOUGH_RX_SIZE: usize = 320;
 /// Bytes of a `gough_preview_t` (one side's front-to-rear preview, `gough::mu::preview`).
 pub const GOUGH_PREVIEW_SIZE: usize = 512;
+/// Bytes of a `gough_verifier_t` (the checking of a device's secured answers,
+/// `gough::proto::auth::Verifier`: the keyed AES-CMAC and the counters).
+pub const GOUGH_VERIFIER_SIZE: usize = 896;
 
 /// 64-bit words of a `gough_params_t`.
 pub const GOUGH_PARAMS_WORDS: usize = GOUGH_PARAMS_SIZE / 8;
@@ -25,6 +28,8 @@ pub const GOUGH_ESTIMATOR_WORDS: usize = GOUGH_ESTIMATOR_SIZE / 8;
 pub const GOUGH_RX_WORDS: usize = GOUGH_RX_SIZE / 8;
 /// 64-bit words of a `gough_preview_t`.
 pub const GOUGH_PREVIEW_WORDS: usize = GOUGH_PREVIEW_SIZE / 8;
+/// 64-bit words of a `gough_verifier_t`.
+pub const GOUGH_VERIFIER_WORDS: usize = GOUGH_VERIFIER_SIZE / 8;
 
 /// A parsed tyre (`gough_tir_parse`). Opaque; declare it, never read it.
 #[repr(C)]
@@ -57,6 +62,13 @@ pub struct gough_preview_t {
     _opaque: [u64; GOUGH_PREVIEW_WORDS],
 }
 
+/// The checking of a device's secured answers (`gough_verifier_init`). Opaque; holds the
+/// keyed AES-CMAC (the key's round keys), never read it.
+#[repr(C)]
+pub struct gough_verifier_t {
+    _opaque: [u64; GOUGH_VERIFIER_WORDS],
+}
+
 /// A storage's contents behind its magic word.
 #[repr(C)]
 pub(crate) struct Slot<T> {
@@ -69,6 +81,7 @@ pub(crate) const MAGIC_WHEEL: u32 = 0x676f_7003;
 pub(crate) const MAGIC_EST: u32 = 0x676f_7004;
 pub(crate) const MAGIC_RX: u32 = 0x676f_7005;
 pub(crate) const MAGIC_PREVIEW: u32 = 0x676f_7006;
+pub(crate) const MAGIC_VERIFIER: u32 = 0x676f_7007;
 
 pub(crate) struct ParamsIn {
     pub(crate) p32: Params<f32>,
@@ -97,16 +110,35 @@ fits!(WheelIn, gough_wheel_t, GOUGH_WHEEL_SIZE);
 fits!(EstIn, gough_estimator_t, GOUGH_ESTIMATOR_SIZE);
 fits!(Reassembler<MSG_BUF>, gough_rx_t, GOUGH_RX_SIZE);
 fits!(Preview<f32>, gough_preview_t, GOUGH_PREVIEW_SIZE);
+// The verifier's AES state is aligned to 16 on x86-64 (SSE): it lives at the first 16-aligned
+// byte of its 8-aligned storage ([`aligned`]), so the storage holds its slot and 8 bytes more.
+const _: () = assert!(
+    size_of::<Slot<proto::Verifier>>() + VERIFIER_SHIFT <= GOUGH_VERIFIER_SIZE
+        && align_of::<Slot<proto::Verifier>>() <= 16
+);
+const _: () = assert!(
+    size_of::<gough_verifier_t>() == GOUGH_VERIFIER_SIZE && align_of::<gough_verifier_t>() == 8
+);
+/// The most a 16-aligned slot lies past the start of an 8-aligned storage.
+const VERIFIER_SHIFT: usize = align_of::<Slot<proto::Verifier>>().saturating_sub(8);
+
+/// Where a verifier's slot lies in its storage `p`: the first byte aligned for it.
+pub(crate) fn aligned(p: *mut gough_verifier_t) -> *mut gough_verifier_t {
+    let a = align_of::<Slot<proto::Verifier>>();
+    let off = (p as usize).wrapping_neg() & (a - 1);
+    p.cast::<u8>().wrapping_add(off).cast()
+}
 
 /// Bytes each storage needs on this target (what the `GOUGH_*_SIZE` macros round up):
-/// params, wheel, estimator, rx, preview. For `docs/c-api.md` and the tests.
-pub fn used_sizes() -> [usize; 5] {
+/// params, wheel, estimator, rx, preview, verifier. For `docs/c-api.md` and the tests.
+pub fn used_sizes() -> [usize; 6] {
     [
         size_of::<Slot<ParamsIn>>(),
         size_of::<Slot<WheelIn>>(),
         size_of::<Slot<EstIn>>(),
         size_of::<Slot<Reassembler<MSG_BUF>>>(),
         size_of::<Slot<Preview<f32>>>(),
+        size_of::<Slot<proto::Verifier>>() + VERIFIER_SHIFT,
     ]
 }
 

@@ -15,8 +15,9 @@ fn every_storage_macro_fits_its_type_with_little_slack() {
         GOUGH_ESTIMATOR_SIZE,
         GOUGH_RX_SIZE,
         GOUGH_PREVIEW_SIZE,
+        GOUGH_VERIFIER_SIZE,
     ];
-    let names = ["params", "wheel", "estimator", "rx", "preview"];
+    let names = ["params", "wheel", "estimator", "rx", "preview", "verifier"];
     for ((u, m), n) in used.iter().zip(macros).zip(names) {
         println!(
             "{n}: needs {u} bytes on this target, GOUGH_{}_SIZE = {m}",
@@ -187,6 +188,7 @@ fn a_secured_message_from_c_is_accepted_by_the_device_check_once() {
         mac_len: 8,
         epoch: 4,
         counter: 10,
+        all: 0,
     };
     let mut msg = ZERO_MSG;
     msg.kind = GOUGH_MSG_SETTINGS;

@@ -655,6 +655,48 @@ static void errors(const char *root) {
     CHECK(last == GOUGH_E_PROTO && got.kind == GOUGH_MSG_NONE, "corrupted: %d", last);
     gough_frame_t empty_frame = {0x300, 0, {0}};
     CHECK(gough_rx_feed(&rx, &empty_frame, 2, &got) == GOUGH_E_ARG, "empty frame");
+    /* Every message authenticated (--secure-all): a measurement signed (signer.all), checked by a
+     * verifier as the device's answers are: accepted once, then stale; unsigned or altered refused. */
+    {
+        static gough_verifier_t ver, ver0;
+        const uint8_t key[16] = {0x7e, 0x7e, 0x7e, 0x7e, 0x7e, 0x7e, 0x7e, 0x7e,
+                                 0x7e, 0x7e, 0x7e, 0x7e, 0x7e, 0x7e, 0x7e, 0x7e};
+        gough_signer_t sg;
+        memset(&sg, 0, sizeof sg);
+        memcpy(sg.key, key, 16);
+        sg.mac_len = 8;
+        sg.epoch = 3;
+        sg.counter = 100;
+        sg.all = 1;
+        CHECK(gough_verifier_init(&ver, key, 8, 3, 100) == GOUGH_OK, "verifier");
+        CHECK(gough_verifier_init(&ver0, key, 9, 3, 100) == GOUGH_E_ARG, "verifier mac_len 9");
+        gough_frame_t sec[GOUGH_MAX_FRAMES];
+        size_t ns = 0;
+        CHECK(gough_msg_encode_secured(&sg, &msg, 20, sec, GOUGH_MAX_FRAMES, &ns) == GOUGH_OK &&
+                  ns > nf && sg.counter == 101,
+              "secured measurement: %zu frames, counter %u", ns, sg.counter);
+        int32_t rc = GOUGH_OK;
+        for (size_t i = 0; i < ns; i++) rc = gough_rx_feed_secured(&rx, &ver, &sec[i], 3, &got);
+        CHECK(rc == GOUGH_OK && got.kind == GOUGH_MSG_MEASUREMENT &&
+                  !memcmp(&got.measurement, &m, sizeof m),
+              "secured measurement accepted: %d", rc);
+        for (size_t i = 0; i < ns; i++) rc = gough_rx_feed_secured(&rx, &ver, &sec[i], 4, &got);
+        CHECK(rc == GOUGH_E_AUTH && got.kind == GOUGH_MSG_NONE, "replayed: %d", rc);
+        CHECK(gough_msg_encode(&msg, 21, frames, GOUGH_MAX_FRAMES, &nf) == GOUGH_OK, "plain");
+        for (size_t i = 0; i < nf; i++) rc = gough_rx_feed_secured(&rx, &ver, &frames[i], 5, &got);
+        CHECK(rc == GOUGH_E_AUTH, "unsigned: %d", rc);
+        sg.key[0] ^= 1;
+        CHECK(gough_msg_encode_secured(&sg, &msg, 22, sec, GOUGH_MAX_FRAMES, &ns) == GOUGH_OK,
+              "another key");
+        for (size_t i = 0; i < ns; i++) rc = gough_rx_feed_secured(&rx, &ver, &sec[i], 6, &got);
+        CHECK(rc == GOUGH_E_AUTH, "another key: %d", rc);
+        gough_auth_counts_t c;
+        CHECK(gough_verifier_counts(&ver, &c) == GOUGH_OK && c.accepted == 1 && c.stale == 1 &&
+                  c.missing == 1 && c.bad_mac == 1 && c.epoch == 3 && c.counter == 101,
+              "verifier counts: %u %u %u %u", c.accepted, c.stale, c.missing, c.bad_mac);
+        CHECK(gough_rx_feed_secured(&rx, &ver0, &sec[0], 7, &got) == GOUGH_E_UNINIT,
+              "uninitialised verifier");
+    }
     free(text);
     printf("errors, null pointers, NaN inputs, wheel, estimator and protocol checked\n");
 }

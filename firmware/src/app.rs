@@ -27,6 +27,15 @@
 //! epoch ([`App::provision`]); without them (`App::new`) the device refuses every
 //! state-changing message.
 //!
+//! Provisioned with [`gough::proto::Policy::All`] (`--secure-all`), every message must be
+//! secured — measurements, compact measurements and batches, status requests too — and the
+//! device secures everything it sends with its own transmit counter. A refused message on a
+//! measurement identifier (0x300, 0x302, 0x303) is counted in `Status::auth` and **not**
+//! answered: at 4 wheels × 1 kHz an `Ack` per refused measurement would let any node make the
+//! device flood the bus (each refused frame answered by a multi-frame secured `Ack`); a refused
+//! message on the configuration identifier is still answered with its code (the owner's tool
+//! needs it, and it comes at the sender's rate).
+//!
 //! ## The calibration
 //! Each running estimator's calibration of the tyre (`gough::mu::calibration`) is reported as a
 //! `Calibration` message once a second per wheel: one wheel every [`CAL_PERIOD_MS`] / 4, in
@@ -38,8 +47,8 @@
 use gough::mf::Params;
 use gough::proto::{
     self, crc32, id, link, Ack, AckCode, CalibrationState, Command, CompactBatch, CompactResults,
-    CompactWheelResult, Estimate, Feed, Forces, Measurement, Msg, MsgType, ParamSource,
-    Reassembler, Settings, Status, Verifier, Wheel, MAX_TIR_LEN, MSG_BUF,
+    CompactWheelResult, Estimate, Feed, Forces, Measurement, Msg, MsgType, Mtu, ParamSource,
+    Reassembler, Segmenter, Settings, Status, Verifier, Wheel, MAX_TIR_LEN, MSG_BUF,
 };
 use gough::wheel::{self, Car};
 
@@ -267,9 +276,24 @@ impl App {
         if let Some(s) = self.tx_seq.get_mut(k) {
             *s = seq.wrapping_add(1);
         }
-        match link::send_nb(can, cid, seq, msg, TX_ATTEMPTS) {
+        // Secured when the policy says so (the device's transmit counter, its epoch).
+        let epoch = self.auth.epoch();
+        let sent = Segmenter::device(msg, seq, Mtu::Classic, &mut self.auth)
+            .map_err(link::SendError::Encode)
+            .and_then(|seg| link::send_segments_nb(can, cid, seg, TX_ATTEMPTS));
+        self.store_epoch_if_moved(epoch);
+        match sent {
             Ok(()) => self.tx_messages = self.tx_messages.wrapping_add(1),
             Err(_) => self.tx_errors = self.tx_errors.wrapping_add(1),
+        }
+    }
+
+    /// After the verifier moved to the next epoch (a counter reached `u32::MAX`, received or
+    /// sent): stores it, or drops the key when it cannot.
+    fn store_epoch_if_moved(&mut self, epoch: u32) {
+        if self.auth.epoch() != epoch && !self.epoch_store.is_some_and(|f| f(self.auth.epoch())) {
+            defmt::warn!("epoch not stored: the key is dropped");
+            self.auth = Verifier::without_key();
         }
     }
 
@@ -318,15 +342,13 @@ impl App {
                 Feed::Done(msg) => {
                     let epoch = self.auth.epoch();
                     let checked = self.auth.check(cid.unwrap_or(0), &msg, rx.last());
-                    if self.auth.epoch() != epoch
-                        && !self.epoch_store.is_some_and(|f| f(self.auth.epoch()))
-                    {
-                        defmt::warn!("epoch not stored: the key is dropped");
-                        self.auth = Verifier::without_key();
-                    }
+                    self.store_epoch_if_moved(epoch);
                     if let Err(r) = checked {
                         defmt::warn!("refused {}: {}", r.of, r.code);
-                        self.ack(can, r.of, seq, r.code);
+                        // Counted; answered on the configuration identifier only (module doc).
+                        if cid == Some(id::CONFIG) {
+                            self.ack(can, r.of, seq, r.code);
+                        }
                         continue;
                     }
                     if let Some(ev) = self.handle(can, msg, seq) {

@@ -19,7 +19,7 @@
 use core::ptr::addr_of_mut;
 use cortex_m_rt::{entry, exception};
 use cortex_m_semihosting::hprintln;
-use gough::proto::{ParamSource, Verifier};
+use gough::proto::{ParamSource, Policy, Verifier};
 use gough_firmware::app::{App, Event};
 use gough_firmware::mps2::{self, SlcanPort};
 use gough_firmware::{stack, BUNDLED_TIR};
@@ -47,10 +47,13 @@ fn main() -> ! {
         // The key provisioned at flash time, and this boot's epoch (the non-volatile boot
         // counter, raised now): without either, every state-changing message is refused.
         let key = match (mps2::provisioned_key(), mps2::next_epoch()) {
-            (Some((key, mac_len)), Some(epoch)) => {
-                app.provision(Verifier::new(key, mac_len, epoch));
+            (Some((key, mac_len, policy)), Some(epoch)) => {
+                app.provision(Verifier::new(key, mac_len, epoch).with_policy(policy));
                 app.epoch_store = Some(mps2::store_epoch);
-                "provisioned"
+                match policy {
+                    Policy::StateChanging => "provisioned",
+                    Policy::All => "provisioned, every message authenticated",
+                }
             }
             (Some(_), None) => "provisioned, but no epoch could be stored: refused",
             (None, _) => "none: state-changing messages refused",

@@ -256,8 +256,12 @@ unsafe fn HardFault(frame: &cortex_m_rt::ExceptionFrame) -> ! {
 /// slot reads as zeros: no key, and the device refuses every state-changing message.
 pub const KEY_SLOT: usize = 0x003F_FF00;
 
-/// The key provisioned in [`KEY_SLOT`], if any, and its MAC length.
-pub fn provisioned_key() -> Option<(gough::proto::Key, gough::proto::MacLen)> {
+/// The key provisioned in [`KEY_SLOT`], if any, its MAC length and what it authenticates.
+pub fn provisioned_key() -> Option<(
+    gough::proto::Key,
+    gough::proto::MacLen,
+    gough::proto::Policy,
+)> {
     // SAFETY: KEY_SLOT is mapped memory (SSRAM1, 4 MB) that nothing else writes.
     let s =
         unsafe { core::ptr::read_volatile(KEY_SLOT as *const [u8; gough::proto::auth::slot::LEN]) };

@@ -7,14 +7,21 @@
 //!    message; the same bytes again are stale; the bytes with any one byte changed (the CRC
 //!    made right, as an attacker would) are never accepted.
 //!
+//! 3. with every message authenticated (`Policy::All`): the same arbitrary bytes on a
+//!    measurement identifier are accepted only when unsecured and a status request (the one
+//!    message the policy lets through); whatever decodes, secured by the device
+//!    (`Verifier::seal`, its own counter), is accepted once by a tool's verifier on the
+//!    identifier it was sent on, stale the second time, and refused on another identifier or
+//!    with any one byte changed.
+//!
 //! The first input byte picks the MAC length (4..=8) and whether the counter starts near its
-//! wrap; the second the byte changed in (2).
+//! wrap; the second the byte changed in (2) and (3).
 //!
 //! Run: `cargo +nightly fuzz run auth_open -- -max_total_time=60`.
 #![no_main]
 
 use gough::proto::auth::{self, AuthStatus, Signer, Verifier};
-use gough::proto::{crc32, id, Key, MacLen, Msg, MAX_MSG_LEN};
+use gough::proto::{crc32, id, AckCode, Command, Key, MacLen, Msg, Policy, MAX_MSG_LEN};
 use libfuzzer_sys::fuzz_target;
 
 const KEY: Key = Key::new(*b"gough fuzz key!!");
@@ -90,5 +97,52 @@ fuzz_target!(|data: &[u8]| {
         // Only by leaving the MAC out of play: the secured bit cleared on a message that needs
         // none (it then decodes only if nothing follows the body, which it does not).
         panic!("a changed secured message was accepted: {m:?}");
+    }
+
+    // 3. Every message authenticated: arbitrary bytes on the measurement identifier, then the
+    // device's own answers through a tool's verifier.
+    let all = |counter: u32| {
+        let mut v = Verifier::new(KEY, mac_len, 7).with_policy(Policy::All);
+        v.set_counter(counter);
+        v
+    };
+    let mut v = all(start);
+    if let Ok(m) = v.open(id::MEASUREMENT, bytes) {
+        assert!(
+            m == Msg::Command(Command::StatusRequest) && bytes[1] & auth::SECURED == 0,
+            "accepted under Policy::All without a MAC: {m:?}"
+        );
+    }
+    let mut device = all(start);
+    let mut out = [0u8; MAX_MSG_LEN];
+    let sent_on = id::of(msg.msg_type());
+    let Ok(n) = device.seal(sent_on, &msg, &mut out) else {
+        return;
+    };
+    let answer = &out[..n];
+    assert!(answer[1] & auth::SECURED != 0);
+    // The tool continues above the device's counter before this message.
+    let mut tool = all(0);
+    assert_eq!(
+        tool.open(if sent_on == id::RESULT { id::STATUS } else { id::RESULT }, answer)
+            .unwrap_err()
+            .map(|r| r.code)
+            .ok(),
+        Some(AckCode::BadMac),
+        "another identifier"
+    );
+    let mut tool = all(0);
+    let got = tool.open(sent_on, answer).expect("the device's answer verifies");
+    let (mut e1, mut e2) = ([0u8; MAX_MSG_LEN], [0u8; MAX_MSG_LEN]);
+    let (n1, n2) = (msg.encode(&mut e1).unwrap(), got.encode(&mut e2).unwrap());
+    assert_eq!(e1[..n1], e2[..n2], "the same message");
+    assert!(tool.open(sent_on, answer).is_err(), "replayed answer accepted");
+    let mut changed = answer.to_vec();
+    let i = usize::from(*b) % (n - 4);
+    changed[i] ^= 1 << (a % 8);
+    let crc = crc32(&changed[..n - 4]).to_le_bytes();
+    changed[n - 4..].copy_from_slice(&crc);
+    if let Ok(m) = all(0).open(sent_on, &changed) {
+        panic!("a changed answer was accepted: {m:?}");
     }
 });

@@ -25,14 +25,15 @@ def gough(*args):
     return subprocess.run([GOUGH, *args], check=True, capture_output=True, text=True).stdout
 
 
-def load(fd):
-    text = gough("proto", "dbc", *(["--fd"] if fd else []))
+def load(fd, secure_all=False):
+    text = gough("proto", "dbc", *(["--fd"] if fd else []), *(["--secure-all"] if secure_all else []))
     return cantools.database.load_string(text, database_format="dbc", strict=True)
 
 
-def frames(fd, compact=False, batch=False, secured=False):
+def frames(fd, compact=False, batch=False, secured=False, secure_all=False):
     flags = (["--fd"] if fd else []) + (["--compact"] if compact else []) + (["--batch"] if batch else [])
     flags += ["--key-file", str(KEY)] if secured else []
+    flags += ["--secure-all"] if secure_all else []
     out = gough("proto", "frames", "--tir", str(TIR), "--log", str(LOG), *flags)
     return [json.loads(line) for line in out.splitlines()]
 
@@ -61,16 +62,19 @@ COMPACT = [("Fz", "fz", 0.5), ("Fy", "fy", 1.0), ("Mz", "mz", 0.1), ("Fx", "fx",
            ("kappa", "kappa", 1e-4), ("gamma", "gamma", 1e-4)]
 
 
-@pytest.mark.parametrize("fd,compact,batch,secured",
-                         [(False, False, False, False), (True, False, False, False),
-                          (False, True, False, False), (True, True, False, False),
-                          (False, False, True, False), (True, False, True, False),
-                          (False, False, False, True), (True, False, False, True)],
+@pytest.mark.parametrize("fd,compact,batch,secured,secure_all",
+                         [(False, False, False, False, False), (True, False, False, False, False),
+                          (False, True, False, False, False), (True, True, False, False, False),
+                          (False, False, True, False, False), (True, False, True, False, False),
+                          (False, False, False, True, False), (True, False, False, True, False),
+                          (False, False, False, True, True), (True, False, False, True, True),
+                          (True, True, False, True, True), (True, False, True, True, True)],
                          ids=["classic", "fd", "classic-compact", "fd-compact", "classic-batch",
-                              "fd-batch", "classic-secured", "fd-secured"])
-def test_every_frame_decodes_to_the_hosts_values(fd, compact, batch, secured):
-    db = load(fd)
-    msgs = frames(fd, compact, batch, secured)
+                              "fd-batch", "classic-secured", "fd-secured", "classic-secure-all",
+                              "fd-secure-all", "fd-compact-secure-all", "fd-batch-secure-all"])
+def test_every_frame_decodes_to_the_hosts_values(fd, compact, batch, secured, secure_all):
+    db = load(fd, secure_all)
+    msgs = frames(fd, compact, batch, secured, secure_all)
     assert len(msgs) > (150 if batch else 500)
     seen = set()
     for m in msgs:
@@ -88,10 +92,12 @@ def test_every_frame_decodes_to_the_hosts_values(fd, compact, batch, secured):
                 assert sig["msg_len"] == len(m["encoded"]) // 2
                 assert sig["proto_version"] == 5
                 assert str(sig["msg_type"]) == m["type"]
-                if any(s.startswith("first_bytes") for s in sig):
+                sec = f"{m['type']}_bytes"  # a secured type's first frame on CAN FD
+                if any(s.startswith("first_bytes") or s.startswith(sec) for s in sig):
                     raw = dbm.decode(data, decode_choices=False)
                     got = bytes([raw["proto_version"], raw["msg_type"]])
-                    got += payload(raw, "first_bytes", dbm.length - 5)
+                    pre = "first_bytes" if any(s.startswith("first_bytes") for s in sig) else sec
+                    got += payload(raw, pre, dbm.length - 5)
                 else:  # FD results: the body as physical signals, checked below
                     got = data[3:]
             else:
@@ -107,6 +113,14 @@ def test_every_frame_decodes_to_the_hosts_values(fd, compact, batch, secured):
             assert list(vals) == [f32(x) for x in want["value"] + want["sigma"]]
             assert int.from_bytes(body[33:37], "little") == want["batches"]
         if m["type"].endswith("Secured"):
+            # Every secured message: the counter (u32 LE) and the 8-byte MAC between the body
+            # and the CRC, in the bytes the DBC's signals carried.
+            enc = bytes.fromhex(m["encoded"])
+            assert enc[1] & 0x40 and got[1] == enc[1]
+            assert int.from_bytes(got[len(enc) - 16:len(enc) - 12], "little") == m["secured"]["counter"]
+            assert got[len(enc) - 12:len(enc) - 4].hex() == m["secured"]["mac"]
+            seen.add(("Secured", m["id"]))
+        if m["type"] == "SetCalibrationSecured":
             # Secured (type | 0x40): counter u32 LE and the 8-byte MAC after the body; on CAN FD
             # signals of their own.
             enc = bytes.fromhex(m["encoded"])
@@ -179,6 +193,12 @@ def test_every_frame_decodes_to_the_hosts_values(fd, compact, batch, secured):
     # What the replay puts on the bus: measurements, forces, estimates; continuation frames
     # on classic CAN.
     kinds = {t for t, _ in seen}
+    if secure_all:
+        # Every identifier's messages came secured, measurements and answers too.
+        ids = {k for t, k in seen if t == "Secured"}
+        assert ids == {m["id"] for m in msgs} and all(m["type"].endswith("Secured") for m in msgs)
+        assert len(ids) >= 2, ids
+        return
     if batch:
         assert {"CompactBatch", "CompactResults"} == kinds - {"ResultsPhysical"}
         assert ("CompactBatch", True) in seen  # two frames (FD) or 14 (classic)

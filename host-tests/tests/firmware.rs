@@ -3,8 +3,8 @@
 //! `cargo test`; `cargo xtask test-all` builds the firmware and runs them with `--ignored`
 //! (and fails, never skips, when QEMU is missing).
 use gough::proto::{
-    AckCode, Command, CompactMeasurement, Key, MacLen, Measurement, Msg, MsgType, Settings, Signer,
-    Wheel,
+    AckCode, Command, CompactMeasurement, Key, MacLen, Measurement, Msg, MsgType, Mtu, Policy,
+    Segmenter, Settings, Signer, Wheel,
 };
 use gough_host::device::{self, Device, Qemu, SlcanTcp};
 use std::path::Path;
@@ -27,16 +27,25 @@ fn test_key() -> Key {
 /// The firmware under QEMU in `target/WORKDIR`, provisioned with the test key (8-byte MACs), and
 /// a client that signs with it.
 fn keyed(workdir: &str) -> (Qemu, Device) {
+    keyed_with(workdir, Policy::StateChanging)
+}
+
+/// As [`keyed`], the device provisioned with `policy`; under [`Policy::All`] the client signs
+/// everything and checks every answer.
+fn keyed_with(workdir: &str, policy: Policy) -> (Qemu, Device) {
     let q = Qemu::start_keyed(
         &device::firmware_elf("gough-firmware"),
         &root().join("target").join(workdir),
         true,
         None,
-        Some((&test_key(), MacLen::DEFAULT)),
+        Some((&test_key(), MacLen::DEFAULT, policy)),
     )
     .unwrap();
     let mut dev = Device::new(SlcanTcp::connect(q.port, Duration::from_secs(20)).unwrap());
-    dev.authenticate(test_key()).unwrap();
+    match policy {
+        Policy::StateChanging => dev.authenticate(test_key()).unwrap(),
+        Policy::All => dev.authenticate_all(test_key()).unwrap(),
+    }
     (q, dev)
 }
 
@@ -64,12 +73,14 @@ fn replay(
         .unwrap()
 }
 
+/// With every message authenticated (`--secure-all`: the measurements signed, every answer
+/// checked); the preview test below replays with the state-changing messages signed only.
 #[test]
 #[ignore = "needs QEMU and the release firmware; run by `cargo xtask test-all`"]
 fn replay_answers_equal_the_host_f32_run() {
     let out = std::env::temp_dir().join(format!("gough-replay-{}.csv", std::process::id()));
     let o = replay(
-        &["--check"],
+        &["--check", "--secure-all"],
         &root().join("host-tests/data/tyres/MagicFormula61_Parameters.tir"),
         &root().join("examples/replay_log.csv"),
         &out,
@@ -82,6 +93,18 @@ fn replay_answers_equal_the_host_f32_run() {
         "check: device answers = host f32 run (math::Fast): forces worst 0 ulp; estimates worst 0 ulp (200 rows)"
     ));
     assert!(err.contains("dropped 0"));
+    // 200 forces, 200 estimates, the upload's acks and statuses: every one verified.
+    assert!(
+        err.contains("refused 0 (unsigned 0, bad MAC 0, stale 0); device refused: unsigned 0, bad MAC 0, stale 0"),
+        "answers not all checked"
+    );
+    let verified: u32 = err
+        .split("answers checked: ")
+        .nth(1)
+        .and_then(|r| r.split(' ').next())
+        .and_then(|n| n.parse().ok())
+        .unwrap();
+    assert!(verified >= 400, "{verified} answers verified");
     let res = std::fs::read_to_string(&out).unwrap();
     let mut lines = res.lines();
     assert_eq!(
@@ -464,6 +487,106 @@ fn a_wheelbase_out_of_range_is_refused_and_unsigned_forged_or_replayed_changes_t
         AckCode::BadMac
     );
     dev.authenticate(test_key()).unwrap();
+    dev.send(&Msg::Command(Command::Stop)).unwrap();
+    assert_eq!(q.wait(Duration::from_secs(20)), Some(0));
+}
+
+/// Provisioned with `--secure-all`: a measurement not signed, forged (another key) or replayed is
+/// refused, counted by reason and not answered (the next answer is the next good measurement's);
+/// a measurement and a settings message whose frames interleave on the bus (the settings,
+/// signed later, complete first) are both accepted: freshness per identifier.
+#[test]
+#[ignore = "needs QEMU and the release firmware; run by `cargo xtask test-all`"]
+fn with_every_message_authenticated_bad_measurements_are_refused_unanswered_and_counted() {
+    use embedded_can::blocking::Can as _;
+    use embedded_can::{Frame as _, StandardId};
+    let (mut q, mut dev) = keyed_with("qemu-secure-all", Policy::All);
+    let m = |t_us: u32| {
+        Msg::Measurement(Measurement {
+            wheel: Wheel::FrontLeft,
+            t_us,
+            fz: 4000.0,
+            alpha: Some(0.02),
+            kappa: Some(0.01),
+            vx: Some(20.0),
+            ..Measurement::default()
+        })
+    };
+    // The next Forces' sample time; anything else before it must be an Estimate or a
+    // Calibration report (no Ack, no Forces of a refused measurement).
+    let forces_t = |dev: &mut Device| loop {
+        match dev.recv(Duration::from_secs(10)).unwrap() {
+            Msg::Forces(f) => break f.t_us,
+            Msg::Estimate(_) | Msg::Calibration(_) => continue,
+            other => panic!("unexpected answer {other:?}"),
+        }
+    };
+    dev.send(&m(1)).unwrap();
+    assert_eq!(forces_t(&mut dev), 1);
+    let good = dev.signer.clone().unwrap();
+    let (epoch, counter) = good.freshness();
+    // Unsigned, then signed by another key, then replayed (counter 2 again): none answered.
+    dev.signer = None;
+    dev.send(&m(100)).unwrap();
+    dev.signer = Some(Signer::new(
+        Key::new([0x5a; 16]),
+        MacLen::DEFAULT,
+        epoch,
+        counter,
+    ));
+    dev.send(&m(101)).unwrap();
+    dev.signer = Some(good.clone());
+    dev.send(&m(2)).unwrap();
+    dev.signer = Some(good);
+    dev.send(&m(102)).unwrap();
+    dev.send(&m(3)).unwrap();
+    assert_eq!(forces_t(&mut dev), 2);
+    assert_eq!(forces_t(&mut dev), 3);
+    // Interleaved: the measurement's first frame, the settings' frames, the measurement's rest.
+    let s = dev.signer.as_mut().unwrap();
+    let mut meas = Segmenter::sealed(&m(4), 0x70, Mtu::Classic, s).unwrap();
+    let settings = Msg::Settings(Settings::default());
+    let mut cfg = Segmenter::sealed(&settings, 0x71, Mtu::Classic, s).unwrap();
+    let send_frames = |dev: &mut Device, cid: u16, seg: &mut Segmenter, n: usize| {
+        let mut buf = [0u8; 64];
+        for _ in 0..n {
+            let Some(d) = seg.next_frame(&mut buf) else {
+                break;
+            };
+            let f = gough::proto::slcan::CanFrame::new(StandardId::new(cid).unwrap(), d).unwrap();
+            dev.link.transmit(&f).unwrap();
+        }
+    };
+    send_frames(&mut dev, gough::proto::id::MEASUREMENT, &mut meas, 1);
+    send_frames(&mut dev, gough::proto::id::CONFIG, &mut cfg, usize::MAX);
+    send_frames(
+        &mut dev,
+        gough::proto::id::MEASUREMENT,
+        &mut meas,
+        usize::MAX,
+    );
+    assert_eq!(
+        dev.wait_ack(MsgType::Settings, Duration::from_secs(10))
+            .unwrap(),
+        AckCode::Ok
+    );
+    assert_eq!(forces_t(&mut dev), 4);
+    let st = dev.status(Duration::from_secs(10)).unwrap();
+    assert_eq!(
+        (st.auth.missing, st.auth.bad_mac, st.auth.stale),
+        (1, 1, 1),
+        "{:?}",
+        st.auth
+    );
+    assert_eq!(st.rx.dropped(), 0);
+    // Every answer verified (forces, ack, statuses), none refused.
+    let a = *dev.answers.as_ref().unwrap().status();
+    assert_eq!((a.missing, a.bad_mac, a.stale), (0, 0, 0), "{a:?}");
+    assert!(a.accepted >= 6, "{a:?}");
+    // A tool that would sign the state-changing messages only is told what the device wants.
+    let e = dev.authenticate(test_key()).unwrap_err();
+    assert!(e.contains("--secure-all"), "{e}");
+    dev.authenticate_all(test_key()).unwrap();
     dev.send(&Msg::Command(Command::Stop)).unwrap();
     assert_eq!(q.wait(Duration::from_secs(20)), Some(0));
 }

@@ -18,7 +18,7 @@ from . import _gough
 from . import logs  # gough.logs.read; its readers (asammdf, python-can, cantools) load on use
 
 __all__ = ["Tyre", "TirError", "estimate_mu", "diagnose_gap", "simulate", "read_log",
-           "OUTPUT_COLUMNS", "logs", "Signer", "read_key"]
+           "OUTPUT_COLUMNS", "logs", "Signer", "Verifier", "Refused", "read_key"]
 
 #: The columns `Tyre.eval` returns: those of `gough mf eval` after its inputs.
 OUTPUT_COLUMNS = tuple(_gough.OUTPUT_COLUMNS)
@@ -281,7 +281,9 @@ def read_key(path) -> bytes:
 
 class Signer:
     """The device owner's end of the protocol's authentication (docs/protocol.md, "Security"):
-    secures state-changing messages with the device key by the core's own `auth::Signer`.
+    secures state-changing messages with the device key by the core's own `auth::Signer` (and,
+    for a device that authenticates every message, `--secure-all`, measurements too: any message
+    seals; check that device's answers with `Verifier`).
 
     `epoch` and `counter` are the device's (its `Status.auth`: the epoch and the last counter it
     accepted); each `seal` takes the next counter, and after counter 2**32 - 1 the next epoch, as
@@ -299,3 +301,39 @@ class Signer:
         out, self.epoch, self.counter = _gough._seal(self.key, self.mac_len, self.epoch,
                                                      self.counter, can_id, bytes(message))
         return bytes(out)
+
+
+class Refused(ValueError):
+    """A message a `Verifier` refused; `code` is the reason, as the device's Ack codes name it:
+    "MacMissing" (not secured), "BadMac" (forged, altered, another key, MAC length or epoch) or
+    "StaleFreshness" (replayed, reordered on its identifier, or too far ahead)."""
+
+    def __init__(self, code: str):
+        super().__init__(f"refused: {code}")
+        self.code = code
+
+
+class Verifier:
+    """Checks the answers of a device that authenticates every message (`gough firmware run
+    --secure-all`; docs/protocol.md, "Security") by the core's own `auth::Verifier`: each must be
+    secured, its MAC (over the CAN identifier it came on) verify under the key and the device's
+    `epoch`, and its counter be above the last one accepted on its identifier (at most 65,536
+    above the highest). `counter`: the device's transmit counter to continue above (that of a
+    `Status` it sent, less one). `mac_len`: the device's MAC length (4..8 bytes)."""
+
+    def __init__(self, key: bytes, epoch: int, counter: int = 0, mac_len: int = 8):
+        self._v = _gough._Verifier(bytes(key), mac_len, epoch, counter)
+
+    def open(self, can_id: int, message: bytes) -> bytes:
+        """The unsecured encoding (`[version][type][body][CRC-32]`) of the secured message
+        `message` received on CAN identifier `can_id`; `Refused` (counted) when it does not
+        verify, ValueError when it is not a message of this protocol."""
+        ok, out = self._v.open(can_id, bytes(message))
+        if not ok:
+            raise Refused(bytes(out).decode())
+        return bytes(out)
+
+    def counts(self) -> dict:
+        """What it accepted and refused (by reason), its epoch and highest accepted counter."""
+        names = ("accepted", "missing", "bad_mac", "stale", "epoch", "counter")
+        return dict(zip(names, self._v.counts()))

@@ -660,10 +660,61 @@ fn _seal(
     Ok((out.get(..n).unwrap_or(&[]).to_vec(), e, c))
 }
 
+/// `gough.Verifier`: the core's `proto::auth::Verifier` checking the secured answers of a device
+/// that authenticates every message (`Policy::All`): its key, MAC length, epoch and the
+/// device's transmit counter to continue above.
+#[pyclass(module = "gough._gough")]
+struct _Verifier(gough::proto::Verifier);
+
+#[pymethods]
+impl _Verifier {
+    #[new]
+    fn new(key: &[u8], mac_len: u8, epoch: u32, counter: u32) -> PyResult<Self> {
+        use gough::proto::{Key, MacLen, Policy, Verifier};
+        let key: [u8; 16] = key
+            .try_into()
+            .map_err(|_| PyValueError::new_err("key: 16 bytes"))?;
+        let mac_len =
+            MacLen::new(mac_len).ok_or_else(|| PyValueError::new_err("mac_len: 4..8 bytes"))?;
+        let mut v = Verifier::new(Key::new(key), mac_len, epoch).with_policy(Policy::All);
+        v.set_counter(counter);
+        Ok(_Verifier(v))
+    }
+
+    /// Checks the encoded message `message` received on `can_id`: `(True, plain)` with the
+    /// message's unsecured encoding, or `(False, code)` with the refusal's `AckCode` name.
+    /// ValueError when `message` is not a message of this protocol.
+    fn open(&mut self, can_id: u16, message: &[u8]) -> PyResult<(bool, Vec<u8>)> {
+        use gough::proto::MAX_MSG_LEN;
+        match self.0.open(can_id, message) {
+            Ok(m) => {
+                let mut out = [0u8; MAX_MSG_LEN];
+                let n = m
+                    .encode(&mut out)
+                    .map_err(|e| PyValueError::new_err(e.to_string()))?;
+                Ok((true, out.get(..n).unwrap_or(&[]).to_vec()))
+            }
+            Err(Ok(r)) => Ok((false, format!("{:?}", r.code).into_bytes())),
+            Err(Err(e)) => Err(PyValueError::new_err(format!(
+                "not a message of this protocol: {e}"
+            ))),
+        }
+    }
+
+    /// (accepted, missing, bad_mac, stale, epoch, highest counter accepted).
+    fn counts(&self) -> (u32, u32, u32, u32, u32, u32) {
+        let s = self.0.status();
+        (
+            s.accepted, s.missing, s.bad_mac, s.stale, s.epoch, s.counter,
+        )
+    }
+}
+
 /// The extension module.
 #[pymodule]
 fn _gough(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<Tyre>()?;
+    m.add_class::<_Verifier>()?;
     m.add_function(wrap_pyfunction!(_estimate_mu, m)?)?;
     m.add_function(wrap_pyfunction!(_diagnose_gap, m)?)?;
     m.add_function(wrap_pyfunction!(_simulate, m)?)?;

@@ -1,5 +1,6 @@
 """gough.Signer (the core's auth::Signer from Python) against an independent AES-CMAC
-(`cryptography`): the secured layout of docs/protocol.md "Security", the counter and its wrap."""
+(`cryptography`): the secured layout of docs/protocol.md "Security", the counter and its wrap;
+gough.Verifier (the core's auth::Verifier) on answers secured by that independent CMAC."""
 import struct
 import zlib
 from pathlib import Path
@@ -50,3 +51,51 @@ def test_the_counter_never_wraps_and_bad_input_is_refused():
         gough.Signer(bytes(15), epoch=1)
     with pytest.raises(ValueError):
         gough.Signer(bytes(16), epoch=1, mac_len=9).seal(ID_CONFIG, settings(0.0))
+
+
+ID_RESULT, ID_STATUS = 0x310, 0x311
+
+
+def forces(t_us):
+    data = bytes([5, 0x81, 1]) + struct.pack("<IfffH", t_us, -812.5, 2310.25, -40.5, 0)
+    return data + struct.pack("<I", zlib.crc32(data))
+
+
+def device_seal(key, cid, plain, epoch, counter, mac_len=8):
+    """A device's secured answer, by `cryptography` alone (the layout of docs/protocol.md)."""
+    data = bytes([plain[0], plain[1] | 0x40]) + plain[2:-4] + struct.pack("<I", counter)
+    data += cmac(key, struct.pack("<H", cid) + data + struct.pack("<I", epoch))[:mac_len]
+    return data + struct.pack("<I", zlib.crc32(data))
+
+
+def test_the_verifier_checks_answers_secured_by_an_independent_cmac():
+    key = gough.read_key(ROOT / "firmware/keys/test.key")
+    v = gough.Verifier(key, epoch=2, counter=10)
+    a = device_seal(key, ID_RESULT, forces(1), 2, 11)
+    assert v.open(ID_RESULT, a) == forces(1)
+    # Per identifier: an Ack with counter 13 on 0x311 delivered before forces 12 on 0x310.
+    ack = bytes([5, 0x84, 5, 0, 0])
+    ack += struct.pack("<I", zlib.crc32(ack))
+    assert v.open(ID_STATUS, device_seal(key, ID_STATUS, ack, 2, 13)) == ack
+    assert v.open(ID_RESULT, device_seal(key, ID_RESULT, forces(2), 2, 12)) == forces(2)
+    for msg, cid, code in (
+        (a, ID_RESULT, "StaleFreshness"),  # replayed
+        (device_seal(key, ID_RESULT, forces(3), 1, 14), ID_RESULT, "BadMac"),  # old epoch
+        (device_seal(bytes(16), ID_RESULT, forces(3), 2, 14), ID_RESULT, "BadMac"),  # other key
+        (device_seal(key, ID_RESULT, forces(3), 2, 14), ID_STATUS, "BadMac"),  # other id
+        (device_seal(key, ID_RESULT, forces(3), 2, 14, mac_len=4), ID_RESULT, "BadMac"),
+        (forces(3), ID_RESULT, "MacMissing"),  # unsigned
+        (device_seal(key, ID_RESULT, forces(3), 2, 14 + 65536), ID_RESULT, "StaleFreshness"),
+    ):
+        with pytest.raises(gough.Refused) as e:
+            v.open(cid, msg)
+        assert e.value.code == code
+    altered = bytearray(device_seal(key, ID_RESULT, forces(4), 2, 14))
+    altered[4] ^= 1
+    altered[-4:] = struct.pack("<I", zlib.crc32(bytes(altered[:-4])))
+    with pytest.raises(gough.Refused):
+        v.open(ID_RESULT, bytes(altered))
+    assert v.counts() == dict(accepted=3, missing=1, bad_mac=5, stale=2, epoch=2, counter=13)
+    assert v.open(ID_RESULT, device_seal(key, ID_RESULT, forces(4), 2, 14)) == forces(4)
+    with pytest.raises(ValueError):
+        v.open(ID_RESULT, a[:-1])  # not a message (CRC)

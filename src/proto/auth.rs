@@ -18,9 +18,10 @@
 //! **Freshness.** The device's *epoch* is a boot counter kept in its non-volatile memory, raised
 //! once per boot (so a message of an earlier boot never verifies again) and once per counter
 //! wrap; within an epoch the device accepts a counter only if it is above the last one it
-//! accepted and at most [`WINDOW`] above it (a replayed, reordered or duplicated message is
-//! stale). Having accepted counter `u32::MAX` the device moves to epoch + 1 and counter 0, and so
-//! does the [`Signer`]: the counter never wraps within an epoch. The epoch and the last accepted
+//! accepted on the message's identifier and at most [`WINDOW`] above the highest it accepted
+//! (a replayed, reordered or duplicated message is stale; below, "Freshness per identifier").
+//! Having accepted counter `u32::MAX` the device moves to epoch + 1 and counter 0, and so does
+//! the [`Signer`]: the counter never wraps within an epoch. The epoch and the highest accepted
 //! counter are public (`Status::auth`): a sender that starts reads them and continues.
 //!
 //! Checked in order by [`Verifier::open`]: a device without a key refuses every
@@ -29,8 +30,24 @@
 //! ([`AckCode::BadMac`], compared in constant time); then the freshness
 //! ([`AckCode::StaleFreshness`]). Each refusal is counted in [`AuthStatus`]; nothing a refused
 //! message carried takes effect.
+//!
+//! **Policy.** What must be secured is provisioned with the key ([`Policy`], in the key
+//! [`slot`]), never set from the bus: [`Policy::StateChanging`] (the default) or [`Policy::All`],
+//! under which every message the device receives must be secured, measurements too (but the
+//! status request, which synchronises a sender's freshness: [`Policy::All`]), and the device
+//! secures every message it sends ([`Verifier::seal`], its own transmit counter
+//! in the same epoch; the CAN identifier in the MAC keeps the directions apart).
+//!
+//! **Freshness per identifier.** Messages on different identifiers are reassembled
+//! independently, so they may be delivered in another order than they were sent. As SecOC keeps a
+//! freshness value per data identifier, the verifier keeps the last accepted counter per
+//! identifier ([`FRESHNESS_IDS`]): a counter is fresh when it is above the last one accepted *on
+//! its identifier* and at most [`WINDOW`] above the highest accepted on any
+//! (`AuthStatus::counter`). A sender keeps one counter for all identifiers (one [`Signer`]), so no
+//! two of its messages share a freshness value, and a sender that starts continues above
+//! `AuthStatus::counter` on every identifier.
 
-use super::{AckCode, Command, Error, Msg, MsgType};
+use super::{id, AckCode, Command, Error, Msg, MsgType};
 use aes::Aes128;
 use cmac::digest::generic_array::GenericArray;
 use cmac::digest::KeyInit;
@@ -52,8 +69,62 @@ pub const MAC_LEN_MIN: u8 = 4;
 pub const MAC_LEN_MAX: u8 = 8;
 /// Longest trailer (counter + MAC) a secured message adds \[bytes\].
 pub const TRAILER_MAX: usize = COUNTER_LEN + MAC_LEN_MAX as usize;
-/// A counter is fresh when it is above the last accepted one by at most this much.
+/// A counter is fresh when it is above the last accepted one on its identifier and at most this
+/// much above the highest accepted on any.
 pub const WINDOW: u32 = 1 << 16;
+
+/// The identifiers that keep a freshness counter of their own (module doc): the device's four
+/// receive identifiers and its three transmit identifiers. A secured message on any other
+/// identifier does not verify ([`AckCode::BadMac`]).
+pub const FRESHNESS_IDS: [u16; 7] = [
+    id::MEASUREMENT,
+    id::CONFIG,
+    id::COMPACT,
+    id::BATCH,
+    id::RESULT,
+    id::STATUS,
+    id::BATCH_RESULT,
+];
+
+/// What a device authenticates, provisioned with its key (the key [`slot`]), never switched from
+/// the bus.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Policy {
+    /// Only the state-changing messages ([`is_state_changing`]) must be secured; measurements,
+    /// status requests and the device's answers go unsecured.
+    #[default]
+    StateChanging = 0,
+    /// Every message the device receives must be secured — but `Command::StatusRequest`, the
+    /// freshness synchronisation: a sender learns the epoch and counters from the `Status` it
+    /// brings, before it can sign anything — and the device secures every message it sends
+    /// (`Forces`, `Estimate`, `CompactResults`, `Status`, `Ack`, `Calibration`).
+    All = 1,
+}
+
+impl Policy {
+    /// The policy of its byte in the key slot (0 or 1).
+    pub const fn from_u8(b: u8) -> Option<Policy> {
+        match b {
+            0 => Some(Policy::StateChanging),
+            1 => Some(Policy::All),
+            _ => None,
+        }
+    }
+
+    /// Whether `msg`, received, must be secured under this policy.
+    pub const fn requires_mac(self, msg: &Msg) -> bool {
+        match self {
+            Policy::StateChanging => is_state_changing(msg),
+            Policy::All => !matches!(msg, Msg::Command(Command::StatusRequest)),
+        }
+    }
+}
+
+/// The index of identifier `id` in [`FRESHNESS_IDS`].
+fn lane(cid: u16) -> Option<usize> {
+    FRESHNESS_IDS.iter().position(|&i| i == cid)
+}
 
 /// A device key: 16 bytes. Its `Debug` does not show it.
 #[derive(Clone, Copy, PartialEq, Eq)]
@@ -178,7 +249,8 @@ pub struct AuthStatus {
     /// The current epoch (boot counter).
     #[serde(with = "postcard::fixint::le")]
     pub epoch: u32,
-    /// The last counter accepted in this epoch (0: none yet); a sender continues above it.
+    /// The highest counter accepted in this epoch on any identifier (0: none yet); a sender
+    /// continues above it.
     #[serde(with = "postcard::fixint::le")]
     pub counter: u32,
     /// Secured messages accepted.
@@ -205,12 +277,19 @@ pub struct Refused {
     pub code: AckCode,
 }
 
-/// The receiving end (the device): checks secured messages against its key and freshness.
-/// Keeps the keyed CMAC (the AES round keys and CMAC subkeys: 400 bytes on the M4F, computed
-/// once in [`Verifier::new`]); its `Debug` does not show them.
+/// The receiving end (the device; or a tool checking the device's answers): checks secured
+/// messages against its key, [`Policy`] and freshness (per identifier, [`FRESHNESS_IDS`]), and
+/// under [`Policy::All`] secures what the device sends ([`Verifier::seal`], its own transmit
+/// counter in the same epoch). Keeps the keyed CMAC (the AES round keys and CMAC subkeys: 400
+/// bytes on the M4F, computed once in [`Verifier::new`]); its `Debug` does not show them.
 #[derive(Clone)]
 pub struct Verifier {
     key: Option<(Cmac<Aes128>, MacLen)>,
+    policy: Policy,
+    /// The last counter accepted on each of [`FRESHNESS_IDS`] in this epoch.
+    last: [u32; FRESHNESS_IDS.len()],
+    /// The last counter this end secured a message with ([`Verifier::seal`]).
+    tx: u32,
     status: AuthStatus,
 }
 
@@ -218,6 +297,9 @@ impl fmt::Debug for Verifier {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.debug_struct("Verifier")
             .field("key", &self.key.as_ref().map(|_| "..."))
+            .field("policy", &self.policy)
+            .field("last", &self.last)
+            .field("tx", &self.tx)
             .field("status", &self.status)
             .finish()
     }
@@ -234,6 +316,9 @@ impl Verifier {
     pub const fn without_key() -> Verifier {
         Verifier {
             key: None,
+            policy: Policy::StateChanging,
+            last: [0; FRESHNESS_IDS.len()],
+            tx: 0,
             status: AuthStatus {
                 mac_len: 0,
                 epoch: 0,
@@ -257,6 +342,17 @@ impl Verifier {
         v
     }
 
+    /// The same, under `policy` (provisioned with the key).
+    pub fn with_policy(mut self, policy: Policy) -> Verifier {
+        self.policy = policy;
+        self
+    }
+
+    /// What must be secured.
+    pub const fn policy(&self) -> Policy {
+        self.policy
+    }
+
     /// State and counters.
     pub const fn status(&self) -> &AuthStatus {
         &self.status
@@ -267,9 +363,38 @@ impl Verifier {
         self.status.epoch
     }
 
-    /// Sets the last accepted counter (tests of the counter wrap).
+    /// Sets the last accepted counter on every identifier (tests of the counter wrap; a tool
+    /// that starts checking a device's answers from a counter it verified).
     pub fn set_counter(&mut self, counter: u32) {
         self.status.counter = counter;
+        self.last = [counter; FRESHNESS_IDS.len()];
+    }
+
+    /// Moves to the next epoch (after counter `u32::MAX`, received or sent): every counter back
+    /// to 0.
+    fn next_epoch(&mut self) {
+        self.status.epoch = self.status.epoch.saturating_add(1);
+        self.set_counter(0);
+        self.tx = 0;
+    }
+
+    /// Encodes `msg`, sent on identifier `id`, into `out`; returns the length. Under
+    /// [`Policy::All`] with a key it is secured with this end's next transmit counter in the
+    /// current epoch (after `u32::MAX` the epoch moves on, as on receipt: the board stores it);
+    /// otherwise plain ([`Msg::encode`]). [`Error::Overflow`] if `out` is too short (a buffer of
+    /// [`super::MAX_MSG_LEN`] never is).
+    pub fn seal(&mut self, id: u16, msg: &Msg, out: &mut [u8]) -> Result<usize, Error> {
+        let (Policy::All, Some((key, len))) = (self.policy, &self.key) else {
+            return msg.encode(out);
+        };
+        let counter = self.tx.saturating_add(1);
+        let n = seal_into(key, *len, self.status.epoch, counter, id, msg, out)?;
+        if counter == u32::MAX {
+            self.next_epoch();
+        } else {
+            self.tx = counter;
+        }
+        Ok(n)
     }
 
     /// Decodes the complete encoded message `bytes` received on identifier `id` and checks it
@@ -285,11 +410,11 @@ impl Verifier {
     /// Checks `msg`, decoded from the complete encoded message `bytes` received on identifier
     /// `id` (what a `Reassembler` delivered, and its `last()` bytes): `Ok(())` to act on it,
     /// else why it is refused (counted). Order (module doc): no key, not secured, MAC (its
-    /// length and value, constant time), freshness. An unsecured message that does not change
-    /// the state passes at no cost.
+    /// length and value, constant time), freshness on its identifier. An unsecured message the
+    /// [`Policy`] does not require secured passes at no cost.
     pub fn check(&mut self, id: u16, msg: &Msg, bytes: &[u8]) -> Result<(), Refused> {
         let secured = bytes.get(1).is_some_and(|t| t & SECURED != 0);
-        if !secured && !is_state_changing(msg) {
+        if !secured && !self.policy.requires_mac(msg) {
             return Ok(());
         }
         let of = msg.msg_type();
@@ -319,18 +444,22 @@ impl Verifier {
                 mac: bytes.get(m..end)?,
             })
         });
-        let Some(t) = trailer.filter(|t| {
-            tag(key, id, t.data, s.epoch)
-                .verify_truncated_left(t.mac)
-                .is_ok()
-        }) else {
+        let lane = lane(id);
+        let Some((t, last)) = trailer
+            .filter(|t| {
+                tag(key, id, t.data, s.epoch)
+                    .verify_truncated_left(t.mac)
+                    .is_ok()
+            })
+            .zip(lane.and_then(|i| self.last.get_mut(i)))
+        else {
             s.bad_mac = s.bad_mac.wrapping_add(1);
             return Err(Refused {
                 of,
                 code: AckCode::BadMac,
             });
         };
-        if t.counter <= s.counter || t.counter.wrapping_sub(s.counter) > WINDOW {
+        if t.counter <= *last || t.counter > s.counter.saturating_add(WINDOW) {
             s.stale = s.stale.wrapping_add(1);
             return Err(Refused {
                 of,
@@ -338,12 +467,11 @@ impl Verifier {
             });
         }
         s.accepted = s.accepted.wrapping_add(1);
+        *last = t.counter;
+        s.counter = s.counter.max(t.counter);
         if t.counter == u32::MAX {
             // The counter never wraps: the next epoch (the board stores it).
-            s.epoch = s.epoch.saturating_add(1);
-            s.counter = 0;
-        } else {
-            s.counter = t.counter;
+            self.next_epoch();
         }
         Ok(())
     }
@@ -391,32 +519,47 @@ impl Signer {
     /// [`super::MAX_MSG_LEN`] never is). After counter `u32::MAX` the signer moves to the next
     /// epoch, as the device does.
     pub fn seal(&mut self, id: u16, msg: &Msg, out: &mut [u8]) -> Result<usize, Error> {
-        let n = msg.encode(out)?;
-        let body_end = n.checked_sub(4).ok_or(Error::Overflow)?;
         let counter = self.counter.saturating_add(1);
-        let data_end = body_end.saturating_add(COUNTER_LEN);
-        let mac_end = data_end.saturating_add(self.mac_len.get());
-        let total = mac_end.saturating_add(4);
-        if out.len() < total {
-            return Err(Error::Overflow);
-        }
-        if let Some(t) = out.get_mut(1) {
-            *t |= SECURED;
-        }
-        put(out, body_end, &counter.to_le_bytes())?;
-        let data = out.get(..data_end).ok_or(Error::Overflow)?;
-        let t = tag(&self.key, id, data, self.epoch).finalize().into_bytes();
-        put(out, data_end, t.get(..self.mac_len.get()).unwrap_or(&[]))?;
-        let crc = super::crc32(out.get(..mac_end).ok_or(Error::Overflow)?);
-        put(out, mac_end, &crc.to_le_bytes())?;
+        let n = seal_into(&self.key, self.mac_len, self.epoch, counter, id, msg, out)?;
         if counter == u32::MAX {
             self.epoch = self.epoch.saturating_add(1);
             self.counter = 0;
         } else {
             self.counter = counter;
         }
-        Ok(total)
+        Ok(n)
     }
+}
+
+/// Encodes `msg`, sent on identifier `id`, secured with freshness (`epoch`, `counter`) into
+/// `out`; returns the length.
+fn seal_into(
+    key: &Cmac<Aes128>,
+    mac_len: MacLen,
+    epoch: u32,
+    counter: u32,
+    id: u16,
+    msg: &Msg,
+    out: &mut [u8],
+) -> Result<usize, Error> {
+    let n = msg.encode(out)?;
+    let body_end = n.checked_sub(4).ok_or(Error::Overflow)?;
+    let data_end = body_end.saturating_add(COUNTER_LEN);
+    let mac_end = data_end.saturating_add(mac_len.get());
+    let total = mac_end.saturating_add(4);
+    if out.len() < total {
+        return Err(Error::Overflow);
+    }
+    if let Some(t) = out.get_mut(1) {
+        *t |= SECURED;
+    }
+    put(out, body_end, &counter.to_le_bytes())?;
+    let data = out.get(..data_end).ok_or(Error::Overflow)?;
+    let t = tag(key, id, data, epoch).finalize().into_bytes();
+    put(out, data_end, t.get(..mac_len.get()).unwrap_or(&[]))?;
+    let crc = super::crc32(out.get(..mac_end).ok_or(Error::Overflow)?);
+    put(out, mac_end, &crc.to_le_bytes())?;
+    Ok(total)
 }
 
 /// The CMAC of `id ‖ data ‖ epoch` under a keyed CMAC, not finalised.
@@ -436,36 +579,44 @@ fn put(out: &mut [u8], at: usize, bytes: &[u8]) -> Result<(), Error> {
 }
 
 /// The key slot a device is provisioned with at flash time (never sent on the bus): 28 bytes,
-/// `"GKEY"`, format 1, the MAC length, 2 zero bytes, the key, CRC-32 of the 24 bytes before.
-/// Erased flash (0xFF) or zeros: no key.
+/// `"GKEY"`, the format, the MAC length, the [`Policy`] byte (format 2; 0 in format 1), a zero
+/// byte, the key, CRC-32 of the 24 bytes before. Format 1 (no policy byte) is
+/// [`Policy::StateChanging`]. Erased flash (0xFF) or zeros: no key.
 pub mod slot {
-    use super::{Key, MacLen};
+    use super::{Key, MacLen, Policy};
 
     /// Bytes of a slot.
     pub const LEN: usize = 28;
     const MAGIC: [u8; 4] = *b"GKEY";
+    /// The format [`encode`] writes.
+    pub const FORMAT: u8 = 2;
 
-    /// The slot that provisions `key` with MACs of `mac_len` bytes.
-    pub fn encode(key: &Key, mac_len: MacLen) -> [u8; LEN] {
+    /// The slot (format 2) that provisions `key` with MACs of `mac_len` bytes under `policy`.
+    pub fn encode(key: &Key, mac_len: MacLen, policy: Policy) -> [u8; LEN] {
         let mut s = [0u8; LEN];
         let (body, crc) = s.split_at_mut(24);
         let (head, k) = body.split_at_mut(8);
-        head.copy_from_slice(&[MAGIC[0], MAGIC[1], MAGIC[2], MAGIC[3], 1, mac_len.0, 0, 0]);
+        let [m0, m1, m2, m3] = MAGIC;
+        head.copy_from_slice(&[m0, m1, m2, m3, FORMAT, mac_len.0, policy as u8, 0]);
         k.copy_from_slice(&key.0);
         crc.copy_from_slice(&super::super::crc32(body).to_le_bytes());
         s
     }
 
-    /// The key and MAC length of a slot, or `None` (empty, damaged, another format).
-    pub fn decode(s: &[u8; LEN]) -> Option<(Key, MacLen)> {
+    /// The key, MAC length and policy of a slot (format 1: [`Policy::StateChanging`]), or
+    /// `None` (empty, damaged, an unknown format or policy).
+    pub fn decode(s: &[u8; LEN]) -> Option<(Key, MacLen, Policy)> {
         let (body, crc) = s.split_at_checked(24)?;
-        if body.get(..5)? != [MAGIC[0], MAGIC[1], MAGIC[2], MAGIC[3], 1]
-            || super::super::crc32(body).to_le_bytes() != *crc
-        {
+        if body.get(..4)? != MAGIC || super::super::crc32(body).to_le_bytes() != *crc {
             return None;
         }
+        let policy = match (*body.get(4)?, *body.get(6)?) {
+            (1, _) => Policy::StateChanging,
+            (2, p) => Policy::from_u8(p)?,
+            _ => return None,
+        };
         let mac_len = MacLen::new(*body.get(5)?)?;
-        Some((Key(body.get(8..24)?.try_into().ok()?), mac_len))
+        Some((Key(body.get(8..24)?.try_into().ok()?), mac_len, policy))
     }
 }
 
@@ -524,8 +675,25 @@ mod tests {
     #[test]
     fn the_key_slot_round_trips_and_an_empty_or_damaged_one_is_no_key() {
         let k = Key::new([7; 16]);
-        let s = slot::encode(&k, MacLen::new(6).unwrap());
-        assert_eq!(slot::decode(&s), Some((k, MacLen::new(6).unwrap())));
+        let six = MacLen::new(6).unwrap();
+        for p in [Policy::StateChanging, Policy::All] {
+            assert_eq!(slot::decode(&slot::encode(&k, six, p)), Some((k, six, p)));
+        }
+        let s = slot::encode(&k, six, Policy::All);
+        // A format-1 slot (issue 59's, no policy byte) is state-changing only.
+        let mut v1 = slot::encode(&k, six, Policy::StateChanging);
+        v1[4] = 1;
+        let c = crate::proto::crc32(&v1[..24]).to_le_bytes();
+        v1[24..].copy_from_slice(&c);
+        assert_eq!(slot::decode(&v1), Some((k, six, Policy::StateChanging)));
+        // An unknown policy or format is no key.
+        for (at, b) in [(6, 2u8), (4, 3)] {
+            let mut d = s;
+            d[at] = b;
+            let c = crate::proto::crc32(&d[..24]).to_le_bytes();
+            d[24..].copy_from_slice(&c);
+            assert_eq!(slot::decode(&d), None, "byte {at} = {b}");
+        }
         assert_eq!(slot::decode(&[0; slot::LEN]), None);
         assert_eq!(slot::decode(&[0xff; slot::LEN]), None);
         for i in 0..slot::LEN {
@@ -705,5 +873,188 @@ mod tests {
         assert_eq!(refused(&mut v, &a), AckCode::BadMac);
         assert_eq!(refused(&mut v, &b), AckCode::BadMac);
         assert_eq!(refused(&mut v, &c), AckCode::StaleFreshness);
+    }
+
+    fn measurement(i: u8) -> Msg {
+        Msg::Measurement(Measurement {
+            wheel: Wheel::FrontLeft,
+            t_us: u32::from(i) * 1000,
+            fz: 4000.0,
+            kappa: Some(0.01 * f32::from(i)),
+            ..Measurement::default()
+        })
+    }
+
+    fn plain(m: &Msg) -> std::vec::Vec<u8> {
+        let mut buf = [0u8; MAX_MSG_LEN];
+        let n = m.encode(&mut buf).unwrap();
+        buf[..n].to_vec()
+    }
+
+    #[test]
+    fn secure_all_accepts_secured_measurements_and_refuses_unsecured_forged_and_replayed_ones() {
+        let key = Key::new([0x33; 16]);
+        let mut v = Verifier::new(key, MacLen::DEFAULT, 2).with_policy(Policy::All);
+        let mut s = Signer::new(key, MacLen::DEFAULT, 2, 0);
+        let status_req = Msg::Command(Command::StatusRequest);
+        let batch = Msg::CompactBatch(crate::proto::CompactBatch::default());
+        let compact = Msg::CompactMeasurement(crate::proto::CompactMeasurement::default());
+        // Secured: accepted on each receive identifier, exactly the message sent.
+        for m in [measurement(1), compact, batch, status_req] {
+            let b = sealed(&mut s, &m);
+            assert_eq!(v.open(id::of(m.msg_type()), &b), Ok(m), "{m:?}");
+            // Unsecured: refused under the policy (but the status request: the freshness
+            // synchronisation), accepted without it.
+            let p = plain(&m);
+            if m == status_req {
+                assert_eq!(v.open(id::CONFIG, &p), Ok(m));
+            } else {
+                let r = v.open(id::of(m.msg_type()), &p).unwrap_err().unwrap();
+                assert_eq!(r.code, AckCode::MacMissing, "{m:?}");
+            }
+            let mut lax = Verifier::new(key, MacLen::DEFAULT, 2);
+            assert_eq!(lax.open(id::of(m.msg_type()), &p), Ok(m));
+        }
+        assert_eq!((v.status().accepted, v.status().missing), (4, 3));
+        // Forged (a MAC bit flipped, the CRC made right) and replayed measurements.
+        let good = sealed(&mut s, &measurement(2));
+        let mut forged = good.clone();
+        let n = forged.len();
+        forged[n - 5] ^= 0x80;
+        let c = crate::proto::crc32(&forged[..n - 4]).to_le_bytes();
+        forged[n - 4..].copy_from_slice(&c);
+        let refuse = |v: &mut Verifier, b: &[u8]| v.open(id::MEASUREMENT, b).unwrap_err().unwrap();
+        assert_eq!(refuse(&mut v, &forged).code, AckCode::BadMac);
+        assert_eq!(v.open(id::MEASUREMENT, &good), Ok(measurement(2)));
+        assert_eq!(refuse(&mut v, &good).code, AckCode::StaleFreshness);
+        // Sent on another identifier than it was signed for: the identifier is in the MAC.
+        let other = sealed(&mut s, &measurement(3));
+        assert_eq!(
+            v.open(id::COMPACT, &other).unwrap_err().unwrap().code,
+            AckCode::BadMac
+        );
+        // An identifier without a freshness counter of its own: never verifies.
+        assert_eq!(
+            v.open(0x123, &other).unwrap_err().unwrap().code,
+            AckCode::BadMac
+        );
+        let st = *v.status();
+        assert_eq!(
+            (st.accepted, st.missing, st.bad_mac, st.stale),
+            (5, 3, 3, 1)
+        );
+    }
+
+    #[test]
+    fn freshness_is_per_identifier_so_interleaved_delivery_is_accepted() {
+        let key = Key::new([0x44; 16]);
+        let mut v = Verifier::new(key, MacLen::DEFAULT, 1).with_policy(Policy::All);
+        let mut s = Signer::new(key, MacLen::DEFAULT, 1, 0);
+        // Sent: measurement (1), settings (2), compact batch (3), measurement (4). Delivered in
+        // another order between identifiers (each reassembled on its own), in order within one.
+        let m1 = sealed(&mut s, &measurement(1));
+        let cfg = sealed(&mut s, &settings());
+        let batch = Msg::CompactBatch(crate::proto::CompactBatch::default());
+        let b3 = sealed(&mut s, &batch);
+        let m4 = sealed(&mut s, &measurement(4));
+        assert!(v.open(id::CONFIG, &cfg).is_ok());
+        assert!(v.open(id::BATCH, &b3).is_ok());
+        assert_eq!(v.open(id::MEASUREMENT, &m1), Ok(measurement(1)));
+        assert_eq!(v.open(id::MEASUREMENT, &m4), Ok(measurement(4)));
+        assert_eq!((v.status().accepted, v.status().counter), (4, 4));
+        // Within one identifier the order still counts: the first measurement again is stale.
+        assert_eq!(
+            v.open(id::MEASUREMENT, &m1).unwrap_err().unwrap().code,
+            AckCode::StaleFreshness
+        );
+        // The window is from the highest counter accepted on any identifier.
+        let mut far = Signer::new(key, MacLen::DEFAULT, 1, 4 + WINDOW);
+        let f = sealed(&mut far, &measurement(5));
+        assert_eq!(
+            v.open(id::MEASUREMENT, &f).unwrap_err().unwrap().code,
+            AckCode::StaleFreshness
+        );
+        let mut edge = Signer::new(key, MacLen::DEFAULT, 1, 3 + WINDOW);
+        assert!(v
+            .open(
+                id::COMPACT,
+                &sealed(&mut edge, &Msg::CompactMeasurement(Default::default()))
+            )
+            .is_ok());
+    }
+
+    #[test]
+    fn the_device_signs_its_answers_and_a_tool_verifies_them() {
+        let key = Key::new([0x55; 16]);
+        let mut dev = Verifier::new(key, MacLen::new(6).unwrap(), 8).with_policy(Policy::All);
+        let forces = Msg::Forces(crate::proto::Forces::default());
+        let ack = Msg::Ack(crate::proto::Ack {
+            of: MsgType::Settings as u8,
+            seq: 3,
+            code: AckCode::Ok,
+        });
+        let mut out = [0u8; MAX_MSG_LEN];
+        let mut answers = std::vec::Vec::new();
+        for m in [&forces, &ack, &forces] {
+            let n = dev.seal(id::of(m.msg_type()), m, &mut out).unwrap();
+            answers.push((id::of(m.msg_type()), out[..n].to_vec()));
+        }
+        // Secured: type bit, counter 1, 2, 3 (the device's own transmit counter) in epoch 8.
+        let (_, t) = Msg::decode_secured(&answers[2].1).unwrap();
+        assert_eq!(
+            (answers[2].1[1] & SECURED, t.unwrap().counter),
+            (SECURED, 3)
+        );
+        // Receiving did not move the transmit counter, nor the reverse.
+        assert_eq!(dev.status().counter, 0);
+        let mut tool = Verifier::new(key, MacLen::new(6).unwrap(), 8).with_policy(Policy::All);
+        for (cid, b) in &answers {
+            assert!(tool.open(*cid, b).is_ok());
+        }
+        // Replayed, forged, from another epoch, unsigned, or taken for a request: refused.
+        assert_eq!(
+            tool.open(id::RESULT, &answers[0].1)
+                .unwrap_err()
+                .unwrap()
+                .code,
+            AckCode::StaleFreshness
+        );
+        let mut forged = answers[2].1.clone();
+        forged[3] ^= 1;
+        let n = forged.len();
+        let c = crate::proto::crc32(&forged[..n - 4]).to_le_bytes();
+        forged[n - 4..].copy_from_slice(&c);
+        assert_eq!(
+            tool.open(id::RESULT, &forged).unwrap_err().unwrap().code,
+            AckCode::BadMac
+        );
+        let mut old = Verifier::new(key, MacLen::new(6).unwrap(), 7).with_policy(Policy::All);
+        let n = old.seal(id::RESULT, &forces, &mut out).unwrap();
+        let mut t2 = Verifier::new(key, MacLen::new(6).unwrap(), 8).with_policy(Policy::All);
+        assert_eq!(
+            t2.open(id::RESULT, &out[..n]).unwrap_err().unwrap().code,
+            AckCode::BadMac
+        );
+        assert_eq!(
+            t2.open(id::RESULT, &plain(&forces))
+                .unwrap_err()
+                .unwrap()
+                .code,
+            AckCode::MacMissing
+        );
+        // The device's answer replayed to it as a request: another identifier in the MAC.
+        let (_, fb) = &answers[0];
+        assert_eq!(
+            dev.open(id::MEASUREMENT, fb).unwrap_err().unwrap().code,
+            AckCode::BadMac
+        );
+        // Without the policy the device sends plain messages.
+        let mut lax = Verifier::new(key, MacLen::new(6).unwrap(), 8);
+        let n = lax.seal(id::RESULT, &forces, &mut out).unwrap();
+        assert_eq!(out[..n], plain(&forces)[..]);
+        // The transmit counter never wraps: after u32::MAX the device's epoch moves on.
+        dev.tx = u32::MAX - 1;
+        dev.seal(id::RESULT, &forces, &mut out).unwrap();
+        assert_eq!((dev.epoch(), dev.tx, dev.status().counter), (9, 0, 0));
     }
 }

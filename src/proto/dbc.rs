@@ -25,7 +25,7 @@
 //! A bus log then shows μ per wheel without gough. On classic CAN
 //! these messages span several frames, and only their bytes are signals.
 
-use super::auth::{MacLen, SECURED, STATE_CHANGING_TYPES};
+use super::auth::{MacLen, Policy, SECURED, STATE_CHANGING_TYPES};
 use super::segmenter::Mtu;
 use super::{id, MsgType, PROTO_VERSION};
 use core::fmt::{self, Write};
@@ -321,7 +321,7 @@ fn config_fd<W: Write>(
 /// A signal's name.
 type Name = heapless::String<40>;
 /// Signals multiplexed on `msg_type`, with its value.
-type Muxes = heapless::Vec<(Name, u8), 128>;
+type Muxes = heapless::Vec<(Name, u8), 192>;
 
 /// [`byte_signals`] multiplexed on `msg_type` = `t`; records their names in `muxes`.
 fn muxed_bytes<W: Write>(
@@ -351,6 +351,25 @@ fn muxed_bytes<W: Write>(
 /// of their own (on the configuration identifier, multiplexed on `msg_type`); on classic CAN they are bytes
 /// of the message, as every body is.
 pub fn write_with<W: Write>(w: &mut W, mtu: Mtu, mac_len: MacLen) -> fmt::Result {
+    write_policy(w, mtu, mac_len, Policy::StateChanging)
+}
+
+/// The message types of identifier `cid` that may come secured under `policy`.
+fn secured_types(cid: u16, policy: Policy) -> impl Iterator<Item = MsgType> {
+    MsgType::ALL.into_iter().filter(move |t| {
+        id::of(*t) == cid && (policy == Policy::All || STATE_CHANGING_TYPES.iter().any(|s| s == t))
+    })
+}
+
+/// As [`write_with`], for a device provisioned with `policy`: under [`Policy::All`] every
+/// identifier's types come secured too (type | 0x40, `<Type>Secured` in the `msg_type` value
+/// tables). Their counter and MAC follow a body whose end is not at a fixed offset of a frame
+/// (a `Measurement`'s length varies; the other secured messages span frames, a
+/// `CompactMeasurement`, `Forces`, `Estimate` or `CompactResults` spilling into a second CAN
+/// FD frame): they are message bytes (`first_bytes*`, `next_bytes*`; on CAN FD the first frames
+/// of the identifiers with physical signals carry `<Type>Secured_bytes*`), to be found at the
+/// end of the message, before its CRC.
+pub fn write_policy<W: Write>(w: &mut W, mtu: Mtu, mac_len: MacLen, policy: Policy) -> fmt::Result {
     let fd = mtu == Mtu::Fd;
     let mut muxes = Muxes::new();
     writeln!(w, "VERSION \"gough-proto-{PROTO_VERSION}\"")?;
@@ -384,6 +403,12 @@ pub fn write_with<W: Write>(w: &mut W, mtu: Mtu, mac_len: MacLen) -> fmt::Result
             writeln!(w, " SG_ msg_type m0M : 32|8@1+ (1,0) [0|255] \"\" {rx}")?;
             if cid == id::CONFIG {
                 config_fd(w, len, mac_len, rx, &mut muxes)?;
+            } else if policy == Policy::All {
+                for t in secured_types(cid, policy) {
+                    let mut name = Name::new();
+                    let _ = write!(name, "{}Secured_bytes", t.name());
+                    muxed_bytes(w, &name, t as u8 | SECURED, (BODY, len), rx, &mut muxes)?;
+                }
             }
             for (_, t, fields) in BODIES.iter().filter(|b| b.0 == cid) {
                 for (name, off, n, kind, scale, unit, _) in fields.iter() {
@@ -418,7 +443,13 @@ pub fn write_with<W: Write>(w: &mut W, mtu: Mtu, mac_len: MacLen) -> fmt::Result
         for t in MsgType::ALL.iter().filter(|t| id::of(**t) == cid) {
             write!(w, " {}", t.name())?;
         }
-        if cid == id::CONFIG {
+        if policy == Policy::All {
+            write!(
+                w,
+                ". Every message secured (type | 0x40; the device provisioned to authenticate every message): counter (u32 LE) and AES-128-CMAC truncated to {} bytes after the body, before the CRC-32",
+                mac_len.get()
+            )?;
+        } else if cid == id::CONFIG {
             write!(
                 w,
                 ". Secured (type | 0x40: upload, settings, calibration, reset, stop): counter (u32 LE) and AES-128-CMAC truncated to {} bytes after the body, before the CRC-32",
@@ -445,10 +476,8 @@ pub fn write_with<W: Write>(w: &mut W, mtu: Mtu, mac_len: MacLen) -> fmt::Result
         for t in MsgType::ALL.iter().filter(|t| id::of(**t) == cid) {
             write!(w, " {} \"{}\"", *t as u8, t.name())?;
         }
-        if cid == id::CONFIG {
-            for t in STATE_CHANGING_TYPES {
-                write!(w, " {} \"{}Secured\"", t as u8 | SECURED, t.name())?;
-            }
+        for t in secured_types(cid, policy) {
+            write!(w, " {} \"{}Secured\"", t as u8 | SECURED, t.name())?;
         }
         writeln!(w, " ;")?;
     }
@@ -488,8 +517,11 @@ pub fn write_with<W: Write>(w: &mut W, mtu: Mtu, mac_len: MacLen) -> fmt::Result
                     writeln!(w, "SG_MUL_VAL_ {cid} {name} msg_type {0}-{0};", *t as u8)?;
                 }
             }
-            if cid == id::CONFIG {
-                for (name, t) in muxes.iter() {
+            {
+                for (name, t) in muxes
+                    .iter()
+                    .filter(|(_, t)| MsgType::from_u8(t & !SECURED).map(id::of) == Some(cid))
+                {
                     writeln!(w, "SG_MUL_VAL_ {cid} {name} msg_type {t}-{t};")?;
                 }
             }

@@ -67,8 +67,20 @@ pub fn send_nb<C: embedded_can::nb::Can>(
     msg: &Msg,
     attempts: u32,
 ) -> Result<(), SendError<C::Error>> {
+    let seg = Segmenter::new(msg, seq, Mtu::Classic).map_err(SendError::Encode)?;
+    send_segments_nb(can, id, seg, attempts)
+}
+
+/// Sends the frames of a [`Segmenter`] (e.g. a message the device secured,
+/// [`Segmenter::device`]) on the standard identifier `id` through a non-blocking driver, as
+/// [`send_nb`] does.
+pub fn send_segments_nb<C: embedded_can::nb::Can>(
+    can: &mut C,
+    id: u16,
+    mut seg: Segmenter,
+    attempts: u32,
+) -> Result<(), SendError<C::Error>> {
     let sid = StandardId::new(id).ok_or(SendError::Frame)?;
-    let mut seg = Segmenter::new(msg, seq, Mtu::Classic).map_err(SendError::Encode)?;
     let mut buf = [0u8; 64];
     while let Some(data) = seg.next_frame(&mut buf) {
         let f = C::Frame::new(sid, data).ok_or(SendError::Frame)?;

@@ -48,7 +48,7 @@ pub mod segmenter;
 pub mod slcan;
 pub mod status;
 
-pub use auth::{AuthStatus, Key, MacLen, Signer, Verifier};
+pub use auth::{AuthStatus, Key, MacLen, Policy, Signer, Verifier};
 pub use calibration::CalibrationState;
 pub use crc::crc32;
 pub use frame::{Frame, FrameRepr, Position};

@@ -5,7 +5,7 @@
 //! length, and strict decoders (cantools) reject frames of another length.
 
 use super::frame::{Frame, FrameRepr, Position};
-use super::{id, Error, Msg, Signer, MAX_MSG_LEN};
+use super::{id, Error, Msg, Signer, Verifier, MAX_MSG_LEN};
 use postcard::experimental::max_size::MaxSize;
 
 /// Largest frame of the bus.
@@ -106,6 +106,15 @@ impl Segmenter {
         let cid = id::of(msg.msg_type());
         let mut buf = [0u8; MAX_MSG_LEN];
         let len = signer.seal(cid, msg, &mut buf)?;
+        Ok(Segmenter::of(buf, len, seq, mtu, cid))
+    }
+
+    /// Encodes `msg`, sent by the device, as its [`Verifier`] secures it ([`Verifier::seal`]:
+    /// secured under [`super::Policy::All`], else plain), with sequence number `seq`.
+    pub fn device(msg: &Msg, seq: u8, mtu: Mtu, v: &mut Verifier) -> Result<Segmenter, Error> {
+        let cid = id::of(msg.msg_type());
+        let mut buf = [0u8; MAX_MSG_LEN];
+        let len = v.seal(cid, msg, &mut buf)?;
         Ok(Segmenter::of(buf, len, seq, mtu, cid))
     }
 

@@ -159,8 +159,15 @@ fn test_key() -> PathBuf {
     root().join("firmware/keys/test.key")
 }
 
-fn python_client() -> Result<(), String> {
-    step("python-can client (independent protocol implementation) against the firmware");
+/// The python-can client against the firmware provisioned with the test key; with `secure_all`
+/// the device authenticates every message and the client runs its short `--secure-all`
+/// scenario (about 2 s).
+fn python_client(secure_all: bool) -> Result<(), String> {
+    step(if secure_all {
+        "python-can client with every message authenticated (--secure-all): signed measurements, every answer checked by Python's own CMAC"
+    } else {
+        "python-can client (independent protocol implementation) against the firmware"
+    });
     let py = crate::venv()?;
     let port = std::net::TcpListener::bind("127.0.0.1:0")
         .and_then(|l| l.local_addr())
@@ -171,10 +178,12 @@ fn python_client() -> Result<(), String> {
         .unwrap_or_else(|| root().join("target"));
     let gough = target.join("debug/gough");
     run(cargo().args(["build", "-p", "gough-host", "--bin", "gough"]))?;
+    let all: &[&str] = if secure_all { &["--secure-all"] } else { &[] };
     let mut fw = Command::new(&gough)
         .args(["firmware", "run", "--no-build", "--port", &port.to_string()])
         .arg("--key-file")
         .arg(test_key())
+        .args(all)
         .arg("--elf")
         .arg(elf("gough-firmware"))
         .arg("--workdir")
@@ -189,7 +198,8 @@ fn python_client() -> Result<(), String> {
         .arg("--tir")
         .arg(root().join("host-tests/data/tyres/MagicFormula61_Parameters.tir"))
         .arg("--key-file")
-        .arg(test_key()));
+        .arg(test_key())
+        .args(all));
     let t0 = Instant::now();
     let fw_status = loop {
         if let Ok(Some(st)) = fw.try_wait() {
@@ -238,8 +248,9 @@ pub fn test_m4f(passed: &mut u64) -> Result<(), String> {
         passed,
         &mut 0,
     )?;
-    python_client()?;
-    *passed += 1;
+    python_client(false)?;
+    python_client(true)?;
+    *passed += 2;
     step("STM32F405 with bxCAN (stm32f4xx-hal): build and link, flash/RAM/CCM (math::Fast; MF + transient filter + estimator: the App and its four estimators in SRAM, the stack in CCM, ≥ 20 KiB of it)");
     run(fw_cargo().args([
         "build",

@@ -544,13 +544,16 @@ fn main() -> ! {
 /// The key check of every message the device receives (`gough::proto::auth::Verifier::check`,
 /// what `App::poll` adds per message): per secured message of each kind (AES-128-CMAC over its
 /// identifier, body, counter and epoch, constant-time compare of the 8-byte MAC, the freshness),
-/// and per unsecured measurement (the check that lets it through). `bench: auth_<kind>
-/// mean=<n> worst=<n> ram=<Verifier bytes>` lines.
+/// and per unsecured measurement (the check that lets it through); with every message
+/// authenticated (`Policy::All`) per secured `Measurement` and four-wheel `CompactBatch`, and
+/// per answer the device secures (`Verifier::seal`: encoding, CMAC, CRC; the plain encoding's
+/// cost subtracted, so the figure is what the option adds). `bench: auth_<kind> mean=<n>
+/// worst=<n> ram=<Verifier bytes>` and `bench: auth_seal_<kind> …` lines.
 fn auth_figures(id: u32, clock: Clock) {
-    use gough::proto::auth::{Signer, Verifier};
+    use gough::proto::auth::{Policy, Signer, Verifier};
     use gough::proto::{
-        id as cid, Bytes, CalibrationState, Command, Key, MacLen, Msg, ParamChunk, Wheel,
-        MAX_MSG_LEN,
+        id as cid, Bytes, CalibrationState, Command, CompactBatch, CompactResults,
+        CompactWheelResult, Key, MacLen, Msg, ParamChunk, Wheel, MAX_MSG_LEN,
     };
     const K: usize = 32;
     let key = Key::new([0x7e; 16]);
@@ -570,12 +573,29 @@ fn auth_figures(id: u32, clock: Clock) {
         alpha: Some(0.02),
         ..Measurement::default()
     });
-    let kinds: [(&str, Msg, bool); 5] = [
+    // A measurement with every field (the replay's: t, Fz, α, κ, vx, γ), and a full batch.
+    let full = Measurement {
+        wheel: Wheel::RearRight,
+        t_us: 123_456_789,
+        fz: 4000.0,
+        fy: -1234.5,
+        mz: 21.4,
+        alpha: Some(0.02),
+        kappa: Some(-0.01),
+        vx: Some(20.0),
+        gamma: Some(0.01),
+        ..Measurement::default()
+    };
+    let wheels = Wheel::ALL.map(|wheel| Measurement { wheel, ..full });
+    let batch = CompactBatch::new(full.t_us, &wheels).unwrap_or_else(|| mps2::exit(false));
+    let kinds: [(&str, Msg, bool); 7] = [
         ("settings", settings, true),
         ("command", Msg::Command(Command::Reset), true),
         ("calibration", cal, true),
         ("param_chunk", chunk, true),
         ("measurement_unsecured", meas, false),
+        ("measurement", Msg::Measurement(full), true),
+        ("compact_batch", Msg::CompactBatch(batch), true),
     ];
     for (k, (name, msg, secured)) in kinds.iter().enumerate() {
         let mut signer = Signer::new(key, MacLen::DEFAULT, 3, 0);
@@ -594,7 +614,13 @@ fn auth_figures(id: u32, clock: Clock) {
             let b = bufs[i].get(..lens[i]).unwrap_or(&[]);
             v.check(c, msg, core::hint::black_box(b)).is_ok()
         };
-        let mut v = Verifier::new(key, MacLen::DEFAULT, 3);
+        let policy = if *secured {
+            Policy::All
+        } else {
+            Policy::StateChanging
+        };
+        let verifier = || Verifier::new(key, MacLen::DEFAULT, 3).with_policy(policy);
+        let mut v = verifier();
         bench_start(id + k as u32);
         let t0 = now();
         let mut ok = 0;
@@ -604,7 +630,7 @@ fn auth_figures(id: u32, clock: Clock) {
         let t1 = now();
         bench_stop(id + k as u32);
         let mean = (t1 - t0) as f64 * clock.per_count / K as f64;
-        let mut v = Verifier::new(key, MacLen::DEFAULT, 3);
+        let mut v = verifier();
         let mut worst = 0f64;
         for i in 0..K {
             let t0 = now();
@@ -621,6 +647,67 @@ fn auth_figures(id: u32, clock: Clock) {
             name,
             mean as u32,
             worst as u32,
+            size_of::<Verifier>()
+        );
+    }
+    // The answers the device secures under `Policy::All`: sealed minus plain encoding.
+    let forces = Forces {
+        wheel: Wheel::RearRight,
+        t_us: full.t_us,
+        fx: -812.5,
+        fy: 2310.25,
+        mz: -40.5,
+        flags: 0,
+    };
+    let estimate = Estimate {
+        wheel: Wheel::RearRight,
+        t_us: full.t_us,
+        mu: 0.91,
+        sigma: 0.05,
+        state: State::Identifiable,
+        mu_min: 0.6,
+        change: false,
+        mismatch: false,
+    };
+    let res = CompactWheelResult::or_na(Some(&forces), Some(&estimate));
+    let results = CompactResults {
+        t_us: full.t_us,
+        wheels: [res; 4],
+    };
+    let answers: [(&str, Msg); 3] = [
+        ("forces", Msg::Forces(forces)),
+        ("estimate", Msg::Estimate(estimate)),
+        ("compact_results", Msg::CompactResults(results)),
+    ];
+    for (k, (name, msg)) in answers.iter().enumerate() {
+        let c = cid::of(msg.msg_type());
+        let mut out = [0u8; MAX_MSG_LEN];
+        let mut plain = Verifier::new(key, MacLen::DEFAULT, 3);
+        let mut dev = Verifier::new(key, MacLen::DEFAULT, 3).with_policy(Policy::All);
+        let mut run = |v: &mut Verifier| {
+            let t0 = now();
+            let n = v.seal(c, core::hint::black_box(msg), &mut out);
+            let t1 = now();
+            if n.is_err() {
+                mps2::exit(false);
+            }
+            ((t1 - t0) as f64 - clock.overhead).max(0.0) * clock.per_count
+        };
+        let (mut sum, mut worst, mut base) = (0f64, 0f64, 0f64);
+        bench_start(id + 10 + k as u32);
+        for _ in 0..K {
+            base += run(&mut plain);
+            let t = run(&mut dev);
+            sum += t;
+            worst = worst.max(t);
+        }
+        bench_stop(id + 10 + k as u32);
+        let plain_mean = base / K as f64;
+        hprintln!(
+            "bench: auth_seal_{} mean={} worst={} ram={}",
+            name,
+            (sum / K as f64 - plain_mean) as u32,
+            (worst - plain_mean) as u32,
             size_of::<Verifier>()
         );
     }

@@ -1,7 +1,7 @@
 //! `gough firmware ...`: the firmware under QEMU, its UART bridged to TCP.
 use crate::device::{self, Qemu};
 use clap::{Args, Subcommand};
-use gough::proto::MacLen;
+use gough::proto::{MacLen, Policy};
 use std::path::PathBuf;
 use std::time::Duration;
 
@@ -41,6 +41,23 @@ pub struct RunArgs {
     /// MAC length the device is provisioned with \[bytes, 4..=8\] (with `--key-file`).
     #[arg(long, default_value_t = 8, value_parser = clap::value_parser!(u8).range(4..=8))]
     pub mac_len: u8,
+    /// Authenticate measurements and answers too (with `--key-file`): the device is provisioned
+    /// to refuse every unsecured message (but the status request) and to sign everything it
+    /// sends, and `gough replay` signs its measurements and checks every answer
+    /// (docs/protocol.md, "Security").
+    #[arg(long, requires = "key_file")]
+    pub secure_all: bool,
+}
+
+impl RunArgs {
+    /// What the device authenticates (`--secure-all`).
+    pub fn policy(&self) -> Policy {
+        if self.secure_all {
+            Policy::All
+        } else {
+            Policy::StateChanging
+        }
+    }
 }
 
 /// Starts the firmware of `args` under QEMU (building it first unless told not to).
@@ -61,7 +78,7 @@ pub fn start(args: &RunArgs) -> Result<Qemu, String> {
         &args.workdir,
         false,
         args.port,
-        key.as_ref().map(|k| (k, mac_len)),
+        key.as_ref().map(|k| (k, mac_len, args.policy())),
     )
 }
 

@@ -4,7 +4,7 @@ use crate::tyre;
 use clap::Subcommand;
 use gough::proto::{
     auth, id, Ack, CompactBatch, CompactMeasurement, CompactResults, CompactWheelResult, Feed,
-    MacLen, Msg, MsgType, Mtu, Reassembler, Segmenter, Settings, Signer, MSG_BUF,
+    MacLen, Msg, MsgType, Mtu, Policy, Reassembler, Segmenter, Settings, Signer, Verifier, MSG_BUF,
 };
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -21,6 +21,10 @@ pub enum ProtoCmd {
         /// MAC length of the secured messages \[bytes, 4..=8\] (as provisioned on the device).
         #[arg(long, default_value_t = 8, value_parser = clap::value_parser!(u8).range(4..=8))]
         mac_len: u8,
+        /// For a device that authenticates every message (`gough firmware run --secure-all`):
+        /// every identifier's message types also secured (type | 0x40).
+        #[arg(long)]
+        secure_all: bool,
         /// Write to this file instead of stdout.
         #[arg(long)]
         out: Option<PathBuf>,
@@ -54,6 +58,11 @@ pub enum ProtoCmd {
         /// the device's owner sends them (8-byte MACs, epoch 1 from counter 1).
         #[arg(long, value_name = "KEY")]
         key_file: Option<PathBuf>,
+        /// With `--key-file`: every message secured, as on a bus whose device authenticates
+        /// every message (`gough firmware run --secure-all`): the measurements by the owner's
+        /// signer, the answers by the device's (its own counter, epoch 1).
+        #[arg(long, requires = "key_file")]
+        secure_all: bool,
         /// Write to this file instead of stdout.
         #[arg(long)]
         out: Option<PathBuf>,
@@ -85,11 +94,22 @@ fn emit(s: &str, out: Option<PathBuf>) -> Result<(), String> {
 /// `gough proto ...`
 pub fn run(cmd: ProtoCmd) -> Result<(), String> {
     match cmd {
-        ProtoCmd::Dbc { fd, mac_len, out } => {
+        ProtoCmd::Dbc {
+            fd,
+            mac_len,
+            secure_all,
+            out,
+        } => {
             let mtu = if fd { Mtu::Fd } else { Mtu::Classic };
             let mac_len = MacLen::new(mac_len).ok_or("--mac-len: 4..=8")?;
+            let policy = if secure_all {
+                Policy::All
+            } else {
+                Policy::StateChanging
+            };
             let mut s = String::new();
-            gough::proto::dbc::write_with(&mut s, mtu, mac_len).map_err(|e| e.to_string())?;
+            gough::proto::dbc::write_policy(&mut s, mtu, mac_len, policy)
+                .map_err(|e| e.to_string())?;
             emit(&s, out)
         }
         ProtoCmd::Frames {
@@ -99,13 +119,18 @@ pub fn run(cmd: ProtoCmd) -> Result<(), String> {
             compact,
             batch,
             key_file,
+            secure_all,
             out,
         } => {
-            let mut signer = key_file
+            let key = key_file
                 .as_deref()
                 .map(crate::device::read_key)
-                .transpose()?
-                .map(|k| Signer::new(k, MacLen::DEFAULT, 1, 0));
+                .transpose()?;
+            let mut signer = key.map(|k| Signer::new(k, MacLen::DEFAULT, 1, 0));
+            // The device's end under `--secure-all`: it secures its answers.
+            let mut device = key
+                .filter(|_| secure_all)
+                .map(|k| Verifier::new(k, MacLen::DEFAULT, 1).with_policy(Policy::All));
             let t = tyre::load(&tir)?;
             let mut rows = replay::read_log(&log).map_err(|e| e.to_string())?;
             let mut sent: Vec<Msg> = rows.iter().map(|m| Msg::Measurement(*m)).collect();
@@ -159,7 +184,12 @@ pub fn run(cmd: ProtoCmd) -> Result<(), String> {
             for m in &msgs {
                 let cid = id::of(m.msg_type());
                 let k = id::ALL.iter().position(|x| x.0 == cid).unwrap_or(0);
-                let line = frames_json(m, cid, seq[k], mtu, &mut rx[k], signer.as_mut())?;
+                let sender = match (&mut signer, &mut device) {
+                    (_, Some(d)) if is_answer(cid) => Sender::Device(d),
+                    (Some(s), d) => Sender::Owner(s, d.is_some()),
+                    _ => Sender::Plain,
+                };
+                let line = frames_json(m, cid, seq[k], mtu, &mut rx[k], sender)?;
                 seq[k] = seq[k].wrapping_add(1);
                 writeln!(s, "{line}").map_err(|e| e.to_string())?;
             }
@@ -234,6 +264,19 @@ fn hex(b: &[u8]) -> String {
     })
 }
 
+/// Whether identifier `cid` carries the device's answers.
+fn is_answer(cid: u16) -> bool {
+    matches!(cid, id::RESULT | id::STATUS | id::BATCH_RESULT)
+}
+
+/// Who encodes a message: the owner's signer (every message when the flag is set, else the
+/// state-changing ones), the device (its answers, secured under `Policy::All`), or nobody.
+enum Sender<'a> {
+    Owner(&'a mut Signer, bool),
+    Device(&'a mut Verifier),
+    Plain,
+}
+
 /// One message as a JSON line: its frames from the core's segmenter, and the message the
 /// core's reassembler makes of them.
 fn frames_json(
@@ -242,10 +285,13 @@ fn frames_json(
     seq: u8,
     mtu: Mtu,
     rx: &mut Reassembler<MSG_BUF>,
-    signer: Option<&mut Signer>,
+    sender: Sender<'_>,
 ) -> Result<String, String> {
-    let mut seg = match signer {
-        Some(s) if auth::is_state_changing(m) => Segmenter::sealed(m, seq, mtu, s),
+    let mut seg = match sender {
+        Sender::Owner(s, all) if all || auth::is_state_changing(m) => {
+            Segmenter::sealed(m, seq, mtu, s)
+        }
+        Sender::Device(d) => Segmenter::device(m, seq, mtu, d),
         _ => Segmenter::new(m, seq, mtu),
     }
     .map_err(|e| e.to_string())?;

@@ -81,7 +81,13 @@ pub fn run(a: ReplayArgs) -> Result<(), String> {
     );
     match a.run.key_file.as_deref() {
         Some(k) => {
-            dev.authenticate(crate::device::read_key(k)?)?;
+            let key = crate::device::read_key(k)?;
+            if a.run.secure_all {
+                dev.authenticate_all(key)?;
+                eprintln!("--secure-all: measurements signed, every answer checked");
+            } else {
+                dev.authenticate(key)?;
+            }
             let s = dev
                 .signer
                 .as_ref()
@@ -155,6 +161,18 @@ pub fn run(a: ReplayArgs) -> Result<(), String> {
         match q.wait(Duration::from_secs(20)) {
             Some(0) => {}
             c => return Err(format!("firmware exit code {c:?}, expected 0")),
+        }
+    }
+    if let Some(v) = dev.answers.as_ref() {
+        let s = v.status();
+        let refused = s.missing + s.bad_mac + s.stale;
+        eprintln!(
+            "answers checked: {} verified; refused {refused} (unsigned {}, bad MAC {}, stale {}); device refused: unsigned {}, bad MAC {}, stale {}",
+            s.accepted, s.missing, s.bad_mac, s.stale,
+            status.auth.missing, status.auth.bad_mac, status.auth.stale
+        );
+        if refused > 0 {
+            return Err(format!("{refused} answers did not verify (not used)"));
         }
     }
     if a.check {

@@ -10,8 +10,8 @@ use embedded_can::Frame as _;
 use gough::proto::slcan::{self, CanFrame, Decoder, Line};
 use gough::proto::{
     auth, crc32, id, link, AckCode, Bytes, Command, Feed, Key, MacLen, Msg, MsgType, Mtu,
-    ParamBegin, ParamChunk, ParamCommit, Reassembler, Segmenter, Signer, Status, CHUNK_LEN,
-    MSG_BUF,
+    ParamBegin, ParamChunk, ParamCommit, Policy, Reassembler, Segmenter, Signer, Status, Verifier,
+    CHUNK_LEN, MSG_BUF,
 };
 use std::io::{Read, Write};
 use std::net::TcpStream;
@@ -155,8 +155,13 @@ pub struct Device {
     rx_status: Reassembler<MSG_BUF>,
     seq: [u8; 2],
     t0: Instant,
-    /// Secures the state-changing messages [`Device::send`] sends ([`Device::authenticate`]).
+    /// Secures the state-changing messages [`Device::send`] sends ([`Device::authenticate`]);
+    /// every message when [`Device::answers`] is set.
     pub signer: Option<Signer>,
+    /// Checks every answer of a device provisioned with [`Policy::All`]
+    /// ([`Device::authenticate_all`]): an answer it refuses (forged, stale, unsigned) is counted
+    /// in its status and never returned by [`Device::recv`].
+    pub answers: Option<Verifier>,
 }
 
 /// The key of a key file (32 hexadecimal digits; `#` comment lines allowed).
@@ -180,28 +185,84 @@ impl Device {
             seq: [0; 2],
             t0: Instant::now(),
             signer: None,
+            answers: None,
         }
     }
 
     /// Signs from now on with `key`: reads the device's status for its MAC length, epoch and
-    /// last accepted counter (`Status::auth`). Fails when the device has no key.
+    /// highest accepted counter (`Status::auth`). Fails when the device has no key, or signs
+    /// its answers (then every message must be signed: [`Device::authenticate_all`]).
     pub fn authenticate(&mut self, key: Key) -> Result<(), String> {
-        let s = self.status(Duration::from_secs(20))?.auth;
+        self.answers = None;
+        self.send(&Msg::Command(Command::StatusRequest))?;
+        let deadline = Instant::now() + Duration::from_secs(20);
+        let (s, bytes) = loop {
+            let left = deadline.saturating_duration_since(Instant::now());
+            if let (Msg::Status(s), bytes) = self.recv_raw(left)? {
+                break (s.auth, bytes);
+            }
+        };
+        if matches!(Msg::decode_secured(&bytes), Ok((_, Some(_)))) {
+            return Err(
+                "the device authenticates every message (provisioned with --secure-all): \
+                        sign with --secure-all"
+                    .into(),
+            );
+        }
         let mac_len = MacLen::new(s.mac_len)
             .ok_or("the device has no key: it refuses every state-changing message")?;
         self.signer = Some(Signer::new(key, mac_len, s.epoch, s.counter));
         Ok(())
     }
 
+    /// Signs everything from now on with `key`, for a device provisioned with [`Policy::All`]
+    /// (`gough firmware run --secure-all`): the status request (unsecured: the freshness
+    /// synchronisation) brings a signed `Status`, whose MAC under the key and the epoch it states
+    /// is checked; its MAC length, epoch and counter start the signer, its own counter the
+    /// checking of the device's answers ([`Device::answers`]). Fails when the device has no key,
+    /// does not sign its answers, or its `Status` does not verify (another key).
+    pub fn authenticate_all(&mut self, key: Key) -> Result<(), String> {
+        self.signer = None;
+        self.answers = None;
+        self.send(&Msg::Command(Command::StatusRequest))?;
+        let deadline = Instant::now() + Duration::from_secs(20);
+        let (s, bytes) = loop {
+            let left = deadline.saturating_duration_since(Instant::now());
+            if let (Msg::Status(s), bytes) = self.recv_raw(left)? {
+                break (s, bytes);
+            }
+        };
+        let mac_len = MacLen::new(s.auth.mac_len)
+            .ok_or("the device has no key: it refuses every state-changing message")?;
+        let (_, trailer) = Msg::decode_secured(&bytes).map_err(|e| e.to_string())?;
+        let t = trailer
+            .ok_or("the device does not sign its answers (provisioned without --secure-all)")?;
+        let mut v = Verifier::new(key, mac_len, s.auth.epoch).with_policy(Policy::All);
+        v.set_counter(t.counter.saturating_sub(1));
+        v.check(id::STATUS, &Msg::Status(s), &bytes).map_err(|r| {
+            format!(
+                "the device's status does not verify ({:?}): another key?",
+                r.code
+            )
+        })?;
+        self.signer = Some(Signer::new(key, mac_len, s.auth.epoch, s.auth.counter));
+        self.answers = Some(v);
+        Ok(())
+    }
+
     /// Sends one message on its identifier, secured when it changes the device's state and a
-    /// signer is set ([`Device::authenticate`]); returns the sequence number used.
+    /// signer is set ([`Device::authenticate`]), or always once the answers are checked too
+    /// ([`Device::authenticate_all`]); returns the sequence number used.
     pub fn send(&mut self, msg: &Msg) -> Result<u8, String> {
         let cid = id::of(msg.msg_type());
         let k = usize::from(cid == id::CONFIG);
         let seq = self.seq[k];
         self.seq[k] = seq.wrapping_add(1);
+        let all = self.answers.is_some();
         let seg = match self.signer.as_mut() {
-            Some(s) if auth::is_state_changing(msg) => Segmenter::sealed(msg, seq, Mtu::Classic, s),
+            Some(s) if all || auth::is_state_changing(msg) => {
+                Segmenter::sealed(msg, seq, Mtu::Classic, s)
+            }
             _ => Segmenter::new(msg, seq, Mtu::Classic),
         }
         .map_err(|e| e.to_string())?;
@@ -209,8 +270,14 @@ impl Device {
         Ok(seq)
     }
 
-    /// The next message from the device, waiting at most `timeout`.
+    /// The next message from the device, waiting at most `timeout`. When the answers are
+    /// checked ([`Device::answers`]) one that does not verify is counted there and skipped.
     pub fn recv(&mut self, timeout: Duration) -> Result<Msg, String> {
+        self.recv_raw(timeout).map(|(m, _)| m)
+    }
+
+    /// As [`Device::recv`], with the message's encoded bytes.
+    pub fn recv_raw(&mut self, timeout: Duration) -> Result<(Msg, Vec<u8>), String> {
         let deadline = Instant::now() + timeout;
         loop {
             let left = deadline.saturating_duration_since(Instant::now());
@@ -220,13 +287,19 @@ impl Device {
             self.link.timeout = left;
             let f = self.link.receive().map_err(|e| e.to_string())?;
             let now = self.t0.elapsed().as_millis() as u32;
-            let fed = match link::standard_id(&f) {
-                Some(id::RESULT) => self.rx_result.feed(f.data(), now),
-                Some(id::STATUS) => self.rx_status.feed(f.data(), now),
+            let (cid, rx) = match link::standard_id(&f) {
+                Some(id::RESULT) => (id::RESULT, &mut self.rx_result),
+                Some(id::STATUS) => (id::STATUS, &mut self.rx_status),
                 _ => continue,
             };
-            if let Feed::Done(m) = fed {
-                return Ok(m);
+            if let Feed::Done(m) = rx.feed(f.data(), now) {
+                if let Some(v) = self.answers.as_mut() {
+                    if let Err(r) = v.check(cid, &m, rx.last()) {
+                        eprintln!("answer refused: {:?} {:?} on {cid:#x}", r.of, r.code);
+                        continue;
+                    }
+                }
+                return Ok((m, rx.last().to_vec()));
             }
         }
     }

@@ -3,7 +3,7 @@
 //! exit and returns what it printed. `gough firmware`, `gough replay`, the firmware tests and
 //! `cargo xtask` all start QEMU here.
 use gough::proto::auth::slot;
-use gough::proto::{Key, MacLen};
+use gough::proto::{Key, MacLen, Policy};
 use std::io::Read;
 use std::net::TcpListener;
 use std::path::{Path, PathBuf};
@@ -156,8 +156,8 @@ impl Qemu {
         Qemu::start_keyed(elf, workdir, quiet, port, None)
     }
 
-    /// As [`Qemu::start`], the device provisioned at "flash time" with `key` and MACs of its
-    /// length: the key slot (`gough::proto::auth::slot`) written to `workdir/key-slot.bin` and
+    /// As [`Qemu::start`], the device provisioned at "flash time" with `key`, MACs of its
+    /// length and its policy (what it authenticates): the key slot (`gough::proto::auth::slot`) written to `workdir/key-slot.bin` and
     /// loaded by QEMU's `-device loader` at the firmware's `KEY_SLOT` (0x003F_FF00), never sent
     /// on the bus. `None`: no key (the device refuses every state-changing message).
     pub fn start_keyed(
@@ -165,7 +165,7 @@ impl Qemu {
         workdir: &Path,
         quiet: bool,
         port: Option<u16>,
-        key: Option<(&Key, MacLen)>,
+        key: Option<(&Key, MacLen, Policy)>,
     ) -> Result<Qemu, String> {
         if !elf.exists() {
             return Err(format!(
@@ -188,8 +188,8 @@ impl Qemu {
             .arg(format!("tcp:127.0.0.1:{port},server=on,wait=on"));
         let slot_file = workdir.join("key-slot.bin");
         let _ = std::fs::remove_file(&slot_file);
-        if let Some((k, n)) = key {
-            std::fs::write(&slot_file, slot::encode(k, n))
+        if let Some((k, n, p)) = key {
+            std::fs::write(&slot_file, slot::encode(k, n, p))
                 .map_err(|e| format!("{}: {e}", slot_file.display()))?;
             let slot_file = slot_file
                 .canonicalize()
