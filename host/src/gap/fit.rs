@@ -93,8 +93,8 @@ pub enum Jacobian {
 /// were measured on a 4,000-row MF 6.1 log with the thermal effect (`gough gap generate
 /// --rows 4000 --rate 100 --seed 5 --load-oscillation --effect thermal`, then `gap diagnose`):
 /// the same verdict and shrinks to 0.001, 32.4 → 26.5 s of CPU (differenced Jacobians 831 →
-/// 699 over 160 fits, trial steps 880 → 1,738); not made the default until the gap bench has
-/// been run with it (docs/decisions.md, "Gap diagnosis").
+/// 699 over 160 fits, trial steps 880 → 1,738); but on the quick gap bench 121.4 → 123.4 s,
+/// the same verdicts: not the default (docs/decisions.md, "Gap diagnosis: the fits' Jacobian").
 pub const JACOBIAN: Jacobian = Jacobian::Differences;
 
 /// Levenberg–Marquardt from `start` within `bounds`, at most `max_iter` differenced Jacobians,
