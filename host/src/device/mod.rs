@@ -189,19 +189,26 @@ impl Device {
         }
     }
 
+    /// Requests the device's `Status` (the unsecured status request) and waits up to `timeout`
+    /// for it: the status and its encoded bytes (whether they carry a MAC).
+    fn status_raw(&mut self, timeout: Duration) -> Result<(Status, Vec<u8>), String> {
+        self.send(&Msg::Command(Command::StatusRequest))?;
+        let deadline = Instant::now() + timeout;
+        loop {
+            let left = deadline.saturating_duration_since(Instant::now());
+            if let (Msg::Status(s), bytes) = self.recv_raw(left)? {
+                return Ok((s, bytes));
+            }
+        }
+    }
+
     /// Signs from now on with `key`: reads the device's status for its MAC length, epoch and
     /// highest accepted counter (`Status::auth`). Fails when the device has no key, or signs
     /// its answers (then every message must be signed: [`Device::authenticate_all`]).
     pub fn authenticate(&mut self, key: Key) -> Result<(), String> {
         self.answers = None;
-        self.send(&Msg::Command(Command::StatusRequest))?;
-        let deadline = Instant::now() + Duration::from_secs(20);
-        let (s, bytes) = loop {
-            let left = deadline.saturating_duration_since(Instant::now());
-            if let (Msg::Status(s), bytes) = self.recv_raw(left)? {
-                break (s.auth, bytes);
-            }
-        };
+        let (s, bytes) = self.status_raw(Duration::from_secs(20))?;
+        let s = s.auth;
         if matches!(Msg::decode_secured(&bytes), Ok((_, Some(_)))) {
             return Err(
                 "the device authenticates every message (provisioned with --secure-all): \
@@ -224,14 +231,7 @@ impl Device {
     pub fn authenticate_all(&mut self, key: Key) -> Result<(), String> {
         self.signer = None;
         self.answers = None;
-        self.send(&Msg::Command(Command::StatusRequest))?;
-        let deadline = Instant::now() + Duration::from_secs(20);
-        let (s, bytes) = loop {
-            let left = deadline.saturating_duration_since(Instant::now());
-            if let (Msg::Status(s), bytes) = self.recv_raw(left)? {
-                break (s, bytes);
-            }
-        };
+        let (s, bytes) = self.status_raw(Duration::from_secs(20))?;
         let mac_len = MacLen::new(s.auth.mac_len)
             .ok_or("the device has no key: it refuses every state-changing message")?;
         let (_, trailer) = Msg::decode_secured(&bytes).map_err(|e| e.to_string())?;
@@ -325,14 +325,7 @@ impl Device {
 
     /// Asks for and returns the device's status.
     pub fn status(&mut self, timeout: Duration) -> Result<Status, String> {
-        self.send(&Msg::Command(Command::StatusRequest))?;
-        let deadline = Instant::now() + timeout;
-        loop {
-            let left = deadline.saturating_duration_since(Instant::now());
-            if let Msg::Status(s) = self.recv(left)? {
-                return Ok(s);
-            }
-        }
+        self.status_raw(timeout).map(|(s, _)| s)
     }
 
     /// Uploads a `.tir` text: begin (acknowledged), chunks, commit (acknowledged). The device
