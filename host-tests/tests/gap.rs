@@ -516,3 +516,40 @@ fn bad_sampling_gives_one_line_errors_naming_the_flag() {
         assert!(!o.status.success() && err.contains(flag), "{args:?}: {err}");
     }
 }
+
+/// The case CSV names each none log's best candidate beside its shrink and z (the column
+/// that says what came near a false alarm), one field per header column.
+#[test]
+fn the_case_csv_names_the_best_candidate() {
+    let r = bench::CaseResult {
+        tyre: "T.tir".into(),
+        truth: None,
+        truth2: None,
+        decoys: vec![],
+        rate: 20.0,
+        named: vec![],
+        verdict_shrink: 0.0,
+        best_second: None,
+        magnitude: 1.0,
+        noise: 0.01,
+        seed: 1001,
+        verdict: None,
+        indistinguishable: vec![],
+        achieved: 0.0,
+        achievable: 0.0,
+        best: Some(Effect::SensorLag),
+        best_shrink: 0.004,
+        best_z: 5.49,
+        seconds: 11.6,
+    };
+    let csv = bench::cases_csv(&[r]);
+    let mut lines = csv.lines();
+    let head: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let row: Vec<&str> = lines.next().unwrap().split(',').collect();
+    assert_eq!(head.len(), row.len(), "{csv}");
+    let col = |n: &str| row[head.iter().position(|h| *h == n).unwrap()];
+    assert_eq!(col("best"), "sensor_lag");
+    assert_eq!(col("best_shrink"), "0.00400");
+    assert_eq!(col("best_z"), "5.49");
+    assert_eq!(col("verdict"), "none");
+}
