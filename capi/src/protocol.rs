@@ -574,6 +574,15 @@ pub unsafe extern "C" fn gough_rx_init(rx: *mut gough_rx_t) -> i32 {
     GOUGH_OK
 }
 
+/// A received frame's data bytes: its first `len` (1 to the frame's capacity), else
+/// `GOUGH_E_ARG`.
+fn frame_data(f: &gough_frame_t) -> Result<&[u8], i32> {
+    f.data
+        .get(..f.len as usize)
+        .filter(|d| !d.is_empty())
+        .ok_or(GOUGH_E_ARG)
+}
+
 /// Feeds one received frame at time `now_ms` [ms] (a message whose frames are more than 50 ms
 /// apart is dropped). `*out` gets the message when this frame completes one, else
 /// `kind = GOUGH_MSG_NONE`. `GOUGH_E_PROTO`: the frame or the message was dropped (counted).
@@ -592,11 +601,7 @@ pub unsafe extern "C" fn gough_rx_feed(
         }
         // SAFETY: non-null, the caller's frame.
         let f = unsafe { &*frame };
-        let data = f
-            .data
-            .get(..f.len as usize)
-            .filter(|d| !d.is_empty())
-            .ok_or(GOUGH_E_ARG)?;
+        let data = frame_data(f)?;
         let (msg, code) = match r.feed(data, now_ms) {
             Feed::Pending => (ZERO_MSG, Ok(())),
             Feed::Done(m) => (to_c(&m), Ok(())),
@@ -664,11 +669,7 @@ pub unsafe extern "C" fn gough_rx_feed_secured(
         }
         // SAFETY: non-null, the caller's frame.
         let f = unsafe { &*frame };
-        let data = f
-            .data
-            .get(..f.len as usize)
-            .filter(|d| !d.is_empty())
-            .ok_or(GOUGH_E_ARG)?;
+        let data = frame_data(f)?;
         let cid = u16::try_from(f.id).map_err(|_| GOUGH_E_ARG)?;
         let (msg, code) = match r.feed(data, now_ms) {
             Feed::Pending => (ZERO_MSG, Ok(())),
