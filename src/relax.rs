@@ -47,7 +47,7 @@
 //! slip-dependent relaxation length inside the step (offered between steps by
 //! [`decayed_sigma`], paper ref. \[8\]).
 
-use crate::math::{Backend, Float};
+use crate::math::{Backend, Float, Mask};
 use crate::mf::{self, EvalError, Input, Options, Output, Params};
 
 /// Which speed damps the deflection in eq. (20).
@@ -300,10 +300,10 @@ impl<F: Float> Config<F> {
         let (v_max, u_max) = (self.max_tan_alpha * s_a, self.max_kappa * s_k);
         let (v, fv) = v.clamp_flag(-v_max, v_max);
         let (u, fu) = u.clamp_flag(-u_max, u_max);
-        if fv {
+        if fv.any() {
             flags.0 |= StepFlags::ALPHA_CLAMPED.0;
         }
-        if fu {
+        if fu.any() {
             flags.0 |= StepFlags::KAPPA_CLAMPED.0;
         }
         (v, u)

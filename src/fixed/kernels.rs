@@ -12,7 +12,7 @@ use super::Fix;
 use crate::math::minimax::{
     A0, A1, A2, A3, C0, C1, E0, E1, E2, E3, L0, L1, P0, P1, P2, P3, S0, S1, S2, T0, T1, T2, T3, T4,
 };
-use crate::math::{Backend, Float};
+use crate::math::{Backend, Real};
 
 /// A Q31.32 constant from an `f64` (compile time).
 const fn q(x: f64) -> Fix {
@@ -294,6 +294,7 @@ impl Backend<Fix> for FixMath {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::math::Float;
     use core::f64::consts::PI as PI64;
     use proptest::prelude::*;
 

@@ -79,7 +79,7 @@ pub mod kernels;
 
 pub use kernels::FixMath;
 
-use crate::math::Float;
+use crate::math::{Float, Real};
 use crate::mf::{self, EvalError, Input, Options, Output, Params};
 use core::ops::{Add, AddAssign, Div, Mul, MulAssign, Neg, Sub, SubAssign};
 use fixed::types::I32F32;
@@ -646,7 +646,29 @@ impl MulAssign for Fix {
     }
 }
 
-impl Float for Fix {
+impl Real for Fix {
+    type Mask = bool;
+    type Flags = crate::mf::Flags;
+    #[inline(always)]
+    fn mask_lt(self, o: Fix) -> bool {
+        self < o
+    }
+    #[inline(always)]
+    fn mask_le(self, o: Fix) -> bool {
+        self <= o
+    }
+    #[inline(always)]
+    fn mask_eq(self, o: Fix) -> bool {
+        self == o
+    }
+    #[inline(always)]
+    fn select(m: bool, a: Fix, b: Fix) -> Fix {
+        if m {
+            a
+        } else {
+            b
+        }
+    }
     const ZERO: Fix = Fix::from_int(0);
     const ONE: Fix = Fix::from_int(1);
     const TWO: Fix = Fix::from_int(2);
@@ -661,6 +683,18 @@ impl Float for Fix {
     fn from_f64(x: f64) -> Fix {
         Fix::from_f64_const(x)
     }
+    #[inline]
+    fn abs(self) -> Fix {
+        Fix(self.0.saturating_abs())
+    }
+    /// `false` for the saturation markers [`Fix::MAX`] and [`Fix::MIN`].
+    #[inline]
+    fn is_finite(self) -> bool {
+        self != Fix::MAX && self != Fix::MIN
+    }
+}
+
+impl Float for Fix {
     /// Exact for |x| < 2²¹; rounded above (the trait's "exact" holds for the floats only).
     #[inline]
     fn to_f64(self) -> f64 {
@@ -678,15 +712,6 @@ impl Float for Fix {
     #[inline]
     fn from_index(i: u16) -> Fix {
         Fix::from_int(i32::from(i))
-    }
-    #[inline]
-    fn abs(self) -> Fix {
-        Fix(self.0.saturating_abs())
-    }
-    /// `false` for the saturation markers [`Fix::MAX`] and [`Fix::MIN`].
-    #[inline]
-    fn is_finite(self) -> bool {
-        self != Fix::MAX && self != Fix::MIN
     }
 }
 

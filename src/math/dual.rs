@@ -11,7 +11,7 @@
 //! value is a constant (derivative 0). √ at 0 and acos at ±1, whose derivatives are infinite,
 //! get the derivative 0 (their callers' kinks): never NaN from finite input.
 
-use super::{Backend, Float, Lift};
+use super::{Backend, Float, Lift, Real};
 use core::cmp::Ordering;
 use core::ops::{Add, AddAssign, Div, Mul, MulAssign, Neg, Sub, SubAssign};
 
@@ -155,7 +155,33 @@ impl<F: Float, const N: usize> MulAssign for Dual<F, N> {
     }
 }
 
-impl<F: Float, const N: usize> Float for Dual<F, N> {
+impl<F: Float, const N: usize> Real for Dual<F, N> {
+    type Mask = F::Mask;
+    type Flags = F::Flags;
+    /// Compares the values (the derivatives do not order).
+    #[inline(always)]
+    fn mask_lt(self, o: Self) -> F::Mask {
+        self.v.mask_lt(o.v)
+    }
+    #[inline(always)]
+    fn mask_le(self, o: Self) -> F::Mask {
+        self.v.mask_le(o.v)
+    }
+    #[inline(always)]
+    fn mask_eq(self, o: Self) -> F::Mask {
+        self.v.mask_eq(o.v)
+    }
+    #[inline(always)]
+    fn select(m: F::Mask, a: Self, b: Self) -> Self {
+        let mut d = b.d;
+        for (x, y) in d.iter_mut().zip(a.d) {
+            *x = F::select(m, y, *x);
+        }
+        Dual {
+            v: F::select(m, a.v, b.v),
+            d,
+        }
+    }
     const ZERO: Self = Dual {
         v: F::ZERO,
         d: [F::ZERO; N],
@@ -189,10 +215,6 @@ impl<F: Float, const N: usize> Float for Dual<F, N> {
         Self::cst(F::from_f64(x))
     }
     #[inline]
-    fn to_f64(self) -> f64 {
-        self.v.to_f64()
-    }
-    #[inline]
     fn abs(self) -> Self {
         if self.v < F::ZERO {
             -self
@@ -212,20 +234,27 @@ impl<F: Float, const N: usize> Float for Dual<F, N> {
             .fold(true, |ok, x| ok & x.v.is_finite() & F::all_finite(&x.d))
     }
     #[inline]
-    fn floor_index(self, max: usize) -> usize {
-        self.v.floor_index(max)
-    }
-    #[inline]
-    fn from_index(i: u16) -> Self {
-        Self::cst(F::from_index(i))
-    }
-    #[inline]
     fn sign(self) -> Self {
         Self::cst(self.v.sign())
     }
     #[inline]
     fn sign_nz(self) -> Self {
         Self::cst(self.v.sign_nz())
+    }
+}
+
+impl<F: Float, const N: usize> Float for Dual<F, N> {
+    #[inline]
+    fn to_f64(self) -> f64 {
+        self.v.to_f64()
+    }
+    #[inline]
+    fn floor_index(self, max: usize) -> usize {
+        self.v.floor_index(max)
+    }
+    #[inline]
+    fn from_index(i: u16) -> Self {
+        Self::cst(F::from_index(i))
     }
 }
 

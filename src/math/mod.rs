@@ -49,11 +49,12 @@ pub use micro::Micromath;
 #[cfg(all(test, any(feature = "fast", feature = "micromath")))]
 pub(crate) mod testutil;
 
-/// A real scalar: `f32` on the device, `f64` on the host (and `fixed::Fix`, Q31.32, with the
-/// `fixed` feature).
+/// A real number as the equations compute with it: one value ([`Float`]: `f32` on the device,
+/// `f64` on the host, `fixed::Fix` with the `fixed` feature) or several in lanes (lanes,
+/// the host's batch).
 ///
 /// Only what the equations use. Units are whatever the caller's quantity has.
-pub trait Float:
+pub trait Real:
     Copy
     + PartialOrd
     + PartialEq
@@ -83,33 +84,43 @@ pub trait Float:
     /// 2/π (the normalisation of `atan` in (4.E44))
     const FRAC_2_PI: Self;
 
+    /// What a comparison of two values gives: `bool` for a scalar, one flag per lane for
+    /// lanes. The formula's branches on a *value* (a sign, a clip, a guard) compare into a
+    /// mask and [`select`](Real::select) or [`choose`]; branches on parameters stay `if`s
+    /// (`PartialOrd`, which for lanes holds when it holds in every lane).
+    type Mask: Mask;
+    /// The flags of an evaluation ([`crate::mf::Flags`]; one set per lane for lanes).
+    type Flags: crate::mf::FlagSet<Self::Mask>;
+    /// `self < o`, per lane.
+    fn mask_lt(self, o: Self) -> Self::Mask;
+    /// `self <= o`, per lane.
+    fn mask_le(self, o: Self) -> Self::Mask;
+    /// `self == o`, per lane.
+    fn mask_eq(self, o: Self) -> Self::Mask;
+    /// `self > o`, per lane.
+    #[inline(always)]
+    fn mask_gt(self, o: Self) -> Self::Mask {
+        o.mask_lt(self)
+    }
+    /// `self >= o`, per lane.
+    #[inline(always)]
+    fn mask_ge(self, o: Self) -> Self::Mask {
+        o.mask_le(self)
+    }
+    /// `a` where `m`, else `b` (per lane; for a scalar, `if m { a } else { b }`).
+    fn select(m: Self::Mask, a: Self, b: Self) -> Self;
     /// Converts from `f64` (rounding to nearest for `f32`). Used for parameters and constants.
     fn from_f64(x: f64) -> Self;
-    /// Converts to `f64` (exact for `f32` and `f64`; `fixed::Fix` rounds beyond 2²¹).
-    fn to_f64(self) -> f64;
     /// |x|
     fn abs(self) -> Self;
     /// `true` unless NaN or ±∞ (for `fixed::Fix`: unless saturated).
     fn is_finite(self) -> bool;
-    /// `true` when every value [`is_finite`](Float::is_finite). The floats override it with
+    /// `true` when every value [`is_finite`](Real::is_finite). The floats override it with
     /// one comparison for the whole slice (x − x is 0 for every finite x and NaN otherwise, so
     /// their sum is 0 exactly when all are finite) instead of one test and branch per value.
     #[inline]
     fn all_finite(xs: &[Self]) -> bool {
         xs.iter().all(|x| x.is_finite())
-    }
-    /// ⌊x⌋ as an index, clamped to `0..=max` (NaN and negative values give 0): a table cell
-    /// from a position along a uniform grid, with no conversion through `f64`.
-    fn floor_index(self, max: usize) -> usize;
-    /// A small index as a value (exact for `i` < 2¹⁶): a grid position, with no conversion
-    /// through `f64`.
-    fn from_index(i: u16) -> Self;
-    /// `us` microseconds in seconds. The floats divide by 10⁶ in their own precision
-    /// (correctly rounded for `us` < 2²⁴ in `f32`, all `u32` in `f64`): no soft `f64` on a
-    /// device whose FPU is single precision.
-    #[inline]
-    fn from_micros(us: u32) -> Self {
-        Self::from_f64(f64::from(us) * 1e-6)
     }
     /// The larger of two values; NaN-free inputs assumed (callers check finiteness first).
     #[inline]
@@ -155,22 +166,132 @@ pub trait Float:
     fn sq(self) -> Self {
         self * self
     }
-    /// Clamps to `[lo, hi]`; returns the value and whether it was changed.
+    /// Clamps to `[lo, hi]`; returns the value and whether it was changed (per lane).
     #[inline]
-    fn clamp_flag(self, lo: Self, hi: Self) -> (Self, bool) {
-        if self < lo {
-            (lo, true)
-        } else if self > hi {
-            (hi, true)
-        } else {
-            (self, false)
-        }
+    fn clamp_flag(self, lo: Self, hi: Self) -> (Self, Self::Mask) {
+        let (below, above) = (self.mask_lt(lo), self.mask_gt(hi));
+        (
+            Self::select(below, lo, Self::select(above, hi, self)),
+            below.or(above),
+        )
+    }
+}
+
+/// One real scalar: `f32` on the device, `f64` on the host (and `fixed::Fix`, Q31.32, with the
+/// `fixed` feature). A [`Real`] whose comparisons are `bool`s and whose flags are one
+/// [`crate::mf::Flags`], with the conversions the rest of the crate needs.
+pub trait Float: Real<Mask = bool, Flags = crate::mf::Flags> {
+    /// Converts to `f64` (exact for `f32` and `f64`; `fixed::Fix` rounds beyond 2²¹).
+    fn to_f64(self) -> f64;
+    /// ⌊x⌋ as an index, clamped to `0..=max` (NaN and negative values give 0): a table cell
+    /// from a position along a uniform grid, with no conversion through `f64`.
+    fn floor_index(self, max: usize) -> usize;
+    /// A small index as a value (exact for `i` < 2¹⁶): a grid position, with no conversion
+    /// through `f64`.
+    fn from_index(i: u16) -> Self;
+    /// `us` microseconds in seconds. The floats divide by 10⁶ in their own precision
+    /// (correctly rounded for `us` < 2²⁴ in `f32`, all `u32` in `f64`): no soft `f64` on a
+    /// device whose FPU is single precision.
+    #[inline]
+    fn from_micros(us: u32) -> Self {
+        Self::from_f64(f64::from(us) * 1e-6)
+    }
+}
+
+/// A comparison's result ([`Real::Mask`]): `bool` for one value, a flag per lane for
+/// lanes.
+pub trait Mask: Copy + Default + core::fmt::Debug {
+    /// `b` in every lane.
+    fn splat(b: bool) -> Self;
+    /// Every lane set (for `bool`: itself).
+    fn all(self) -> bool;
+    /// Some lane set (for `bool`: itself).
+    fn any(self) -> bool;
+    /// Lane-wise and.
+    fn and(self, o: Self) -> Self;
+    /// Lane-wise or.
+    fn or(self, o: Self) -> Self;
+    /// Lane-wise not.
+    fn not(self) -> Self;
+}
+
+impl Mask for bool {
+    #[inline(always)]
+    fn splat(b: bool) -> bool {
+        b
+    }
+    #[inline(always)]
+    fn all(self) -> bool {
+        self
+    }
+    #[inline(always)]
+    fn any(self) -> bool {
+        self
+    }
+    #[inline(always)]
+    fn and(self, o: bool) -> bool {
+        self && o
+    }
+    #[inline(always)]
+    fn or(self, o: bool) -> bool {
+        self || o
+    }
+    #[inline(always)]
+    fn not(self) -> bool {
+        !self
+    }
+}
+
+/// `a()` where `m`, `b()` elsewhere: one side alone when every lane agrees (for a scalar,
+/// always: `if m { a() } else { b() }`), both sides and a [`Real::select`] when lanes differ.
+/// For a value branch whose sides are both finite for finite inputs.
+#[inline(always)]
+pub fn choose<F: Real>(m: F::Mask, a: impl FnOnce() -> F, b: impl FnOnce() -> F) -> F {
+    if m.all() {
+        a()
+    } else if !m.any() {
+        b()
+    } else {
+        F::select(m, a(), b())
     }
 }
 
 macro_rules! impl_float {
     ($t:ty, $pi:expr, $pi2:expr, $f2pi:expr) => {
-        impl Float for $t {
+        impl Real for $t {
+            type Mask = bool;
+            type Flags = crate::mf::Flags;
+            #[inline(always)]
+            fn mask_lt(self, o: Self) -> bool {
+                self < o
+            }
+            #[inline(always)]
+            fn mask_le(self, o: Self) -> bool {
+                self <= o
+            }
+            #[inline(always)]
+            fn mask_eq(self, o: Self) -> bool {
+                self == o
+            }
+            #[inline(always)]
+            fn select(m: bool, a: Self, b: Self) -> Self {
+                if m {
+                    a
+                } else {
+                    b
+                }
+            }
+            /// The scalar form (an `if` chain), as before lanes existed.
+            #[inline]
+            fn clamp_flag(self, lo: Self, hi: Self) -> (Self, bool) {
+                if self < lo {
+                    (lo, true)
+                } else if self > hi {
+                    (hi, true)
+                } else {
+                    (self, false)
+                }
+            }
             const ZERO: Self = 0.0;
             const ONE: Self = 1.0;
             const TWO: Self = 2.0;
@@ -181,10 +302,6 @@ macro_rules! impl_float {
             #[inline]
             fn from_f64(x: f64) -> Self {
                 x as $t
-            }
-            #[inline]
-            fn to_f64(self) -> f64 {
-                self as f64
             }
             #[inline]
             fn abs(self) -> Self {
@@ -201,6 +318,12 @@ macro_rules! impl_float {
                     acc += x - x;
                 }
                 acc == 0.0
+            }
+        }
+        impl Float for $t {
+            #[inline]
+            fn to_f64(self) -> f64 {
+                self as f64
             }
             #[inline]
             fn floor_index(self, max: usize) -> usize {
@@ -251,8 +374,8 @@ impl_float!(
 /// value: for `F` itself they are `F`'s own; for a dual number they skip the derivative
 /// arithmetic of the constant side (x·c is N + 1 products, where lifting c first made
 /// 2N + 1 products and N sums).
-pub trait Lift<F>:
-    Float
+pub trait Lift<F: Real>:
+    Real<Mask = F::Mask, Flags = F::Flags>
     + Add<F, Output = Self>
     + Sub<F, Output = Self>
     + Mul<F, Output = Self>
@@ -265,7 +388,7 @@ pub trait Lift<F>:
     fn value(self) -> F;
 }
 
-impl<F: Float> Lift<F> for F {
+impl<F: Real> Lift<F> for F {
     #[inline]
     fn lift(x: F) -> F {
         x
@@ -279,7 +402,7 @@ impl<F: Float> Lift<F> for F {
 /// The transcendental kernels of the Magic Formula, chosen by type.
 ///
 /// Every function takes and returns the same scalar type. Angles in radians.
-pub trait Backend<F: Float> {
+pub trait Backend<F: Real> {
     /// sin x — the sine Magic Formula (4.E9), (4.E19); turn-slip shifts (4.80).
     fn sin(x: F) -> F;
     /// cos x — the cosine Magic Formula (4.E33), (4.E36), weighting functions (4.E51), (4.E59).

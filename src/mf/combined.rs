@@ -6,9 +6,10 @@
 //! E was not needed"), MF 5.2 adds REX/REY; the files of each version carry the matching keys,
 //! and the absent ones are zero.
 
-use super::limits::Conditioned;
+use super::limits::Cond;
+use super::FlagSet;
 use super::{clip_e, cos_atan, magic_cos, Flags, Params};
-use crate::math::{Backend, Float, Lift};
+use crate::math::{Backend, Lift, Mask, Real};
 
 /// G = cos[C·atan{B·x − E(B·x − atan B·x)}] / cos[C·atan{B·S − E(B·S − atan B·S)}], eqs. (14),
 /// (4.E51)/(4.E52), (4.E59)/(4.E60), at x = slip + S. A vanishing denominator (only for C > 1
@@ -17,24 +18,30 @@ use crate::math::{Backend, Float, Lift};
 ///
 /// Computed in the slips' type `G`; C, E and S are load-stage values (`F`).
 #[inline]
-fn weight<F: Float, G: Lift<F>, M: Backend<G>>(
+fn weight<F: Real, G: Lift<F>, M: Backend<G>>(
     b: G,
     c: F,
     e: F,
     s_h: F,
     x: G,
-    flags: &mut Flags,
+    flags: &mut F::Flags,
 ) -> G {
-    if s_h == F::ZERO {
+    // S = 0 in every lane; where only some lanes have it, their G0 is cos 0 = 1 exactly.
+    if s_h.mask_eq(F::ZERO).all() {
         return magic_cos::<G, M, G, F, F>(b, c, e, x);
     }
     // The denominator's B·S taken as S·B (the same product): S is the load-stage value.
     let g0 = magic_cos::<G, M, F, F, F>(s_h, c, e, b);
-    if g0.abs() < G::from_f64(1e-6) {
-        flags.insert(Flags::GUARD);
+    let vanished = g0.abs().mask_lt(G::from_f64(1e-6));
+    flags.set_if(Flags::GUARD, vanished);
+    if vanished.all() {
         return G::ONE;
     }
-    magic_cos::<G, M, G, F, F>(b, c, e, x) / g0
+    G::select(
+        vanished,
+        G::ONE,
+        magic_cos::<G, M, G, F, F>(b, c, e, x) / g0,
+    )
 }
 
 /// Load stage of the combined-slip Fx and Fy, (57)–(68) / (4.E50)–(4.E67): the weights'
@@ -55,7 +62,8 @@ pub struct WeightsLoad<F> {
     pub lxal: F,
     /// Fz·(rVy1 + rVy2·dfz + rVy3·γ*) of DVyκ (68), (4.E67) per μy·ζ2.
     pub d_vyk1: F,
-    /// rVy1 + rVy2·dfz + rVy3·γ* is 0: no κ-induced side force.
+    /// rVy1 + rVy2·dfz + rVy3·γ* is 0 (in every lane): no κ-induced side force. (A lane where
+    /// it is 0 gets SVyκ = 0 from the formula too: DVyκ = 0.)
     pub no_vyk: bool,
     /// rVy4, rVy5, rVy6.
     pub rvy4: F,
@@ -83,7 +91,7 @@ pub struct WeightsLoad<F> {
 
 /// [`WeightsLoad`] of the conditioned load `c`.
 #[inline(always)]
-pub fn weights_load<F: Float>(p: &Params<F>, c: &mut Conditioned<F>) -> WeightsLoad<F> {
+pub fn weights_load<F: Real>(p: &Params<F>, c: &mut Cond<F>) -> WeightsLoad<F> {
     let (dfz, g) = (c.dfz, c.gamma_star);
     let r_vy = p.rvy1 + p.rvy2 * dfz + p.rvy3 * g;
     WeightsLoad {
@@ -94,7 +102,7 @@ pub fn weights_load<F: Float>(p: &Params<F>, c: &mut Conditioned<F>) -> WeightsL
         rbx2: p.rbx2,
         lxal: p.lxal,
         d_vyk1: c.fz * r_vy,
-        no_vyk: r_vy == F::ZERO,
+        no_vyk: r_vy.mask_eq(F::ZERO).all(),
         rvy4: p.rvy4,
         rvy5: p.rvy5,
         rvy6: p.rvy6,
@@ -112,12 +120,12 @@ pub fn weights_load<F: Float>(p: &Params<F>, c: &mut Conditioned<F>) -> WeightsL
 /// Combined-slip longitudinal force, (57)–(62) RECONSTRUCTED for Delft 96 (from eq. (12) and
 /// MF 5.2), (4.E50)–(4.E57): the slip stage, given Fx0.
 #[inline(always)]
-pub fn fx_slip<F: Float, G: Lift<F>, M: Backend<G>>(
+pub fn fx_slip<F: Real, G: Lift<F>, M: Backend<G>>(
     w: &WeightsLoad<F>,
     kappa: G,
     alpha_star: G,
     fx0: G,
-    flags: &mut Flags,
+    flags: &mut F::Flags,
 ) -> G {
     let b_xa = cos_atan::<G, M>(kappa * w.rbx2) * w.b_xa1 * w.lxal; // (4.E54)
     let alpha_s = alpha_star + w.s_hxa; // (4.E53)
@@ -140,11 +148,11 @@ pub struct Fy<F> {
 /// Gyκ (14), (4.E59), (4.E60), with Byκ (15), (4.E62) and κS (4.E61): depends on neither Fy0
 /// nor μy.
 #[inline(always)]
-pub fn g_yk<F: Float, G: Lift<F>, M: Backend<G>>(
+pub fn g_yk<F: Real, G: Lift<F>, M: Backend<G>>(
     w: &WeightsLoad<F>,
     kappa: G,
     alpha_star: G,
-    flags: &mut Flags,
+    flags: &mut F::Flags,
 ) -> G {
     let b_yk = cos_atan::<G, M>((alpha_star - w.rby3) * w.rby2) * w.b_yk1 * w.lyka; // (15), (4.E62)
     let kappa_s = kappa + w.s_hyk; // (4.E61)
@@ -155,14 +163,14 @@ pub fn g_yk<F: Float, G: Lift<F>, M: Backend<G>>(
 /// given Fy0, μy (of the friction stage, `H`) and ζ2.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
-pub fn fy_slip<F: Float, H: Lift<F>, G: Lift<F> + Lift<H>, M: Backend<G>>(
+pub fn fy_slip<F: Real, H: Lift<F>, G: Lift<F> + Lift<H>, M: Backend<G>>(
     w: &WeightsLoad<F>,
-    c: &Conditioned<F>,
+    c: &Cond<F>,
     (kappa, alpha_star): (G, G),
     fy0: G,
     mu_y: H,
     zeta2: F,
-    flags: &mut Flags,
+    flags: &mut F::Flags,
 ) -> Fy<G> {
     // (68), (4.E67) DVyκ = μy·Fz·(rVy1 + rVy2·dfz + rVy3·γ*)·cos(atan(rVy4·α*))·ζ2, and
     // (16), (4.E66) SVyκ = DVyκ·sin(rVy5·atan(rVy6·κ))·λVyκ, computed per unit μy·ζ2 (and not
@@ -175,7 +183,7 @@ pub fn fy_slip<F: Float, H: Lift<F>, G: Lift<F> + Lift<H>, M: Backend<G>>(
             * M::sin(M::atan(kappa * w.rvy6) * w.rvy5)
             * w.lvyka
     };
-    if c.low_speed {
+    if c.low_speed.any() {
         s_vyk_per_mu = s_vyk_per_mu * c.red_smooth;
     }
     let s_vyk = s_vyk_per_mu * (mu_y * zeta2);
@@ -202,7 +210,7 @@ pub struct Arm<F> {
     pub ls: F,
 }
 
-impl<F: Float> Arm<F> {
+impl<F: Real> Arm<F> {
     /// The coefficients of `p`.
     pub fn from_params(p: &Params<F>) -> Self {
         Arm {
@@ -282,9 +290,9 @@ pub struct MzLoad<F> {
 // DIFFERS FROM MFeval: MFeval multiplies t by λFz0 (LFZO), which no published equation has;
 // we follow the equations (every bundled file has LFZO = 1, so the oracle cannot tell).
 #[inline(always)]
-pub fn mz_slip<F: Float, H: Float, G: Lift<F> + Lift<H>, M: Backend<G>>(
+pub fn mz_slip<F: Real, H: Lift<F>, G: Lift<F> + Lift<H>, M: Backend<G>>(
     l: &MzLoad<F>,
-    c: &Conditioned<F>,
+    c: &Cond<F>,
     m: &MzIn<G, H>,
 ) -> Mz<G> {
     // (18), (74), (75), (A54), (A55): equivalent slip angles with (Kxκ/Kyα')²κ².
@@ -297,14 +305,14 @@ pub fn mz_slip<F: Float, H: Float, G: Lift<F> + Lift<H>, M: Backend<G>>(
                                                                                // (73), (A56): s with Fy/Fz0 and γ (not Fz0', γ*), as the paper and TNO.
     let s = l.arm.s_at::<G>(m.fy, c.dfz, c.gamma);
     // (72), (4.E75); Cr = 1 without turn slip, and cos(atan x) = 1/√(1 + x²) exactly.
-    let mut m_zr = if l.c_r == F::ONE {
+    let mut m_zr = if l.c_r.mask_eq(F::ONE).all() {
         m.d_r * cos_atan::<G, M>(alpha_r_eq * m.b_r)
     } else {
         m.d_r * M::cos(M::atan(alpha_r_eq * m.b_r) * l.c_r)
     };
     let mut t =
         magic_cos::<G, M, H, F, G>(m.b_t, l.c_t, m.e_t, alpha_t_eq) * l.d_t * m.cos_alpha_prime; // (70), (4.E73)
-    if c.low_speed {
+    if c.low_speed.any() {
         t = t * c.red_smooth;
         m_zr = m_zr * c.red_smooth;
     }

@@ -9,8 +9,9 @@
 //!
 //! Every clip sets its [`Flags`] bit; nothing is clipped silently.
 
+use super::FlagSet;
 use super::{EvalError, Flags, Input, InputField, Options, Params, Version, EPS};
-use crate::math::{Backend, Float, Lift};
+use crate::math::{choose, Backend, Lift, Mask, Real};
 
 /// Digressive friction factor Aμ of (4.E8): λμ' = Aμ·λμ*/(1 + (Aμ − 1)·λμ*). The book suggests
 /// 10. With λμ = 1 (every bundled file) λμ' = 1 whatever Aμ is.
@@ -21,7 +22,7 @@ pub const A_MU: f64 = 10.0;
 
 /// Post-processed inputs and the quantities every equation shares.
 #[derive(Debug, Clone, Copy)]
-pub struct Conditioned<F> {
+pub struct Conditioned<F, L = Flags, K = bool> {
     /// Version of the parameter set.
     pub version: Version,
     /// Limits and low-speed handling on.
@@ -88,15 +89,18 @@ pub struct Conditioned<F> {
     pub kpumax: F,
     /// VXLOW \[m/s\].
     pub vxlow: F,
-    /// |Vx| ≤ VXLOW with limits on.
-    pub low_speed: bool,
+    /// |Vx| ≤ VXLOW with limits on (per lane).
+    pub low_speed: K,
     /// Turn-slip state, when turn slip is evaluated.
     pub turn: Option<super::turnslip::Spin<F>>,
     /// Flags raised so far.
-    pub flags: Flags,
+    pub flags: L,
 }
 
-fn check<F: Float>(x: F, field: InputField) -> Result<(), EvalError> {
+/// [`Conditioned`] in `F`'s own flags and masks (one per lane for lanes).
+pub type Cond<F> = Conditioned<F, <F as Real>::Flags, <F as Real>::Mask>;
+
+fn check<F: Real>(x: F, field: InputField) -> Result<(), EvalError> {
     if x.is_finite() {
         Ok(())
     } else {
@@ -107,7 +111,7 @@ fn check<F: Float>(x: F, field: InputField) -> Result<(), EvalError> {
 /// The finiteness check of an input, in the order of `Input`'s fields (the first non-finite one
 /// is reported).
 #[inline(always)]
-pub fn check_finite<F: Float>(input: &Input<F>) -> Result<(), EvalError> {
+pub fn check_finite<F: Real>(input: &Input<F>) -> Result<(), EvalError> {
     let Input {
         fz,
         kappa,
@@ -135,11 +139,11 @@ pub fn check_finite<F: Float>(input: &Input<F>) -> Result<(), EvalError> {
 
 /// Validates and conditions one input (see the module doc): the load stage
 /// ([`condition_load`]) and the slips ([`slips`]) in one.
-pub fn condition<F: Float, M: Backend<F>>(
+pub fn condition<F: Real, M: Backend<F>>(
     p: &Params<F>,
     input: &Input<F>,
     opts: &Options,
-) -> Result<Conditioned<F>, EvalError> {
+) -> Result<Cond<F>, EvalError> {
     check_finite(input)?;
     let mut c = condition_load_checked::<F, M>(p, input, opts)?;
     if opts.limits && opts.turn_slip {
@@ -155,7 +159,7 @@ pub fn condition<F: Float, M: Backend<F>>(
     c.alpha_star = s.alpha_star;
     c.cos_alpha_star = s.cos_alpha_star;
     c.cos_alpha_prime = s.cos_alpha_prime;
-    c.flags.insert(s.flags);
+    c.flags.merge(s.flags);
     Ok(c)
 }
 
@@ -163,11 +167,11 @@ pub fn condition<F: Float, M: Backend<F>>(
 /// conditions them) — of an input its caller has checked finite ([`check_finite`]): `mf::eval`
 /// checks the whole input once.
 #[inline(always)]
-pub(crate) fn condition_load_checked<F: Float, M: Backend<F>>(
+pub(crate) fn condition_load_checked<F: Real, M: Backend<F>>(
     p: &Params<F>,
     input: &Input<F>,
     opts: &Options,
-) -> Result<Conditioned<F>, EvalError> {
+) -> Result<Cond<F>, EvalError> {
     let Input {
         mut fz,
         mut gamma,
@@ -178,46 +182,47 @@ pub(crate) fn condition_load_checked<F: Float, M: Backend<F>>(
     } = *input;
     let mut pres = p_in.unwrap_or(p.inflpres);
     let mf6 = p.version.is_mf6();
-    if mf6 && pres <= F::ZERO {
+    if mf6 && pres.mask_le(F::ZERO).any() {
         return Err(EvalError::NonPositivePressure);
     }
-    let mut flags = Flags::default();
-    flags.set_if(Flags::REVERSE, vx < F::ZERO);
-    if fz <= F::ZERO {
-        flags.insert(Flags::NO_CONTACT);
-        fz = F::ZERO;
-    }
+    let mut flags = F::Flags::default();
+    flags.set_if(Flags::REVERSE, vx.mask_lt(F::ZERO));
+    let no_contact = fz.mask_le(F::ZERO);
+    flags.set_if(Flags::NO_CONTACT, no_contact);
+    fz = F::select(no_contact, F::ZERO, fz);
     let fz_u = fz;
     let mut fz_low = fz;
     let mut red_smooth = F::ONE;
     let mut red_linear = F::ONE;
-    let mut low_speed = false;
+    let mut low_speed = F::Mask::splat(false);
 
     if opts.limits {
         let vxlow = p.vxlow;
-        if vx.abs() <= vxlow && vxlow > F::ZERO {
-            low_speed = true;
-            flags.insert(Flags::LOW_SPEED);
-            // Smooth reduction 1 − ½(1 + cos(π·Vx/VXLOW)): 0 at standstill, 1 at VXLOW.
-            red_smooth = F::ONE - F::HALF * (F::ONE + M::cos(F::PI * (vx / vxlow)));
-            red_linear = (vx / vxlow).abs();
-            phit *= red_linear;
+        if vxlow > F::ZERO {
+            let low = vx.abs().mask_le(vxlow);
+            if low.any() {
+                low_speed = low;
+                flags.set_if(Flags::LOW_SPEED, low);
+                // Smooth reduction 1 − ½(1 + cos(π·Vx/VXLOW)): 0 at standstill, 1 at VXLOW.
+                red_smooth = F::select(
+                    low,
+                    F::ONE - F::HALF * (F::ONE + M::cos(F::PI * (vx / vxlow))),
+                    F::ONE,
+                );
+                red_linear = F::select(low, (vx / vxlow).abs(), F::ONE);
+                phit *= red_linear; // 1 in the lanes above VXLOW: exact
+            }
         }
-        if vx < F::ZERO {
-            phit = -phit;
-        }
+        phit = F::select(vx.mask_lt(F::ZERO), -phit, phit);
         let (g, fg) = gamma.clamp_flag(p.cammin, p.cammax);
         gamma = g;
         flags.set_if(Flags::GAMMA, fg);
-        if fz > p.fzmax {
-            fz = p.fzmax.max(F::ZERO);
-            flags.insert(Flags::FZ_HIGH);
-        }
-        fz_low = fz;
-        if fz_u > F::ZERO && fz < p.fzmin {
-            fz_low = p.fzmin;
-            flags.insert(Flags::FZ_LOW);
-        }
+        let high = fz.mask_gt(p.fzmax);
+        fz = F::select(high, p.fzmax.max(F::ZERO), fz);
+        flags.set_if(Flags::FZ_HIGH, high);
+        let light = fz_u.mask_gt(F::ZERO).and(fz.mask_lt(p.fzmin));
+        fz_low = F::select(light, p.fzmin, fz);
+        flags.set_if(Flags::FZ_LOW, light);
         if mf6 {
             let (q, fp) = pres.clamp_flag(p.presmin, p.presmax);
             pres = q;
@@ -283,14 +288,14 @@ pub(crate) fn condition_load_checked<F: Float, M: Backend<F>>(
 
 /// λμ' = Aμ·λμ*/(1 + (Aμ − 1)·λμ*) (4.E8).
 #[inline]
-pub fn digressive<F: Float>(lmu_star: F) -> F {
+pub fn digressive<F: Real>(lmu_star: F) -> F {
     let a_mu = F::from_f64(A_MU);
     a_mu * lmu_star / (F::ONE + (a_mu - F::ONE) * lmu_star)
 }
 
 /// κ and α after conditioning, and what the equations take from α.
 #[derive(Debug, Clone, Copy)]
-pub struct Slips<G> {
+pub struct Slips<G, L = Flags> {
     /// κ used by the equations (reduced at low speed, clipped).
     pub kappa: G,
     /// κ after the low-speed reduction, before clipping (reported).
@@ -304,25 +309,26 @@ pub struct Slips<G> {
     /// cos α' = Vx/Vc' (4.E6), (4.E6a).
     pub cos_alpha_prime: G,
     /// Clips of κ and α.
-    pub flags: Flags,
+    pub flags: L,
 }
 
 /// The slip stage of the conditioning: κ and α at the load stage's speed and limits.
 #[inline(always)]
-pub fn slips<F: Float, G: Lift<F>, M: Backend<G>>(
-    c: &Conditioned<F>,
+pub fn slips<F: Real, G: Lift<F>, M: Backend<G>>(
+    c: &Cond<F>,
     mut kappa: G,
     mut alpha: G,
-) -> Slips<G> {
+) -> Slips<G, G::Flags> {
     let l = |x: F| G::lift(x);
     let vx = c.vx;
-    let mut flags = Flags::default();
+    let mut flags = G::Flags::default();
     let mut kappa_out = kappa;
     // tan α, reused below (computed again only if α is reduced or clipped).
     let alpha_in = alpha;
     let mut tan_alpha = M::tan(alpha);
     if c.limits {
-        if c.low_speed {
+        // The reductions are 1 above VXLOW (exact), so lanes may share them.
+        if c.low_speed.any() {
             kappa_out = kappa * c.red_linear;
             if !c.transient {
                 kappa = kappa * c.red_linear;
@@ -330,8 +336,11 @@ pub fn slips<F: Float, G: Lift<F>, M: Backend<G>>(
         }
         // α fades when the total speed |Vx| + |Vsy| falls below VXLOW (Vsy = tan(α)·Vx).
         let speed_sum = (tan_alpha * vx).abs() + vx.abs();
-        if speed_sum < l(c.vxlow) && !c.transient {
-            alpha *= speed_sum / c.vxlow;
+        if !c.transient {
+            let slow = speed_sum.mask_lt(l(c.vxlow));
+            if slow.any() {
+                alpha = G::select(slow, alpha * (speed_sum / c.vxlow), alpha);
+            }
         }
         let (a, fa) = alpha.clamp_flag(l(c.alpmin), l(c.alpmax));
         alpha = a;
@@ -340,8 +349,9 @@ pub fn slips<F: Float, G: Lift<F>, M: Backend<G>>(
         kappa = k;
         flags.set_if(Flags::KAPPA, fk);
     }
-    if alpha != alpha_in {
-        tan_alpha = M::tan(alpha);
+    let changed = alpha.mask_eq(alpha_in).not();
+    if changed.any() {
+        tan_alpha = G::select(changed, M::tan(alpha), tan_alpha);
     }
     let alpha_star = if c.use_alpha_star {
         tan_alpha * vx.sign() // (4.E3)
@@ -350,10 +360,14 @@ pub fn slips<F: Float, G: Lift<F>, M: Backend<G>>(
     };
     // cos α* for Dr (4.E47): without α*, from tan α as 1/√(1 + tan²α) where that is exact
     // (|α| < π/2, where cos α > 0): one square root instead of a cosine.
-    let cos_alpha_star = if !c.use_alpha_star && alpha.abs() < G::FRAC_PI_2 {
-        G::ONE / M::sqrt(G::ONE + tan_alpha * tan_alpha)
-    } else {
+    let cos_alpha_star = if c.use_alpha_star {
         M::cos(alpha_star)
+    } else {
+        choose::<G>(
+            alpha.abs().mask_lt(G::FRAC_PI_2),
+            || G::ONE / M::sqrt(G::ONE + tan_alpha * tan_alpha),
+            || M::cos(alpha_star),
+        )
     };
     // (4.E6), (4.E6a): Vc' = Vc + ε·sign(Vc), with Vsy = tan(α)·|Vx| and Vcy = Vsy.
     let vsy = tan_alpha * vx.abs();

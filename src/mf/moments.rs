@@ -7,27 +7,33 @@
 //! - My: (A48) for MF 6.x (Fz0 in front, load and pressure powers), the MF 5.2 form otherwise;
 //!   with the low-speed and reverse handling of the TNO solver.
 
-use super::limits::Conditioned;
+use super::limits::Cond;
 use super::{Params, Version};
-use crate::math::{Backend, Float};
+use crate::math::{choose, Backend, Mask, Real};
 
 /// Load used by the moments: below FZMIN it fades as Fz·(Fz/FZMIN)^n (n = 2 for Mx, 1 for My),
 /// so the moments vanish smoothly at lift-off (TNO solver behaviour, as MFeval reproduces it).
-fn low_load<F: Float>(fz: F, fzmin: F, power2: bool) -> F {
-    if fz < fzmin && fzmin > F::ZERO {
-        let r = fz / fzmin;
-        if power2 {
-            fz * r * r
-        } else {
-            fz * r
-        }
+fn low_load<F: Real>(fz: F, fzmin: F, power2: bool) -> F {
+    if fzmin > F::ZERO {
+        choose::<F>(
+            fz.mask_lt(fzmin),
+            || {
+                let r = fz / fzmin;
+                if power2 {
+                    fz * r * r
+                } else {
+                    fz * r
+                }
+            },
+            || fz,
+        )
     } else {
         fz
     }
 }
 
 /// Overturning moment Mx \[N·m\], (A47) + MF 6.1.2 terms.
-pub fn mx<F: Float, M: Backend<F>>(p: &Params<F>, c: &Conditioned<F>, fy: F) -> F {
+pub fn mx<F: Real, M: Backend<F>>(p: &Params<F>, c: &Cond<F>, fy: F) -> F {
     let fz = low_load(c.fz, p.fzmin, true);
     let (g, fz0, r0) = (c.gamma, p.fnomin, p.unloaded_radius);
     let fy_n = fy / fz0;
@@ -45,23 +51,21 @@ pub fn mx<F: Float, M: Backend<F>>(p: &Params<F>, c: &Conditioned<F>, fy: F) -> 
 /// x^y for x ≥ 0 as exp(y·ln x); 0^y = 0 for y > 0 and 1 for y = 0. 1^y and x^0 are 1
 /// without the kernels (what exp(y·ln x) gives there: ln 1 = 0, exp 0 = 1): the pressure power
 /// at p = NOMPRES, the usual case, costs nothing.
-fn pow<F: Float, M: Backend<F>>(x: F, y: F) -> F {
-    if x <= F::ZERO {
-        if y == F::ZERO {
-            F::ONE
-        } else {
-            F::ZERO
-        }
-    } else if x == F::ONE || y == F::ZERO {
-        F::ONE
-    } else {
-        M::exp(y * M::ln(x))
+fn pow<F: Real, M: Backend<F>>(x: F, y: F) -> F {
+    // y is a parameter (the same in every lane), x a value.
+    if y == F::ZERO {
+        return F::ONE;
     }
+    choose::<F>(
+        x.mask_le(F::ZERO),
+        || F::ZERO,
+        || choose::<F>(x.mask_eq(F::ONE), || F::ONE, || M::exp(y * M::ln(x))),
+    )
 }
 
 /// Rolling resistance moment My \[N·m\], (A48) for MF 6.x, MF 5.2 form otherwise; `kappa_u` is
 /// κ as given.
-pub fn my<F: Float, M: Backend<F>>(p: &Params<F>, c: &Conditioned<F>, fx: F, kappa_u: F) -> F {
+pub fn my<F: Real, M: Backend<F>>(p: &Params<F>, c: &Cond<F>, fx: F, kappa_u: F) -> F {
     let fz = low_load(c.fz_u, p.fzmin, false);
     let (fz0, r0, v0) = (p.fnomin, p.unloaded_radius, p.longvl);
     let vx = c.vx;
@@ -77,10 +81,9 @@ pub fn my<F: Float, M: Backend<F>>(p: &Params<F>, c: &Conditioned<F>, fx: F, kap
         } // (A48)
         Version::Delft96 | Version::Mf52 => -r0 * fz * p.lmy * base,
     };
-    if vx < F::ZERO {
-        my = -my; // rolling backwards
-    }
-    if vx == F::ZERO {
+    my = F::select(vx.mask_lt(F::ZERO), -my, my); // rolling backwards
+    let stopped = vx.mask_eq(F::ZERO);
+    if stopped.all() {
         return F::ZERO;
     }
     // Near a locked wheel (κ → −1) the wheel hardly rotates and My fades out: sin of a linear
@@ -89,12 +92,12 @@ pub fn my<F: Float, M: Backend<F>>(p: &Params<F>, c: &Conditioned<F>, fx: F, kap
     let kappa = kappa_u;
     let high = p.vxlow / vx.abs() - F::ONE;
     let low = -F::ONE - p.vxlow - high;
-    if kappa >= low && kappa <= high {
+    let window = kappa.mask_ge(low).and(kappa.mask_le(high));
+    if window.any() {
         let ramp = F::FRAC_PI_2 * (kappa + F::ONE) / (high + F::ONE);
-        my *= M::sin(ramp);
+        my = F::select(window, my * M::sin(ramp), my);
     }
-    if kappa < low {
-        my = -my;
-    }
-    my
+    my = F::select(kappa.mask_lt(low), -my, my);
+    // Vx = 0: no rolling resistance (in a lane that stopped among lanes that roll).
+    F::select(stopped, F::ZERO, my)
 }

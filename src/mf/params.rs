@@ -8,7 +8,7 @@
 //! Units: SI (N, m, rad, Pa, s), axes ISO-W (TYDEX W) as in `.tir` files. Parameters `p`, `q`,
 //! `r`, `s` are non-dimensional (paper, appendix); λ (`l*`) scaling factors default to 1.
 
-use crate::math::Float;
+use crate::math::{Float, Real};
 
 /// Magic Formula version, from `FITTYP`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -153,7 +153,7 @@ macro_rules! tir_params {
             $( #[doc = $doc] pub $field: F, )*
         }
 
-        impl<F: Float> Params<F> {
+        impl<F: Real> Params<F> {
             /// All numeric fields zero, λ's one; version as given. A starting point for
             /// building a parameter set in code; not a usable tyre by itself.
             pub fn zeroed(version: Version) -> Self {
@@ -178,8 +178,12 @@ macro_rules! tir_params {
             pub fn mirrored_on(&self, mounted: Option<Side>) -> bool {
                 matches!((mounted, self.tyreside), (Some(m), Some(s)) if m != s)
             }
-            /// The same parameter set in another float type (f64 → f32 rounds to nearest).
-            pub fn cast<G: Float>(&self) -> Params<G> {
+        }
+
+        impl<F: Float> Params<F> {
+            /// The same parameter set in another float type (f64 → f32 rounds to nearest), or
+            /// in lanes ([`crate::math::Lanes`]: every lane the parameter).
+            pub fn cast<G: Real>(&self) -> Params<G> {
                 Params {
                     version: self.version,
                     tyreside: self.tyreside,

@@ -24,10 +24,13 @@
 //! the derivative is the one-sided one of the branch taken.
 
 use super::combined::{self, Arm, MzIn, MzLoad, WeightsLoad};
-use super::limits::{self, check_finite, condition_load_checked, digressive, slips, Conditioned};
+use super::limits::{
+    self, check_finite, condition_load_checked, digressive, slips, Cond, Conditioned,
+};
 use super::pure::{self, Fx0Load, Fx0Mu, Fy0Load, Fy0Mu, Mz0Load, Mz0Mu};
+use super::FlagSet;
 use super::{clip_e, EvalError, Flags, Input, InputField, Options, Params, Version};
-use crate::math::{Backend, Dual, Float, Lift};
+use crate::math::{Backend, Dual, Float, Lift, Mask, Real};
 
 /// The operating point without the slips: what the load stage depends on. SI units, ISO-W.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -67,7 +70,7 @@ pub struct Mu<F> {
     mz0: Mz0Mu<F>,
 }
 
-impl<F: Float> Mu<F> {
+impl<F: Real> Mu<F> {
     /// μx \[-\] (26), (4.E13) at this load and friction scaling.
     pub fn mu_x(&self) -> F {
         self.fx0.mu_x
@@ -90,7 +93,7 @@ impl<F: Float> Mu<F> {
 
 /// Fx, Fy, Mz and what goes with them, as [`super::Output`] has them.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub struct Forces<F> {
+pub struct Forces<F, L = Flags> {
     /// Longitudinal force Fx \[N\].
     pub fx: F,
     /// Lateral force Fy \[N\].
@@ -103,8 +106,8 @@ pub struct Forces<F> {
     pub m_zr: F,
     /// κ after the low-speed reduction \[-\].
     pub kappa: F,
-    /// What was clipped or regularised (load and slip stages).
-    pub flags: Flags,
+    /// What was clipped or regularised (load and slip stages; per lane for lanes).
+    pub flags: L,
 }
 
 /// ∂Fx, ∂Fy, ∂Mz along one direction.
@@ -153,7 +156,7 @@ pub struct Adjust<F> {
     pub trail_shift: F,
 }
 
-impl<F: Float> Adjust<F> {
+impl<F: Real> Adjust<F> {
     /// No adjustment: the file.
     pub const NONE: Adjust<F> = Adjust {
         kx: F::ONE,
@@ -294,7 +297,7 @@ impl<F: Float> Prepared<F> {
         self.c.fz
     }
     /// The conditioned load-stage inputs (for the relaxation lengths, `mf::sigma`).
-    pub(crate) fn conditioned(&self) -> &Conditioned<F> {
+    pub(crate) fn conditioned(&self) -> &Cond<F> {
         &self.c
     }
     /// Kxκ \[N\] (28), (4.E15).
@@ -418,8 +421,8 @@ impl<F: Float> Prepared<F> {
 
 /// The friction stage from the load stage's parts (λμx*, λμy* (4.E7), λμ' (4.E8)).
 #[inline(always)]
-fn mu_of<F: Float, G: Lift<F>>(
-    c: &Conditioned<F>,
+fn mu_of<F: Real, G: Lift<F>>(
+    c: &Cond<F>,
     fx0_l: &Fx0Load<F>,
     fy0_l: &Fy0Load<F>,
     fy0_g0_l: Option<&Fy0Load<F>>,
@@ -447,8 +450,8 @@ fn mu_of<F: Float, G: Lift<F>>(
 /// one over its locals ([`stages`]), [`Prepared`] over its fields: no copy of the load stage
 /// on `mf::eval`'s path.
 #[derive(Clone, Copy)]
-pub(crate) struct View<'a, F> {
-    pub(crate) c: &'a Conditioned<F>,
+pub(crate) struct View<'a, F: Real> {
+    pub(crate) c: &'a Cond<F>,
     pub(crate) contact: bool,
     pub(crate) mirrored: bool,
     pub(crate) fx0: &'a Fx0Load<F>,
@@ -463,15 +466,19 @@ pub(crate) struct View<'a, F> {
 /// The load stage from a conditioned load (with turn slip, `turn` is (κ, α*) of `c`'s point),
 /// handed to `k` as a [`View`] of locals.
 #[inline(always)]
-pub(crate) fn stages<F: Float, M: Backend<F>, R>(
+pub(crate) fn stages<F: Real, M: Backend<F>, R>(
     p: &Params<F>,
-    mut c: Conditioned<F>,
+    mut c: Cond<F>,
     mirrored: bool,
     turn: Option<(F, F)>,
     k: impl FnOnce(View<'_, F>) -> R,
 ) -> R {
-    c.flags.set_if(Flags::MIRRORED, mirrored);
-    if c.fz <= F::ZERO {
+    if mirrored {
+        c.flags.insert(Flags::MIRRORED);
+    }
+    // No contact (Fz ≤ 0). Lanes reach here all in contact or all not (`mf::lanes` evaluates
+    // a chunk that mixes them point by point).
+    if c.fz.mask_le(F::ZERO).all() {
         let (fx0, fy0, mz0) = (Fx0Load::default(), Fy0Load::default(), Mz0Load::default());
         let (w, mz) = (WeightsLoad::default(), MzLoad::default());
         return k(View {
@@ -493,7 +500,9 @@ pub(crate) fn stages<F: Float, M: Backend<F>, R>(
     // Fy0 at γ = 0 for F'y (4.E74) (MF 6.x; MF 5.2's Mz takes the actual Fy − SVyκ and does
     // not read it, but testing the version here cost the M4F bench's MF 6.1 load stage 5
     // instructions, `mf_load_stage_fast` 2,211 → 2,216: MF 5.2 computes it unused).
-    let fy0_g0 = if gamma_star == F::ZERO {
+    // (In lanes: skipped when γ* = 0 in every lane; Fy0 at γ = 0 of a lane whose γ* is 0 is
+    // its Fy0, the same arithmetic.)
+    let fy0_g0 = if gamma_star.mask_eq(F::ZERO).all() {
         None
     } else {
         Some(pure::fy0_load::<F, M>(p, &mut c, F::ZERO, turn_on))
@@ -527,7 +536,7 @@ pub(crate) fn stages<F: Float, M: Backend<F>, R>(
     })
 }
 
-impl<F: Float> View<'_, F> {
+impl<F: Real> View<'_, F> {
     #[inline(always)]
     pub(crate) fn mu_stage<G: Lift<F>>(&self, lmux_star: G, lmuy_star: G) -> Mu<G> {
         if !self.contact {
@@ -551,12 +560,12 @@ impl<F: Float> View<'_, F> {
         mu: &Mu<H>,
         kappa: G,
         alpha: G,
-    ) -> Forces<G> {
+    ) -> Forces<G, G::Flags> {
         let c = &self.c;
         let alpha = if self.mirrored { -alpha } else { alpha };
         let s = slips::<F, G, M>(c, kappa, alpha);
         let mut flags = c.flags;
-        flags.insert(s.flags);
+        flags.merge(s.flags);
         if !self.contact {
             // No contact: no force, no moment (MFeval gives the same, see the `load` sweep).
             return Forces {
@@ -636,7 +645,7 @@ impl<F: Float> View<'_, F> {
     }
 }
 
-fn check_slips<F: Float>(kappa: F, alpha: F) -> Result<(), EvalError> {
+fn check_slips<F: Real>(kappa: F, alpha: F) -> Result<(), EvalError> {
     if !kappa.is_finite() {
         return Err(EvalError::NonFinite(InputField::Kappa));
     }
@@ -646,7 +655,7 @@ fn check_slips<F: Float>(kappa: F, alpha: F) -> Result<(), EvalError> {
     Ok(())
 }
 
-fn finite<F: Float>(f: Forces<F>) -> Result<Forces<F>, EvalError> {
+fn finite<F: Real, L>(f: Forces<F, L>) -> Result<Forces<F, L>, EvalError> {
     if F::all_finite(&[f.fx, f.fy, f.mz, f.t, f.m_zr]) {
         Ok(f)
     } else {
@@ -682,11 +691,11 @@ fn split<F: Float, const N: usize>(
 /// through a `Result`). `input` must have been checked finite (`limits::check_finite`).
 #[allow(clippy::type_complexity)]
 #[inline(always)]
-pub(crate) fn for_eval<F: Float, M: Backend<F>>(
+pub(crate) fn for_eval<F: Real, M: Backend<F>>(
     p: &Params<F>,
     input: &Input<F>,
     opts: &Options,
-) -> Result<(Conditioned<F>, bool, Option<(F, F)>), EvalError> {
+) -> Result<(Cond<F>, bool, Option<(F, F)>), EvalError> {
     let mirrored = p.mirrored_on(opts.mounted);
     let sgn = |x: F| if mirrored { -x } else { x };
     if !opts.turn_slip {

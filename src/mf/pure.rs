@@ -14,9 +14,9 @@
 //! stage is generic over the type `G` it computes in (the stored `F`, or dual numbers for
 //! derivatives; [`Lift`]).
 
-use super::limits::Conditioned;
-use super::{clip_e, magic_sin, Flags, Params, Version, EPS};
-use crate::math::{Backend, Float, Lift};
+use super::limits::Cond;
+use super::{clip_e, magic_sin, Params, Version, EPS};
+use crate::math::{Backend, Lift, Mask, Real};
 
 /// Results of [`fx0`].
 #[cfg(test)]
@@ -29,7 +29,7 @@ pub struct Fx0<F> {
 }
 
 /// γx: camber as Fx sees it — γ·λγx (MF 5.x), γ (MF 6.x, Delft 96 has no μx camber term).
-fn gamma_x<F: Float>(p: &Params<F>, gamma: F) -> F {
+fn gamma_x<F: Real>(p: &Params<F>, gamma: F) -> F {
     match p.version {
         Version::Mf52 => gamma * p.lgax,
         _ => gamma,
@@ -61,7 +61,7 @@ pub struct Fx0Load<F> {
 
 /// [`Fx0Load`] of the conditioned load `c`.
 #[inline(always)]
-pub fn fx0_load<F: Float, M: Backend<F>>(p: &Params<F>, c: &Conditioned<F>) -> Fx0Load<F> {
+pub fn fx0_load<F: Real, M: Backend<F>>(p: &Params<F>, c: &Cond<F>) -> Fx0Load<F> {
     let (fz, dfz, dpi) = (c.fz, c.dfz, c.dpi);
     let zeta1 = c.turn.map_or(F::ONE, |t| t.zeta1);
     let gx = gamma_x(p, c.gamma);
@@ -80,7 +80,7 @@ pub fn fx0_load<F: Float, M: Backend<F>>(p: &Params<F>, c: &Conditioned<F>) -> F
         * (F::ONE + p.ppx1 * dpi + p.ppx2 * dpi * dpi)
         * p.lkx; // (28), (4.E15)
     let mut s_hx = (p.phx1 + p.phx2 * dfz) * p.lhx; // (30), (4.E17)
-    if c.low_speed {
+    if c.low_speed.any() {
         s_hx *= c.red_smooth;
     }
     Fx0Load {
@@ -111,22 +111,19 @@ pub struct Fx0Mu<G> {
 
 /// [`Fx0Mu`] at λμx* = `lmux_star`, λμx' = `lmux_prime` (4.E7), (4.E8).
 #[inline(always)]
-pub fn fx0_mu<F: Float, G: Lift<F>>(
+pub fn fx0_mu<F: Real, G: Lift<F>>(
     l: &Fx0Load<F>,
-    c: &Conditioned<F>,
+    c: &Cond<F>,
     lmux_star: G,
     lmux_prime: G,
 ) -> Fx0Mu<G> {
     // Load-stage values (`F`) meet λμ (`G`) in mixed operations (`Lift<F>`).
-    let mut mu_x = lmux_star * l.mu_x1; // (26), (4.E13)
-    if c.fz == F::ZERO {
-        mu_x = G::ZERO;
-    }
+    let mu_x = G::select(c.fz.mask_eq(F::ZERO), G::ZERO, lmux_star * l.mu_x1); // (26), (4.E13)
     let d_x = mu_x * c.fz * l.zeta1; // (25), (4.E12)
     let eps = F::from_f64(EPS) * d_x.value().sign_nz();
     let b_x = G::lift(l.k_xk) / (d_x * l.c_x + eps); // (29), (4.E16) with the signed ε
     let mut s_vx = lmux_prime * l.s_vx1 * l.zeta1; // (31), (4.E18)
-    if c.low_speed {
+    if c.low_speed.any() {
         s_vx = s_vx * c.red_smooth;
     }
     Fx0Mu {
@@ -139,12 +136,12 @@ pub fn fx0_mu<F: Float, G: Lift<F>>(
 
 /// Slip stage of Fx0 at the conditioned κ: (22), (23), (27) / (4.E9), (4.E10), (4.E14).
 #[inline(always)]
-pub fn fx0_slip<F: Float, H: Float, G: Lift<F> + Lift<H>, M: Backend<G>>(
+pub fn fx0_slip<F: Real, H: Lift<F>, G: Lift<F> + Lift<H>, M: Backend<G>>(
     l: &Fx0Load<F>,
     m: &Fx0Mu<H>,
-    c: &Conditioned<F>,
+    c: &Cond<F>,
     kappa: G,
-    flags: &mut Flags,
+    flags: &mut F::Flags,
 ) -> G {
     let kappa_x = kappa + l.s_hx; // (23), (4.E10)
                                   // Ex depends on κ through sign(κx) alone (derivative 0): computed in F.
@@ -152,12 +149,12 @@ pub fn fx0_slip<F: Float, H: Float, G: Lift<F> + Lift<H>, M: Backend<G>>(
     let e_x = l.e_x1 * (F::ONE - l.pex4 * sign_x) * l.lex; // (27), (4.E14)
     let e_x = clip_e(e_x, c.limits, flags);
     let mut fx0 = magic_sin::<G, M, H, F, H, F>(m.b_x, l.c_x, m.d_x, e_x, kappa_x) + m.s_vx; // (22), (4.E9)
-    if c.vx < F::ZERO && !c.transient {
+    if !c.transient {
         // Running backwards: mirror image (appendix, first paragraph), for steady-state slips
         // defined with κ = −1 locked in both directions. Slips from the transient model
         // (κ' = −Vsx/|Vx|) already carry the direction: a wheel locked while sliding backwards
         // has κ' = +1 and must get Fx > 0 (MFeval's dynamic modes flip κ for the same reason).
-        fx0 = -fx0;
+        fx0 = G::select(c.vx.mask_lt(F::ZERO), -fx0, fx0);
     }
     fx0
 }
@@ -166,7 +163,7 @@ pub fn fx0_slip<F: Float, H: Float, G: Lift<F> + Lift<H>, M: Backend<G>>(
 /// three stages in a row (`mf::eval` runs them staged; the tests check the pure-slip identities
 /// with this).
 #[cfg(test)]
-pub fn fx0<F: Float, M: Backend<F>>(p: &Params<F>, c: &mut Conditioned<F>) -> Fx0<F> {
+pub fn fx0<F: Real, M: Backend<F>>(p: &Params<F>, c: &mut Cond<F>) -> Fx0<F> {
     let l = fx0_load::<F, M>(p, c);
     let m = fx0_mu::<F, F>(&l, c, c.lmux_star, c.lmux_prime);
     let mut flags = c.flags;
@@ -228,9 +225,9 @@ pub struct Fy0Load<F> {
 /// [`Fy0Load`] at camber `gamma_star` (the aligning torque needs Fy0 at γ = 0 too), with or
 /// without turn slip.
 #[inline(always)]
-pub fn fy0_load<F: Float, M: Backend<F>>(
+pub fn fy0_load<F: Real, M: Backend<F>>(
     p: &Params<F>,
-    c: &mut Conditioned<F>,
+    c: &mut Cond<F>,
     gamma_star: F,
     turn_slip: bool,
 ) -> Fy0Load<F> {
@@ -325,9 +322,9 @@ pub struct Fy0Mu<G> {
 
 /// [`Fy0Mu`] at λμy* = `lmuy_star`, λμy' = `lmuy_prime` (4.E7), (4.E8).
 #[inline(always)]
-pub fn fy0_mu<F: Float, G: Lift<F>>(
+pub fn fy0_mu<F: Real, G: Lift<F>>(
     l: &Fy0Load<F>,
-    c: &Conditioned<F>,
+    c: &Cond<F>,
     lmuy_star: G,
     lmuy_prime: G,
 ) -> Fy0Mu<G> {
@@ -351,7 +348,7 @@ pub fn fy0_mu<F: Float, G: Lift<F>>(
             (s_hy, s_vy)
         }
     };
-    if c.low_speed {
+    if c.low_speed.any() {
         s_vy = s_vy * c.red_smooth;
         s_hy = s_hy * c.red_smooth;
     }
@@ -360,7 +357,7 @@ pub fn fy0_mu<F: Float, G: Lift<F>>(
     let eps = F::from_f64(EPS) * d_y.value().sign_nz();
     let b_y = f(l.k_ya) / (d_y * l.c_y + eps); // (40), (4.E26) with the signed ε
     Fy0Mu {
-        mu_y: if c.fz == F::ZERO { G::ZERO } else { mu_y },
+        mu_y: G::select(c.fz.mask_eq(F::ZERO), G::ZERO, mu_y),
         d_y,
         b_y,
         s_hy,
@@ -370,12 +367,12 @@ pub fn fy0_mu<F: Float, G: Lift<F>>(
 
 /// Slip stage of Fy0 at α*: (32), (33), (38) / (4.E19), (4.E20), (4.E24).
 #[inline(always)]
-pub fn fy0_slip<F: Float, H: Float, G: Lift<F> + Lift<H>, M: Backend<G>>(
+pub fn fy0_slip<F: Real, H: Lift<F>, G: Lift<F> + Lift<H>, M: Backend<G>>(
     l: &Fy0Load<F>,
     m: &Fy0Mu<H>,
-    c: &Conditioned<F>,
+    c: &Cond<F>,
     alpha_star: G,
-    flags: &mut Flags,
+    flags: &mut F::Flags,
 ) -> G {
     let alpha_y = alpha_star + m.s_hy; // (33), (4.E20)
                                        // Ey depends on α through sign(αy) alone (derivative 0): computed in F.
@@ -383,9 +380,9 @@ pub fn fy0_slip<F: Float, H: Float, G: Lift<F> + Lift<H>, M: Backend<G>>(
     let e_y = l.e_y1 * (l.e_y2 - l.e_y3 * sign_y) * l.ley; // (38), (4.E24)
     let e_y = clip_e(e_y, c.limits, flags);
     let mut fy0 = magic_sin::<G, M, H, F, H, F>(m.b_y, l.c_y, m.d_y, e_y, alpha_y) + m.s_vy; // (32), (4.E19)
-    if c.use_alpha_star && c.vx < F::ZERO {
+    if c.use_alpha_star {
         // With α* = tan(α)·sign(Vx) the force changes sign with Vx; undo it (MFeval, TNO).
-        fy0 = -fy0;
+        fy0 = G::select(c.vx.mask_lt(F::ZERO), -fy0, fy0);
     }
     fy0
 }
@@ -393,9 +390,9 @@ pub fn fy0_slip<F: Float, H: Float, G: Lift<F> + Lift<H>, M: Backend<G>>(
 /// Pure side-slip force, eqs. (32)–(42) / (4.E19)–(4.E30), at the conditioned `c` and camber
 /// `gamma_star`: the three stages in a row (as [`fx0`]).
 #[cfg(test)]
-pub fn fy0<F: Float, M: Backend<F>>(
+pub fn fy0<F: Real, M: Backend<F>>(
     p: &Params<F>,
-    c: &mut Conditioned<F>,
+    c: &mut Cond<F>,
     gamma_star: F,
     turn_slip: bool,
 ) -> Fy0<F> {
@@ -448,9 +445,9 @@ pub struct Mz0Load<F> {
 /// [`Mz0Load`] of the conditioned load `c`; with turn slip, `turn_g_yk` is (μy, Gyκ) at the
 /// slips of `c`, which the turn-slip factors (4.92)–(4.104) need.
 #[inline(always)]
-pub fn mz0_load<F: Float, M: Backend<F>>(
+pub fn mz0_load<F: Real, M: Backend<F>>(
     p: &Params<F>,
-    c: &mut Conditioned<F>,
+    c: &mut Cond<F>,
     turn_g_yk: Option<(F, F)>,
 ) -> Mz0Load<F> {
     let fz = c.fz_low; // Dt, Dr use Fz raised to FZMIN (TNO limit handling)
@@ -525,11 +522,11 @@ pub struct Mz0Mu<G> {
 
 /// [`Mz0Mu`] at λμy* = `lmuy_star`, with Fy0's friction stage `fy`.
 #[inline(always)]
-pub fn mz0_mu<F: Float, G: Lift<F>>(
+pub fn mz0_mu<F: Real, G: Lift<F>>(
     l: &Mz0Load<F>,
     fy_l: &Fy0Load<F>,
     fy: &Fy0Mu<G>,
-    c: &Conditioned<F>,
+    c: &Cond<F>,
     lmuy_star: G,
 ) -> Mz0Mu<G> {
     let f = |x: F| G::lift(x);

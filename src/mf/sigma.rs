@@ -4,17 +4,12 @@
 //! MF 5.2 / Delft 96: the PTX/PTY formulas of the MF-Tyre 5.2 manual. A file without the needed
 //! keys gives 0 ("not available"), never a division by zero.
 
-use super::limits::Conditioned;
+use super::limits::Cond;
 use super::Params;
-use crate::math::{Backend, Float};
+use crate::math::{choose, Backend, Real};
 
 /// (σx, σy) \[m\].
-pub fn sigma<F: Float, M: Backend<F>>(
-    p: &Params<F>,
-    c: &Conditioned<F>,
-    k_xk: F,
-    k_ya: F,
-) -> (F, F) {
+pub fn sigma<F: Real, M: Backend<F>>(p: &Params<F>, c: &Cond<F>, k_xk: F, k_ya: F) -> (F, F) {
     let dfz = c.dfz;
     if p.version.is_mf6() {
         let dpi = c.dpi;
@@ -24,16 +19,8 @@ pub fn sigma<F: Float, M: Backend<F>>(
         let c_y = p.lateral_stiffness
             * (F::ONE + p.pcfy1 * dfz + p.pcfy2 * dfz * dfz)
             * (F::ONE + p.pcfy3 * dpi); // eq. (18)
-        let sx = if c_x != F::ZERO {
-            (k_xk / c_x).abs()
-        } else {
-            F::ZERO
-        }; // eq. (19)
-        let sy = if c_y != F::ZERO {
-            (k_ya / c_y).abs()
-        } else {
-            F::ZERO
-        }; // eq. (19)
+        let sx = choose::<F>(c_x.mask_eq(F::ZERO), || F::ZERO, || (k_xk / c_x).abs()); // eq. (19)
+        let sy = choose::<F>(c_y.mask_eq(F::ZERO), || F::ZERO, || (k_ya / c_y).abs()); // eq. (19)
         (sx, sy)
     } else {
         let (r0, fz0, fz) = (p.unloaded_radius, p.fnomin, c.fz);

@@ -5,9 +5,9 @@
 //! wheel speed Ω from the effective rolling radius (Besselink et al. 2010, eqs. 1, 7: a fixed
 //! point iteration, bounded here to [`RE_MAX_ITER`] steps and flagged when it does not settle).
 
-use super::limits::Conditioned;
-use super::{cos_atan, Flags, Params, EPS};
-use crate::math::{Backend, Float};
+use super::limits::Cond;
+use super::{cos_atan, FlagSet, Flags, Params, EPS};
+use crate::math::{Backend, Real};
 
 /// Bound on the effective-rolling-radius fixed-point iteration (it contracts fast: typically
 /// 3–5 steps reach 1e-9 m).
@@ -31,7 +31,7 @@ pub struct Spin<F> {
 }
 
 /// Does this parameter set support turn slip (MF 6.x with turn-slip coefficients)?
-pub fn available<F: Float>(p: &Params<F>) -> bool {
+pub fn available<F: Real>(p: &Params<F>) -> bool {
     p.version.is_mf6()
         && [
             p.pdxp1, p.pdyp1, p.pkyp1, p.phyp1, p.qdtp1, p.qcrp1, p.qbrp1, p.qdrp1,
@@ -41,7 +41,7 @@ pub fn available<F: Float>(p: &Params<F>) -> bool {
 }
 
 /// Wheel angular speed Ω \[rad/s\] from Vx and κ through the effective rolling radius Re.
-fn omega<F: Float, M: Backend<F>>(p: &Params<F>, c: &mut Conditioned<F>) -> F {
+fn omega<F: Real, M: Backend<F>>(p: &Params<F>, c: &mut Cond<F>) -> F {
     let (r0, fz0, v0) = (p.unloaded_radius, p.fnomin, p.longvl);
     let c_z = p.vertical_stiffness * (F::ONE + p.pfz1 * c.dpi);
     if c_z == F::ZERO {
@@ -69,7 +69,7 @@ fn omega<F: Float, M: Backend<F>>(p: &Params<F>, c: &mut Conditioned<F>) -> F {
 }
 
 /// Computes φ, εγ and the ζ factors that do not depend on the forces.
-pub fn prepare<F: Float, M: Backend<F>>(p: &Params<F>, c: &mut Conditioned<F>) {
+pub fn prepare<F: Real, M: Backend<F>>(p: &Params<F>, c: &mut Cond<F>) {
     let r0 = p.unloaded_radius;
     let dfz = c.dfz;
     let eps_gamma = p.pecp1 * (F::ONE + p.pecp2 * dfz); // (4.90)
@@ -106,7 +106,7 @@ pub fn prepare<F: Float, M: Backend<F>>(p: &Params<F>, c: &mut Conditioned<F>) {
 }
 
 /// Lateral shift SHyp of the Fy–α curve due to spin, (4.80)–(4.89).
-pub fn s_hyp<F: Float, M: Backend<F>>(p: &Params<F>, c: &mut Conditioned<F>, k_yg0: F) -> F {
+pub fn s_hyp<F: Real, M: Backend<F>>(p: &Params<F>, c: &mut Cond<F>, k_yg0: F) -> F {
     let Some(s) = c.turn else { return F::ZERO };
     let (dfz, dpi, fz0p, r0) = (c.dfz, c.dpi, c.fz0_prime, p.unloaded_radius);
     // Kyα0: cornering stiffness at γ = 0 (4.E25 with γ = 0).
@@ -132,9 +132,9 @@ pub fn s_hyp<F: Float, M: Backend<F>>(p: &Params<F>, c: &mut Conditioned<F>, k_y
 
 /// ζ0, ζ2, ζ6, ζ7, ζ8 of the residual torque, (4.92)–(4.104); `fz` is the moment load,
 /// `mu_y` and `g_yk` from the turn-slip Fy.
-pub fn mz_zetas<F: Float, M: Backend<F>>(
+pub fn mz_zetas<F: Real, M: Backend<F>>(
     p: &Params<F>,
-    c: &mut Conditioned<F>,
+    c: &mut Cond<F>,
     fz: F,
     mu_y: F,
     g_yk: F,

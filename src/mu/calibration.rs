@@ -579,7 +579,7 @@ mod tests {
             [7.0, -2.0, 60.0],
             [30.0, 5.0, -45.0],
         ];
-        let mut h = [[0.0; PROPERTIES]; 4];
+        let mut h = [[0.0f64; PROPERTIES]; 4];
         for i in 0..4 {
             h[i][0] = 2.0 * hn[i][2]; // the trail moves the rows as +2 of μ does
             h[i][1] = hn[i][0]; // the shape as α′ does: the surface does not move

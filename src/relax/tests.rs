@@ -212,7 +212,7 @@ fn bad_steps_are_refused_and_leave_the_state() {
 #[test]
 fn decayed_sigma_bounds() {
     assert_eq!(decayed_sigma(0.4, 1000.0, -50000.0, 0.01), 0.4); // linear range
-    let s = decayed_sigma(0.4, 4000.0, -50000.0, 0.2); // saturated: 4000 of 10000
+    let s: f64 = decayed_sigma(0.4, 4000.0, -50000.0, 0.2); // saturated: 4000 of 10000
     assert!((s - 0.16).abs() < 1e-12);
     assert_eq!(decayed_sigma(0.4, 0.0, 0.0, 0.0), 0.4);
 }
@@ -414,7 +414,7 @@ fn transient_tyre_converges_to_the_steady_state() {
 #[test]
 fn fixed_point_filter_and_forces_track_f64() {
     use crate::fixed::{Fix, FixMath};
-    use crate::math::Float;
+    use crate::math::{Float, Real};
     use crate::mf::Input;
     let p64 = tyre61();
     let pfx = p64.cast::<Fix>();
