@@ -5,7 +5,10 @@
 //!
 //! Then the batch (`mf::eval_batch`, issue 57): Fx, Fy, Mz at 4,096 random combined-slip points
 //! per iteration, MF 5.2, 6.1, 6.2, f64 (`Libm`) and f32 (`Libm`; `Fast` with the
-//! feature), points/s in criterion's "thrpt" — and the scalar `mf::eval` over the same points.
+//! feature), points/s in criterion's "thrpt" — and the scalar `mf::eval` over the same points;
+//! and the f64 lanes (`mf::eval_batch_lanes_on`: AVX-512F, AVX2, two lanes; the instruction
+//! sets are detected at run time, with the `std` feature, which the dev-dependency below
+//! turns on).
 //!
 //! `cargo bench --bench mf_eval` (`-- batch` for the batch groups alone)
 use criterion::{criterion_group, criterion_main, Criterion};
@@ -224,6 +227,39 @@ fn batch_of<F: Float, M: Backend<F>>(
     });
 }
 
+/// `mf::eval_batch_lanes_on` (f64 lanes, `Lanewise`) on `isa` over the same points as
+/// [`batch_of`]'s, Fx, Fy, Mz asked for.
+fn lanes_of(
+    g: &mut criterion::BenchmarkGroup<'_, criterion::measurement::WallTime>,
+    isa: mf::Isa,
+    p: &Params<f64>,
+) {
+    let pts = points::<f64>(p.fnomin, BATCH);
+    let cols = Columns {
+        fz: &pts.fz,
+        kappa: &pts.kappa,
+        alpha: &pts.alpha,
+        gamma: &pts.gamma,
+        vx: &pts.vx,
+        phit: None,
+        p: None,
+    };
+    let opts = Options::default();
+    let (mut fx, mut fy, mut mz) = (vec![0.0; BATCH], vec![0.0; BATCH], vec![0.0; BATCH]);
+    g.bench_function(format!("eval_batch_lanes f64 {isa:?} (Fx, Fy, Mz)"), |b| {
+        b.iter(|| {
+            let mut out = Outputs {
+                fx: Some(&mut fx),
+                fy: Some(&mut fy),
+                mz: Some(&mut mz),
+                ..Outputs::default()
+            };
+            let n = mf::eval_batch_lanes_on(isa, p, black_box(&cols), &opts, &mut out).unwrap();
+            assert_eq!(n, BATCH);
+        })
+    });
+}
+
 /// Points per batch iteration.
 const BATCH: usize = 4096;
 
@@ -234,6 +270,9 @@ fn batch(c: &mut Criterion) {
         let mut g = c.benchmark_group(format!("batch/{name}"));
         g.throughput(criterion::Throughput::Elements(BATCH as u64));
         batch_of::<f64, Libm>(&mut g, "f64 Libm", &p64);
+        for isa in [mf::Isa::Avx512, mf::Isa::Avx2, mf::Isa::Baseline] {
+            lanes_of(&mut g, isa, &p64);
+        }
         batch_of::<f32, Libm>(&mut g, "f32 Libm", &p32);
         #[cfg(feature = "fast")]
         batch_of::<f32, gough::math::Fast>(&mut g, "f32 Fast", &p32);

@@ -2,7 +2,7 @@
 //! useMode, MF 5.2, 6.1, 6.2 and the book's tyre): equal to the bit, in f64 and f32, every
 //! output column and the flags.
 use gough::math::{Backend, Float, Libm};
-use gough::mf::{self, Columns, Flags, Input, Options, Output, Outputs, Params};
+use gough::mf::{self, Columns, Flags, Input, Isa, Options, Output, Outputs, Params};
 use gough_host::csvio;
 use gough_host::mfrun::InputRow;
 use std::path::{Path, PathBuf};
@@ -48,6 +48,17 @@ fn batch<F: Float, M: Backend<F>>(
     inputs: &[Input<F>],
     opts: &Options,
 ) -> (Vec<[F; 15]>, Vec<Flags>) {
+    batch_by(p, inputs, |cols, out| {
+        mf::eval_batch::<F, M>(p, cols, opts, out).unwrap();
+    })
+}
+
+/// The 15 value columns and flags that `run` writes at every point (every column asked for).
+fn batch_by<F: Float>(
+    p: &Params<F>,
+    inputs: &[Input<F>],
+    run: impl FnOnce(&Columns<'_, F>, &mut Outputs<'_, F>),
+) -> (Vec<[F; 15]>, Vec<Flags>) {
     let col = |f: fn(&Input<F>) -> F| inputs.iter().map(f).collect::<Vec<F>>();
     let (fz, kappa, alpha, gamma, vx, phit) = (
         col(|i| i.fz),
@@ -92,7 +103,7 @@ fn batch<F: Float, M: Backend<F>>(
             kappa: next(),
             flags: Some(&mut flags),
         };
-        mf::eval_batch::<F, M>(p, &cols, opts, &mut out).unwrap();
+        run(&cols, &mut out);
     }
     let rows = (0..n).map(|i| core::array::from_fn(|k| c[k][i])).collect();
     (rows, flags)
@@ -142,4 +153,60 @@ fn batch_equals_eval_to_the_bit_at_every_oracle_point() {
         points += inputs.len();
     }
     println!("batch = eval to the bit at {points} oracle points, f64 and f32");
+}
+
+/// The lanes (`mf::eval_batch_lanes_on`, every instruction set this processor has: 16, 8 and 4
+/// lanes) against `mf::eval::<f64, Libm>` at every oracle point (MF 5.2, 6.1, 6.2, the book's
+/// tyre, every useMode): every output column within 1e-9·FNOMIN (N, N·m, and the
+/// dimensionless and length columns in the same number), the flags equal; and the lanes did
+/// evaluate the points (all but turn slip, which runs point by point).
+#[test]
+fn lanes_within_1e9_fnomin_of_eval_at_every_oracle_point() {
+    for isa in [Isa::Avx512, Isa::Avx2, Isa::Baseline] {
+        let (mut points, mut in_lanes, mut turn_slip, mut worst) = (0, 0, 0, 0.0f64);
+        // Points in chunks of 16 (the widest; a narrower chunk lies inside one) that mix
+        // Fz > 0 with Fz ≤ 0: those the lanes may hand to `mf::eval`.
+        let mut mixed = 0;
+        for (name, opts, p64, inputs) in oracle() {
+            let mut lanes = 0;
+            let (rows, flags) = batch_by(&p64, &inputs, |cols, out| {
+                lanes = mf::eval_batch_lanes_on(isa, &p64, cols, &opts, out).unwrap();
+            });
+            for (i, input) in inputs.iter().enumerate() {
+                let o = mf::eval::<f64, Libm>(&p64, input, &opts).unwrap();
+                for (k, (got, want)) in rows[i].iter().zip(fields(&o)).enumerate() {
+                    let err = (got - want).abs() / p64.fnomin;
+                    assert!(
+                        err <= 1e-9,
+                        "{name} {isa:?} point {i} column {k}: {got} vs {want}"
+                    );
+                    worst = worst.max(err);
+                }
+                assert_eq!(flags[i], o.flags, "{name} {isa:?} point {i}");
+            }
+            if opts.turn_slip {
+                assert_eq!(lanes, 0, "{name}");
+                turn_slip += inputs.len();
+            } else {
+                for c in inputs.chunks(16) {
+                    let contact = c.iter().filter(|i| i.fz > 0.0).count();
+                    if contact != 0 && contact != c.len() {
+                        mixed += c.len();
+                    }
+                }
+            }
+            points += inputs.len();
+            in_lanes += lanes;
+        }
+        println!(
+            "{isa:?}: {in_lanes} of {points} oracle points in lanes ({turn_slip} with turn slip \
+             point by point, {mixed} in chunks of 16 mixing Fz > 0 and Fz ≤ 0), \
+             max |lanes − eval| = {worst:.1e}·FNOMIN"
+        );
+        // Only turn slip and chunks that mix contact with no contact run point by point.
+        assert!(
+            in_lanes + turn_slip + mixed >= points,
+            "{in_lanes} + {turn_slip} + {mixed} of {points}"
+        );
+    }
 }

@@ -33,6 +33,9 @@ use core::ops::{Add, AddAssign, Div, Mul, MulAssign, Neg, Sub, SubAssign};
 pub mod dual;
 pub use dual::Dual;
 
+pub mod lanes;
+pub use lanes::{LaneFlags, LaneMask, Lanes, Lanewise};
+
 #[cfg(any(feature = "fast", feature = "fixed"))]
 pub(crate) mod minimax;
 
@@ -50,7 +53,7 @@ pub use micro::Micromath;
 pub(crate) mod testutil;
 
 /// A real number as the equations compute with it: one value ([`Float`]: `f32` on the device,
-/// `f64` on the host, `fixed::Fix` with the `fixed` feature) or several in lanes (lanes,
+/// `f64` on the host, `fixed::Fix` with the `fixed` feature) or several in lanes ([`Lanes`],
 /// the host's batch).
 ///
 /// Only what the equations use. Units are whatever the caller's quantity has.
@@ -85,11 +88,11 @@ pub trait Real:
     const FRAC_2_PI: Self;
 
     /// What a comparison of two values gives: `bool` for a scalar, one flag per lane for
-    /// lanes. The formula's branches on a *value* (a sign, a clip, a guard) compare into a
+    /// [`Lanes`]. The formula's branches on a *value* (a sign, a clip, a guard) compare into a
     /// mask and [`select`](Real::select) or [`choose`]; branches on parameters stay `if`s
     /// (`PartialOrd`, which for lanes holds when it holds in every lane).
     type Mask: Mask;
-    /// The flags of an evaluation ([`crate::mf::Flags`]; one set per lane for lanes).
+    /// The flags of an evaluation ([`crate::mf::Flags`]; one set per lane for [`Lanes`]).
     type Flags: crate::mf::FlagSet<Self::Mask>;
     /// `self < o`, per lane.
     fn mask_lt(self, o: Self) -> Self::Mask;
@@ -199,7 +202,7 @@ pub trait Float: Real<Mask = bool, Flags = crate::mf::Flags> {
 }
 
 /// A comparison's result ([`Real::Mask`]): `bool` for one value, a flag per lane for
-/// lanes.
+/// [`Lanes`].
 pub trait Mask: Copy + Default + core::fmt::Debug {
     /// `b` in every lane.
     fn splat(b: bool) -> Self;

@@ -17,7 +17,7 @@ use crate::math::{Backend, Lift, Mask, Real};
 /// Without a shift (S = 0) the denominator is cos 0 = 1 exactly and is not evaluated.
 ///
 /// Computed in the slips' type `G`; C, E and S are load-stage values (`F`).
-#[inline]
+#[inline(always)]
 fn weight<F: Real, G: Lift<F>, M: Backend<G>>(
     b: G,
     c: F,
@@ -224,7 +224,7 @@ impl<F: Real> Arm<F> {
     /// s \[m\] at lateral force `fy` \[N\] (a dual number carries ∂s/∂Fy), normalised load
     /// increment `dfz` and camber `gamma` \[rad\]: s = R0·(ssz1 + ssz2·Fy/Fz0 + (ssz3 +
     /// ssz4·dfz)·γ)·λs (73), (A56) — Fy/Fz0 and γ, not Fz0' and γ*, as the paper and TNO.
-    #[inline]
+    #[inline(always)]
     pub fn s_at<G: Lift<F>>(&self, fy: G, dfz: F, gamma: F) -> G {
         let [s1, s2, s3, s4] = self.ssz;
         (fy / self.fz0 * s2 + s1 + (s3 + s4 * dfz) * gamma) * self.r0 * self.ls

@@ -287,7 +287,7 @@ pub(crate) fn condition_load_checked<F: Real, M: Backend<F>>(
 }
 
 /// λμ' = Aμ·λμ*/(1 + (Aμ − 1)·λμ*) (4.E8).
-#[inline]
+#[inline(always)]
 pub fn digressive<F: Real>(lmu_star: F) -> F {
     let a_mu = F::from_f64(A_MU);
     a_mu * lmu_star / (F::ONE + (a_mu - F::ONE) * lmu_star)

@@ -46,7 +46,9 @@ pub(crate) mod pure;
 pub(crate) mod sigma;
 pub mod turnslip;
 
-pub use batch::{eval_batch, BatchError, Columns, Outputs};
+pub use batch::{
+    eval_batch, eval_batch_lanes, eval_batch_lanes_on, BatchError, Columns, Isa, Outputs,
+};
 pub use params::{Key, Need, Params, Side, Since, Version, IGNORED_KEYS};
 
 use crate::math::{Backend, Float, Mask, Real};
@@ -203,7 +205,7 @@ impl Flags {
 }
 
 /// The flags an evaluation raises, as the generic formula sets them: [`Flags`] itself for one
-/// point (the mask a `bool`), one [`Flags`] per lane for lanes.
+/// point (the mask a `bool`), one [`Flags`] per lane for [`crate::math::Lanes`].
 pub trait FlagSet<M>: Copy + Default + PartialEq + core::fmt::Debug {
     /// Sets the bits of `other` (in every lane).
     fn insert(&mut self, other: Flags);
@@ -354,9 +356,9 @@ pub fn eval<F: Float, M: Backend<F>>(
     eval_in::<F, M>(p, input, opts)
 }
 
-/// [`eval`] in any [`Real`] — lanes (lanes) too, with their flags. A lane
+/// [`eval`] in any [`Real`] — lanes ([`crate::math::Lanes`]) too, with their flags. A lane
 /// type's caller keeps to what the lanes' value branches need: every lane in contact or none
-/// (`mf::lanes` does; `prepared::stages`), no turn slip (its effective rolling radius iterates
+/// (`mf::eval_batch_lanes` does; `prepared::stages`), no turn slip (its effective rolling radius iterates
 /// per point). An error means that some lane failed: that caller evaluates the lanes again
 /// one by one to learn which and why.
 #[inline(always)]
@@ -372,71 +374,96 @@ pub(crate) fn eval_in<F: Real, M: Backend<F>>(
     let (c, mirrored, turn) = prepared::for_eval::<F, M>(p, input, opts)?;
     // The load stage (with turn slip: every stage's load part at this point) on locals, then
     // the slip stage: the `prepared` module's, so that its results are this function's.
-    prepared::stages::<F, M, _>(p, c, mirrored, turn, |prep| {
-        let mu = prep.mu_stage::<F>(prep.c.lmux_star, prep.c.lmuy_star);
-        // The slips were checked finite above; the results are, with the rest, below.
-        let f = prep.slip::<F, F, M>(&mu, input.kappa, input.alpha);
-        if !prep.contact {
-            // No contact: no force, no moment (MFeval gives the same, see the `load` oracle sweep).
-            return Ok(Output {
+    /// The friction and slip stages, Mx, My and σ at the load stage's view.
+    struct Rest<'a, F: Real, M> {
+        p: &'a Params<F>,
+        input: &'a Input<F>,
+        opts: &'a Options,
+        mirrored: bool,
+        backend: core::marker::PhantomData<M>,
+    }
+    impl<F: Real, M: Backend<F>> prepared::Then<F> for Rest<'_, F, M> {
+        type Out = Result<Output<F, F::Flags>, EvalError>;
+        // Inlined where the lanes run (x86_64, aarch64: else it is compiled without their
+        // target features); left to the compiler on the devices, where, as a function of its
+        // own, an M4F combined evaluation (f32, `Fast`) counts 2,434 instructions (2,407
+        // before the lanes), inlined 2,536 (`cargo xtask firmware`, the `fast:` line).
+        #[cfg_attr(any(target_arch = "x86_64", target_arch = "aarch64"), inline(always))]
+        fn then(self, prep: prepared::View<'_, F>) -> Self::Out {
+            let (p, input, opts, mirrored) = (self.p, self.input, self.opts, self.mirrored);
+            let mu = prep.mu_stage::<F>(prep.c.lmux_star, prep.c.lmuy_star);
+            // The slips were checked finite above; the results are, with the rest, below.
+            let f = prep.slip::<F, F, M>(&mu, input.kappa, input.alpha);
+            if !prep.contact {
+                // No contact: no force, no moment (MFeval gives the same, see the `load` oracle sweep).
+                return Ok(Output {
+                    kappa: f.kappa,
+                    flags: f.flags,
+                    ..Output::default()
+                });
+            }
+            let c = prep.c;
+            let (mx, my) = if opts.moments {
+                // Mx of the file's tyre (unmirrored Fy), mirrored back below.
+                let fy = if mirrored { -f.fy } else { f.fy };
+                let mx = moments::mx::<F, M>(p, c, fy);
+                (
+                    if mirrored { -mx } else { mx },
+                    moments::my::<F, M>(p, c, f.fx, input.kappa),
+                )
+            } else {
+                (F::ZERO, F::ZERO)
+            };
+            let (k_xk, k_ya) = (prep.fx0.k_xk, prep.fy0.k_ya);
+            let (sigma_x, sigma_y) = sigma::sigma::<F, M>(p, c, k_xk, k_ya);
+            let out = Output {
+                fx: f.fx,
+                fy: f.fy,
+                fz: c.fz,
+                mx,
+                my,
+                mz: f.mz,
+                mu_x: mu.mu_x(),
+                mu_y: mu.mu_y(),
+                k_xk,
+                k_ya,
+                t: f.t,
+                m_zr: f.m_zr,
+                sigma_x,
+                sigma_y,
                 kappa: f.kappa,
                 flags: f.flags,
-                ..Output::default()
-            });
+            };
+            let all = [
+                out.fx,
+                out.fy,
+                out.mz,
+                out.t,
+                out.m_zr,
+                out.mx,
+                out.my,
+                out.mu_x,
+                out.mu_y,
+                out.k_xk,
+                out.k_ya,
+                out.sigma_x,
+                out.sigma_y,
+            ];
+            if F::all_finite(&all) {
+                Ok(out)
+            } else {
+                Err(EvalError::Overflow)
+            }
         }
-        let c = prep.c;
-        let (mx, my) = if opts.moments {
-            // Mx of the file's tyre (unmirrored Fy), mirrored back below.
-            let fy = if mirrored { -f.fy } else { f.fy };
-            let mx = moments::mx::<F, M>(p, c, fy);
-            (
-                if mirrored { -mx } else { mx },
-                moments::my::<F, M>(p, c, f.fx, input.kappa),
-            )
-        } else {
-            (F::ZERO, F::ZERO)
-        };
-        let (k_xk, k_ya) = (prep.fx0.k_xk, prep.fy0.k_ya);
-        let (sigma_x, sigma_y) = sigma::sigma::<F, M>(p, c, k_xk, k_ya);
-        let out = Output {
-            fx: f.fx,
-            fy: f.fy,
-            fz: c.fz,
-            mx,
-            my,
-            mz: f.mz,
-            mu_x: mu.mu_x(),
-            mu_y: mu.mu_y(),
-            k_xk,
-            k_ya,
-            t: f.t,
-            m_zr: f.m_zr,
-            sigma_x,
-            sigma_y,
-            kappa: f.kappa,
-            flags: f.flags,
-        };
-        let all = [
-            out.fx,
-            out.fy,
-            out.mz,
-            out.t,
-            out.m_zr,
-            out.mx,
-            out.my,
-            out.mu_x,
-            out.mu_y,
-            out.k_xk,
-            out.k_ya,
-            out.sigma_x,
-            out.sigma_y,
-        ];
-        if F::all_finite(&all) {
-            Ok(out)
-        } else {
-            Err(EvalError::Overflow)
-        }
-    })
+    }
+    let rest = Rest::<F, M> {
+        p,
+        input,
+        opts,
+        mirrored,
+        backend: core::marker::PhantomData,
+    };
+    prepared::stages::<F, M, _>(p, c, mirrored, turn, rest)
 }
 
 /// The sine version of the Magic Formula, eq. (3): D·sin[C·atan{B·x − E·(B·x − atan(B·x))}].
@@ -444,7 +471,7 @@ pub(crate) fn eval_in<F: Real, M: Backend<F>>(
 /// Computed in the type `G` of the slip x; each coefficient may be a `G` or a plain value
 /// (`B`, `C`, `D`, `E`: a load- or friction-stage coefficient, a constant in dual numbers),
 /// multiplied in as it is (x·B, not B·x: the same product).
-#[inline]
+#[inline(always)]
 pub fn magic_sin<G, M, B, C, D, E>(b: B, c: C, d: D, e: E, x: G) -> G
 where
     G: Real + Mul<B, Output = G> + Mul<C, Output = G> + Mul<D, Output = G> + Mul<E, Output = G>,
@@ -456,7 +483,7 @@ where
 
 /// B·x − E·(B·x − atan(B·x)), the argument of the outer atan in eqs. (3) and (8); with E = 0
 /// it is B·x exactly, and the inner atan is skipped.
-#[inline]
+#[inline(always)]
 fn magic_arg<G, M, B, E>(b: B, e: E, x: G) -> G
 where
     G: Real + Mul<B, Output = G> + Mul<E, Output = G>,
@@ -475,7 +502,7 @@ where
 
 /// The cosine version of the Magic Formula, eq. (8) without its D: cos[C·atan{B·x − E·(B·x −
 /// atan(B·x))}]. Also the weighting functions G, eq. (12). Coefficients as [`magic_sin`]'s.
-#[inline]
+#[inline(always)]
 pub fn magic_cos<G, M, B, C, E>(b: B, c: C, e: E, x: G) -> G
 where
     G: Real + Mul<B, Output = G> + Mul<C, Output = G> + Mul<E, Output = G>,
@@ -486,14 +513,14 @@ where
 }
 
 /// cos(atan(x)) = 1/√(1 + x²), exactly; one square root instead of two trigonometric calls.
-#[inline]
+#[inline(always)]
 pub(crate) fn cos_atan<F: Real, M: Backend<F>>(x: F) -> F {
     F::ONE / M::sqrt(F::ONE + x * x)
 }
 
 /// Clips a curvature factor to ≤ 1 when limits are on ("(≤ 1)" in eqs. (27), (38), (4.E14),
 /// (4.E24), (4.E44), (4.E56), (4.E64)) and flags it.
-#[inline]
+#[inline(always)]
 pub(crate) fn clip_e<F: Real>(e: F, limits: bool, flags: &mut F::Flags) -> F {
     if !limits {
         return e;

@@ -13,6 +13,7 @@ use crate::math::{choose, Backend, Mask, Real};
 
 /// Load used by the moments: below FZMIN it fades as Fz·(Fz/FZMIN)^n (n = 2 for Mx, 1 for My),
 /// so the moments vanish smoothly at lift-off (TNO solver behaviour, as MFeval reproduces it).
+#[inline(always)]
 fn low_load<F: Real>(fz: F, fzmin: F, power2: bool) -> F {
     if fzmin > F::ZERO {
         choose::<F>(
@@ -33,6 +34,7 @@ fn low_load<F: Real>(fz: F, fzmin: F, power2: bool) -> F {
 }
 
 /// Overturning moment Mx \[N·m\], (A47) + MF 6.1.2 terms.
+#[inline(always)]
 pub fn mx<F: Real, M: Backend<F>>(p: &Params<F>, c: &Cond<F>, fy: F) -> F {
     let fz = low_load(c.fz, p.fzmin, true);
     let (g, fz0, r0) = (c.gamma, p.fnomin, p.unloaded_radius);
@@ -51,6 +53,7 @@ pub fn mx<F: Real, M: Backend<F>>(p: &Params<F>, c: &Cond<F>, fy: F) -> F {
 /// x^y for x ≥ 0 as exp(y·ln x); 0^y = 0 for y > 0 and 1 for y = 0. 1^y and x^0 are 1
 /// without the kernels (what exp(y·ln x) gives there: ln 1 = 0, exp 0 = 1): the pressure power
 /// at p = NOMPRES, the usual case, costs nothing.
+#[inline(always)]
 fn pow<F: Real, M: Backend<F>>(x: F, y: F) -> F {
     // y is a parameter (the same in every lane), x a value.
     if y == F::ZERO {
@@ -65,6 +68,7 @@ fn pow<F: Real, M: Backend<F>>(x: F, y: F) -> F {
 
 /// Rolling resistance moment My \[N·m\], (A48) for MF 6.x, MF 5.2 form otherwise; `kappa_u` is
 /// κ as given.
+#[inline(always)]
 pub fn my<F: Real, M: Backend<F>>(p: &Params<F>, c: &Cond<F>, fx: F, kappa_u: F) -> F {
     let fz = low_load(c.fz_u, p.fzmin, false);
     let (fz0, r0, v0) = (p.fnomin, p.unloaded_radius, p.longvl);

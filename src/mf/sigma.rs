@@ -9,6 +9,7 @@ use super::Params;
 use crate::math::{choose, Backend, Real};
 
 /// (σx, σy) \[m\].
+#[inline(always)]
 pub fn sigma<F: Real, M: Backend<F>>(p: &Params<F>, c: &Cond<F>, k_xk: F, k_ya: F) -> (F, F) {
     let dfz = c.dfz;
     if p.version.is_mf6() {
