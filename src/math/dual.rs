@@ -227,7 +227,7 @@ impl<F: Float, const N: usize> Real for Dual<F, N> {
         self.v.is_finite() && F::all_finite(&self.d)
     }
     /// Every value and derivative finite, without a branch per element (`F`'s own
-    /// [`Float::all_finite`] on each derivative array).
+    /// [`Real::all_finite`] on each derivative array).
     #[inline]
     fn all_finite(xs: &[Self]) -> bool {
         xs.iter()

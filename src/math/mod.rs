@@ -2,9 +2,11 @@
 //! transcendental kernels.
 //!
 //! Two traits, kept deliberately small:
-//! - [`Float`]: arithmetic, a few constants and the exact (non-transcendental) operations that
-//!   the Magic Formula needs (`abs`, `sign`, `min`/`max`, finiteness). Implemented for `f32`
-//!   (device) and `f64` (host).
+//! - [`Real`]: arithmetic, a few constants and the exact (non-transcendental) operations that
+//!   the Magic Formula needs (`abs`, `sign`, `min`/`max`, finiteness), and comparisons into
+//!   masks with `select` for its value branches. [`Float`] is a `Real` whose masks are `bool`
+//!   and whose flags are one `mf::Flags`: `f32` (device) and `f64` (host); [`Lanes`] is `N`
+//!   values in lanes (the host's batch, `mf::eval_batch_lanes`).
 //! - [`Backend`]: the transcendental kernels the equations call (`sin cos tan atan acos exp ln
 //!   sqrt`), one line per function. The *type* chooses the backend:
 //!   `mf::eval::<f32, math::Fast>`. Each kernel is listed with the equations that need it.
@@ -18,6 +20,7 @@
 //! | [`Libm`] | always | the `libm` crate (musl port) | ≤ 1 ulp; the reference |
 //! | `Fast` | `fast` | minimax polynomials, pure f32 (`math::fast`) | ≤ 4e-7 relative (issue 7 asks 2e-6) |
 //! | `Micromath` | `micromath` | the `micromath` crate, wrapped (`math::micro`) | 1e-3 to 3e-2 absolute, ln 0.12, √ 6 % |
+//! | [`Lanewise`] | always | — ([`Lanes`]`<f64, N>` only: fdlibm's sin, cos, tan, atan by masks; exp, ln, acos from `libm` lane by lane) | ≤ 2 ulp (tan 4) |
 //!
 //! Through the whole Magic Formula (`host-tests/tests/backends.rs`, all oracle sweeps): f32 with
 //! `Fast` is as close to f64 as f32 with `Libm` (2e-6·FNOMIN); `Micromath` is 4e-2·FNOMIN off.
