@@ -1334,12 +1334,7 @@ mod tests {
             let mut worst = 0.0f64;
             for r in log.records.iter().step_by(97) {
                 let x = &r.wheels[w];
-                let y = m
-                    .forces(
-                        &s,
-                        &RowState::of_wheel(x),
-                    )
-                    .unwrap();
+                let y = m.forces(&s, &RowState::of_wheel(x)).unwrap();
                 worst = worst
                     .max((y[0] - x.fx).abs())
                     .max((y[1] - x.fy).abs())
