@@ -48,6 +48,7 @@ pub mod turnslip;
 
 pub use batch::{eval_batch, BatchError, Columns, Outputs};
 pub use params::{Key, Need, Params, Side, Since, Version, IGNORED_KEYS};
+pub use sigma::relaxation_lengths;
 
 use crate::math::{Backend, Float};
 use core::ops::Mul;

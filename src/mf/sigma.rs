@@ -5,7 +5,7 @@
 //! keys gives 0 ("not available"), never a division by zero.
 
 use super::limits::Conditioned;
-use super::Params;
+use super::{EvalError, Input, Options, Params};
 use crate::math::{Backend, Float};
 
 /// (σx, σy) \[m\].
@@ -51,4 +51,36 @@ pub fn sigma<F: Float, M: Backend<F>>(
         };
         (sx, sy)
     }
+}
+
+/// The relaxation lengths (σx, σy) \[m\] of [`super::eval`] at `input` under `opts`, without its
+/// slip stage (the forces and moments): `mf::eval`'s `sigma_x`, `sigma_y` to the bit, from the
+/// same load stage (with turn slip on, the load parts at the point's slips, as `eval` has them).
+/// For a caller that needs σ at a row before it evaluates the forces along a transient (the
+/// gap diagnosis's sim: one σ per row, the forces at the filter's slips).
+///
+/// Errors: those of `eval`'s checks (non-finite input, pressure ≤ 0, turn slip without its
+/// coefficients); [`EvalError::Overflow`] when σ itself is not finite. No contact (Fz ≤ 0):
+/// (0, 0), as `eval` gives.
+pub fn relaxation_lengths<F: Float, M: Backend<F>>(
+    p: &Params<F>,
+    input: &Input<F>,
+    opts: &Options,
+) -> Result<(F, F), EvalError> {
+    if opts.turn_slip && !super::turnslip::available(p) {
+        return Err(EvalError::TurnSlipUnavailable);
+    }
+    super::limits::check_finite(input)?;
+    let (c, mirrored, turn) = super::prepared::for_eval::<F, M>(p, input, opts)?;
+    super::prepared::stages::<F, M, _>(p, c, mirrored, turn, |prep| {
+        if !prep.contact {
+            return Ok((F::ZERO, F::ZERO));
+        }
+        let (sx, sy) = sigma::<F, M>(p, prep.c, prep.fx0.k_xk, prep.fy0.k_ya);
+        if sx.is_finite() && sy.is_finite() {
+            Ok((sx, sy))
+        } else {
+            Err(EvalError::Overflow)
+        }
+    })
 }

@@ -538,6 +538,34 @@ macro_rules! float_props {
                     }
                 }
 
+                /// `relaxation_lengths` is `eval`'s σx, σy to the bit wherever `eval` gives them,
+                /// with turn slip on or off, on every tyre; its errors are `eval`'s checks.
+                #[test]
+                fn relaxation_lengths_are_evals(
+                    idx in 0usize..14, fz in -1e5f64..1e6, kappa in -20.0f64..20.0,
+                    alpha in -1.6f64..1.6, gamma in -1.0f64..1.0, phit in -1.0f64..1.0,
+                    vx in -80.0f64..80.0, limits in any::<bool>(), star in any::<bool>(),
+                    turn in any::<bool>(), mounted in any::<bool>(),
+                ) {
+                    let ps = tyres();
+                    let p = &ps[idx];
+                    let i = Input { fz: fz as $t, kappa: kappa as $t, alpha: alpha as $t,
+                        gamma: gamma as $t, phit: phit as $t, vx: vx as $t, p: None };
+                    let side = mounted.then_some(Side::Left);
+                    let o = Options { limits, alpha_star: star, turn_slip: turn, mounted: side, transient: false, moments: false };
+                    let s = relaxation_lengths::<$t, Libm>(p, &i, &o);
+                    match eval::<$t, Libm>(p, &i, &o) {
+                        Ok(out) => {
+                            let (sx, sy) = s.expect("eval gave σ");
+                            prop_assert_eq!(sx.to_bits(), out.sigma_x.to_bits());
+                            prop_assert_eq!(sy.to_bits(), out.sigma_y.to_bits());
+                        }
+                        // The forces may overflow where σ does not.
+                        Err(EvalError::Overflow) => prop_assert!(!matches!(s, Err(ref e) if *e != EvalError::Overflow)),
+                        Err(e) => prop_assert_eq!(s, Err(e)),
+                    }
+                }
+
                 /// The staged evaluation (`prepared`), its slopes in κ, α and λμ: for any
                 /// finite input, finite numbers or a clear error, never a panic; the values of
                 /// every entry point are `mf::eval`'s.
