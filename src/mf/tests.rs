@@ -857,6 +857,47 @@ impl crate::math::Backend<f64> for Counting {
     }
 }
 
+/// `relaxation_lengths` takes the load stage only: far fewer kernel calls than `eval` (below),
+/// the same σ.
+#[test]
+fn kernel_calls_of_relaxation_lengths() {
+    // tyre → (sin, cos, tan, atan, acos + exp + ln, √).
+    let cases: [(usize, [u32; 6]); 3] = [
+        (0, [2, 0, 0, 2, 2, 0]),
+        (1, [1, 0, 0, 1, 1, 0]),
+        (2, [1, 0, 0, 1, 1, 0]),
+    ];
+    for (t, want) in cases {
+        let p = load(TYRES[t].1);
+        let i = Input {
+            fz: p.fnomin,
+            kappa: -0.05,
+            alpha: 0.05,
+            vx: 20.0,
+            ..Default::default()
+        };
+        let opts = Options::default();
+        CALLS.with(|c| c.set([0; 8]));
+        let s = relaxation_lengths::<f64, Counting>(&p, &i, &opts).unwrap();
+        let o = eval64(&p, i, &opts);
+        assert_eq!(s, (o.sigma_x, o.sigma_y));
+        let v = CALLS.with(|c| c.get());
+        let got = [v[0], v[1], v[2], v[3], v[4] + v[5] + v[6], v[7]];
+        std::println!(
+            "{} relaxation_lengths: sin {} cos {} tan {} atan {} acos/exp/ln {} √ {}: {} calls",
+            TYRES[t].0,
+            got[0],
+            got[1],
+            got[2],
+            got[3],
+            got[4],
+            got[5],
+            got.iter().sum::<u32>()
+        );
+        assert_eq!(got, want, "{}", TYRES[t].0);
+    }
+}
+
 /// Where an evaluation's time goes (issue 57; docs/magic-formula.md, "Measured speed"): the
 /// kernel calls of one combined evaluation at Fz0, κ = −0.05, α = 0.05, Vx = 20 m/s, per
 /// version, γ = 0 and 0.03 rad, with and without Mx, My. Printed (`--nocapture`) and held to

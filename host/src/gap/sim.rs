@@ -112,7 +112,8 @@ pub struct Mods<'a> {
 pub struct Sim {
     /// SIM.tir's parameters.
     pub params: Params<f64>,
-    /// Evaluation options (limits on; `transient` when the filters run; turn slip if used).
+    /// Evaluation options (limits on; `transient` when the filters run; turn slip if used; no
+    /// Mx, My).
     pub opts: Options,
     /// The relaxation-length filters run.
     pub filters: bool,
@@ -150,9 +151,12 @@ impl Sim {
     pub fn new(params: Params<f64>, log: &Log) -> Sim {
         let filters = has_filters(&params);
         let turn_slip = log.phit.is_some() && mf::turnslip::available(&params);
+        // Mx and My are not in a log's channels: not computed (five of about fifty kernel
+        // calls of an evaluation; Fx, Fy, Mz do not depend on them).
         let opts = Options {
             transient: filters,
             turn_slip,
+            moments: false,
             ..Options::default()
         };
         let mut cfg = Config::from_params(&params);
