@@ -1,6 +1,6 @@
 //! The staged Magic Formula (`gough::mf::prepared`): the load stage, the friction stage and the
 //! slip stage with its slopes must never panic, and for finite input give finite numbers or an
-//! error; the slip stage's forces are `mf::eval`'s.
+//! error; the slip stage's forces are `mf::eval`'s, and so are `mf::relaxation_lengths`' σ.
 //!
 //! Run: `cargo +nightly fuzz run mf_staged -- -max_total_time=60`.
 #![no_main]
@@ -46,6 +46,14 @@ where
     }
     if let Ok(s) = staged {
         assert!(F::all_finite(&[s.fx, s.fy, s.mz, s.t, s.m_zr]));
+    }
+    // The relaxation lengths from the load stage alone: finite, and `eval`'s where it gives them.
+    let sigma = mf::relaxation_lengths::<F, Libm>(p, i, o);
+    if let Ok((sx, sy)) = sigma {
+        assert!(F::all_finite(&[sx, sy]));
+        if let Ok(e) = mf::eval::<F, Libm>(p, i, o) {
+            assert!(sx == e.sigma_x && sy == e.sigma_y, "{sx:?} {sy:?} vs {e:?}");
+        }
     }
     let mu = prep.with_mu(lmu, lmu);
     if let Ok((f, d)) = prep.eval_d::<Libm>(&mu, i.kappa, i.alpha) {

@@ -239,6 +239,33 @@ class Receiver:
                 return mtype, body
         raise AssertionError("timed out waiting for the device")
 
+    def until(self, want, **kw):
+        """The body of the next message of type `want` (the others before it passed over)."""
+        while True:
+            t, body = self.recv(**kw)
+            if t == want:
+                return body
+
+
+class Sender:
+    """Messages onto the bus, each identifier's frames numbered in turn; `sent` counts them
+    (the device's `messages` counter, for the messages that arrive whole)."""
+
+    def __init__(self, bus):
+        self.bus = bus
+        self.seq = {}
+        self.sent = 0
+
+    def frames(self, cid, frames_):
+        for fr in frames_:
+            self.bus.send(can.Message(arbitration_id=cid, data=fr, is_extended_id=False))
+
+    def __call__(self, cid, msg):
+        n = self.seq.get(cid, 0)
+        self.frames(cid, frames(msg, n % 256))
+        self.seq[cid] = n + 1
+        self.sent += 1
+
 
 def decode_forces(b):
     wheel = b[0]
@@ -329,34 +356,11 @@ def main():
             expected = [(fx, -fy, -mz) if c[0] % 2 == 0 else (fx, fy, mz)
                         for c, (fx, fy, mz) in zip(cases, expected)]
 
-    bus = None
-    for _ in range(100):
-        try:
-            bus = can.Bus(interface="slcan", channel=f"socket://127.0.0.1:{a.port}", sleep_after_open=0)
-            break
-        except Exception:
-            time.sleep(0.1)
-    assert bus is not None, "cannot connect to the firmware"
-    # Each frame is one small socket write: with Nagle's algorithm on (pyserial's socket:// does
-    # not turn it off), the second frame of a message waits for the ACK of the first, which the
-    # peer may delay by 40 ms or more — beyond the device's 50 ms between the frames of one
-    # message (FRAME_TIMEOUT_MS), and the message is dropped as timed out. A CAN adapter
-    # would send the frames back to back; so does the host's own client (`set_nodelay`).
-    sock = getattr(getattr(bus, "serialPortOrig", None), "_socket", None)
-    if sock is not None:
-        sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
-    print(f"note: TCP_NODELAY {'set' if sock is not None else 'not available (frames may be delayed)'}")
+    bus, nodelay = connect(a.port)
+    print(f"note: TCP_NODELAY {'set' if nodelay else 'not available (frames may be delayed)'}")
     rx = Receiver(bus)
     fails = 0
-    sent = 0  # good messages sent (the device's `messages` counter)
-    seq = {ID_MEASUREMENT: 0, ID_CONFIG: 0, ID_COMPACT: 0, ID_BATCH: 0}
-
-    def send(cid, msg):
-        nonlocal sent
-        for fr in frames(msg, seq[cid] % 256):
-            bus.send(can.Message(arbitration_id=cid, data=fr, is_extended_id=False))
-        seq[cid] += 1
-        sent += 1
+    send = Sender(bus)
 
     try:
         # Wait until the device is up and a measurement gets an Estimate (the estimators start
@@ -385,10 +389,7 @@ def main():
 
         def ack(cid, msg):
             send(cid, msg)
-            while True:
-                t, body = rx.recv()
-                if t == T_ACK:
-                    return body
+            return rx.until(T_ACK)
 
         for k, (w, fz, al, ka, vx) in enumerate(cases):
             send(ID_MEASUREMENT, measurement(w, 1000 * (k + 1), fz, -1000.0, 10.0, vx, al, ka))
@@ -428,10 +429,7 @@ def main():
         fields = {w: compact_fields(fz, -1000.0, 10.0, None, None, None, al, ka, None)
                   for w, fz, al, ka, _ in cases}
         send(ID_BATCH, batch(T_B, fields))
-        while True:
-            t, body = rx.recv()
-            if t == T_BATCH_RESULTS:
-                break
+        body = rx.until(T_BATCH_RESULTS)
         bt, bw = decode_batch_results(body)
         ok = bt == T_B and all(w["present"] for w in bw)
         print(f"{'ok  ' if ok else 'FAIL'} batch of four wheels answered by one results message, t_us {bt}")
@@ -520,15 +518,11 @@ def main():
         # A damaged message: the device must drop it and count it.
         bad = bytearray(measurement(0, 99, 1.0, 1.0, 1.0, 1.0, 0.0, 0.0))
         bad[-1] ^= 0xFF
-        for fr in frames(bytes(bad), 200):
-            bus.send(can.Message(arbitration_id=ID_MEASUREMENT, data=fr, is_extended_id=False))
+        send.frames(ID_MEASUREMENT, frames(bytes(bad), 200))
         send(ID_CONFIG, message(T_COMMAND, bytes([CMD_STATUS_REQUEST])))
-        while True:
-            t, body = rx.recv()
-            if t == T_STATUS:
-                break
+        body = rx.until(T_STATUS)
         s = decode_status(body)
-        ok = (s["bad_crc"] == 1 and s["messages"] == sent and s["proto"] == PROTO_VERSION
+        ok = (s["bad_crc"] == 1 and s["messages"] == send.sent and s["proto"] == PROTO_VERSION
               and (s["auth_accepted"], s["auth_missing"], s["auth_bad_mac"], s["auth_stale"],
                    s["auth_no_key"]) == (6, 1, 1, 1, 0)
               # the forged message took the signer's last counter; the device never accepted it
@@ -537,10 +531,7 @@ def main():
         fails += not ok
 
         send(ID_CONFIG, signer.seal(ID_CONFIG, T_COMMAND, bytes([CMD_STOP])))
-        while True:
-            t, body = rx.recv()
-            if t == T_STATUS:
-                break
+        body = rx.until(T_STATUS)
     finally:
         bus.shutdown()
     print(f"python-can client: {fails} failed")
@@ -548,6 +539,14 @@ def main():
 
 
 def connect(port):
+    """The firmware's SLCAN bridge at `port` (retried while it starts), and whether Nagle's
+    algorithm could be turned off.
+
+    Each frame is one small socket write: with Nagle's algorithm on (pyserial's socket:// does
+    not turn it off), the second frame of a message waits for the ACK of the first, which the
+    peer may delay by 40 ms or more — beyond the device's 50 ms between the frames of one
+    message (FRAME_TIMEOUT_MS), and the message is dropped as timed out. A CAN adapter would
+    send the frames back to back; so does the host's own client (`set_nodelay`)."""
     bus = None
     for _ in range(100):
         try:
@@ -557,21 +556,16 @@ def connect(port):
             time.sleep(0.1)
     assert bus is not None, "cannot connect to the firmware"
     sock = getattr(getattr(bus, "serialPortOrig", None), "_socket", None)
-    if sock is not None:  # (main: why)
+    if sock is not None:
         sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
-    return bus
+    return bus, sock is not None
 
 
 def secure_all(a, key, mac_len=8):
     """The device provisioned with --secure-all: measurements signed, every answer checked."""
-    bus = connect(a.port)
+    bus, _ = connect(a.port)
     fails = 0
-    seq = {ID_MEASUREMENT: 0, ID_CONFIG: 0}
-
-    def send(cid, msg):
-        for fr in frames(msg, seq[cid] % 256):
-            bus.send(can.Message(arbitration_id=cid, data=fr, is_extended_id=False))
-        seq[cid] += 1
+    send = Sender(bus)
 
     def check(ok, what):
         nonlocal fails
@@ -583,11 +577,8 @@ def secure_all(a, key, mac_len=8):
         # freshness); its Status comes signed: checked from the counter it carries.
         raw = Receiver(bus)
         send(ID_CONFIG, message(T_COMMAND, bytes([CMD_STATUS_REQUEST])))
-        while True:
-            t, body = raw.recv()
-            if t == T_STATUS | SECURED:
-                break
-        data = bytes([PROTO_VERSION, t]) + body
+        body = raw.until(T_STATUS | SECURED)
+        data = bytes([PROTO_VERSION, T_STATUS | SECURED]) + body
         (c0,) = struct.unpack("<I", data[-mac_len - 4:-mac_len])
         st = decode_status(body[:-mac_len - 4])
         v = AnswerVerifier(key, mac_len, st["epoch"], c0 - 1)
@@ -637,20 +628,14 @@ def secure_all(a, key, mac_len=8):
         check(v.open(ID_RESULT, buf[:-4]) is None and v.refused == before + 1,
               "an altered answer is refused by the client")
         send(ID_CONFIG, signer.seal(ID_CONFIG, T_COMMAND, bytes([CMD_STATUS_REQUEST])))
-        while True:
-            t, body = rx.recv()
-            if t == T_STATUS:
-                break
+        body = rx.until(T_STATUS)
         s = decode_status(body)
         check((s["auth_missing"], s["auth_bad_mac"], s["auth_stale"]) == (1, 1, 0)
               and v.refused == 1,
               f"the device counted them (missing {s['auth_missing']}, bad MAC {s['auth_bad_mac']}); "
               f"answers verified, {v.refused} refused (the altered one)")
         send(ID_CONFIG, signer.seal(ID_CONFIG, T_COMMAND, bytes([CMD_STOP])))
-        while True:
-            t, body = rx.recv()
-            if t == T_STATUS:
-                break
+        body = rx.until(T_STATUS)
     finally:
         bus.shutdown()
     print(f"python-can client (secure-all): {fails} failed")

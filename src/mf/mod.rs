@@ -50,6 +50,7 @@ pub use batch::{
     eval_batch, eval_batch_lanes, eval_batch_lanes_on, BatchError, Columns, Isa, Outputs,
 };
 pub use params::{Key, Need, Params, Side, Since, Version, IGNORED_KEYS};
+pub use sigma::relaxation_lengths;
 
 use crate::math::{Backend, Float, Mask, Real};
 use core::ops::Mul;

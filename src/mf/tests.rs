@@ -538,6 +538,34 @@ macro_rules! float_props {
                     }
                 }
 
+                /// `relaxation_lengths` is `eval`'s σx, σy to the bit wherever `eval` gives them,
+                /// with turn slip on or off, on every tyre; its errors are `eval`'s checks.
+                #[test]
+                fn relaxation_lengths_are_evals(
+                    idx in 0usize..14, fz in -1e5f64..1e6, kappa in -20.0f64..20.0,
+                    alpha in -1.6f64..1.6, gamma in -1.0f64..1.0, phit in -1.0f64..1.0,
+                    vx in -80.0f64..80.0, limits in any::<bool>(), star in any::<bool>(),
+                    turn in any::<bool>(), mounted in any::<bool>(),
+                ) {
+                    let ps = tyres();
+                    let p = &ps[idx];
+                    let i = Input { fz: fz as $t, kappa: kappa as $t, alpha: alpha as $t,
+                        gamma: gamma as $t, phit: phit as $t, vx: vx as $t, p: None };
+                    let side = mounted.then_some(Side::Left);
+                    let o = Options { limits, alpha_star: star, turn_slip: turn, mounted: side, transient: false, moments: false };
+                    let s = relaxation_lengths::<$t, Libm>(p, &i, &o);
+                    match eval::<$t, Libm>(p, &i, &o) {
+                        Ok(out) => {
+                            let (sx, sy) = s.expect("eval gave σ");
+                            prop_assert_eq!(sx.to_bits(), out.sigma_x.to_bits());
+                            prop_assert_eq!(sy.to_bits(), out.sigma_y.to_bits());
+                        }
+                        // The forces may overflow where σ does not.
+                        Err(EvalError::Overflow) => prop_assert!(!matches!(s, Err(ref e) if *e != EvalError::Overflow)),
+                        Err(e) => prop_assert_eq!(s, Err(e)),
+                    }
+                }
+
                 /// The staged evaluation (`prepared`), its slopes in κ, α and λμ: for any
                 /// finite input, finite numbers or a clear error, never a panic; the values of
                 /// every entry point are `mf::eval`'s.
@@ -826,6 +854,47 @@ impl crate::math::Backend<f64> for Counting {
     fn sqrt(x: f64) -> f64 {
         count(7);
         libm::sqrt(x)
+    }
+}
+
+/// `relaxation_lengths` takes the load stage only: far fewer kernel calls than `eval` (below),
+/// the same σ.
+#[test]
+fn kernel_calls_of_relaxation_lengths() {
+    // tyre → (sin, cos, tan, atan, acos + exp + ln, √).
+    let cases: [(usize, [u32; 6]); 3] = [
+        (0, [2, 0, 0, 2, 2, 0]),
+        (1, [1, 0, 0, 1, 1, 0]),
+        (2, [1, 0, 0, 1, 1, 0]),
+    ];
+    for (t, want) in cases {
+        let p = load(TYRES[t].1);
+        let i = Input {
+            fz: p.fnomin,
+            kappa: -0.05,
+            alpha: 0.05,
+            vx: 20.0,
+            ..Default::default()
+        };
+        let opts = Options::default();
+        CALLS.with(|c| c.set([0; 8]));
+        let s = relaxation_lengths::<f64, Counting>(&p, &i, &opts).unwrap();
+        let o = eval64(&p, i, &opts);
+        assert_eq!(s, (o.sigma_x, o.sigma_y));
+        let v = CALLS.with(|c| c.get());
+        let got = [v[0], v[1], v[2], v[3], v[4] + v[5] + v[6], v[7]];
+        std::println!(
+            "{} relaxation_lengths: sin {} cos {} tan {} atan {} acos/exp/ln {} √ {}: {} calls",
+            TYRES[t].0,
+            got[0],
+            got[1],
+            got[2],
+            got[3],
+            got[4],
+            got[5],
+            got.iter().sum::<u32>()
+        );
+        assert_eq!(got, want, "{}", TYRES[t].0);
     }
 }
 

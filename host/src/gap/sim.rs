@@ -22,7 +22,8 @@
 //! high log rates a step is shorter than a quarter relaxation time and this is issue 40's single
 //! hold between the rows; at 50 Hz the hold alone missed a log sampled from a 5 kHz truth by half
 //! the noise, the spline by a tenth (docs/gap.md, "Any log rate"). σ does not depend on the slips,
-//! so each row's σ comes from one extra Magic Formula evaluation at the log's slips (moments off),
+//! so each row's σ comes from the Magic Formula's load stage at the log's slips
+//! ([`gough::mf::relaxation_lengths`]: `eval`'s σ without the forces),
 //! and between rows from the spline. Steps longer than [`gough::relax::MAX_DT`] are gaps.
 //!
 //! ## Gaps
@@ -111,7 +112,8 @@ pub struct Mods<'a> {
 pub struct Sim {
     /// SIM.tir's parameters.
     pub params: Params<f64>,
-    /// Evaluation options (limits on; `transient` when the filters run; turn slip if used).
+    /// Evaluation options (limits on; `transient` when the filters run; turn slip if used; no
+    /// Mx, My).
     pub opts: Options,
     /// The relaxation-length filters run.
     pub filters: bool,
@@ -149,9 +151,12 @@ impl Sim {
     pub fn new(params: Params<f64>, log: &Log) -> Sim {
         let filters = has_filters(&params);
         let turn_slip = log.phit.is_some() && mf::turnslip::available(&params);
+        // Mx and My are not in a log's channels: not computed (five of about fifty kernel
+        // calls of an evaluation; Fx, Fy, Mz do not depend on them).
         let opts = Options {
             transient: filters,
             turn_slip,
+            moments: false,
             ..Options::default()
         };
         let mut cfg = Config::from_params(&params);
@@ -208,8 +213,9 @@ impl Sim {
     }
 
     /// The relaxation lengths `[σκ, σα]` of row `i` under `q` (λ of the row set) and `mods`:
-    /// σ does not depend on the slips, so the Magic Formula runs once at the log's slips,
-    /// without moments, for them (or not at all when they are given).
+    /// σ does not depend on the slips (but for turn slip's load parts, taken at the log's
+    /// slips): the Magic Formula's load stage for them ([`mf::relaxation_lengths`], `eval`'s σ
+    /// without the forces), or nothing when they are given.
     pub fn sigma_at(
         &self,
         log: &Log,
@@ -220,19 +226,15 @@ impl Sim {
         if let SigmaMode::Given(g) = mods.sigma {
             return Ok(g.get(i).copied().unwrap_or([0.0, 0.0]));
         }
-        let opts = Options {
-            moments: false,
-            ..self.opts
-        };
         let inp = self.input(log, i, log.kappa[i], log.alpha[i]);
-        let o = mf::eval::<f64, Libm>(q, &inp, &opts)
+        let (sx, sy) = mf::relaxation_lengths::<f64, Libm>(q, &inp, &self.opts)
             .map_err(|e| (i, format!("Magic Formula: {e}")))?;
         Ok(match mods.sigma {
             SigmaMode::Scaled(m) => {
                 let m = m.get(i).copied().unwrap_or([1.0, 1.0]);
-                [o.sigma_x * m[0], o.sigma_y * m[1]]
+                [sx * m[0], sy * m[1]]
             }
-            _ => [o.sigma_x, o.sigma_y],
+            _ => [sx, sy],
         })
     }
 

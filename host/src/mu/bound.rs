@@ -94,6 +94,31 @@ pub struct RowState {
     pub vx: f64,
 }
 
+impl RowState {
+    /// Row `i` of a wheel case's trace: its transient slips, true load, γ and Vx.
+    pub fn of_trace(tr: &super::scenario::Trace, i: usize) -> RowState {
+        RowState {
+            alpha: tr.alpha_t[i],
+            kappa: tr.kappa_t[i],
+            fz: tr.fz_true[i],
+            gamma: tr.gamma[i],
+            vx: tr.vx[i],
+        }
+    }
+
+    /// What one wheel of the vehicle simulation had over a step: its transient slips, load, γ
+    /// and Vx.
+    pub fn of_wheel(w: &crate::sim::vehicle::WheelRecord) -> RowState {
+        RowState {
+            alpha: w.alpha_t,
+            kappa: w.kappa_t,
+            fz: w.fz,
+            gamma: w.gamma,
+            vx: w.vx,
+        }
+    }
+}
+
 impl<'a> Model<'a> {
     /// The tyre `base` mounted on `side`, surfaces scaled from the file's μy0 (docs/architecture.md).
     pub fn new(base: &'a Params<f64>, side: Side) -> Result<Model<'a>, String> {
@@ -627,13 +652,7 @@ pub fn wheel_bounds(
                 let src = &recs[i.saturating_sub(lag)].wheels[w];
                 // A row from before the surface began measured the previous surface.
                 if i.saturating_sub(lag) >= a {
-                    let row = RowState {
-                        alpha: src.alpha_t,
-                        kappa: src.kappa_t,
-                        fz: src.fz,
-                        gamma: src.gamma,
-                        vx: src.vx,
-                    };
+                    let row = RowState::of_wheel(src);
                     sum.add(m, &surf, &row, sens);
                 }
                 if i == i5 {
@@ -689,13 +708,7 @@ pub fn trace_bounds(m: &Model, tr: &super::scenario::Trace, sens: &Sensors) -> T
     let mut before = [[0.0; PROPERTIES]; PROPERTIES];
     for (a, b) in bench::segments(&tr.mu) {
         let surf = Surfaces::new(m, tr.mu[a]);
-        let row = |i: usize| RowState {
-            alpha: tr.alpha_t[i],
-            kappa: tr.kappa_t[i],
-            fz: tr.fz_true[i],
-            gamma: tr.gamma[i],
-            vx: tr.vx[i],
-        };
+        let row = |i: usize| RowState::of_trace(tr, i);
         let t_dead = (a..b)
             .find(|&i| tr.util[i] >= 0.5)
             .map(|i5| tr.t[i5] + DEADLINE);
@@ -1142,13 +1155,7 @@ mod tests {
             .unwrap();
         let t0 = tr.t[a];
         let surf = Surfaces::new(&m, tr.mu[a]);
-        let row = |i: usize| RowState {
-            alpha: tr.alpha_t[i],
-            kappa: tr.kappa_t[i],
-            fz: tr.fz_true[i],
-            gamma: tr.gamma[i],
-            vx: tr.vx[i],
-        };
+        let row = |i: usize| RowState::of_trace(&tr, i);
         let window = |from: f64| {
             let mut g = Gathered::default();
             for i in (a..tr.t.len()).filter(|&i| tr.t[i] >= t0 + from - 1e-9) {
@@ -1327,18 +1334,7 @@ mod tests {
             let mut worst = 0.0f64;
             for r in log.records.iter().step_by(97) {
                 let x = &r.wheels[w];
-                let y = m
-                    .forces(
-                        &s,
-                        &RowState {
-                            alpha: x.alpha_t,
-                            kappa: x.kappa_t,
-                            fz: x.fz,
-                            gamma: x.gamma,
-                            vx: x.vx,
-                        },
-                    )
-                    .unwrap();
+                let y = m.forces(&s, &RowState::of_wheel(x)).unwrap();
                 worst = worst
                     .max((y[0] - x.fx).abs())
                     .max((y[1] - x.fy).abs())
