@@ -33,7 +33,7 @@
 //! ## Arithmetic: saturating, no panic
 //! Every operation saturates (`saturating_add/sub/mul/div`); x/0 gives [`Fix::MAX`] or
 //! [`Fix::MIN`] by the sign of x, √ of a negative number and ln of x ≤ 0 give [`Fix::MIN`].
-//! [`Fix::MAX`] and [`Fix::MIN`] play the part of ±∞/NaN: [`Float::is_finite`] is false for them,
+//! [`Fix::MAX`] and [`Fix::MIN`] play the part of ±∞/NaN: [`Real::is_finite`] is false for them,
 //! so an input that saturates is rejected like a non-finite float, and a result that saturates
 //! makes `mf::eval` return `EvalError::Overflow` (as long as the saturated value reaches an output:
 //! unlike NaN, a saturated value multiplied by 0 is 0).
