@@ -857,6 +857,26 @@ impl crate::math::Backend<f64> for Counting {
     }
 }
 
+/// The kernel calls of `f` on this thread, grouped (sin, cos, tan, atan, acos + exp + ln, √), and
+/// printed after `what` (`--nocapture`).
+fn kernel_calls<R>(what: &str, f: impl FnOnce() -> R) -> (R, [u32; 6]) {
+    CALLS.with(|c| c.set([0; 8]));
+    let r = f();
+    let v = CALLS.with(|c| c.get());
+    let got = [v[0], v[1], v[2], v[3], v[4] + v[5] + v[6], v[7]];
+    std::println!(
+        "{what}: sin {} cos {} tan {} atan {} acos/exp/ln {} √ {}: {} calls",
+        got[0],
+        got[1],
+        got[2],
+        got[3],
+        got[4],
+        got[5],
+        got.iter().sum::<u32>()
+    );
+    (r, got)
+}
+
 /// `relaxation_lengths` takes the load stage only: far fewer kernel calls than `eval` (below),
 /// the same σ.
 #[test]
@@ -877,23 +897,12 @@ fn kernel_calls_of_relaxation_lengths() {
             ..Default::default()
         };
         let opts = Options::default();
-        CALLS.with(|c| c.set([0; 8]));
-        let s = relaxation_lengths::<f64, Counting>(&p, &i, &opts).unwrap();
+        let what = std::format!("{} relaxation_lengths", TYRES[t].0);
+        let (s, got) = kernel_calls(&what, || {
+            relaxation_lengths::<f64, Counting>(&p, &i, &opts).unwrap()
+        });
         let o = eval64(&p, i, &opts);
         assert_eq!(s, (o.sigma_x, o.sigma_y));
-        let v = CALLS.with(|c| c.get());
-        let got = [v[0], v[1], v[2], v[3], v[4] + v[5] + v[6], v[7]];
-        std::println!(
-            "{} relaxation_lengths: sin {} cos {} tan {} atan {} acos/exp/ln {} √ {}: {} calls",
-            TYRES[t].0,
-            got[0],
-            got[1],
-            got[2],
-            got[3],
-            got[4],
-            got[5],
-            got.iter().sum::<u32>()
-        );
         assert_eq!(got, want, "{}", TYRES[t].0);
     }
 }
@@ -930,22 +939,9 @@ fn kernel_calls_per_evaluation() {
             moments,
             ..Options::default()
         };
-        CALLS.with(|c| c.set([0; 8]));
-        let o = eval::<f64, Counting>(&p, &i, &opts).unwrap();
+        let what = std::format!("{} γ = {gamma} moments {moments}", TYRES[t].0);
+        let (o, got) = kernel_calls(&what, || eval::<f64, Counting>(&p, &i, &opts).unwrap());
         assert_eq!(o, eval64(&p, i, &opts));
-        let v = CALLS.with(|c| c.get());
-        let got = [v[0], v[1], v[2], v[3], v[4] + v[5] + v[6], v[7]];
-        std::println!(
-            "{} γ = {gamma} moments {moments}: sin {} cos {} tan {} atan {} acos/exp/ln {} √ {}: {} calls",
-            TYRES[t].0,
-            got[0],
-            got[1],
-            got[2],
-            got[3],
-            got[4],
-            got[5],
-            got.iter().sum::<u32>()
-        );
         assert_eq!(got, want, "{} γ = {gamma} moments {moments}", TYRES[t].0);
     }
 }
