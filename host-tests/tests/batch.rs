@@ -162,6 +162,23 @@ fn batch_equals_eval_to_the_bit_at_every_oracle_point() {
 /// evaluate the points (all but turn slip, which runs point by point).
 #[test]
 fn lanes_within_1e9_fnomin_of_eval_at_every_oracle_point() {
+    on_big_stack(lanes_at_every_oracle_point);
+}
+
+/// Runs `f` on a thread with 16 MiB of stack. This crate's tests are unoptimised, and so are
+/// the lanes that `mf::eval_batch_lanes_on` compiles in it (it is `#[inline]`): unoptimised,
+/// the 16 lanes overflow a test thread's 2 MiB (4 MiB was enough), as the doc of
+/// `mf::eval_batch_lanes` says.
+fn on_big_stack(f: fn()) {
+    std::thread::Builder::new()
+        .stack_size(16 << 20)
+        .spawn(f)
+        .unwrap()
+        .join()
+        .unwrap();
+}
+
+fn lanes_at_every_oracle_point() {
     for isa in [Isa::Avx512, Isa::Avx2, Isa::Baseline] {
         let (mut points, mut in_lanes, mut turn_slip, mut worst) = (0, 0, 0, 0.0f64);
         // Points in chunks of 16 (the widest; a narrower chunk lies inside one) that mix
@@ -208,5 +225,99 @@ fn lanes_within_1e9_fnomin_of_eval_at_every_oracle_point() {
             in_lanes + turn_slip + mixed >= points,
             "{in_lanes} + {turn_slip} + {mixed} of {points}"
         );
+    }
+}
+
+/// One bundled tyre file's parameters.
+fn tyre(stem: &str) -> Params<f64> {
+    let text = std::fs::read_to_string(tyre_for(stem)).unwrap();
+    gough::tir::parse(&text).unwrap().params
+}
+
+/// The lanes at points that take different sides of the value branches within one chunk
+/// (Vx from −1 to 29 m/s: reverse, low speed; κ, α, Fz beyond the file's limits; γ = 0 and
+/// not): within 1e-9·FNOMIN of `mf::eval`, the flags equal, on every instruction set, with
+/// the moments and σ asked for; every point in lanes.
+#[test]
+fn lanes_agree_with_eval_across_branches() {
+    on_big_stack(lanes_across_branches);
+}
+
+fn lanes_across_branches() {
+    let p = tyre("MagicFormula61_Parameters");
+    let n = 203; // not a multiple of any width: the last chunk is padded
+    let f = |i: usize| ((i * 37) % n) as f64 / (n - 1) as f64;
+    let col = |g: &dyn Fn(usize) -> f64| (0..n).map(g).collect::<Vec<f64>>();
+    let fz = col(&|i| p.fnomin * (0.2 + 4.8 * f(i)));
+    let kappa = col(&|i| -1.2 + 1.8 * f((i * 7) % n));
+    let alpha = col(&|i| 1.1 * (2.0 * f((i * 11) % n) - 1.0));
+    let gamma = col(&|i| {
+        if i % 3 == 0 {
+            0.0
+        } else {
+            0.3 * f((i * 5) % n) - 0.1
+        }
+    });
+    let vx = col(&|i| 30.0 * f((i * 13) % n) - 1.0);
+    let cols = Columns {
+        fz: &fz,
+        kappa: &kappa,
+        alpha: &alpha,
+        gamma: &gamma,
+        vx: &vx,
+        phit: None,
+        p: None,
+    };
+    let opts = Options::default();
+    for isa in [Isa::Avx512, Isa::Avx2, Isa::Baseline] {
+        let mut c = [[0.0f64; 203]; 6];
+        let mut flags = [Flags::default(); 203];
+        let [fx, fy, mz, mx, my, sy] = &mut c;
+        let mut out = Outputs {
+            fx: Some(fx),
+            fy: Some(fy),
+            mz: Some(mz),
+            mx: Some(mx),
+            my: Some(my),
+            sigma_y: Some(sy),
+            flags: Some(&mut flags),
+            ..Outputs::default()
+        };
+        let in_lanes = mf::eval_batch_lanes_on(isa, &p, &cols, &opts, &mut out).unwrap();
+        assert_eq!(in_lanes, n, "{isa:?}");
+        let mut seen = Flags::default();
+        for i in 0..n {
+            let input = Input {
+                fz: fz[i],
+                kappa: kappa[i],
+                alpha: alpha[i],
+                gamma: gamma[i],
+                phit: 0.0,
+                vx: vx[i],
+                p: None,
+            };
+            let o = mf::eval::<f64, Libm>(&p, &input, &opts).unwrap();
+            for (k, w) in [o.fx, o.fy, o.mz, o.mx, o.my, o.sigma_y].iter().enumerate() {
+                let err = (c[k][i] - w).abs() / p.fnomin;
+                assert!(
+                    err <= 1e-9,
+                    "{isa:?} point {i} column {k}: {} vs {w}",
+                    c[k][i]
+                );
+            }
+            assert_eq!(flags[i], o.flags, "{isa:?} point {i}");
+            seen.insert(o.flags);
+        }
+        // The points did take the branches in question.
+        for f in [
+            Flags::REVERSE,
+            Flags::LOW_SPEED,
+            Flags::KAPPA,
+            Flags::ALPHA,
+            Flags::GAMMA,
+            Flags::FZ_HIGH,
+        ] {
+            assert!(seen.contains(f), "{f:?} never raised");
+        }
     }
 }

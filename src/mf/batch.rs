@@ -295,6 +295,14 @@ pub enum Isa {
 /// some lanes and ≤ 0 in others, a rejected point, a result that overflows — is evaluated point
 /// by point with [`super::eval`] (`Libm`), as is everything with turn slip (its effective
 /// rolling radius iterates per point). Returns how many points were evaluated in lanes.
+///
+/// `#[inline]`, as are the functions it dispatches to: the three widths of the whole formula
+/// are compiled in the crate that calls them, at that crate's optimisation level, and not in
+/// every build of the core (the device's included), where they took 7 of the core's 8 minutes
+/// of compilation at `opt-level = 2`. Unoptimised (`opt-level = 0` in the calling crate), the
+/// 16 lanes' temporaries each keep their own stack slot: more than the 2 MiB of a spawned
+/// thread (4 MiB was enough, `host-tests/tests/batch.rs`).
+#[inline]
 pub fn eval_batch_lanes(
     p: &Params<f64>,
     inputs: &Columns<'_, f64>,
@@ -306,6 +314,7 @@ pub fn eval_batch_lanes(
 
 /// [`eval_batch_lanes`] on a chosen instruction set (one the processor lacks, or that the build
 /// cannot detect, runs as [`Isa::Auto`]).
+#[inline]
 pub fn eval_batch_lanes_on(
     isa: Isa,
     p: &Params<f64>,
@@ -346,6 +355,7 @@ pub fn eval_batch_lanes_on(
 /// [`lanes`] of 16 compiled for AVX-512F.
 #[cfg(all(feature = "std", target_arch = "x86_64"))]
 #[target_feature(enable = "avx512f,avx2,fma")]
+#[inline]
 fn lanes_avx512(
     p: &Params<f64>,
     inputs: &Columns<'_, f64>,
@@ -358,6 +368,7 @@ fn lanes_avx512(
 /// [`lanes`] of 8 compiled for AVX2 and FMA.
 #[cfg(all(feature = "std", target_arch = "x86_64"))]
 #[target_feature(enable = "avx2,fma")]
+#[inline]
 fn lanes_avx2(
     p: &Params<f64>,
     inputs: &Columns<'_, f64>,
@@ -467,7 +478,6 @@ fn chunk<const N: usize>(
 mod tests {
     use super::*;
     use crate::math::Libm;
-    use crate::mf::batch::Isa;
     use crate::mf::{eval, Output, Version};
 
     fn tyre() -> Params<f64> {
@@ -544,90 +554,6 @@ mod tests {
             })
         );
         assert!(fy[0] < 0.0 && fy[2] == 0.0);
-    }
-
-    /// The lanes at points that take different sides of the value branches within one chunk
-    /// (Vx from −1 to 29 m/s: reverse, low speed; κ, α, Fz beyond the file's limits; γ = 0 and
-    /// not): within 1e-9·FNOMIN of `mf::eval`, the flags equal, on every instruction set, with
-    /// the moments and σ asked for; every point in lanes.
-    #[test]
-    fn lanes_agree_with_eval_across_branches() {
-        let p = tyre();
-        let n = 203; // not a multiple of any width: the last chunk is padded
-        let f = |i: usize| ((i * 37) % n) as f64 / (n - 1) as f64;
-        let col = |g: &dyn Fn(usize) -> f64| (0..n).map(g).collect::<std::vec::Vec<f64>>();
-        let fz = col(&|i| p.fnomin * (0.2 + 4.8 * f(i)));
-        let kappa = col(&|i| -1.2 + 1.8 * f((i * 7) % n));
-        let alpha = col(&|i| 1.1 * (2.0 * f((i * 11) % n) - 1.0));
-        let gamma = col(&|i| {
-            if i % 3 == 0 {
-                0.0
-            } else {
-                0.3 * f((i * 5) % n) - 0.1
-            }
-        });
-        let vx = col(&|i| 30.0 * f((i * 13) % n) - 1.0);
-        let cols = Columns {
-            fz: &fz,
-            kappa: &kappa,
-            alpha: &alpha,
-            gamma: &gamma,
-            vx: &vx,
-            phit: None,
-            p: None,
-        };
-        let opts = Options::default();
-        for isa in [Isa::Avx512, Isa::Avx2, Isa::Baseline] {
-            let mut c = [[0.0f64; 203]; 6];
-            let mut flags = [Flags::default(); 203];
-            let [fx, fy, mz, mx, my, sy] = &mut c;
-            let mut out = Outputs {
-                fx: Some(fx),
-                fy: Some(fy),
-                mz: Some(mz),
-                mx: Some(mx),
-                my: Some(my),
-                sigma_y: Some(sy),
-                flags: Some(&mut flags),
-                ..Outputs::default()
-            };
-            let in_lanes = eval_batch_lanes_on(isa, &p, &cols, &opts, &mut out).unwrap();
-            assert_eq!(in_lanes, n, "{isa:?}");
-            let mut seen = Flags::default();
-            for i in 0..n {
-                let input = Input {
-                    fz: fz[i],
-                    kappa: kappa[i],
-                    alpha: alpha[i],
-                    gamma: gamma[i],
-                    phit: 0.0,
-                    vx: vx[i],
-                    p: None,
-                };
-                let o = eval::<f64, Libm>(&p, &input, &opts).unwrap();
-                for (k, w) in [o.fx, o.fy, o.mz, o.mx, o.my, o.sigma_y].iter().enumerate() {
-                    let err = (c[k][i] - w).abs() / p.fnomin;
-                    assert!(
-                        err <= 1e-9,
-                        "{isa:?} point {i} column {k}: {} vs {w}",
-                        c[k][i]
-                    );
-                }
-                assert_eq!(flags[i], o.flags, "{isa:?} point {i}");
-                seen.insert(o.flags);
-            }
-            // The points did take the branches in question.
-            for f in [
-                Flags::REVERSE,
-                Flags::LOW_SPEED,
-                Flags::KAPPA,
-                Flags::ALPHA,
-                Flags::GAMMA,
-                Flags::FZ_HIGH,
-            ] {
-                assert!(seen.contains(f), "{f:?} never raised");
-            }
-        }
     }
 
     /// Every column equals `mf::eval`'s field, to the bit, f64 and f32, with and without the
