@@ -57,11 +57,18 @@ def main():
         fz, kappa, alpha, gamma = points(n, rng)
         for prec in ("f64", "f32"):
             dt = best_of(lambda: tyre.eval(fz, kappa, alpha, gamma, vx=16.7, precision=prec), a.repeat)
-            rows.append((f"`Tyre.eval`, {prec}, combined (mode 111)", n, n / dt))
+            lanes = ", lanes" if prec == "f64" else ""
+            rows.append((f"`Tyre.eval`, {prec}{lanes}, combined (mode 111)", n, n / dt))
+            if prec == "f64":
+                dt = best_of(lambda: tyre.eval(fz, kappa, alpha, gamma, vx=16.7, exact=True),
+                             a.repeat)
+                rows.append(("`Tyre.eval`, f64, `exact=True` (scalar batch), combined (mode 111)",
+                             n, n / dt))
             if n >= 100_000:
                 dt = best_of(lambda: tyre.eval(fz, kappa, alpha, gamma, vx=16.7, precision=prec,
                                                threads=1), a.repeat)
-                rows.append((f"`Tyre.eval`, {prec}, combined (mode 111), `threads=1`", n, n / dt))
+                rows.append((f"`Tyre.eval`, {prec}{lanes}, combined (mode 111), `threads=1`", n,
+                             n / dt))
     n = 10_000
     fz, kappa, alpha, gamma = points(n, rng)
     pts = [(float(fz[i]), float(kappa[i]), float(alpha[i]), float(gamma[i])) for i in range(n)]

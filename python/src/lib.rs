@@ -1,8 +1,10 @@
 //! `gough._gough`: the extension module under the Python package `gough` (python/gough/).
 //!
 //! It wraps, never re-implements: `.tir` text goes through `gough::tir::parse`, the points of
-//! `Tyre.eval` through the core's batch `gough::mf::eval_batch` (at each point what
-//! `gough_host::mfrun::eval_row`, which `gough mf eval` runs, gives, to the bit), a friction
+//! `Tyre.eval` through the core's batches: `f64` in lanes (`gough::mf::eval_batch_lanes`,
+//! within 1e-9·FNOMIN of `gough::mf::eval`), or, with `exact` and in `f32`,
+//! `gough::mf::eval_batch` (at each point what `gough_host::mfrun::eval_row`, which
+//! `gough mf eval` runs, gives, to the bit), a friction
 //! log through `gough_host::mu::Method::estimator` (what `gough mu estimate` runs), a gap log through
 //! `gough_host::gap::diagnose` (what `gough gap diagnose` runs). The pure-Python layer does the
 //! broadcasting and the pandas conversions; this module takes and returns flat `float64` arrays.
@@ -93,13 +95,15 @@ impl Tyre {
     }
 
     /// The Magic Formula at each point of equal-length 1-D float64 arrays (the Python layer
-    /// broadcasts), through the core's batch (`gough::mf::eval_batch`, the columns of
-    /// `gough mf eval`: each point equals `mfrun::eval_row`'s to the bit). `p` = 0 means
-    /// INFLPRES. Runs without the GIL, on `threads` threads (`None`: one per core when there
-    /// are at least [`PAR_MIN`] points per thread). Returns `{column: array}`; raises
-    /// `ValueError` naming the first point that the core rejects.
+    /// broadcasts), the columns of `gough mf eval`: in `f64` and not `exact`, in lanes
+    /// (`gough::mf::eval_batch_lanes`: the widest this processor has, each point within
+    /// 1e-9·FNOMIN of `mf::eval`); else through the core's batch (`gough::mf::eval_batch`: each
+    /// point equals `mfrun::eval_row`'s to the bit). `p` = 0 means INFLPRES. Runs without the
+    /// GIL, on `threads` threads (`None`: one per core when there are at least [`PAR_MIN`]
+    /// points per thread). Returns `{column: array}`; raises `ValueError` naming the first
+    /// point that the core rejects.
     #[allow(clippy::too_many_arguments)]
-    #[pyo3(signature = (fz, kappa, alpha, gamma, phit, vx, p, mode, f32, threads=None))]
+    #[pyo3(signature = (fz, kappa, alpha, gamma, phit, vx, p, mode, f32, threads=None, exact=false))]
     fn _eval<'py>(
         &self,
         py: Python<'py>,
@@ -113,6 +117,7 @@ impl Tyre {
         mode: u16,
         f32: bool,
         threads: Option<usize>,
+        exact: bool,
     ) -> PyResult<Bound<'py, PyDict>> {
         let opts = options(mode)?;
         let cols = [&fz, &kappa, &alpha, &gamma, &phit, &vx, &p].map(|a| a.as_slice());
@@ -138,9 +143,17 @@ impl Tyre {
         let err = py.detach(|| {
             let cols = [s[0], s[1], s[2], s[3], s[4], s[5], s[6]];
             if f32 {
-                batch::<f32>(&params.cast::<f32>(), cols, n, &opts, &mut out, threads)
+                batch::<f32>(
+                    &params.cast::<f32>(),
+                    cols,
+                    n,
+                    &opts,
+                    &mut out,
+                    threads,
+                    true,
+                )
             } else {
-                batch::<f64>(params, cols, n, &opts, &mut out, threads)
+                batch::<f64>(params, cols, n, &opts, &mut out, threads, exact)
             }
         });
         if let Err(e) = err {
@@ -213,12 +226,41 @@ where
     Libm: Backend<Self>,
 {
     fn from64(x: f64) -> Self;
+
+    /// The core's batch on these columns: `mf::eval_batch` with `Libm` when `exact`, else the
+    /// fastest the core has for this type.
+    fn eval(
+        params: &Params<Self>,
+        columns: &Columns<'_, Self>,
+        opts: &Options,
+        out: &mut Outputs<'_, Self>,
+        exact: bool,
+    ) -> Result<(), BatchError> {
+        let _ = exact;
+        mf::eval_batch::<Self, Libm>(params, columns, opts, out)
+    }
 }
 impl Path for f64 {
     fn from64(x: f64) -> Self {
         x
     }
+
+    /// Not `exact`: the lanes (`mf::eval_batch_lanes`).
+    fn eval(
+        params: &Params<f64>,
+        columns: &Columns<'_, f64>,
+        opts: &Options,
+        out: &mut Outputs<'_, f64>,
+        exact: bool,
+    ) -> Result<(), BatchError> {
+        if exact {
+            mf::eval_batch::<f64, Libm>(params, columns, opts, out)
+        } else {
+            mf::eval_batch_lanes(params, columns, opts, out).map(|_| ())
+        }
+    }
 }
+/// No `f32` lanes yet: `f32` is always the scalar batch.
 impl Path for f32 {
     fn from64(x: f64) -> Self {
         x as f32
@@ -228,7 +270,8 @@ impl Path for f32 {
 /// `mf::eval_batch` over the 7 input columns (fz, κ, α, γ, φt, Vx, p; p = 0: INFLPRES; a
 /// column of one value: that value at each of the `n` points) into
 /// the 13 output columns of [`mfrun::OUTPUT_COLUMNS`], in `threads` contiguous chunks on
-/// scoped threads; the first rejected point's error (its index in the whole batch).
+/// scoped threads ([`Path::eval`]: `exact` or not); the first rejected point's error (its index
+/// in the whole batch).
 fn batch<F: Path>(
     params: &Params<F>,
     cols: [&[f64]; 7],
@@ -236,6 +279,7 @@ fn batch<F: Path>(
     opts: &Options,
     out: &mut [Vec<f64>],
     threads: usize,
+    exact: bool,
 ) -> Result<(), BatchError>
 where
     Libm: Backend<F>,
@@ -304,7 +348,7 @@ where
             sigma_y,
             ..Outputs::default()
         };
-        mf::eval_batch::<F, Libm>(params, &columns, opts, &mut o).map_err(|e| match e {
+        F::eval(params, &columns, opts, &mut o, exact).map_err(|e| match e {
             BatchError::Point { index, error } => BatchError::Point {
                 index: index + start,
                 error,
