@@ -159,7 +159,7 @@ fn batch_equals_eval_to_the_bit_at_every_oracle_point() {
 /// lanes) against `mf::eval::<f64, Libm>` at every oracle point (MF 5.2, 6.1, 6.2, the book's
 /// tyre, every useMode): every output column within 1e-9·FNOMIN (N, N·m, and the
 /// dimensionless and length columns in the same number), the flags equal; and the lanes did
-/// evaluate the points (all but turn slip, which runs point by point).
+/// evaluate the points, those with turn slip too (all but chunks mixing contact with none).
 #[test]
 fn lanes_within_1e9_fnomin_of_eval_at_every_oracle_point() {
     on_big_stack(lanes_at_every_oracle_point);
@@ -180,10 +180,12 @@ fn on_big_stack(f: fn()) {
 
 fn lanes_at_every_oracle_point() {
     for isa in [Isa::Avx512, Isa::Avx2, Isa::Baseline] {
-        let (mut points, mut in_lanes, mut turn_slip, mut worst) = (0, 0, 0, 0.0f64);
+        let (mut points, mut in_lanes, mut worst) = (0, 0, 0.0f64);
         // Points in chunks of 16 (the widest; a narrower chunk lies inside one) that mix
         // Fz > 0 with Fz ≤ 0: those the lanes may hand to `mf::eval`.
         let mut mixed = 0;
+        // The turn-slip points, those of them in lanes, and in mixed chunks.
+        let (mut turn_slip, mut turn_in_lanes, mut turn_mixed) = (0, 0, 0);
         for (name, opts, p64, inputs) in oracle() {
             let mut lanes = 0;
             let (rows, flags) = batch_by(&p64, &inputs, |cols, out| {
@@ -201,30 +203,33 @@ fn lanes_at_every_oracle_point() {
                 }
                 assert_eq!(flags[i], o.flags, "{name} {isa:?} point {i}");
             }
-            if opts.turn_slip {
-                assert_eq!(lanes, 0, "{name}");
-                turn_slip += inputs.len();
-            } else {
-                for c in inputs.chunks(16) {
-                    let contact = c.iter().filter(|i| i.fz > 0.0).count();
-                    if contact != 0 && contact != c.len() {
-                        mixed += c.len();
-                    }
+            let mut file_mixed = 0;
+            for c in inputs.chunks(16) {
+                let contact = c.iter().filter(|i| i.fz > 0.0).count();
+                if contact != 0 && contact != c.len() {
+                    file_mixed += c.len();
                 }
+            }
+            mixed += file_mixed;
+            if opts.turn_slip {
+                turn_slip += inputs.len();
+                turn_in_lanes += lanes;
+                turn_mixed += file_mixed;
             }
             points += inputs.len();
             in_lanes += lanes;
         }
         println!(
-            "{isa:?}: {in_lanes} of {points} oracle points in lanes ({turn_slip} with turn slip \
-             point by point, {mixed} in chunks of 16 mixing Fz > 0 and Fz ≤ 0), \
+            "{isa:?}: {in_lanes} of {points} oracle points in lanes ({turn_in_lanes} of the \
+             {turn_slip} with turn slip; {mixed} in chunks of 16 mixing Fz > 0 and Fz ≤ 0), \
              max |lanes − eval| = {worst:.1e}·FNOMIN"
         );
-        // Only turn slip and chunks that mix contact with no contact run point by point.
+        // Only chunks that mix contact with no contact run point by point.
         assert!(
-            in_lanes + turn_slip + mixed >= points,
-            "{in_lanes} + {turn_slip} + {mixed} of {points}"
+            in_lanes + mixed >= points,
+            "{in_lanes} + {mixed} of {points}"
         );
+        assert!(turn_slip > 0 && turn_in_lanes + turn_mixed >= turn_slip);
     }
 }
 
@@ -259,19 +264,40 @@ fn lanes_across_branches() {
         }
     });
     let vx = col(&|i| 30.0 * f((i * 13) % n) - 1.0);
+    // Turn slip: φt from −2 to 2 /m, 0 on every fourth point (with γ = 0 on every third: chunks
+    // with and without camber spin, with and without spin at all).
+    let phit = col(&|i| {
+        if i % 4 == 0 {
+            0.0
+        } else {
+            4.0 * f((i * 17) % n) - 2.0
+        }
+    });
+    for turn_slip in [false, true] {
+        lanes_across_branches_with(&p, [&fz, &kappa, &alpha, &gamma, &vx, &phit], turn_slip);
+    }
+}
+
+/// `lanes_across_branches` on its columns (fz, κ, α, γ, Vx, φt), with or without turn slip.
+fn lanes_across_branches_with(p: &Params<f64>, cols: [&[f64]; 6], turn_slip: bool) {
+    let [fz, kappa, alpha, gamma, vx, phit] = cols;
+    let n = fz.len();
     let cols = Columns {
-        fz: &fz,
-        kappa: &kappa,
-        alpha: &alpha,
-        gamma: &gamma,
-        vx: &vx,
-        phit: None,
+        fz,
+        kappa,
+        alpha,
+        gamma,
+        vx,
+        phit: turn_slip.then_some(phit),
         p: None,
     };
-    let opts = Options::default();
+    let opts = Options {
+        turn_slip,
+        ..Options::default()
+    };
     for isa in [Isa::Avx512, Isa::Avx2, Isa::Baseline] {
-        let mut c = [[0.0f64; 203]; 6];
-        let mut flags = [Flags::default(); 203];
+        let mut c: [Vec<f64>; 6] = std::array::from_fn(|_| vec![0.0; n]);
+        let mut flags = vec![Flags::default(); n];
         let [fx, fy, mz, mx, my, sy] = &mut c;
         let mut out = Outputs {
             fx: Some(fx),
@@ -283,8 +309,8 @@ fn lanes_across_branches() {
             flags: Some(&mut flags),
             ..Outputs::default()
         };
-        let in_lanes = mf::eval_batch_lanes_on(isa, &p, &cols, &opts, &mut out).unwrap();
-        assert_eq!(in_lanes, n, "{isa:?}");
+        let in_lanes = mf::eval_batch_lanes_on(isa, p, &cols, &opts, &mut out).unwrap();
+        assert_eq!(in_lanes, n, "{isa:?} turn slip {turn_slip}");
         let mut seen = Flags::default();
         for i in 0..n {
             let input = Input {
@@ -292,20 +318,20 @@ fn lanes_across_branches() {
                 kappa: kappa[i],
                 alpha: alpha[i],
                 gamma: gamma[i],
-                phit: 0.0,
+                phit: if turn_slip { phit[i] } else { 0.0 },
                 vx: vx[i],
                 p: None,
             };
-            let o = mf::eval::<f64, Libm>(&p, &input, &opts).unwrap();
+            let o = mf::eval::<f64, Libm>(p, &input, &opts).unwrap();
             for (k, w) in [o.fx, o.fy, o.mz, o.mx, o.my, o.sigma_y].iter().enumerate() {
                 let err = (c[k][i] - w).abs() / p.fnomin;
                 assert!(
                     err <= 1e-9,
-                    "{isa:?} point {i} column {k}: {} vs {w}",
+                    "{isa:?} turn slip {turn_slip} point {i} column {k}: {} vs {w}",
                     c[k][i]
                 );
             }
-            assert_eq!(flags[i], o.flags, "{isa:?} point {i}");
+            assert_eq!(flags[i], o.flags, "{isa:?} turn slip {turn_slip} point {i}");
             seen.insert(o.flags);
         }
         // The points did take the branches in question.

@@ -293,8 +293,9 @@ pub enum Isa {
 ///
 /// A chunk of lanes that some of the lanes' value branches cannot take together — Fz > 0 in
 /// some lanes and ≤ 0 in others, a rejected point, a result that overflows — is evaluated point
-/// by point with [`super::eval`] (`Libm`), as is everything with turn slip (its effective
-/// rolling radius iterates per point). Returns how many points were evaluated in lanes.
+/// by point with [`super::eval`] (`Libm`). Turn slip runs in lanes too (the effective rolling
+/// radius iterates in each lane until that lane's settles). Returns how many points were
+/// evaluated in lanes.
 ///
 /// `#[inline]`, as are the functions it dispatches to: the three widths of the whole formula
 /// are compiled in the crate that calls them, at that crate's optimisation level, and not in
@@ -323,12 +324,6 @@ pub fn eval_batch_lanes_on(
     out: &mut Outputs<'_, f64>,
 ) -> Result<usize, BatchError> {
     let opts = check_lengths(inputs, opts, out)?;
-    if opts.turn_slip {
-        for i in 0..inputs.len() {
-            point::<f64, Libm>(p, inputs, &opts, out, i)?;
-        }
-        return Ok(0);
-    }
     #[cfg(all(feature = "std", target_arch = "x86_64"))]
     {
         let avx512 = std::is_x86_feature_detected!("avx512f");
@@ -379,7 +374,7 @@ fn lanes_avx2(
 }
 
 /// The points `N` at a time (the last chunk padded with its last point); a chunk the lanes
-/// cannot take together point by point. `opts` from [`check_lengths`], without turn slip.
+/// cannot take together point by point. `opts` from [`check_lengths`].
 #[inline(always)]
 fn lanes<const N: usize>(
     p: &Params<f64>,

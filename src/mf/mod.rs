@@ -359,9 +359,8 @@ pub fn eval<F: Float, M: Backend<F>>(
 
 /// [`eval`] in any [`Real`] — lanes ([`crate::math::Lanes`]) too, with their flags. A lane
 /// type's caller keeps to what the lanes' value branches need: every lane in contact or none
-/// (`mf::eval_batch_lanes` does; `prepared::stages`), no turn slip (its effective rolling radius iterates
-/// per point). An error means that some lane failed: that caller evaluates the lanes again
-/// one by one to learn which and why.
+/// (`mf::eval_batch_lanes` does; `prepared::stages`). An error means that some lane failed: that
+/// caller evaluates the lanes again one by one to learn which and why.
 #[inline(always)]
 pub(crate) fn eval_in<F: Real, M: Backend<F>>(
     p: &Params<F>,
