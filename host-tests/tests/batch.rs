@@ -347,3 +347,71 @@ fn lanes_across_branches_with(p: &Params<f64>, cols: [&[f64]; 6], turn_slip: boo
         }
     }
 }
+
+/// `mf::eval_batch_lanes_scaled`: every oracle point with its own factors on λμx, λμy, λKx, λKy
+/// (0.7–1.3, a different one at each point) against `mf::eval` on the file with those factors
+/// multiplied in: within 1e-9·FNOMIN, the flags equal; a scale column of the wrong length is an
+/// error before anything is written.
+#[test]
+fn scaled_lanes_equal_eval_on_each_points_parameters() {
+    on_big_stack(scaled_lanes);
+}
+
+fn scaled_lanes() {
+    let frac = |x: f64| x - x.floor();
+    let (mut points, mut worst) = (0, 0.0f64);
+    for (name, opts, p64, inputs) in oracle() {
+        let n = inputs.len();
+        let factor = |k: f64| -> Vec<f64> {
+            (0..n)
+                .map(|i| 0.7 + 0.6 * frac((i as f64 + k) * 0.618_033_988_7))
+                .collect()
+        };
+        let (lmux, lmuy, lkx, lky) = (factor(0.1), factor(0.3), factor(0.5), factor(0.7));
+        let scales = mf::Scales {
+            lmux: Some(&lmux),
+            lmuy: Some(&lmuy),
+            lkx: Some(&lkx),
+            lky: Some(&lky),
+        };
+        let mut lanes = 0;
+        let (rows, flags) = batch_by(&p64, &inputs, |cols, out| {
+            lanes =
+                mf::eval_batch_lanes_scaled(Isa::Auto, &p64, cols, &scales, &opts, out).unwrap();
+        });
+        for (i, input) in inputs.iter().enumerate() {
+            let mut q = p64.clone();
+            q.lmux *= lmux[i];
+            q.lmuy *= lmuy[i];
+            q.lkx *= lkx[i];
+            q.lky *= lky[i];
+            let o = mf::eval::<f64, Libm>(&q, input, &opts).unwrap();
+            for (k, (got, want)) in rows[i].iter().zip(fields(&o)).enumerate() {
+                let err = (got - want).abs() / p64.fnomin;
+                assert!(err <= 1e-9, "{name} point {i} column {k}: {got} vs {want}");
+                worst = worst.max(err);
+            }
+            assert_eq!(flags[i], o.flags, "{name} point {i}");
+        }
+        assert!(lanes > 0, "{name}: no point in lanes");
+        points += n;
+    }
+    println!(
+        "scaled lanes = eval on each point's λ at {points} oracle points, max {worst:.1e}·FNOMIN"
+    );
+    // A scale column of another length than the inputs.
+    let (_, _, p64, inputs) = oracle().swap_remove(0);
+    let short = vec![1.0; inputs.len() - 1];
+    let scales = mf::Scales {
+        lky: Some(&short),
+        ..mf::Scales::default()
+    };
+    let opts = Options::default();
+    batch_by(&p64, &inputs, |cols, out| {
+        let e = mf::eval_batch_lanes_scaled(Isa::Auto, &p64, cols, &scales, &opts, out);
+        assert!(
+            matches!(e, Err(mf::BatchError::Length { column: "lky", .. })),
+            "{e:?}"
+        );
+    });
+}

@@ -553,3 +553,54 @@ fn the_case_csv_names_the_best_candidate() {
     assert_eq!(col("best_z"), "5.49");
     assert_eq!(col("verdict"), "none");
 }
+
+/// `Sim::eval_rows` in lanes against its reference (`mf::eval` row by row) on a thermal log
+/// (per-row λ multipliers) with turn slip and pressure, every row: within 1e-9·FNOMIN.
+#[test]
+fn eval_rows_in_lanes_equal_the_reference() {
+    let p = tyre("MagicFormula61_Parameters.tir");
+    let g = bench::generate(
+        &p,
+        &GenConfig {
+            rows: 300,
+            rate: 100.0,
+            seed: 4,
+            truth: None,
+            noise: 0.01,
+            ..GenConfig::default()
+        },
+    )
+    .unwrap();
+    let mut sim = Sim::new(p.clone(), &g.log);
+    let n = g.log.len();
+    let lambda: Vec<gough_host::gap::sim::Lambda> = (0..n)
+        .map(|i| gough_host::gap::sim::Lambda {
+            mux: 0.8 + 0.4 * (i as f64 / n as f64),
+            muy: 1.2 - 0.3 * (i as f64 / n as f64),
+            kx: 0.9 + 0.002 * (i % 50) as f64,
+            ky: 1.1 - 0.002 * (i % 70) as f64,
+        })
+        .collect();
+    let mods = gough_host::gap::sim::Mods {
+        lambda: Some(&lambda),
+        ..Default::default()
+    };
+    let rows: Vec<usize> = (0..n).collect();
+    let slips: Vec<[f64; 2]> = (0..n).map(|i| [g.log.kappa[i], g.log.alpha[i]]).collect();
+    sim.lanes = false;
+    let want = sim.eval_rows(&g.log, &p, &slips, &rows, &mods).unwrap();
+    sim.lanes = true;
+    let got = sim.eval_rows(&g.log, &p, &slips, &rows, &mods).unwrap();
+    assert!(
+        sim.turn_slip && g.log.p.is_some(),
+        "turn slip and pressure in the log"
+    );
+    for (i, (a, b)) in got.iter().zip(&want).enumerate() {
+        for c in 0..3 {
+            assert!(
+                (a[c] - b[c]).abs() <= 1e-9 * p.fnomin,
+                "row {i} column {c}: {a:?} vs {b:?}"
+            );
+        }
+    }
+}

@@ -245,7 +245,8 @@ impl Path for f64 {
         x
     }
 
-    /// Not `exact`: the lanes (`mf::eval_batch_lanes`).
+    /// Not `exact`: the lanes (`mf::eval_batch_lanes_scaled` without scales, as `gough_lanes`
+    /// compiles it for the host's crates).
     fn eval(
         params: &Params<f64>,
         columns: &Columns<'_, f64>,
@@ -256,7 +257,15 @@ impl Path for f64 {
         if exact {
             mf::eval_batch::<f64, Libm>(params, columns, opts, out)
         } else {
-            mf::eval_batch_lanes(params, columns, opts, out).map(|_| ())
+            gough_lanes::eval_batch_lanes_scaled(
+                mf::Isa::Auto,
+                params,
+                columns,
+                &mf::Scales::default(),
+                opts,
+                out,
+            )
+            .map(|_| ())
         }
     }
 }

@@ -51,6 +51,56 @@ impl<F> Columns<'_, F> {
     }
 }
 
+/// Per-point factors on four of the file's scaling factors, for [`eval_batch_lanes_scaled`]: at
+/// point `i` the evaluation takes λμx = `p.lmux * lmux[i]` (LMUX), and so for λμy (LMUY), λKx
+/// (LKX), λKy (LKY); a column `None` keeps the file's factor. A tyre whose friction or stiffnesses
+/// move from point to point (a temperature, a speed: the gap diagnosis's extensions) is evaluated
+/// in one batch with them. Every column as long as the inputs.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Scales<'a> {
+    /// Factor on λμx \[-\].
+    pub lmux: Option<&'a [f64]>,
+    /// Factor on λμy \[-\].
+    pub lmuy: Option<&'a [f64]>,
+    /// Factor on λKx \[-\].
+    pub lkx: Option<&'a [f64]>,
+    /// Factor on λKy \[-\].
+    pub lky: Option<&'a [f64]>,
+}
+
+impl Scales<'_> {
+    /// No column: every point on the file's factors.
+    fn is_none(&self) -> bool {
+        self.lmux.is_none() && self.lmuy.is_none() && self.lkx.is_none() && self.lky.is_none()
+    }
+
+    /// Each column's length against `n`.
+    fn check(&self, n: usize) -> Result<(), BatchError> {
+        let cols = [
+            ("lmux", self.lmux),
+            ("lmuy", self.lmuy),
+            ("lkx", self.lkx),
+            ("lky", self.lky),
+        ];
+        for (column, c) in cols {
+            check(column, c.map(<[f64]>::len), n)?;
+        }
+        Ok(())
+    }
+
+    /// `q`'s four factors those of `p` times point `i`'s (the file's where a column is `None`).
+    fn apply(&self, p: &Params<f64>, q: &mut Params<f64>, i: usize) {
+        let at = |c: Option<&[f64]>, base: f64| match c.and_then(|c| c.get(i)) {
+            Some(&s) => base * s,
+            None => base,
+        };
+        q.lmux = at(self.lmux, p.lmux);
+        q.lmuy = at(self.lmuy, p.lmuy);
+        q.lkx = at(self.lkx, p.lkx);
+        q.lky = at(self.lky, p.lky);
+    }
+}
+
 /// The output columns a batch writes: one per field of [`super::Output`], each `None` (not
 /// computed where that saves work, not written) or as long as the inputs.
 #[derive(Debug, Default)]
@@ -323,7 +373,24 @@ pub fn eval_batch_lanes_on(
     opts: &Options,
     out: &mut Outputs<'_, f64>,
 ) -> Result<usize, BatchError> {
+    eval_batch_lanes_scaled(isa, p, inputs, &Scales::default(), opts, out)
+}
+
+/// [`eval_batch_lanes_on`] with per-point factors on λμx, λμy, λKx, λKy ([`Scales`]): at each
+/// point within 1e-9·FNOMIN of [`super::eval`] on `p` with that point's factors (the product
+/// `p.lmuy * lmuy[i]` is the same number either way). A scale column of another length than the
+/// inputs is a [`BatchError::Length`] before anything is computed.
+#[inline]
+pub fn eval_batch_lanes_scaled(
+    isa: Isa,
+    p: &Params<f64>,
+    inputs: &Columns<'_, f64>,
+    scales: &Scales<'_>,
+    opts: &Options,
+    out: &mut Outputs<'_, f64>,
+) -> Result<usize, BatchError> {
     let opts = check_lengths(inputs, opts, out)?;
+    scales.check(inputs.len())?;
     #[cfg(all(feature = "std", target_arch = "x86_64"))]
     {
         let avx512 = std::is_x86_feature_detected!("avx512f");
@@ -336,15 +403,15 @@ pub fn eval_batch_lanes_on(
         };
         if use512 {
             // SAFETY: the processor has AVX-512F (detected just above).
-            return unsafe { lanes_avx512(p, inputs, &opts, out) };
+            return unsafe { lanes_avx512(p, inputs, scales, &opts, out) };
         }
         if use2 {
             // SAFETY: the processor has AVX2 and FMA (detected just above).
-            return unsafe { lanes_avx2(p, inputs, &opts, out) };
+            return unsafe { lanes_avx2(p, inputs, scales, &opts, out) };
         }
     }
     let _ = isa;
-    lanes::<4>(p, inputs, &opts, out)
+    lanes::<4>(p, inputs, scales, &opts, out)
 }
 
 /// [`lanes`] of 16 compiled for AVX-512F.
@@ -354,10 +421,11 @@ pub fn eval_batch_lanes_on(
 fn lanes_avx512(
     p: &Params<f64>,
     inputs: &Columns<'_, f64>,
+    scales: &Scales<'_>,
     opts: &Options,
     out: &mut Outputs<'_, f64>,
 ) -> Result<usize, BatchError> {
-    lanes::<16>(p, inputs, opts, out)
+    lanes::<16>(p, inputs, scales, opts, out)
 }
 
 /// [`lanes`] of 8 compiled for AVX2 and FMA.
@@ -367,31 +435,47 @@ fn lanes_avx512(
 fn lanes_avx2(
     p: &Params<f64>,
     inputs: &Columns<'_, f64>,
+    scales: &Scales<'_>,
     opts: &Options,
     out: &mut Outputs<'_, f64>,
 ) -> Result<usize, BatchError> {
-    lanes::<8>(p, inputs, opts, out)
+    lanes::<8>(p, inputs, scales, opts, out)
 }
 
 /// The points `N` at a time (the last chunk padded with its last point); a chunk the lanes
-/// cannot take together point by point. `opts` from [`check_lengths`].
+/// cannot take together point by point. `opts` from [`check_lengths`]; `scales` checked.
 #[inline(always)]
 fn lanes<const N: usize>(
     p: &Params<f64>,
     inputs: &Columns<'_, f64>,
+    scales: &Scales<'_>,
     opts: &Options,
     out: &mut Outputs<'_, f64>,
 ) -> Result<usize, BatchError> {
-    let pl: Params<Lanes<f64, N>> = p.cast();
+    let mut pl: Params<Lanes<f64, N>> = p.cast();
+    let base = (pl.lmux, pl.lmuy, pl.lkx, pl.lky);
+    // The parameters of a point evaluated alone, with its factors (only when there are any).
+    let mut q = (!scales.is_none()).then(|| p.clone());
     let n = inputs.len();
     let (mut i, mut in_lanes) = (0, 0);
     while i < n {
         let len = N.min(n - i);
+        let scaled = |c: Option<&[f64]>, b: Lanes<f64, N>| c.map_or(b, |c| b * gather(c, i, len));
+        pl.lmux = scaled(scales.lmux, base.0);
+        pl.lmuy = scaled(scales.lmuy, base.1);
+        pl.lkx = scaled(scales.lkx, base.2);
+        pl.lky = scaled(scales.lky, base.3);
         if chunk::<N>(&pl, inputs, opts, out, i, len) {
             in_lanes += len;
         } else {
             for k in i..i + len {
-                point::<f64, Libm>(p, inputs, opts, out, k)?;
+                match q.as_mut() {
+                    Some(q) => {
+                        scales.apply(p, q, k);
+                        point::<f64, Libm>(q, inputs, opts, out, k)?;
+                    }
+                    None => point::<f64, Libm>(p, inputs, opts, out, k)?,
+                }
             }
         }
         i += N;

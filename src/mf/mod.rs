@@ -47,7 +47,8 @@ pub(crate) mod sigma;
 pub mod turnslip;
 
 pub use batch::{
-    eval_batch, eval_batch_lanes, eval_batch_lanes_on, BatchError, Columns, Isa, Outputs,
+    eval_batch, eval_batch_lanes, eval_batch_lanes_on, eval_batch_lanes_scaled, BatchError,
+    Columns, Isa, Outputs, Scales,
 };
 pub use params::{Key, Need, Params, Side, Since, Version, IGNORED_KEYS};
 pub use sigma::relaxation_lengths;

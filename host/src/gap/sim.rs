@@ -45,7 +45,7 @@
 
 use super::log::Log;
 use gough::math::Libm;
-use gough::mf::{self, Input, Options, Params};
+use gough::mf::{self, BatchError, Columns, Input, Isa, Options, Outputs, Params, Scales};
 use gough::relax::{
     Config, DampingSpeed, Kinematics, Operating, Sample, Sigma, Transient, TransientTyre,
 };
@@ -121,6 +121,12 @@ pub struct Sim {
     pub turn_slip: bool,
     /// Transient-model settings (|Vx| damping, the file's DAMP_VLOW/VXLOW, σ floor 1 % R0).
     pub cfg: Config<f64>,
+    /// [`Sim::eval_rows`] in lanes (`gough_lanes`); else row by row with `mf::eval`, the
+    /// reference. On in optimised builds (without `debug_assertions`): there the lanes took a
+    /// 20,000-row diagnosis from 40.9 to 26.6 s; the test builds compile them at `opt-level = 1`,
+    /// where they are slower than `mf::eval` (the gap tests 4.5 s → 144 s), and keep to the
+    /// reference (`host-tests/tests/gap.rs` checks the two against each other).
+    pub lanes: bool,
 }
 
 /// The result of a full run.
@@ -167,6 +173,7 @@ impl Sim {
             filters,
             turn_slip,
             cfg,
+            lanes: !cfg!(debug_assertions),
         }
     }
 
@@ -338,7 +345,10 @@ impl Sim {
     }
 
     /// Evaluates the Magic Formula at the given slips on the selected rows only (the fast path
-    /// of a fit: the slips are those of a run, or of [`Sim::slips`]).
+    /// of a fit: the slips are those of a run, or of [`Sim::slips`]). With [`Sim::lanes`] one
+    /// lane batch over the rows (`gough_lanes`, the core's `mf::eval_batch_lanes_scaled`), each
+    /// row's λ multipliers its scales: every row within 1e-9·FNOMIN of `mf::eval` on that row's
+    /// parameters (4.3e-15 over the MFeval oracle); else `mf::eval` row by row.
     pub fn eval_rows(
         &self,
         log: &Log,
@@ -347,23 +357,103 @@ impl Sim {
         rows: &[usize],
         mods: &Mods,
     ) -> Result<Vec<Out>, RowError> {
-        let mut q = params.clone();
-        let base = [q.lmux, q.lmuy, q.lkx, q.lky];
-        let mut res = Vec::with_capacity(rows.len());
+        if !self.lanes {
+            let mut q = params.clone();
+            let base = [q.lmux, q.lmuy, q.lkx, q.lky];
+            let mut res = Vec::with_capacity(rows.len());
+            for &i in rows {
+                set_lambda(&mut q, &base, mods, i);
+                let s = slips
+                    .get(i)
+                    .copied()
+                    .unwrap_or([log.kappa[i], log.alpha[i]]);
+                let inp = self.input(log, i, s[0], s[1]);
+                let o = mf::eval::<f64, Libm>(&q, &inp, &self.opts)
+                    .map_err(|e| (i, format!("Magic Formula: {e}")))?;
+                let mut out = [o.fx, o.fy, o.mz];
+                add(&mut out, mods, i);
+                res.push(out);
+            }
+            return Ok(res);
+        }
+        let m = rows.len();
+        // The inputs: fz, κ, α, γ, Vx, φt, p; the factors on λμx, λμy, λKx, λKy.
+        let mut c: [Vec<f64>; 7] = std::array::from_fn(|_| Vec::with_capacity(m));
+        let mut l: [Vec<f64>; 4] = std::array::from_fn(|_| Vec::with_capacity(m));
         for &i in rows {
-            set_lambda(&mut q, &base, mods, i);
             let s = slips
                 .get(i)
                 .copied()
                 .unwrap_or([log.kappa[i], log.alpha[i]]);
             let inp = self.input(log, i, s[0], s[1]);
-            let o = mf::eval::<f64, Libm>(&q, &inp, &self.opts)
-                .map_err(|e| (i, format!("Magic Formula: {e}")))?;
-            let mut out = [o.fx, o.fy, o.mz];
-            add(&mut out, mods, i);
-            res.push(out);
+            let values = [
+                inp.fz,
+                inp.kappa,
+                inp.alpha,
+                inp.gamma,
+                inp.vx,
+                inp.phit,
+                inp.p.unwrap_or(params.inflpres), // None means INFLPRES
+            ];
+            for (col, v) in c.iter_mut().zip(values) {
+                col.push(v);
+            }
+            if let Some(lambda) = mods.lambda {
+                let f = lambda.get(i).copied().unwrap_or(Lambda::ONE);
+                for (col, v) in l.iter_mut().zip([f.mux, f.muy, f.kx, f.ky]) {
+                    col.push(v);
+                }
+            }
         }
-        Ok(res)
+        let [fz, kappa, alpha, gamma, vx, phit, p] = &c;
+        let columns = Columns {
+            fz,
+            kappa,
+            alpha,
+            gamma,
+            vx,
+            phit: self.turn_slip.then_some(phit.as_slice()),
+            p: log.p.is_some().then_some(p.as_slice()),
+        };
+        let lambda = |k: usize| mods.lambda.is_some().then(|| l[k].as_slice());
+        let scales = Scales {
+            lmux: lambda(0),
+            lmuy: lambda(1),
+            lkx: lambda(2),
+            lky: lambda(3),
+        };
+        let mut o: [Vec<f64>; 3] = std::array::from_fn(|_| vec![0.0; m]);
+        let [fx, fy, mz] = &mut o;
+        let mut out = Outputs {
+            fx: Some(fx),
+            fy: Some(fy),
+            mz: Some(mz),
+            ..Outputs::default()
+        };
+        gough_lanes::eval_batch_lanes_scaled(
+            Isa::Auto,
+            params,
+            &columns,
+            &scales,
+            &self.opts,
+            &mut out,
+        )
+        .map_err(|e| match e {
+            BatchError::Point { index, error } => (
+                rows.get(index).copied().unwrap_or(0),
+                format!("Magic Formula: {error}"),
+            ),
+            e => (rows.first().copied().unwrap_or(0), e.to_string()),
+        })?;
+        Ok(rows
+            .iter()
+            .enumerate()
+            .map(|(k, &i)| {
+                let mut out = [o[0][k], o[1][k], o[2][k]];
+                add(&mut out, mods, i);
+                out
+            })
+            .collect())
     }
 }
 
