@@ -554,8 +554,9 @@ fn the_case_csv_names_the_best_candidate() {
     assert_eq!(col("verdict"), "none");
 }
 
-/// `Sim::eval_rows` in lanes against its reference (`mf::eval` row by row) on a thermal log
-/// (per-row λ multipliers) with turn slip and pressure, every row: within 1e-9·FNOMIN.
+/// `Sim::eval_rows` in lanes against its reference (`mf::eval` row by row) on a generated log
+/// with turn slip and pressure, with made-up per-row λ multipliers (as the thermal and speed
+/// extensions give), every row: within 1e-9·FNOMIN.
 #[test]
 fn eval_rows_in_lanes_equal_the_reference() {
     let p = tyre("MagicFormula61_Parameters.tir");

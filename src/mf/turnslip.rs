@@ -73,9 +73,9 @@ fn omega<F: Real, M: Backend<F>>(p: &Params<F>, c: &Cond<F>) -> (F, F::Mask) {
         n += 1;
         active = active.and((re_old - re).abs().mask_gt(F::from_f64(1e-9)));
     }
+    // (Where `no_cz`, the guard is set anyway.)
     let unsettled = (re_old - re).abs().mask_gt(F::from_f64(1e-6) * r0);
-    let guard = no_cz.or(unsettled.and(no_cz.not()));
-    (F::select(no_cz, from_r0(), om), guard)
+    (F::select(no_cz, from_r0(), om), no_cz.or(unsettled))
 }
 
 /// Computes φ, εγ and the ζ factors that do not depend on the forces.
