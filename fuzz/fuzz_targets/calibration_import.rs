@@ -15,17 +15,6 @@ use gough::mu::calibration::Exported;
 use gough::mu::{Bank, Config, Sample};
 use gough::proto::{CalibrationState, Msg, MsgType, PROTO_VERSION};
 use libfuzzer_sys::fuzz_target;
-use std::sync::OnceLock;
-
-fn tyre() -> &'static (Params<f64>, Params<f32>) {
-    static P: OnceLock<(Params<f64>, Params<f32>)> = OnceLock::new();
-    P.get_or_init(|| {
-        let text = include_str!("../corpus/tir_parse/MagicFormula61_Parameters.tir");
-        let p = gough::tir::parse(text).expect("bundled tyre").params;
-        let p32 = p.cast::<f32>();
-        (p, p32)
-    })
-}
 
 fn check<F: Float, M: Backend<F>>(p: &Params<F>, e: &Exported) {
     let Ok(mut bank) = Bank::new::<M>(p, None, Config::default()) else {
@@ -64,7 +53,7 @@ fn check<F: Float, M: Backend<F>>(p: &Params<F>, e: &Exported) {
 }
 
 fuzz_target!(|data: &[u8]| {
-    let (p64, p32) = tyre();
+    let (p64, p32) = gough_fuzz::mf61();
     // As a message body: the protocol's decoder (the CRC is skipped when fuzzing).
     let mut msg = vec![PROTO_VERSION, MsgType::SetCalibration as u8];
     msg.extend_from_slice(data);

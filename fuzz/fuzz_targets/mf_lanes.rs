@@ -13,28 +13,8 @@
 #![no_main]
 
 use gough::math::Libm;
-use gough::mf::{self, BatchError, Columns, Flags, Input, Isa, Options, Outputs, Params, Scales};
+use gough::mf::{self, BatchError, Columns, Flags, Input, Isa, Options, Outputs, Scales};
 use libfuzzer_sys::fuzz_target;
-use std::sync::OnceLock;
-
-// The bundled tyres of the `tir_parse` seed corpus (files of this crate).
-const TYRES: &[&str] = &[
-    include_str!("../corpus/tir_parse/MagicFormula52_Parameters.tir"),
-    include_str!("../corpus/tir_parse/MagicFormula61_Parameters.tir"),
-    include_str!("../corpus/tir_parse/MagicFormula62_Parameters.tir"),
-    include_str!("../corpus/tir_parse/PacejkaBook_Defaults.tir"),
-    include_str!("../corpus/tir_parse/mf_185_80R14.tir"),
-];
-
-fn tyres() -> &'static [Params<f64>] {
-    static P: OnceLock<Vec<Params<f64>>> = OnceLock::new();
-    P.get_or_init(|| {
-        TYRES
-            .iter()
-            .filter_map(|t| gough::tir::parse(t).ok().map(|t| t.params))
-            .collect()
-    })
-}
 
 /// Values per point: Fz, κ, α, γ, Vx, φt, p, and the four factors.
 const PER_POINT: usize = 11;
@@ -43,7 +23,7 @@ fuzz_target!(|data: &[u8]| {
     if data.len() < 2 + 8 * PER_POINT {
         return;
     }
-    let ps = tyres();
+    let ps = gough_fuzz::tyres();
     let Some(p) = ps.get(data[0] as usize % ps.len().max(1)) else {
         return;
     };

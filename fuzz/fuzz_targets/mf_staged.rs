@@ -9,26 +9,6 @@ use gough::math::Libm;
 use gough::mf::prepared::{Operating, Prepared};
 use gough::mf::{self, Input, Options, Params, Side};
 use libfuzzer_sys::fuzz_target;
-use std::sync::OnceLock;
-
-// The bundled tyres of the `tir_parse` seed corpus (files of this crate).
-const TYRES: &[&str] = &[
-    include_str!("../corpus/tir_parse/MagicFormula52_Parameters.tir"),
-    include_str!("../corpus/tir_parse/MagicFormula61_Parameters.tir"),
-    include_str!("../corpus/tir_parse/MagicFormula62_Parameters.tir"),
-    include_str!("../corpus/tir_parse/PacejkaBook_Defaults.tir"),
-    include_str!("../corpus/tir_parse/mf_185_80R14.tir"),
-];
-
-fn tyres() -> &'static [Params<f64>] {
-    static P: OnceLock<Vec<Params<f64>>> = OnceLock::new();
-    P.get_or_init(|| {
-        TYRES
-            .iter()
-            .filter_map(|t| gough::tir::parse(t).ok().map(|t| t.params))
-            .collect()
-    })
-}
 
 fn check<F: gough::math::Float>(p: &Params<F>, i: &Input<F>, o: &Options, lmu: F)
 where
@@ -88,7 +68,7 @@ fuzz_target!(|data: &[u8]| {
     if data.len() < 2 + 8 * 7 {
         return;
     }
-    let ps = tyres();
+    let ps = gough_fuzz::tyres();
     let Some(p) = ps.get(data[0] as usize % ps.len().max(1)) else {
         return;
     };

@@ -9,21 +9,10 @@
 #![no_main]
 
 use gough::math::{Fast, Libm};
-use gough::mf::{Params, Side};
+use gough::mf::Side;
 use gough::mu::{Bank, Config, Reading, Sample, CELLS};
 use gough::mu::preview::{self, Preview};
 use libfuzzer_sys::fuzz_target;
-use std::sync::OnceLock;
-
-fn tyre() -> &'static (Params<f64>, Params<f32>) {
-    static P: OnceLock<(Params<f64>, Params<f32>)> = OnceLock::new();
-    P.get_or_init(|| {
-        let text = include_str!("../corpus/tir_parse/MagicFormula61_Parameters.tir");
-        let p = gough::tir::parse(text).expect("bundled tyre").params;
-        let p32 = p.cast::<f32>();
-        (p, p32)
-    })
-}
 
 /// 4 bytes as an f32 (any bit pattern: NaN, ±∞, subnormals included).
 fn f(b: &[u8]) -> f32 {
@@ -31,7 +20,7 @@ fn f(b: &[u8]) -> f32 {
 }
 
 fuzz_target!(|data: &[u8]| {
-    let (p64, p32) = tyre();
+    let (p64, p32) = gough_fuzz::mf61();
     let side = if data.first().is_some_and(|b| b & 1 == 1) { Some(Side::Right) } else { None };
     let (Ok(mut e32), Ok(mut e64)) = (
         Bank::new::<Fast>(p32, side, Config::default()),

@@ -9,19 +9,10 @@
 #![no_main]
 
 use gough::math::Fast;
-use gough::mf::{Params, Side};
+use gough::mf::Side;
 use gough::mu::Config;
 use gough::wheel::{Corner, Measurement};
 use libfuzzer_sys::fuzz_target;
-use std::sync::OnceLock;
-
-fn tyre() -> &'static Params<f32> {
-    static P: OnceLock<Params<f32>> = OnceLock::new();
-    P.get_or_init(|| {
-        let text = include_str!("../corpus/tir_parse/MagicFormula61_Parameters.tir");
-        gough::tir::parse(text).expect("bundled tyre").params.cast::<f32>()
-    })
-}
 
 /// 4 bytes as an f32 (any bit pattern: NaN, ±∞, subnormals included).
 fn f(b: &[u8]) -> f32 {
@@ -29,7 +20,7 @@ fn f(b: &[u8]) -> f32 {
 }
 
 fuzz_target!(|data: &[u8]| {
-    let p = tyre();
+    let p = &gough_fuzz::mf61().1;
     let Some((&head, data)) = data.split_first() else {
         return;
     };

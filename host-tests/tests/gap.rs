@@ -588,20 +588,34 @@ fn eval_rows_in_lanes_equal_the_reference() {
     };
     let rows: Vec<usize> = (0..n).collect();
     let slips: Vec<[f64; 2]> = (0..n).map(|i| [g.log.kappa[i], g.log.alpha[i]]).collect();
-    sim.lanes = false;
-    let want = sim.eval_rows(&g.log, &p, &slips, &rows, &mods).unwrap();
-    sim.lanes = true;
-    let got = sim.eval_rows(&g.log, &p, &slips, &rows, &mods).unwrap();
     assert!(
         sim.turn_slip && g.log.p.is_some(),
         "turn slip and pressure in the log"
     );
-    for (i, (a, b)) in got.iter().zip(&want).enumerate() {
-        for c in 0..3 {
-            assert!(
-                (a[c] - b[c]).abs() <= 1e-9 * p.fnomin,
-                "row {i} column {c}: {a:?} vs {b:?}"
-            );
+    // Every row's λ, and λ for the first half only: the rows past its end take the file's.
+    let short = gough_host::gap::sim::Mods {
+        lambda: Some(&lambda[..n / 2]),
+        ..Default::default()
+    };
+    for mods in [&mods, &short] {
+        sim.lanes = false;
+        let want = sim.eval_rows(&g.log, &p, &slips, &rows, mods).unwrap();
+        sim.lanes = true;
+        let got = sim.eval_rows(&g.log, &p, &slips, &rows, mods).unwrap();
+        for (i, (a, b)) in got.iter().zip(&want).enumerate() {
+            for c in 0..3 {
+                assert!(
+                    (a[c] - b[c]).abs() <= 1e-9 * p.fnomin,
+                    "row {i} column {c}: {a:?} vs {b:?}"
+                );
+            }
         }
     }
+    // Past the end of the short λ, the file's: what no λ at all gives.
+    sim.lanes = false;
+    let plain = sim
+        .eval_rows(&g.log, &p, &slips, &rows, &Default::default())
+        .unwrap();
+    let past = sim.eval_rows(&g.log, &p, &slips, &rows, &short).unwrap();
+    assert_eq!(&past[n / 2..], &plain[n / 2..]);
 }

@@ -232,21 +232,25 @@ _GAP_REQUIRED = ("t", "vx", "alpha", "kappa", "gamma", "fz", "fx", "fy", "mz")
 
 
 def diagnose_gap(tyre: Tyre, log, tir_name: str = "<tyre>", log_name: str | None = None,
-                 fit_rows: int | None = None, map=None, write_tir=None) -> dict:
+                 fit_rows: int | None = None, map=None, write_tir=None, exact: bool = False) -> dict:
     """The sim-to-real gap diagnosis of `gough gap diagnose`: the report as a dict (the JSON
     the CLI writes). The log has the columns t, vx, alpha, kappa, gamma, fz, fx, fy, mz and
     optionally p, phit, mu. `tir_name` and `log_name` name the inputs in the report. `map`: the
     log is a path to a log as cars record it, read through this map (`gough.logs`).
     `write_tir`: a path; the corrected tyre file is written there (`gough gap diagnose
     --write-tir`: the tyre's `.tir` text with the verdict's fitted effect(s) put into its
-    coefficients; the report's `corrected_tir` says what went in and what is left out)."""
+    coefficients; the report's `corrected_tir` says what went in and what is left out).
+    `exact`: the fits evaluated row by row with the scalar formula (`--exact`): the same report,
+    bit for bit, from every build of the CLI and the package; by default they run in lanes,
+    about 1.5× faster, different in the last bits."""
     if log_name is None:
         log_name = os.fspath(log) if isinstance(log, (str, os.PathLike)) else "<log>"
     cols = _columns(log, map)
     req = [_col(cols, c) for c in _GAP_REQUIRED]
     opt = [_col(cols, c, required=False) for c in ("p", "phit", "mu")]
     out = None if write_tir is None else os.fspath(write_tir)
-    text = _gough._diagnose_gap(tyre._inner, req, *opt, tir_name, log_name, fit_rows, out)
+    text = _gough._diagnose_gap(tyre._inner, req, *opt, tir_name, log_name, fit_rows, out,
+                               bool(exact))
     return json.loads(text)
 
 

@@ -576,7 +576,7 @@ fn _estimate_mu<'py>(
 /// a dict). `opt` holds the optional columns p, phit, mu (None when not logged).
 #[pyfunction]
 #[allow(clippy::too_many_arguments)]
-#[pyo3(signature = (tyre, cols, p, phit, mu, tir_name, log_name, fit_rows=None, write_tir=None))]
+#[pyo3(signature = (tyre, cols, p, phit, mu, tir_name, log_name, fit_rows=None, write_tir=None, exact=false))]
 fn _diagnose_gap(
     py: Python<'_>,
     tyre: &Tyre,
@@ -588,6 +588,7 @@ fn _diagnose_gap(
     log_name: &str,
     fit_rows: Option<usize>,
     write_tir: Option<std::path::PathBuf>,
+    exact: bool,
 ) -> PyResult<String> {
     let v = |a: &PyReadonlyArray1<'_, f64>| -> PyResult<Vec<f64>> {
         Ok(a.as_slice()
@@ -630,6 +631,7 @@ fn _diagnose_gap(
                     progress: false,
                     plots: None,
                     fit_rows,
+                    exact,
                 },
             )
         })

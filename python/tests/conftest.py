@@ -1,5 +1,6 @@
 """Paths shared by the tests: the repository's data and the `gough` CLI (GOUGH, set by
-`cargo xtask test-all`: the release build, as the wheel is; else target/release/gough)."""
+`cargo xtask test-all`: the debug build its host tests built; else target/debug/gough). The
+gap diagnosis is compared with `--exact`/`exact=True`: the same in every build.)"""
 import os
 import subprocess
 from pathlib import Path
@@ -14,8 +15,8 @@ TIR61 = DATA / "tyres" / "MagicFormula61_Parameters.tir"
 
 @pytest.fixture(scope="session")
 def gough_cli():
-    exe = os.environ.get("GOUGH", str(ROOT / "target" / "release" / "gough"))
-    assert Path(exe).exists(), f"{exe}: build it with `cargo build --release -p gough-host --bin gough`"
+    exe = os.environ.get("GOUGH", str(ROOT / "target" / "debug" / "gough"))
+    assert Path(exe).exists(), f"{exe}: build it with `cargo build -p gough-host --bin gough`"
 
     def run(*args):
         return subprocess.run([exe, *map(str, args)], check=True, capture_output=True, text=True)

@@ -30,6 +30,11 @@ pub enum GapCmd {
         /// SIM.tir unchanged).
         #[arg(long, value_name = "FILE.tir")]
         write_tir: Option<PathBuf>,
+        /// Evaluate the fits row by row with `mf::eval` (the reference, bit for bit the same in
+        /// every build) instead of the lanes (about 1.5× faster; the last bits differ, and the
+        /// μ section's discrete choices can amplify them).
+        #[arg(long)]
+        exact: bool,
     },
     /// Withheld-effect benchmark: generate logs with one effect, a pair or none on (2–3 decoy
     /// blocks out of every sim file), diagnose them from SIM.tir and the log only, print the
@@ -166,6 +171,7 @@ pub fn run(cmd: GapCmd) -> Result<(), String> {
             report,
             plots,
             write_tir,
+            exact,
         } => {
             let tyre = crate::tyre::load(&tir)?;
             let lg = crate::gap::log::read(&log)?;
@@ -179,6 +185,7 @@ pub fn run(cmd: GapCmd) -> Result<(), String> {
                     progress: true,
                     plots,
                     fit_rows: None,
+                    exact,
                 },
             )?;
             let json = serde_json::to_string_pretty(&d.report)

@@ -88,6 +88,10 @@ pub struct Options {
     /// At most this many training rows per fit (`None`: [`cv::FIT_ROWS`]); small values make
     /// quick tests.
     pub fit_rows: Option<usize>,
+    /// The fits' evaluations row by row with `mf::eval`, the reference ([`sim::Sim::lanes`]
+    /// off): the same results, bit for bit, in every build; without it, optimised builds
+    /// evaluate in lanes, about 1.5× faster and different in the last bits.
+    pub exact: bool,
 }
 
 /// The outcome of a diagnosis: the report and what the benchmark scores.
@@ -170,7 +174,8 @@ pub fn diagnose(
             dir.display()
         ));
     }
-    let sim = sim::Sim::new(params, log);
+    let mut sim = sim::Sim::new(params, log);
+    sim.lanes &= !opts.exact;
     let ctx = Ctx::new(log, &sim)
         .map_err(|(i, e)| format!("{log_name}: line {}: sim: {e}", log.line(i)))?;
     let steps = effects::ALL.len() * (cv::K + 1);

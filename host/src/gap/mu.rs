@@ -25,7 +25,7 @@ use super::cv::Score;
 use super::effects::Spec;
 use super::effects::{Ctx, Effect};
 use super::log::Log;
-use super::sim::{Mods, Out, Sim};
+use super::sim::{Mods, Out};
 use super::stats;
 use crate::mu::{Method, Sample, Setup};
 use gough::mf::Params;
@@ -285,7 +285,7 @@ fn contribution(
             let mut l = log.clone();
             let g = stats::median(&log.gamma);
             l.gamma.iter_mut().for_each(|x| *x = g);
-            let s2 = Sim::new(sim.params.clone(), &l);
+            let s2 = sim.like(sim.params.clone(), &l);
             let w = s2.run(&l, &sim.params, &Mods::default()).map_err(fail)?;
             (
                 w.out,
@@ -304,7 +304,7 @@ fn contribution(
         Effect::TurnSlip => {
             let mut l = log.clone();
             l.phit = None;
-            let s2 = Sim::new(sim.params.clone(), &l);
+            let s2 = sim.like(sim.params.clone(), &l);
             let w = s2.run(&l, &sim.params, &Mods::default()).map_err(fail)?;
             (
                 w.out,

@@ -45,7 +45,9 @@
 
 use super::log::Log;
 use gough::math::Libm;
-use gough::mf::{self, BatchError, Columns, Input, Isa, Options, Outputs, Params, Scales};
+use gough::mf::{self, Input, Options, Params};
+#[cfg(feature = "lanes")]
+use gough::mf::{BatchError, Columns, Isa, Outputs, Scales};
 use gough::relax::{
     Config, DampingSpeed, Kinematics, Operating, Sample, Sigma, Transient, TransientTyre,
 };
@@ -121,8 +123,9 @@ pub struct Sim {
     pub turn_slip: bool,
     /// Transient-model settings (|Vx| damping, the file's DAMP_VLOW/VXLOW, σ floor 1 % R0).
     pub cfg: Config<f64>,
-    /// [`Sim::eval_rows`] in lanes (`gough_lanes`); else row by row with `mf::eval`, the
-    /// reference. On in optimised builds (without `debug_assertions`): there the lanes took a
+    /// [`Sim::eval_rows`] in lanes (`gough_lanes`, with the `lanes` feature: without it this is
+    /// ignored); else row by row with `mf::eval`, the reference. On in optimised builds with the
+    /// feature (without `debug_assertions`): there the lanes took a
     /// 20,000-row diagnosis from 40.9 to 26.6 s; the test builds compile them at `opt-level = 1`,
     /// where they are slower than `mf::eval` (the gap tests 4.5 s → 144 s), and keep to the
     /// reference (`host-tests/tests/gap.rs` checks the two against each other).
@@ -173,7 +176,16 @@ impl Sim {
             filters,
             turn_slip,
             cfg,
-            lanes: !cfg!(debug_assertions),
+            lanes: cfg!(feature = "lanes") && !cfg!(debug_assertions),
+        }
+    }
+
+    /// [`Sim::new`] of `params` for `log`, evaluating as this sim does ([`Sim::lanes`]): the
+    /// diagnosis's other sims (a refit, the corrected file, the μ section) take its path.
+    pub fn like(&self, params: Params<f64>, log: &Log) -> Sim {
+        Sim {
+            lanes: self.lanes,
+            ..Sim::new(params, log)
         }
     }
 
@@ -357,25 +369,39 @@ impl Sim {
         rows: &[usize],
         mods: &Mods,
     ) -> Result<Vec<Out>, RowError> {
-        if !self.lanes {
-            let mut q = params.clone();
-            let base = [q.lmux, q.lmuy, q.lkx, q.lky];
-            let mut res = Vec::with_capacity(rows.len());
-            for &i in rows {
-                set_lambda(&mut q, &base, mods, i);
-                let s = slips
-                    .get(i)
-                    .copied()
-                    .unwrap_or([log.kappa[i], log.alpha[i]]);
-                let inp = self.input(log, i, s[0], s[1]);
-                let o = mf::eval::<f64, Libm>(&q, &inp, &self.opts)
-                    .map_err(|e| (i, format!("Magic Formula: {e}")))?;
-                let mut out = [o.fx, o.fy, o.mz];
-                add(&mut out, mods, i);
-                res.push(out);
-            }
-            return Ok(res);
+        #[cfg(feature = "lanes")]
+        if self.lanes {
+            return self.eval_rows_lanes(log, params, slips, rows, mods);
         }
+        let mut q = params.clone();
+        let base = [q.lmux, q.lmuy, q.lkx, q.lky];
+        let mut res = Vec::with_capacity(rows.len());
+        for &i in rows {
+            set_lambda(&mut q, &base, mods, i);
+            let s = slips
+                .get(i)
+                .copied()
+                .unwrap_or([log.kappa[i], log.alpha[i]]);
+            let inp = self.input(log, i, s[0], s[1]);
+            let o = mf::eval::<f64, Libm>(&q, &inp, &self.opts)
+                .map_err(|e| (i, format!("Magic Formula: {e}")))?;
+            let mut out = [o.fx, o.fy, o.mz];
+            add(&mut out, mods, i);
+            res.push(out);
+        }
+        Ok(res)
+    }
+
+    /// [`Sim::eval_rows`] in one lane batch (`gough_lanes`).
+    #[cfg(feature = "lanes")]
+    fn eval_rows_lanes(
+        &self,
+        log: &Log,
+        params: &Params<f64>,
+        slips: &[[f64; 2]],
+        rows: &[usize],
+        mods: &Mods,
+    ) -> Result<Vec<Out>, RowError> {
         let m = rows.len();
         // The inputs: fz, κ, α, γ, Vx, φt, p; the factors on λμx, λμy, λKx, λKy.
         let mut c: [Vec<f64>; 7] = std::array::from_fn(|_| Vec::with_capacity(m));
@@ -626,8 +652,11 @@ fn sigma_of(sigma: [f64; 2]) -> Sigma<f64> {
     }
 }
 
+/// Row `i`'s λ multipliers on `base` into `q`; a row past the end of `mods.lambda` has the
+/// file's (1), as in the lanes' scales.
 fn set_lambda(q: &mut Params<f64>, base: &[f64; 4], mods: &Mods, i: usize) {
-    if let Some(l) = mods.lambda.and_then(|l| l.get(i)) {
+    if let Some(lambda) = mods.lambda {
+        let l = lambda.get(i).copied().unwrap_or(Lambda::ONE);
         q.lmux = base[0] * l.mux;
         q.lmuy = base[1] * l.muy;
         q.lkx = base[2] * l.kx;

@@ -121,7 +121,14 @@ fn sigma_keys(p: &Params<f64>) -> [Key; 6] {
 
 /// Fits the file's σ law (keys of [`sigma_keys`]) to the per-row σ `target` on `rows` from `q`:
 /// least squares of ln(σ_file/σ_target) over both lengths. The stiffnesses fitted in log space.
-fn fit_sigma(log: &Log, q: &Params<f64>, target: &[[f64; 2]], rows: &[usize]) -> Params<f64> {
+/// (`like`: the diagnosis's sim, whose evaluation path the fit's sim takes.)
+fn fit_sigma(
+    like: &Sim,
+    log: &Log,
+    q: &Params<f64>,
+    target: &[[f64; 2]],
+    rows: &[usize],
+) -> Params<f64> {
     let keys = sigma_keys(q);
     let mf6 = q.version.is_mf6();
     let nk = if mf6 { 6 } else { 4 };
@@ -187,7 +194,7 @@ fn fit_sigma(log: &Log, q: &Params<f64>, target: &[[f64; 2]], rows: &[usize]) ->
         p
     };
     let start = to_theta(&base);
-    let sim0 = Sim::new(base.clone(), log);
+    let sim0 = like.like(base.clone(), log);
     let resid = |th: &[f64]| -> Option<Vec<f64>> {
         let p = of_theta(th);
         let mut r = Vec::with_capacity(2 * rows.len());
@@ -281,7 +288,7 @@ pub fn correct(
         match e {
             Effect::RelaxationLength => {
                 let target = sp.sigmas(ctx, th);
-                q = fit_sigma(log, &q, &target, &rows);
+                q = fit_sigma(ctx.sim, log, &q, &target, &rows);
                 let nk = if q.version.is_mf6() { 6 } else { 4 };
                 parts.push(Part {
                     effect: name,
@@ -336,7 +343,8 @@ pub fn correct(
     }
     let target = prediction(ctx, effects);
     let written = |q: &Params<f64>| {
-        Sim::new(q.clone(), log)
+        ctx.sim
+            .like(q.clone(), log)
             .run(log, q, &Mods::default())
             .map(|r| shrink_of(ctx, &r.out))
             .unwrap_or(f64::NAN)
@@ -404,7 +412,7 @@ fn fit_lambdas(
 ) -> Option<Params<f64>> {
     let mut log = ctx.log.clone();
     log.meas = target.to_vec();
-    let sim = Sim::new(q.clone(), &log);
+    let sim = ctx.sim.like(q.clone(), &log);
     let base = sim.run(&log, q, &Mods::default()).ok()?;
     let c2 = Ctx {
         log: &log,
