@@ -29,6 +29,9 @@ pub fn oracle_files() -> Vec<PathBuf> {
 /// the tests that ask for it, where `cargo build -p gough-host --bin gough` puts it
 /// (`target/debug/gough`): the steps of `cargo xtask test-all` after the host tests that run
 /// the binary then find it built (with `--target` it was a second build of the host crate).
+/// Without the `lanes` feature (`--no-default-features --features plot`, as `cargo xtask`
+/// builds it): a debug build never evaluates in lanes (`gap::sim::Sim::lanes`), and compiling
+/// them took this build from about 1 to 2.5 minutes.
 pub fn gough_bin() -> &'static Path {
     static BIN: OnceLock<PathBuf> = OnceLock::new();
     BIN.get_or_init(|| {
@@ -36,6 +39,8 @@ pub fn gough_bin() -> &'static Path {
             .manifest_path(root().join("host/Cargo.toml"))
             .package("gough-host")
             .bin("gough")
+            .no_default_features()
+            .features("plot")
             .current_release()
             .run()
             .unwrap_or_else(|e| panic!("cannot build the gough binary: {e}"));

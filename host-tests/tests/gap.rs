@@ -619,3 +619,83 @@ fn eval_rows_in_lanes_equal_the_reference() {
     let past = sim.eval_rows(&g.log, &p, &slips, &rows, &short).unwrap();
     assert_eq!(&past[n / 2..], &plain[n / 2..]);
 }
+
+/// `Sim::run` in lanes (the filters first, then one lane batch) against the reference (the
+/// core's transient tyre row by row), on a log with dropped rows and jitter (the filters
+/// restart after a gap), per-row λ, turn slip and pressure: the same slips and σ to the bit, the
+/// forces within 1e-9·FNOMIN; and without filters (σ given as zero is no filter: the log's slips).
+#[test]
+fn run_in_lanes_equals_the_reference() {
+    let p = tyre("MagicFormula61_Parameters.tir");
+    let g = bench::generate(
+        &p,
+        &GenConfig {
+            rows: 400,
+            rate: 100.0,
+            seed: 7,
+            truth: None,
+            noise: 0.01,
+            sampling: gough_host::gap::bench::Sampling {
+                truth_rate: Some(1000.0),
+                jitter: 0.1,
+                drop: 0.05,
+            },
+            ..GenConfig::default()
+        },
+    )
+    .unwrap();
+    let mut sim = Sim::new(p.clone(), &g.log);
+    assert!(sim.filters && sim.turn_slip && g.log.p.is_some());
+    assert!(
+        g.log.restarts().iter().skip(1).any(|&r| r),
+        "a restart after row 0"
+    );
+    let n = g.log.len();
+    let lambda: Vec<gough_host::gap::sim::Lambda> = (0..n)
+        .map(|i| gough_host::gap::sim::Lambda {
+            mux: 0.9 + 0.2 * (i as f64 / n as f64),
+            muy: 1.1 - 0.2 * (i as f64 / n as f64),
+            kx: 1.0,
+            ky: 0.95 + 0.001 * (i % 90) as f64,
+        })
+        .collect();
+    let with_lambda = gough_host::gap::sim::Mods {
+        lambda: Some(&lambda),
+        ..Default::default()
+    };
+    for mods in [gough_host::gap::sim::Mods::default(), with_lambda] {
+        sim.lanes = false;
+        let want = sim.run(&g.log, &p, &mods).unwrap();
+        sim.lanes = true;
+        let got = sim.run(&g.log, &p, &mods).unwrap();
+        assert_eq!(got.slips, want.slips);
+        assert_eq!(got.sigma, want.sigma);
+        assert_eq!(got.out.len(), n);
+        for (i, (a, b)) in got.out.iter().zip(&want.out).enumerate() {
+            for c in 0..3 {
+                assert!(
+                    (a[c] - b[c]).abs() <= 1e-9 * p.fnomin,
+                    "row {i} column {c}: {a:?} vs {b:?}"
+                );
+            }
+        }
+    }
+    // No filters: the log's slips, in both.
+    sim.filters = false;
+    sim.opts.transient = false;
+    sim.lanes = true;
+    let got = sim.run(&g.log, &p, &Default::default()).unwrap();
+    sim.lanes = false;
+    let want = sim.run(&g.log, &p, &Default::default()).unwrap();
+    assert_eq!(got.slips, want.slips);
+    assert!(got
+        .slips
+        .iter()
+        .enumerate()
+        .all(|(i, s)| *s == [g.log.kappa[i], g.log.alpha[i]]));
+    for (a, b) in got.out.iter().zip(&want.out) {
+        for c in 0..3 {
+            assert!((a[c] - b[c]).abs() <= 1e-9 * p.fnomin);
+        }
+    }
+}

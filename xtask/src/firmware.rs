@@ -173,11 +173,7 @@ fn python_client(secure_all: bool) -> Result<(), String> {
         .and_then(|l| l.local_addr())
         .map_err(|e| e.to_string())?
         .port();
-    let target = std::env::var_os("CARGO_TARGET_DIR")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| root().join("target"));
-    let gough = target.join("debug/gough");
-    run(cargo().args(["build", "-p", "gough-host", "--bin", "gough"]))?;
+    let gough = crate::debug_cli()?;
     let all: &[&str] = if secure_all { &["--secure-all"] } else { &[] };
     let mut fw = Command::new(&gough)
         .args(["firmware", "run", "--no-build", "--port", &port.to_string()])

@@ -332,6 +332,9 @@ impl WheelBuild {
             .args(["build", "--release", "--quiet", "--out"])
             .arg(&wheels)
             .env("CARGO_TARGET_DIR", target_dir().join("wheel-build"))
+            // The wheel is stripped (pyproject.toml): the release profile's line tables would
+            // only cost time (the lanes' build 255 → 203 s without them).
+            .env("CARGO_PROFILE_RELEASE_DEBUG", "0")
             .env("VIRTUAL_ENV", &venv)
             .env("PATH", {
                 let mut p = std::ffi::OsString::from(venv.join("bin"));
@@ -456,6 +459,23 @@ fn python_package(build: WheelBuild, passed: &mut u64) -> Result<(), String> {
     Ok(())
 }
 
+/// The debug `gough` binary, built as the host tests build it (`host-tests`' `gough_bin`: the
+/// same package and flags, so that this finds it built): without the `lanes` feature, which a
+/// debug build never runs.
+pub fn debug_cli() -> Result<std::path::PathBuf, String> {
+    run(cargo().args([
+        "build",
+        "-p",
+        "gough-host",
+        "--bin",
+        "gough",
+        "--no-default-features",
+        "--features",
+        "plot",
+    ]))?;
+    Ok(target_dir().join("debug/gough"))
+}
+
 /// Runs pytest on `tests` in the venv with `GOUGH` = the debug `gough` binary (the host tests
 /// built it), echoing its output, and adds up its closing line ("N passed, M failed"). The
 /// CLI-equality test of the gap diagnosis runs both sides `--exact`: the release wheel evaluates
@@ -463,13 +483,12 @@ fn python_package(build: WheelBuild, passed: &mut u64) -> Result<(), String> {
 /// last bits; a release CLI only for this test cost 4 to 5 minutes of the test command.
 fn pytest(tests: &[&str], passed: &mut u64, failed: &mut u64) -> Result<(), String> {
     let py = venv()?;
-    run(cargo().args(["build", "-p", "gough-host", "--bin", "gough"]))?;
-    let target = target_dir();
+    let gough = debug_cli()?;
     let mut c = Command::new(&py);
     c.current_dir(root())
         .args(["-m", "pytest", "-q", "-p", "no:cacheprovider"])
         .args(tests)
-        .env("GOUGH", target.join("debug/gough"))
+        .env("GOUGH", gough)
         .stdout(Stdio::piped());
     let shown = format!("{c:?}");
     let mut child = c.spawn().map_err(|e| format!("{shown}: {e}"))?;

@@ -269,7 +269,10 @@ impl Sim {
     }
 
     /// Runs the whole log with `params` (SIM.tir's or an effect's) and `mods`. The filters
-    /// restart in steady state at row 0 and after every gap in time ([`Log::restarts`]).
+    /// restart in steady state at row 0 and after every gap in time ([`Log::restarts`]). With
+    /// [`Sim::lanes`] the filters run first ([`Sim::slips`]) and the Magic Formula over every
+    /// row in one lane batch (the same slips to the bit, the forces within 1e-9·FNOMIN);
+    /// else row by row, the core's `TransientTyre::step_between` (the filter, then `mf::eval`).
     pub fn run(&self, log: &Log, params: &Params<f64>, mods: &Mods) -> Result<Run, RowError> {
         let n = log.len();
         let filters = self.filters || matches!(mods.sigma, SigmaMode::Given(_));
@@ -286,6 +289,20 @@ impl Sim {
             } else {
                 [0.0, 0.0]
             });
+        }
+        #[cfg(feature = "lanes")]
+        if self.lanes {
+            // The filters do not depend on the forces: the slips of every row first (the
+            // filters alone, as `step_between` runs them), then every row's forces in one lane
+            // batch.
+            let slips = if filters {
+                self.slips(log, &sigma)?
+            } else {
+                (0..n).map(|i| [log.kappa[i], log.alpha[i]]).collect()
+            };
+            let rows: Vec<usize> = (0..n).collect();
+            let out = self.eval_rows_lanes(log, params, &slips, &rows, mods)?;
+            return Ok(Run { out, sigma, slips });
         }
         let path = Path::new(log, &sigma, &restart);
         let mut run = Run {
