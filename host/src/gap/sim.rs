@@ -201,6 +201,15 @@ impl Sim {
         }
     }
 
+    /// [`Sim::input`] of row `i` at its slips in `slips` (the log's where `slips` is short).
+    fn input_at(&self, log: &Log, slips: &[[f64; 2]], i: usize) -> Input<f64> {
+        let [kappa, alpha] = slips
+            .get(i)
+            .copied()
+            .unwrap_or([log.kappa[i], log.alpha[i]]);
+        self.input(log, i, kappa, alpha)
+    }
+
     /// The kinematics of row `i`.
     fn kinematics(log: &Log, i: usize) -> Kinematics<f64> {
         let (vsx, vsy) = log.slip_velocity(i);
@@ -395,11 +404,7 @@ impl Sim {
         let mut res = Vec::with_capacity(rows.len());
         for &i in rows {
             set_lambda(&mut q, &base, mods, i);
-            let s = slips
-                .get(i)
-                .copied()
-                .unwrap_or([log.kappa[i], log.alpha[i]]);
-            let inp = self.input(log, i, s[0], s[1]);
+            let inp = self.input_at(log, slips, i);
             let o = mf::eval::<f64, Libm>(&q, &inp, &self.opts)
                 .map_err(|e| (i, format!("Magic Formula: {e}")))?;
             let mut out = [o.fx, o.fy, o.mz];
@@ -424,11 +429,7 @@ impl Sim {
         let mut c: [Vec<f64>; 7] = std::array::from_fn(|_| Vec::with_capacity(m));
         let mut l: [Vec<f64>; 4] = std::array::from_fn(|_| Vec::with_capacity(m));
         for &i in rows {
-            let s = slips
-                .get(i)
-                .copied()
-                .unwrap_or([log.kappa[i], log.alpha[i]]);
-            let inp = self.input(log, i, s[0], s[1]);
+            let inp = self.input_at(log, slips, i);
             let values = [
                 inp.fz,
                 inp.kappa,
